@@ -1,0 +1,137 @@
+#include "skycal/core/exr_io.h"
+
+#include <Iex.h>
+#include <ImfChannelList.h>
+#include <ImfEnvmapAttribute.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfVecAttribute.h>
+#include <half.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+
+namespace skycal {
+namespace {
+
+const char* const kChannels[3] = {"R", "G", "B"};
+
+void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
+  for (const auto& [name, value] : a.strings) header.insert(name, Imf::StringAttribute(value));
+  for (const auto& [name, value] : a.floats) header.insert(name, Imf::FloatAttribute(value));
+  for (const auto& [name, v] : a.v3fs) {
+    header.insert(name, Imf::V3fAttribute(Imath::V3f(v[0], v[1], v[2])));
+  }
+  if (a.envmap_latlong) Imf::addEnvmap(header, Imf::ENVMAP_LATLONG);
+}
+
+ExrAttributes CollectAttributes(const Imf::Header& header) {
+  ExrAttributes a;
+  for (auto it = header.begin(); it != header.end(); ++it) {
+    const std::string name = it.name();
+    const Imf::Attribute& attr = it.attribute();
+    if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&attr)) {
+      a.strings[name] = s->value();
+    } else if (const auto* f = dynamic_cast<const Imf::FloatAttribute*>(&attr)) {
+      a.floats[name] = f->value();
+    } else if (const auto* v = dynamic_cast<const Imf::V3fAttribute*>(&attr)) {
+      a.v3fs[name] = {v->value().x, v->value().y, v->value().z};
+    }
+  }
+  a.envmap_latlong = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_LATLONG;
+  return a;
+}
+
+}  // namespace
+
+ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
+                           const ExrAttributes& attributes, ExrPixelType type) {
+  if (image.empty()) throw Error(path + ": refusing to write an empty image");
+  AtomicOutput out(path);
+  ExrWriteReport report;
+  const size_t n = static_cast<size_t>(image.width) * image.height;
+  std::vector<half> halves;
+  if (type == ExrPixelType::kHalf) {
+    halves.resize(n * 3);
+    for (size_t i = 0; i < n * 3; ++i) {
+      halves[i] = half(image.pixels[i]);
+      if (std::isfinite(image.pixels[i]) && halves[i].isInfinity()) ++report.half_overflow_count;
+    }
+  }
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    const Imf::PixelType pt = type == ExrPixelType::kHalf ? Imf::HALF : Imf::FLOAT;
+    for (const char* c : kChannels) header.channels().insert(c, Imf::Channel(pt));
+    AddAttributes(header, attributes);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c) {
+      char* base = type == ExrPixelType::kHalf
+                       ? reinterpret_cast<char*>(halves.data() + c)
+                       : reinterpret_cast<char*>(const_cast<float*>(image.pixels.data()) + c);
+      const size_t elem = type == ExrPixelType::kHalf ? sizeof(half) : sizeof(float);
+      fb.insert(kChannels[c], Imf::Slice(pt, base, 3 * elem, 3 * elem * image.width));
+    }
+    Imf::OutputFile file(out.temp_path().c_str(), header);
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    throw Error(path + ": could not write EXR (" + e.what() + ")");
+  }
+  out.Commit();
+  return report;
+}
+
+ExrRGB ReadExrRGB(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw Error(path + ": no such file (expected an OpenEXR image)");
+  }
+  ExrRGB result;
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imf::Header& header = file.header();
+    const Imath::Box2i dw = header.dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    if (w <= 0 || h <= 0) throw Error(path + ": empty data window");
+    for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+      result.channels.push_back(it.name());
+    }
+    for (const char* c : kChannels) {
+      if (!header.channels().findChannel(c)) {
+        std::string have;
+        for (const auto& n : result.channels) have += (have.empty() ? "" : ",") + n;
+        throw Error(path + ": channel '" + c + "' missing (expected R, G, B; file has " +
+                    (have.empty() ? std::string("none") : have) + ")");
+      }
+    }
+    result.image = ImageRGB(w, h);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 3; ++c) {
+      // Slice base is offset so that (dw.min.x, dw.min.y) lands on pixels[0].
+      char* base = reinterpret_cast<char*>(result.image.pixels.data() + c) -
+                   (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * w) *
+                       3 * static_cast<ptrdiff_t>(sizeof(float));
+      fb.insert(kChannels[c], Imf::Slice(Imf::FLOAT, base, 3 * sizeof(float),
+                                         3 * sizeof(float) * static_cast<size_t>(w)));
+    }
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    result.attributes = CollectAttributes(header);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path + ": not a readable OpenEXR image (" + e.what() + ")");
+  }
+  return result;
+}
+
+}  // namespace skycal

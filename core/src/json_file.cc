@@ -1,0 +1,23 @@
+#include "skycal/core/json_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+
+namespace skycal {
+
+nlohmann::json ReadJsonFile(const std::string& path) {
+  const std::string text = ReadFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(path + ": not valid JSON (byte " + std::to_string(e.byte) + "): " + e.what());
+  }
+}
+
+void WriteJsonFileAtomically(const std::string& path, const nlohmann::json& value) {
+  WriteFileAtomically(path, value.dump(2) + "\n");
+}
+
+}  // namespace skycal

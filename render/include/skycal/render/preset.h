@@ -1,0 +1,75 @@
+// A sky preset: every parameter of the game's sky model with units, bounds and defaults,
+// plus the RGB LUTs (stored as EXR files next to the preset JSON).
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+namespace skycal::render {
+
+enum class ModelVariant { kFfxv, kFfxvIso };
+const char* ToString(ModelVariant v);
+// Throws skycal::Error naming `what` unless `name` is "ffxv" or "ffxv-iso".
+ModelVariant ParseModelVariant(const std::string& name, const std::string& what);
+
+// LUT grid (node-centred, see render/model/sky_model.glsl.h for the mapping).
+struct LutGrid {
+  int n_theta = 37;              // rows: sun zenith 0 .. theta_max_deg (3 deg steps)
+  int n_gamma = 32;              // columns: sqrt(elevation / 90 deg) 0 .. 1
+  double theta_max_deg = 108.0;  // 90 + 18: the end of astronomical twilight
+};
+
+struct SkyLuts {
+  LutGrid grid;
+  // Each n_theta * n_gamma * 3 floats, row-major (row = sun zenith), unit cd/m^2 * sr.
+  std::vector<float> rayleigh, mie, isotropic;
+  // n_theta * 3 floats: direct-sun transmittance per sun zenith row, dimensionless.
+  std::vector<float> sun_transmittance;
+
+  void Resize(const LutGrid& g);  // zero-filled tables for the grid
+  size_t table_size() const { return static_cast<size_t>(grid.n_theta) * grid.n_gamma * 3; }
+};
+
+// Every scalar the model takes. Units and bounds live in the parameter table
+// (PresetParameterSpecs), the single source the JSON reader, writer and validator share.
+struct Preset {
+  std::string name = "unnamed";
+  ModelVariant variant = ModelVariant::kFfxv;
+  double haziness_g = 0.8;                  // Cornette-Shanks g, 1
+  double overcast_weight = 0.0;             // 1
+  double overcast_zenith_cd_m2 = 4000.0;    // cd/m^2
+  double sun_illuminance_lux = 128000.0;    // lux at normal incidence, top of atmosphere
+  std::array<double, 3> sun_tint_rgb = {1.0, 1.0, 1.0};  // 1
+  double sun_angular_radius_deg = 0.2666;   // deg (mean solar semi-diameter)
+  double sun_limb_darkening = 0.6;          // linear limb-darkening coefficient u, 1
+  double ground_albedo = 0.1;               // 1, diffuse ground below the horizon
+  SkyLuts luts;
+};
+
+struct ParamSpec {
+  const char* name;
+  const char* unit;
+  double min, max, default_value;
+  int components;  // 1 or 3 (RGB)
+  const char* description;
+  double* (*field)(Preset&);
+};
+const std::vector<ParamSpec>& PresetParameterSpecs();
+
+// Throws skycal::Error naming `origin` (file) and the field when a value is non-finite,
+// out of its bounds, or a LUT is malformed (wrong size, negative or non-finite texel).
+void ValidatePreset(const Preset& preset, const std::string& origin);
+
+// JSON <-> Preset (parameters only; `lut_files` names the LUT EXRs).
+nlohmann::json PresetToJson(const Preset& preset, const std::string& lut_stem);
+// Reads a preset JSON and its LUT EXRs (paths relative to the JSON's directory).
+Preset LoadPreset(const std::string& path);
+// Writes `<dir>/<stem>.json` and `<dir>/<stem>.<lut>.exr`, each atomically.
+void SavePreset(const Preset& preset, const std::string& json_path);
+
+// Direct-sun transmittance at a sun zenith angle (radians), linear between rows.
+std::array<double, 3> SunTransmittance(const SkyLuts& luts, double sun_zenith_rad);
+
+}  // namespace skycal::render

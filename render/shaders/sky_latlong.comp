@@ -1,0 +1,56 @@
+#version 450
+// Renders the sky model into a full-sphere lat-long image (OpenEXR LatLong convention),
+// one invocation per pixel. The model itself is render/model/sky_model.glsl.h, the same
+// source the CPU reference and the fit compile as C++.
+#extension GL_GOOGLE_include_directive : require
+
+layout(local_size_x = 16, local_size_y = 4, local_size_z = 1) in;
+
+#define SC_UNIFORM_VEC4(name) vec4 name;
+#define SC_UNIFORM_IVEC4(name) ivec4 name;
+layout(std140, set = 0, binding = 0) uniform SkyUniformBlock {
+#include "sky_uniforms.glsl.h"
+} U;
+
+// LUT nodes: [table (rayleigh, mie, isotropic)][row][column][rgb], float.
+layout(std430, set = 0, binding = 1) readonly buffer LutBuffer { float lut_data[]; };
+// Output: interleaved RGB float, row 0 at the top.
+layout(std430, set = 0, binding = 2) writeonly buffer OutBuffer { float out_rgb[]; };
+
+#include "glsl_prelude.glsl.h"
+
+vec3 lut_texel(int lut, int row, int col) {
+  int i = ((lut * U.sizes.y + row) * U.sizes.x + col) * 3;
+  return vec3(lut_data[i], lut_data[i + 1], lut_data[i + 2]);
+}
+
+#include "sky_model.glsl.h"
+
+void main() {
+  int x = int(gl_GlobalInvocationID.x);
+  int y = int(gl_GlobalInvocationID.y);
+  int width = U.sizes.z;
+  int height = U.sizes.w;
+  if (x >= width || y >= height) return;
+
+  SkyParams p;
+  p.sun_dir = U.sun_dir.xyz;
+  p.haziness_g = U.model.x;
+  p.isotropic_weight = U.model.y;
+  p.overcast_weight = U.model.z;
+  p.overcast_zenith = U.model.w;
+  p.sun_one_minus_cos_radius = U.sun_disc.x;
+  p.sun_radius = U.sun_disc.y;
+  p.sun_limb_u = U.sun_disc.z;
+  p.sun_centre_radiance = U.sun_radiance.xyz;
+  p.ground_radiance = U.ground.xyz;
+  p.lut_theta_max = U.lut_grid.x;
+  p.lut_n_theta = U.sizes.y;
+  p.lut_n_gamma = U.sizes.x;
+
+  vec3 l = radiance(latlong_direction(x, y, width, height), p);
+  int o = (y * width + x) * 3;
+  out_rgb[o] = l.x;
+  out_rgb[o + 1] = l.y;
+  out_rgb[o + 2] = l.z;
+}

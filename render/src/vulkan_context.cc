@@ -1,0 +1,238 @@
+#include "vulkan_context.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <vector>
+
+#include "skycal/core/error.h"
+
+namespace skycal::render {
+
+const char* VkResultName(VkResult r) {
+  switch (r) {
+    case VK_SUCCESS: return "VK_SUCCESS";
+    case VK_NOT_READY: return "VK_NOT_READY";
+    case VK_TIMEOUT: return "VK_TIMEOUT";
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
+    case VK_ERROR_MEMORY_MAP_FAILED: return "VK_ERROR_MEMORY_MAP_FAILED";
+    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER";
+    case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
+    default: return "VkResult(other)";
+  }
+}
+
+void CheckVk(VkResult result, const char* what) {
+  if (result != VK_SUCCESS) throw Error(std::string("Vulkan: ") + what + " failed: " + VkResultName(result));
+}
+
+namespace {
+
+bool HasLayer(const char* name) {
+  uint32_t n = 0;
+  vkEnumerateInstanceLayerProperties(&n, nullptr);
+  std::vector<VkLayerProperties> layers(n);
+  vkEnumerateInstanceLayerProperties(&n, layers.data());
+  for (const auto& l : layers) {
+    if (std::strcmp(l.layerName, name) == 0) return true;
+  }
+  return false;
+}
+
+bool HasInstanceExtension(const char* name) {
+  uint32_t n = 0;
+  vkEnumerateInstanceExtensionProperties(nullptr, &n, nullptr);
+  std::vector<VkExtensionProperties> ext(n);
+  vkEnumerateInstanceExtensionProperties(nullptr, &n, ext.data());
+  for (const auto& e : ext) {
+    if (std::strcmp(e.extensionName, name) == 0) return true;
+  }
+  return false;
+}
+
+int DeviceRank(VkPhysicalDeviceType t) {  // higher is preferred
+  switch (t) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
+    default: return 0;
+  }
+}
+
+constexpr const char* kNoDevice =
+    "no Vulkan device available (on a CPU-only Debian machine install mesa-vulkan-drivers for lavapipe; "
+    "or render with --backend cpu)";
+
+}  // namespace
+
+VKAPI_ATTR VkBool32 VKAPI_CALL VulkanContext::OnValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                                 VkDebugUtilsMessageTypeFlagsEXT,
+                                                                 const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                                 void* user) {
+  auto* self = static_cast<VulkanContext*>(user);
+  if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
+    self->validation_messages_++;
+    std::cerr << "[vulkan validation] " << (data && data->pMessage ? data->pMessage : "(no message)") << "\n";
+  }
+  return VK_FALSE;
+}
+
+std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
+  const char* env = std::getenv("SKYCAL_VULKAN_VALIDATION");
+  if (env && std::string(env) == "1") validation = true;
+  std::shared_ptr<VulkanContext> ctx(new VulkanContext());
+
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = "skycal";
+  app.apiVersion = VK_API_VERSION_1_1;
+  std::vector<const char*> layers, extensions;
+  const bool debug_utils = validation && HasInstanceExtension(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  if (validation) {
+    if (!HasLayer("VK_LAYER_KHRONOS_validation")) {
+      throw Error("Vulkan validation requested but VK_LAYER_KHRONOS_validation is not installed "
+                  "(Debian: apt-get install vulkan-validationlayers)");
+    }
+    layers.push_back("VK_LAYER_KHRONOS_validation");
+    if (debug_utils) extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  }
+  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  ici.pApplicationInfo = &app;
+  ici.enabledLayerCount = static_cast<uint32_t>(layers.size());
+  ici.ppEnabledLayerNames = layers.data();
+  ici.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
+  ici.ppEnabledExtensionNames = extensions.data();
+  const VkResult r = vkCreateInstance(&ici, nullptr, &ctx->instance_);
+  if (r == VK_ERROR_INCOMPATIBLE_DRIVER) throw Error(kNoDevice);
+  CheckVk(r, "vkCreateInstance");
+
+  if (debug_utils) {
+    VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    mci.pfnUserCallback = &VulkanContext::OnValidationMessage;
+    mci.pUserData = ctx.get();
+    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(ctx->instance_, "vkCreateDebugUtilsMessengerEXT"));
+    if (create) CheckVk(create(ctx->instance_, &mci, nullptr, &ctx->messenger_), "vkCreateDebugUtilsMessengerEXT");
+  }
+
+  uint32_t count = 0;
+  vkEnumeratePhysicalDevices(ctx->instance_, &count, nullptr);
+  std::vector<VkPhysicalDevice> devices(count);
+  if (count) vkEnumeratePhysicalDevices(ctx->instance_, &count, devices.data());
+  int best_rank = -1;
+  for (VkPhysicalDevice d : devices) {
+    uint32_t nq = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, nullptr);
+    std::vector<VkQueueFamilyProperties> qf(nq);
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
+    for (uint32_t i = 0; i < nq; ++i) {
+      if (!(qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
+      VkPhysicalDeviceProperties props;
+      vkGetPhysicalDeviceProperties(d, &props);
+      const int rank = DeviceRank(props.deviceType);
+      if (rank > best_rank) {
+        best_rank = rank;
+        ctx->physical_ = d;
+        ctx->queue_family_ = i;
+        ctx->device_name_ = props.deviceName;
+      }
+      break;
+    }
+  }
+  if (ctx->physical_ == VK_NULL_HANDLE) throw Error(kNoDevice);
+  vkGetPhysicalDeviceMemoryProperties(ctx->physical_, &ctx->memory_);
+
+  const float priority = 1.0f;
+  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  qci.queueFamilyIndex = ctx->queue_family_;
+  qci.queueCount = 1;
+  qci.pQueuePriorities = &priority;
+  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  dci.queueCreateInfoCount = 1;
+  dci.pQueueCreateInfos = &qci;
+  CheckVk(vkCreateDevice(ctx->physical_, &dci, nullptr, &ctx->device_), "vkCreateDevice");
+  vkGetDeviceQueue(ctx->device_, ctx->queue_family_, 0, &ctx->queue_);
+  return ctx;
+}
+
+VulkanContext::~VulkanContext() {
+  if (device_) vkDestroyDevice(device_, nullptr);
+  if (messenger_) {
+    auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+    if (destroy) destroy(instance_, messenger_, nullptr);
+  }
+  if (instance_) vkDestroyInstance(instance_, nullptr);
+}
+
+MappedBuffer VulkanContext::CreateMappedBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool prefer_cached) {
+  MappedBuffer b;
+  b.size = size;
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = size;
+  bci.usage = usage;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  CheckVk(vkCreateBuffer(device_, &bci, nullptr, &b.buffer), "vkCreateBuffer");
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device_, b.buffer, &req);
+  // Prefer HOST_VISIBLE|HOST_COHERENT (+HOST_CACHED for readback); accept any HOST_VISIBLE.
+  const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT |
+                                     (prefer_cached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : 0);
+  int chosen = -1;
+  for (int pass = 0; pass < 3 && chosen < 0; ++pass) {
+    const VkMemoryPropertyFlags need = pass == 0 ? want
+                                       : pass == 1 ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+                                                   : VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT;
+    for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+      if ((req.memoryTypeBits & (1u << i)) && (memory_.memoryTypes[i].propertyFlags & need) == need) {
+        chosen = static_cast<int>(i);
+        break;
+      }
+    }
+  }
+  if (chosen < 0) throw Error("Vulkan: no host-visible memory type for a buffer");
+  b.coherent = memory_.memoryTypes[chosen].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = static_cast<uint32_t>(chosen);
+  CheckVk(vkAllocateMemory(device_, &mai, nullptr, &b.memory), "vkAllocateMemory");
+  CheckVk(vkBindBufferMemory(device_, b.buffer, b.memory, 0), "vkBindBufferMemory");
+  CheckVk(vkMapMemory(device_, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped), "vkMapMemory");
+  return b;
+}
+
+void VulkanContext::DestroyBuffer(MappedBuffer& b) {
+  if (b.memory) {
+    vkUnmapMemory(device_, b.memory);
+    vkFreeMemory(device_, b.memory, nullptr);
+  }
+  if (b.buffer) vkDestroyBuffer(device_, b.buffer, nullptr);
+  b = MappedBuffer{};
+}
+
+void VulkanContext::InvalidateForRead(const MappedBuffer& b) {
+  if (b.coherent) return;
+  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+  range.memory = b.memory;
+  range.size = VK_WHOLE_SIZE;
+  CheckVk(vkInvalidateMappedMemoryRanges(device_, 1, &range), "vkInvalidateMappedMemoryRanges");
+}
+
+void VulkanContext::FlushForDevice(const MappedBuffer& b) {
+  if (b.coherent) return;
+  VkMappedMemoryRange range{VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE};
+  range.memory = b.memory;
+  range.size = VK_WHOLE_SIZE;
+  CheckVk(vkFlushMappedMemoryRanges(device_, 1, &range), "vkFlushMappedMemoryRanges");
+}
+
+}  // namespace skycal::render
