@@ -37,6 +37,8 @@ ExrAttributes CollectAttributes(const Imf::Header& header) {
   ExrAttributes a;
   for (auto it = header.begin(); it != header.end(); ++it) {
     const std::string name = it.name();
+    // Required header attributes are the image's geometry, not metadata.
+    if (name == "pixelAspectRatio" || name == "screenWindowWidth" || name == "screenWindowCenter") continue;
     const Imf::Attribute& attr = it.attribute();
     if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&attr)) {
       a.strings[name] = s->value();

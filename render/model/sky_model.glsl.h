@@ -19,12 +19,17 @@
 // Below the horizon (view y < 0): a constant ground radiance chosen by the host.
 //
 // LUT parameterisation (node-centred: texel (row, col) sits exactly on a grid node, and
-// filtering is bilinear between nodes with clamping at the edges):
-//   row = ts / ts_max * (n_theta - 1),   ts in [0, ts_max], ts_max = 108 deg by default
-//         (sun 18 deg below the horizon: astronomical twilight ends there);
-//   col = sqrt(elevation / (pi/2)) * (n_gamma - 1), elevation = pi/2 - gv in [0, pi/2].
-// The square root puts half the columns in the lowest 15 degrees of elevation, where
-// the sky changes fastest (Bruneton & Neyret 2008 use the same idea for their LUTs).
+// filtering is bilinear between nodes with clamping at the edges). Both coordinates are
+// formed from direction components without inverse trigonometry:
+//   row = (1 - cos ts) / (1 - cos ts_max) * (n_theta - 1),  ts_max = 108 deg by default
+//         (the sun 18 deg below the horizon: astronomical twilight ends there). Linear in
+//         the sun's height sun.y, so rows crowd toward sunrise/sunset (2 deg apart at the
+//         horizon, 15 deg near the zenith) where the sky changes fastest;
+//   col = sqrt(sin(elevation)) * (n_gamma - 1) = sqrt(view.y) * (n_gamma - 1): half the
+//         columns cover the lowest 14.5 deg of elevation, where the sky changes fastest
+//         (Bruneton & Neyret 2008 concentrate their LUTs near the horizon the same way).
+// Why no atan/asin: GPUs (and lavapipe) implement them with ~1e-6 absolute error, which
+// the sqrt mapping near the horizon would amplify; sun.y and view.y are exact to rounding.
 
 SC_CONST(SC_PI, 3.14159265358979323846)
 SC_CONST_INT(LUT_RAYLEIGH, 0)
@@ -42,7 +47,7 @@ struct SkyParams {
   Scalar sun_limb_u;            // linear limb-darkening coefficient, [0, 1]
   vec3 sun_centre_radiance;     // L0, cd/m^2 (0 switches the disc off)
   vec3 ground_radiance;         // cd/m^2, used for view directions below the horizon
-  Scalar lut_theta_max;         // ts_max, radians
+  Scalar lut_one_minus_cos_theta_max;  // 1 - cos(ts_max), ts_max = last LUT row's sun zenith
   int lut_n_theta;              // rows
   int lut_n_gamma;              // columns
 };
@@ -64,11 +69,6 @@ Scalar phase_cornette_shanks(Scalar mu, Scalar one_minus_mu, Scalar g) {
   return norm * (Scalar(1.0) + mu * mu) / (d * sqrt(d));
 }
 
-// Elevation of a unit direction above the horizon, radians in [-pi/2, pi/2].
-Scalar elevation_of(vec3 d) {
-  return atan(d.y, sqrt(d.x * d.x + d.z * d.z));
-}
-
 // Continuous LUT coordinates (row, col) in texel units.
 struct LutCoord {
   int row0;
@@ -77,10 +77,11 @@ struct LutCoord {
   Scalar fcol;  // weight of col0 + 1
 };
 
-LutCoord lut_coord(Scalar sun_zenith, Scalar view_elevation, SkyParams p) {
-  Scalar r = clamp(sun_zenith / p.lut_theta_max, Scalar(0.0), Scalar(1.0)) * Scalar(p.lut_n_theta - 1);
-  Scalar e = clamp(view_elevation / Scalar(0.5 * SC_PI), Scalar(0.0), Scalar(1.0));
-  Scalar c = sqrt(e) * Scalar(p.lut_n_gamma - 1);
+// sun_height = cos(sun zenith) = sun.y; view_height = sin(view elevation) = view.y.
+LutCoord lut_coord(Scalar sun_height, Scalar view_height, SkyParams p) {
+  Scalar r = clamp((Scalar(1.0) - sun_height) / p.lut_one_minus_cos_theta_max, Scalar(0.0), Scalar(1.0)) *
+             Scalar(p.lut_n_theta - 1);
+  Scalar c = sqrt(clamp(view_height, Scalar(0.0), Scalar(1.0))) * Scalar(p.lut_n_gamma - 1);
   LutCoord lc;
   lc.row0 = clamp(floor_to_int(r), 0, p.lut_n_theta - 2);
   lc.col0 = clamp(floor_to_int(c), 0, p.lut_n_gamma - 2);
@@ -100,18 +101,12 @@ vec3 lut_bilinear(int lut, LutCoord lc) {
   return mix(mix(t00, t01, lc.fcol), mix(t10, t11, lc.fcol), lc.frow);
 }
 
-// Sun zenith angle, radians in [0, pi].
-Scalar sun_zenith_of(SkyParams p) {
-  return atan(sqrt(p.sun_dir.x * p.sun_dir.x + p.sun_dir.z * p.sun_dir.z), p.sun_dir.y);
-}
-
 // Sky radiance for a view direction at or above the horizon, without the sun disc.
 vec3 sky_radiance(vec3 view, SkyParams p) {
   vec3 diff = view - p.sun_dir;
   Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
   Scalar mu = Scalar(1.0) - one_minus_mu;
-  Scalar elevation = elevation_of(view);
-  LutCoord lc = lut_coord(sun_zenith_of(p), elevation, p);
+  LutCoord lc = lut_coord(p.sun_dir.y, view.y, p);
   vec3 lut = lut_bilinear(LUT_RAYLEIGH, lc) * phase_rayleigh(mu) +
              lut_bilinear(LUT_MIE, lc) * phase_cornette_shanks(mu, one_minus_mu, p.haziness_g);
   if (p.isotropic_weight > Scalar(0.0)) {
@@ -140,12 +135,20 @@ vec3 radiance(vec3 view, SkyParams p) {
   return sky_radiance(view, p) + sun_disc_radiance(view, p);
 }
 
-// Pixel centre (x, y) of a width x height lat-long image to a unit direction, following
-// OpenEXR's envmap LatLong convention (core/latlong.h): latitude +pi/2 at row 0,
-// longitude +pi at column 0 and -pi at column width - 1.
-vec3 latlong_direction(int x, int y, int width, int height) {
-  Scalar lat = Scalar(-SC_PI) * (Scalar(y) / Scalar(height - 1) - Scalar(0.5));
-  Scalar lon = Scalar(-2.0 * SC_PI) * (Scalar(x) / Scalar(width - 1) - Scalar(0.5));
-  Scalar cl = cos(lat);
-  return vec3(sin(lon) * cl, sin(lat), cos(lon) * cl);
+// Lat-long pixel centres follow OpenEXR's envmap LatLong convention (core/latlong.h):
+// latitude +pi/2 at row 0, longitude +pi at column 0 and -pi at column width - 1. The
+// angles come from exact integer numerators, lat = pi (h - 1 - 2y) / (2 (h - 1)); the
+// textbook pi (0.5 - y / (h - 1)) loses ~3e-5 relative precision near the horizon in float.
+Scalar latlong_latitude(int y, int height) {
+  return Scalar(height - 1 - 2 * y) * (Scalar(0.5 * SC_PI) / Scalar(height - 1));
+}
+Scalar latlong_longitude(int x, int width) {
+  return Scalar(width - 1 - 2 * x) * (Scalar(SC_PI) / Scalar(width - 1));
+}
+// Direction from the sines and cosines of latitude and longitude. The GPU takes them from
+// per-row and per-column tables the host fills in double precision: shader sin/cos carry
+// ~1e-6 absolute error (lavapipe; 2^-11 is all Vulkan guarantees), which a peaked Mie
+// phase (g = 0.99) would turn into ~1e-3 relative radiance error near the sun.
+vec3 latlong_direction_from_trig(Scalar sin_lat, Scalar cos_lat, Scalar sin_lon, Scalar cos_lon) {
+  return vec3(sin_lon * cos_lat, sin_lat, cos_lon * cos_lat);
 }

@@ -7,5 +7,5 @@ SC_UNIFORM_VEC4(model)          // x: haziness g; y: isotropic weight; z: overca
 SC_UNIFORM_VEC4(sun_disc)       // x: 1 - cos(R); y: R (rad); z: limb-darkening u; w: unused
 SC_UNIFORM_VEC4(sun_radiance)   // rgb: disc centre radiance, cd/m^2; w: unused
 SC_UNIFORM_VEC4(ground)         // rgb: ground radiance, cd/m^2; w: unused
-SC_UNIFORM_VEC4(lut_grid)       // x: theta_max (rad); yzw: unused
+SC_UNIFORM_VEC4(lut_grid)       // x: 1 - cos(theta_max); yzw: unused
 SC_UNIFORM_IVEC4(sizes)         // x: LUT columns (n_gamma); y: LUT rows (n_theta); z: image width; w: image height

@@ -16,6 +16,9 @@ layout(std140, set = 0, binding = 0) uniform SkyUniformBlock {
 layout(std430, set = 0, binding = 1) readonly buffer LutBuffer { float lut_data[]; };
 // Output: interleaved RGB float, row 0 at the top.
 layout(std430, set = 0, binding = 2) writeonly buffer OutBuffer { float out_rgb[]; };
+// Direction tables filled by the host in double: (sin, cos) of latitude per row
+// [0, height), then (sin, cos) of longitude per column [height, height + width).
+layout(std430, set = 0, binding = 3) readonly buffer TrigBuffer { vec2 trig[]; };
 
 #include "glsl_prelude.glsl.h"
 
@@ -44,11 +47,13 @@ void main() {
   p.sun_limb_u = U.sun_disc.z;
   p.sun_centre_radiance = U.sun_radiance.xyz;
   p.ground_radiance = U.ground.xyz;
-  p.lut_theta_max = U.lut_grid.x;
+  p.lut_one_minus_cos_theta_max = U.lut_grid.x;
   p.lut_n_theta = U.sizes.y;
   p.lut_n_gamma = U.sizes.x;
 
-  vec3 l = radiance(latlong_direction(x, y, width, height), p);
+  vec2 lat = trig[y];
+  vec2 lon = trig[height + x];
+  vec3 l = radiance(latlong_direction_from_trig(lat.x, lat.y, lon.x, lon.y), p);
   int o = (y * width + x) * 3;
   out_rgb[o] = l.x;
   out_rgb[o + 1] = l.y;

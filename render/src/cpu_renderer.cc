@@ -1,6 +1,7 @@
 #include "cpu_renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <thread>
 #include <vector>
 
@@ -20,8 +21,12 @@ class CpuRenderer final : public SkyRenderer {
       CpuSkyModel m(source);
       for (int y = first_row; y < image.height; y += threads) {
         float* row = &image.pixels[image.index(0, y)];
+        const double lat = m.latlong_latitude(y, image.height);
+        const double sin_lat = std::sin(lat), cos_lat = std::cos(lat);
         for (int x = 0; x < image.width; ++x) {
-          const auto l = m.radiance(m.latlong_direction(x, y, image.width, image.height), params);
+          const double lon = m.latlong_longitude(x, image.width);
+          const auto view = m.latlong_direction_from_trig(sin_lat, cos_lat, std::sin(lon), std::cos(lon));
+          const auto l = m.radiance(view, params);
           row[3 * x + 0] = static_cast<float>(l.x);
           row[3 * x + 1] = static_cast<float>(l.y);
           row[3 * x + 2] = static_cast<float>(l.z);

@@ -134,8 +134,8 @@ json PresetToJson(const Preset& preset_in, const std::string& lut_stem) {
   json luts = {
       {"grid", {{"n_theta", preset.luts.grid.n_theta}, {"n_gamma", preset.luts.grid.n_gamma},
                 {"theta_max_deg", preset.luts.grid.theta_max_deg},
-                {"row_mapping", "sun zenith = row / (n_theta - 1) * theta_max_deg"},
-                {"column_mapping", "view elevation = (column / (n_gamma - 1))^2 * 90 deg"},
+                {"row_mapping", "cos(sun zenith) = 1 - row / (n_theta - 1) * (1 - cos(theta_max_deg))"},
+                {"column_mapping", "sin(view elevation) = (column / (n_gamma - 1))^2"},
                 {"unit", "cd/m^2 * sr (radiance per unit normalised phase function)"}}},
       {"rayleigh", lut_stem + ".rayleigh.exr"},
       {"mie", lut_stem + ".mie.exr"},
@@ -250,10 +250,20 @@ void SavePreset(const Preset& preset, const std::string& json_path) {
   WriteJsonFileAtomically(json_path, PresetToJson(preset, stem));
 }
 
+double LutRowSunZenithRad(const LutGrid& g, int row) {
+  const double one_minus_cos_max = 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0);
+  return std::acos(std::clamp(1.0 - static_cast<double>(row) / (g.n_theta - 1) * one_minus_cos_max, -1.0, 1.0));
+}
+
+double LutColumnElevationRad(const LutGrid& g, int col) {
+  const double u = static_cast<double>(col) / (g.n_gamma - 1);
+  return std::asin(std::clamp(u * u, 0.0, 1.0));
+}
+
 std::array<double, 3> SunTransmittance(const SkyLuts& luts, double sun_zenith_rad) {
   const LutGrid& g = luts.grid;
-  const double theta_max = g.theta_max_deg * M_PI / 180.0;
-  const double r = std::clamp(sun_zenith_rad / theta_max, 0.0, 1.0) * (g.n_theta - 1);
+  const double one_minus_cos_max = 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0);
+  const double r = std::clamp((1.0 - std::cos(sun_zenith_rad)) / one_minus_cos_max, 0.0, 1.0) * (g.n_theta - 1);
   const int r0 = std::clamp(static_cast<int>(std::floor(r)), 0, g.n_theta - 2);
   const double f = r - r0;
   std::array<double, 3> t{};

@@ -71,7 +71,7 @@ SkyParamsD ResolveSkyParams(const Preset& preset, const RenderRequest& request) 
   p.sun_radius = radius;
   p.sun_one_minus_cos_radius = 2.0 * std::sin(0.5 * radius) * std::sin(0.5 * radius);
   p.sun_limb_u = preset.sun_limb_darkening;
-  p.lut_theta_max = preset.luts.grid.theta_max_deg * kPi / 180.0;
+  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(preset.luts.grid.theta_max_deg * kPi / 180.0);
   p.lut_n_theta = preset.luts.grid.n_theta;
   p.lut_n_gamma = preset.luts.grid.n_gamma;
 

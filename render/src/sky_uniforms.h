@@ -43,7 +43,7 @@ inline SkyUniforms PackSkyUniforms(const SkyParamsD& p, int width, int height) {
   set(u.sun_disc, p.sun_one_minus_cos_radius, p.sun_radius, p.sun_limb_u, 0.0);
   set(u.sun_radiance, p.sun_centre_radiance.x, p.sun_centre_radiance.y, p.sun_centre_radiance.z, 0.0);
   set(u.ground, p.ground_radiance.x, p.ground_radiance.y, p.ground_radiance.z, 0.0);
-  set(u.lut_grid, p.lut_theta_max, 0.0, 0.0, 0.0);
+  set(u.lut_grid, p.lut_one_minus_cos_theta_max, 0.0, 0.0, 0.0);
   u.sizes[0] = p.lut_n_gamma;
   u.sizes[1] = p.lut_n_theta;
   u.sizes[2] = width;

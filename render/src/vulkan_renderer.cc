@@ -1,5 +1,6 @@
 // The Vulkan compute renderer: one pipeline (render/shaders/sky_latlong.comp), buffers
 // reused between renders and grown on demand, one submit and fence wait per render.
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -18,6 +19,11 @@ namespace skycal::render {
 namespace {
 
 constexpr uint32_t kLocalX = 16, kLocalY = 4;  // must match sky_latlong.comp
+// Bindings of sky_latlong.comp: 0 uniforms, 1 LUTs, 2 output, 3 direction trig table.
+constexpr uint32_t kBindings = 4;
+constexpr VkDescriptorType kBindingTypes[kBindings] = {
+    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 
 class VulkanSkyRenderer final : public SkyRenderer {
  public:
@@ -28,6 +34,7 @@ class VulkanSkyRenderer final : public SkyRenderer {
     ctx_->DestroyBuffer(uniforms_);
     ctx_->DestroyBuffer(luts_);
     ctx_->DestroyBuffer(output_);
+    ctx_->DestroyBuffer(trig_);
     if (fence_) vkDestroyFence(d, fence_, nullptr);
     if (pool_) vkDestroyCommandPool(d, pool_, nullptr);
     if (descriptor_pool_) vkDestroyDescriptorPool(d, descriptor_pool_, nullptr);
@@ -48,7 +55,10 @@ class VulkanSkyRenderer final : public SkyRenderer {
     rebind |= Ensure(uniforms_, sizeof(SkyUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, false);
     rebind |= Ensure(luts_, lut_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
     rebind |= Ensure(output_, out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+    const VkDeviceSize trig_bytes = static_cast<VkDeviceSize>(request.width + request.height) * 2 * sizeof(float);
+    rebind |= Ensure(trig_, trig_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
     if (rebind) WriteDescriptors();
+    if (trig_width_ != request.width || trig_height_ != request.height) FillTrigTable(preset, request.width, request.height);
 
     std::memcpy(uniforms_.mapped, &u, sizeof(u));
     float* lut_dst = static_cast<float*>(luts_.mapped);
@@ -76,11 +86,33 @@ class VulkanSkyRenderer final : public SkyRenderer {
     return image;
   }
 
+  int ValidationMessages() const override { return ctx_->validation_messages(); }
   std::string Describe() const override {
     return std::string("vulkan (") + ctx_->device_name() + (ctx_->validation_enabled() ? ", validation on" : "") + ")";
   }
 
  private:
+  // Per-row (sin, cos) of latitude then per-column (sin, cos) of longitude, in double
+  // through the shared model's angle functions, rounded once to float.
+  void FillTrigTable(const Preset& preset, int width, int height) {
+    const CpuLutSource source{&preset.luts};
+    CpuSkyModel m(source);
+    float* t = static_cast<float*>(trig_.mapped);
+    for (int y = 0; y < height; ++y) {
+      const double lat = m.latlong_latitude(y, height);
+      t[2 * y] = static_cast<float>(std::sin(lat));
+      t[2 * y + 1] = static_cast<float>(std::cos(lat));
+    }
+    for (int x = 0; x < width; ++x) {
+      const double lon = m.latlong_longitude(x, width);
+      t[2 * (height + x)] = static_cast<float>(std::sin(lon));
+      t[2 * (height + x) + 1] = static_cast<float>(std::cos(lon));
+    }
+    ctx_->FlushForDevice(trig_);
+    trig_width_ = width;
+    trig_height_ = height;
+  }
+
   // (Re)creates `b` when it is smaller than `size`; returns true if it changed.
   bool Ensure(MappedBuffer& b, VkDeviceSize size, VkBufferUsageFlags usage, bool cached) {
     if (b.buffer && b.size >= size) return false;
@@ -99,17 +131,15 @@ class VulkanSkyRenderer final : public SkyRenderer {
     smci.pCode = spirv::sky_latlong;
     CheckVk(vkCreateShaderModule(d, &smci, nullptr, &shader_), "vkCreateShaderModule");
 
-    VkDescriptorSetLayoutBinding bindings[3] = {};
-    const VkDescriptorType types[3] = {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    for (uint32_t i = 0; i < 3; ++i) {
+    VkDescriptorSetLayoutBinding bindings[kBindings] = {};
+    for (uint32_t i = 0; i < kBindings; ++i) {
       bindings[i].binding = i;
-      bindings[i].descriptorType = types[i];
+      bindings[i].descriptorType = kBindingTypes[i];
       bindings[i].descriptorCount = 1;
       bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }
     VkDescriptorSetLayoutCreateInfo dslci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    dslci.bindingCount = 3;
+    dslci.bindingCount = kBindings;
     dslci.pBindings = bindings;
     CheckVk(vkCreateDescriptorSetLayout(d, &dslci, nullptr, &set_layout_), "vkCreateDescriptorSetLayout");
 
@@ -126,7 +156,8 @@ class VulkanSkyRenderer final : public SkyRenderer {
     cpci.layout = pipeline_layout_;
     CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
 
-    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2}};
+    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBindings - 1}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = 2;
@@ -152,21 +183,20 @@ class VulkanSkyRenderer final : public SkyRenderer {
   }
 
   void WriteDescriptors() {
-    VkDescriptorBufferInfo infos[3] = {{uniforms_.buffer, 0, VK_WHOLE_SIZE},
-                                       {luts_.buffer, 0, VK_WHOLE_SIZE},
-                                       {output_.buffer, 0, VK_WHOLE_SIZE}};
-    const VkDescriptorType types[3] = {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                       VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-    VkWriteDescriptorSet writes[3] = {};
-    for (uint32_t i = 0; i < 3; ++i) {
+    VkDescriptorBufferInfo infos[kBindings] = {{uniforms_.buffer, 0, VK_WHOLE_SIZE},
+                                               {luts_.buffer, 0, VK_WHOLE_SIZE},
+                                               {output_.buffer, 0, VK_WHOLE_SIZE},
+                                               {trig_.buffer, 0, VK_WHOLE_SIZE}};
+    VkWriteDescriptorSet writes[kBindings] = {};
+    for (uint32_t i = 0; i < kBindings; ++i) {
       writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
       writes[i].dstSet = set_;
       writes[i].dstBinding = i;
       writes[i].descriptorCount = 1;
-      writes[i].descriptorType = types[i];
+      writes[i].descriptorType = kBindingTypes[i];
       writes[i].pBufferInfo = &infos[i];
     }
-    vkUpdateDescriptorSets(ctx_->device(), 3, writes, 0, nullptr);
+    vkUpdateDescriptorSets(ctx_->device(), kBindings, writes, 0, nullptr);
   }
 
   void Record(int width, int height) {
@@ -196,7 +226,8 @@ class VulkanSkyRenderer final : public SkyRenderer {
   VkCommandPool pool_ = VK_NULL_HANDLE;
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;
-  MappedBuffer uniforms_, luts_, output_;
+  MappedBuffer uniforms_, luts_, output_, trig_;
+  int trig_width_ = 0, trig_height_ = 0;  // size the trig table was filled for
 };
 
 }  // namespace

@@ -16,8 +16,8 @@ ModelVariant ParseModelVariant(const std::string& name, const std::string& what)
 
 // LUT grid (node-centred, see render/model/sky_model.glsl.h for the mapping).
 struct LutGrid {
-  int n_theta = 37;              // rows: sun zenith 0 .. theta_max_deg (3 deg steps)
-  int n_gamma = 32;              // columns: sqrt(elevation / 90 deg) 0 .. 1
+  int n_theta = 37;              // rows: sun zenith 0 .. theta_max_deg, linear in cos(zenith)
+  int n_gamma = 32;              // columns: sqrt(sin(elevation)) 0 .. 1
   double theta_max_deg = 108.0;  // 90 + 18: the end of astronomical twilight
 };
 
@@ -69,7 +69,13 @@ Preset LoadPreset(const std::string& path);
 // Writes `<dir>/<stem>.json` and `<dir>/<stem>.<lut>.exr`, each atomically.
 void SavePreset(const Preset& preset, const std::string& json_path);
 
-// Direct-sun transmittance at a sun zenith angle (radians), linear between rows.
+// Where the LUT nodes sit (see render/model/sky_model.glsl.h): the sun zenith angle of a
+// row and the view elevation of a column, radians.
+double LutRowSunZenithRad(const LutGrid& grid, int row);
+double LutColumnElevationRad(const LutGrid& grid, int col);
+
+// Direct-sun transmittance at a sun zenith angle (radians), linear between rows in the
+// LUT's row coordinate (linear in cos(sun zenith)).
 std::array<double, 3> SunTransmittance(const SkyLuts& luts, double sun_zenith_rad);
 
 }  // namespace skycal::render

@@ -38,6 +38,8 @@ class SkyRenderer {
   // Throws skycal::Error on an invalid preset or request, or a backend failure.
   virtual ImageRGB Render(const Preset& preset, const RenderRequest& request) = 0;
   virtual std::string Describe() const = 0;  // backend and device, for logs
+  // Validation-layer warnings and errors reported so far (Vulkan with validation on).
+  virtual int ValidationMessages() const { return 0; }
 };
 
 struct VulkanOptions {

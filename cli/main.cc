@@ -1,0 +1,50 @@
+// skycal: one binary, verbs (COLMAP style). Each verb parses its options into a struct
+// and calls a testable Run<Verb>Impl.
+#include <cstring>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "render_verb.h"
+#include "skycal/core/version.h"
+
+namespace {
+
+struct Verb {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+const std::vector<Verb>& Verbs() {
+  static const std::vector<Verb> verbs = {
+      {"render", "render a sky preset to a lat-long EXR (+ PNG preview)", &skycal::cli::RunRender},
+  };
+  return verbs;
+}
+
+void PrintUsage() {
+  std::cout << "skycal " << skycal::kSkycalVersion << ": calibration and fitting workbench for real-time game skies\n\n"
+            << "usage: skycal VERB [options]   (skycal VERB --help for a verb's options)\n\nverbs:\n";
+  for (const Verb& v : Verbs()) std::cout << "  " << v.name << std::string(12 - std::strlen(v.name), ' ') << v.summary << "\n";
+  std::cout << "\n  --version   print the version\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    PrintUsage();
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version")) {
+    std::cout << "skycal " << skycal::kSkycalVersion << "\n";
+    return 0;
+  }
+  for (const Verb& v : Verbs()) {
+    if (argv[1] == std::string(v.name)) return v.run(argc - 2, argv + 2);
+  }
+  std::cerr << "skycal: unknown verb '" << argv[1] << "'\n\n";
+  PrintUsage();
+  return 2;
+}

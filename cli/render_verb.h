@@ -1,0 +1,40 @@
+// `skycal render`: the sky of a preset for one sun direction, as a lat-long EXR (and an
+// optional PNG preview through the OCIO view transform).
+#pragma once
+#include <array>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/render/renderer.h"
+
+namespace skycal::cli {
+
+struct RenderOptions {
+  std::string preset_path;                       // preset JSON (default: the bundled preset)
+  std::optional<double> sun_elevation_deg;       // degrees above the horizon, [-90, 90]
+  std::optional<double> sun_azimuth_deg;         // lat-long longitude, degrees, [-360, 360]
+  std::optional<std::array<double, 3>> sun_dir;  // alternative: unit vector toward the sun
+  int width = 1024, height = 512;                // pixels
+  render::Backend backend = render::Backend::kVulkan;
+  render::GroundMode ground = render::GroundMode::kLit;
+  bool sun_disc = true;
+  bool half = false;                             // write half floats instead of float
+  std::string out_exr;                           // required, *.exr
+  std::string out_png;                           // optional, *.png
+  double png_exposure_ev = std::numeric_limits<double>::quiet_NaN();  // NaN: automatic
+  bool vulkan_validation = false;
+
+  bool IsValid(std::string* why) const;
+  std::array<double, 3> SunDirection() const;  // unit vector (valid options only)
+};
+
+// Renders and writes the outputs; returns the JSON summary. Throws skycal::Error.
+nlohmann::json RunRenderImpl(const RenderOptions& options);
+int RunRender(int argc, char** argv);
+
+std::string DefaultPresetPath();  // datasets/presets/default_clear.json of this checkout
+
+}  // namespace skycal::cli
