@@ -148,7 +148,12 @@ json PresetToJson(const Preset& preset_in, const std::string& lut_stem) {
 namespace {
 
 std::vector<float> ReadLutImage(const std::string& path, int width, int height, const std::string& origin) {
-  ExrRGB exr = ReadExrRGB(path);
+  ExrRGB exr;
+  try {
+    exr = ReadExrRGB(path);
+  } catch (const Error& e) {
+    throw Error(origin + ": cannot read its LUT: " + e.what());
+  }
   if (exr.image.width != width || exr.image.height != height) {
     throw Error(path + ": LUT is " + std::to_string(exr.image.width) + " x " + std::to_string(exr.image.height) +
                 ", expected " + std::to_string(width) + " x " + std::to_string(height) + " (columns x rows) from " + origin);
@@ -227,8 +232,10 @@ Preset LoadPreset(const std::string& path) {
     return (dir / f.get<std::string>()).string();
   };
   const int tables = p.variant == ModelVariant::kFfxvIso ? 3 : 2;
-  for (int t = 0; t < tables; ++t) LutTable(p.luts, t) = ReadLutImage(lut_path(kLutNames[t]), g.n_gamma, g.n_theta, path);
-  p.luts.sun_transmittance = ReadLutImage(lut_path("sun_transmittance"), 1, g.n_theta, path);
+  for (int t = 0; t < tables; ++t) {
+    LutTable(p.luts, t) = ReadLutImage(lut_path(kLutNames[t]), g.n_gamma, g.n_theta, Field(path, std::string("luts.") + kLutNames[t]));
+  }
+  p.luts.sun_transmittance = ReadLutImage(lut_path("sun_transmittance"), 1, g.n_theta, Field(path, "luts.sun_transmittance"));
   ValidatePreset(p, path);
   return p;
 }

@@ -1,0 +1,181 @@
+// EXR and preset files: round trips and bad input.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/json_file.h"
+#include "skycal/render/preset.h"
+#include "test_presets.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+
+using testing::ScratchDir;
+
+ImageRGB Gradient(int w, int h) {
+  ImageRGB img(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<float>(std::exp(0.01 * (x + 3 * y) + c));
+  return img;
+}
+
+TEST(ExrIo, LatLongFrameRoundTripKeepsPixelsAndAttributes) {
+  ScratchDir dir("exr");
+  capture::LatLongFrame f;
+  f.radiance = Gradient(64, 32);
+  f.sun_direction = std::array<double, 3>{0.6, 0.8, 0.0};
+  f.extra.strings["skycalPreset"] = "x.json";
+  f.extra.floats["exposureScale"] = 2.5f;
+  capture::WriteLatLongFrame(dir / "f.exr", f);
+  const capture::LatLongFrame g = capture::ReadLatLongFrame(dir / "f.exr");
+  ASSERT_EQ(g.radiance.width, 64);
+  EXPECT_EQ(g.radiance.pixels, f.radiance.pixels);  // float: bit exact
+  ASSERT_TRUE(g.sun_direction.has_value());
+  EXPECT_NEAR((*g.sun_direction)[0], 0.6, 1e-7);
+  EXPECT_NEAR((*g.sun_direction)[1], 0.8, 1e-7);
+  EXPECT_EQ(g.extra.strings.at("skycalPreset"), "x.json");
+  EXPECT_EQ(g.extra.floats.at("exposureScale"), 2.5f);
+  EXPECT_EQ(g.extra.strings.count("skycalWarning"), 0u);  // envmap attribute was written
+  const ExrRGB raw = ReadExrRGB(dir / "f.exr");
+  EXPECT_TRUE(raw.attributes.envmap_latlong);
+}
+
+TEST(ExrIo, HalfRoundTripWithinHalfPrecisionAndCountsOverflow) {
+  ScratchDir dir("half");
+  ImageRGB img = Gradient(32, 16);
+  img.at(3, 3, 0) = 1e6f;  // beyond half range
+  const ExrWriteReport rep = WriteExrRGB(dir / "h.exr", img, {}, ExrPixelType::kHalf);
+  EXPECT_EQ(rep.half_overflow_count, 1);
+  const ExrRGB back = ReadExrRGB(dir / "h.exr");
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    if (img.pixels[i] > 65504.0f) continue;
+    EXPECT_NEAR(back.image.pixels[i], img.pixels[i], img.pixels[i] * 4.9e-4);  // half: 2^-11 relative
+  }
+}
+
+TEST(ExrIo, BadFilesGiveClearErrors) {
+  ScratchDir dir("badexr");
+  WriteExrRGB(dir / "good.exr", Gradient(64, 32), {});
+  // Truncated file.
+  {
+    std::ifstream in(dir / "good.exr", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(dir / "trunc.exr", std::ios::binary).write(bytes.data(), bytes.size() / 2);
+  }
+  try {
+    ReadExrRGB(dir / "trunc.exr");
+    FAIL() << "truncated file accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("trunc.exr"), std::string::npos) << e.what();
+  }
+  testing::WriteText(dir / "text.exr", "not an exr");
+  EXPECT_THROW(ReadExrRGB(dir / "text.exr"), Error);
+  try {
+    ReadExrRGB(dir / "missing.exr");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos);
+  }
+  // Not 2:1 as a lat-long frame.
+  WriteExrRGB(dir / "square.exr", Gradient(32, 32), {});
+  EXPECT_THROW(capture::ReadLatLongFrame(dir / "square.exr"), Error);
+}
+
+TEST(ExrIo, UnwritableOutputLeavesNothing) {
+  ScratchDir dir("unwritable");
+  EXPECT_THROW(WriteExrRGB(dir / "no/such/dir/x.exr", Gradient(8, 4), {}), Error);
+  std::filesystem::create_directory(dir / "ro");
+  std::filesystem::permissions(dir / "ro", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  if (::geteuid() != 0) {  // root ignores permission bits
+    EXPECT_THROW(WriteExrRGB(dir / "ro/x.exr", Gradient(8, 4), {}), Error);
+  }
+  EXPECT_EQ(dir.CountEntries(), 1);  // only "ro"
+}
+
+TEST(PresetIo, RoundTripIsExact) {
+  ScratchDir dir("preset");
+  render::Preset p = testing::RandomPreset(9, render::ModelVariant::kFfxvIso);
+  p.name = "roundtrip";
+  p.haziness_g = 0.8312345;
+  p.sun_tint_rgb = {1.0, 0.9, 0.8};
+  p.overcast_weight = 0.25;
+  render::SavePreset(p, dir / "p.json");
+  const render::Preset q = render::LoadPreset(dir / "p.json");
+  EXPECT_EQ(q.name, "roundtrip");
+  EXPECT_EQ(q.variant, render::ModelVariant::kFfxvIso);
+  EXPECT_EQ(q.haziness_g, p.haziness_g);
+  EXPECT_EQ(q.sun_tint_rgb, p.sun_tint_rgb);
+  EXPECT_EQ(q.overcast_weight, p.overcast_weight);
+  EXPECT_EQ(q.luts.rayleigh, p.luts.rayleigh);
+  EXPECT_EQ(q.luts.mie, p.luts.mie);
+  EXPECT_EQ(q.luts.isotropic, p.luts.isotropic);
+  EXPECT_EQ(q.luts.sun_transmittance, p.luts.sun_transmittance);
+  const auto j = ReadJsonFile(dir / "p.json");
+  EXPECT_EQ(j["parameters"]["haziness_g"]["unit"], "1");
+  EXPECT_EQ(j["parameters"]["sun_illuminance"]["unit"], "lux");
+  EXPECT_EQ(j["parameters"]["overcast_zenith_luminance"]["unit"], "cd/m^2");
+}
+
+// Writes a valid preset, applies `edit` to its JSON, and expects LoadPreset to fail with a
+// message containing `expect`.
+void ExpectPresetError(const std::function<void(nlohmann::json&)>& edit, const std::string& expect) {
+  ScratchDir dir("badpreset");
+  render::SavePreset(testing::RandomPreset(1, render::ModelVariant::kFfxv), dir / "p.json");
+  nlohmann::json j = ReadJsonFile(dir / "p.json");
+  edit(j);
+  testing::WriteText(dir / "p.json", j.dump());
+  try {
+    render::LoadPreset(dir / "p.json");
+    FAIL() << "accepted; expected an error containing '" << expect << "'";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("p.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST(PresetIo, BadPresetsNameTheField) {
+  ExpectPresetError([](auto& j) { j["parameters"]["haziness_g"]["value"] = 1.5; }, "haziness_g");
+  ExpectPresetError([](auto& j) { j["parameters"]["sun_illuminance"]["value"] = -1; }, "sun_illuminance");
+  ExpectPresetError([](auto& j) { j["parameters"]["overcast_weight"]["value"] = "half"; }, "overcast_weight");
+  ExpectPresetError([](auto& j) { j["parameters"]["sun_tint_rgb"]["value"] = {1, 2}; }, "sun_tint_rgb");
+  ExpectPresetError([](auto& j) { j["model"] = "bruneton"; }, "unknown model variant 'bruneton'");
+  ExpectPresetError([](auto& j) { j["format"] = "something-else"; }, "format");
+  ExpectPresetError([](auto& j) { j["luts"]["mie"] = "missing.exr"; }, "missing.exr");
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 12; }, "expected 32 x 12");
+  ExpectPresetError([](auto& j) { j.erase("luts"); }, "luts");
+}
+
+TEST(PresetIo, NanTexelAndCorruptJsonAreRejected) {
+  ScratchDir dir("nan");
+  render::Preset p = testing::RandomPreset(2, render::ModelVariant::kFfxv);
+  p.luts.mie[40] = std::nanf("");
+  EXPECT_THROW(render::SavePreset(p, dir / "p.json"), Error);
+  EXPECT_EQ(dir.CountEntries(), 0);  // nothing written
+  p.luts.mie[40] = 1.0f;
+  p.haziness_g = std::nan("");
+  try {
+    render::ValidatePreset(p, "test");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("haziness_g"), std::string::npos);
+  }
+  testing::WriteText(dir / "corrupt.json", "{\"format\": \"skycal-preset\", ");
+  try {
+    render::LoadPreset(dir / "corrupt.json");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos);
+  }
+  EXPECT_THROW(render::LoadPreset(dir / "absent.json"), Error);
+}
+
+}  // namespace
+}  // namespace skycal
