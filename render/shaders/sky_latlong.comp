@@ -4,7 +4,8 @@
 // source the CPU reference and the fit compile as C++.
 #extension GL_GOOGLE_include_directive : require
 
-layout(local_size_x = 16, local_size_y = 4, local_size_z = 1) in;
+// Workgroup size: specialization constants 0 and 1, set by the host (vulkan_renderer.cc).
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 #define SC_UNIFORM_VEC4(name) vec4 name;
 #define SC_UNIFORM_IVEC4(name) ivec4 name;
@@ -12,8 +13,9 @@ layout(std140, set = 0, binding = 0) uniform SkyUniformBlock {
 #include "sky_uniforms.glsl.h"
 } U;
 
-// LUT nodes: [table (rayleigh, mie, isotropic)][row][column][rgb], float.
-layout(std430, set = 0, binding = 1) readonly buffer LutBuffer { float lut_data[]; };
+// The LUTs at this frame's sun position, interpolated between rows by the host:
+// [table (rayleigh, mie, isotropic)][column] -> rgb (w unused).
+layout(std430, set = 0, binding = 1) readonly buffer LutSliceBuffer { vec4 lut_slice[]; };
 // Output: interleaved RGB float, row 0 at the top.
 layout(std430, set = 0, binding = 2) writeonly buffer OutBuffer { float out_rgb[]; };
 // Direction tables filled by the host in double: (sin, cos) of latitude per row
@@ -22,9 +24,8 @@ layout(std430, set = 0, binding = 3) readonly buffer TrigBuffer { vec2 trig[]; }
 
 #include "glsl_prelude.glsl.h"
 
-vec3 lut_texel(int lut, int row, int col) {
-  int i = ((lut * U.sizes.y + row) * U.sizes.x + col) * 3;
-  return vec3(lut_data[i], lut_data[i + 1], lut_data[i + 2]);
+vec3 lut_column_texel(int lut, int row0, float frow, int col) {
+  return lut_slice[lut * U.sizes.x + col].xyz;
 }
 
 #include "sky_model.glsl.h"

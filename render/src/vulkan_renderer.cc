@@ -18,7 +18,7 @@ extern const size_t sky_latlong_size;
 namespace skycal::render {
 namespace {
 
-constexpr uint32_t kLocalX = 16, kLocalY = 4;  // must match sky_latlong.comp
+constexpr uint32_t kLocalX = 16, kLocalY = 4;  // workgroup size, passed as specialization constants 0, 1
 // Bindings of sky_latlong.comp: 0 uniforms, 1 LUTs, 2 output, 3 direction trig table.
 constexpr uint32_t kBindings = 4;
 constexpr VkDescriptorType kBindingTypes[kBindings] = {
@@ -48,8 +48,8 @@ class VulkanSkyRenderer final : public SkyRenderer {
     const SkyParamsD params = ResolveSkyParams(preset, request);
     const SkyUniforms u = PackSkyUniforms(params, request.width, request.height);
 
-    const size_t table = preset.luts.table_size();
-    const VkDeviceSize lut_bytes = 3 * table * sizeof(float);
+    const int columns = preset.luts.grid.n_gamma;
+    const VkDeviceSize lut_bytes = 3 * static_cast<VkDeviceSize>(columns) * 4 * sizeof(float);
     const VkDeviceSize out_bytes = static_cast<VkDeviceSize>(request.width) * request.height * 3 * sizeof(float);
     bool rebind = false;
     rebind |= Ensure(uniforms_, sizeof(SkyUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, false);
@@ -61,14 +61,7 @@ class VulkanSkyRenderer final : public SkyRenderer {
     if (trig_width_ != request.width || trig_height_ != request.height) FillTrigTable(preset, request.width, request.height);
 
     std::memcpy(uniforms_.mapped, &u, sizeof(u));
-    float* lut_dst = static_cast<float*>(luts_.mapped);
-    std::memcpy(lut_dst, preset.luts.rayleigh.data(), table * sizeof(float));
-    std::memcpy(lut_dst + table, preset.luts.mie.data(), table * sizeof(float));
-    if (preset.variant == ModelVariant::kFfxvIso) {
-      std::memcpy(lut_dst + 2 * table, preset.luts.isotropic.data(), table * sizeof(float));
-    } else {
-      std::memset(lut_dst + 2 * table, 0, table * sizeof(float));  // never read: weight 0
-    }
+    FillLutSlice(preset, params, static_cast<float*>(luts_.mapped));
     ctx_->FlushForDevice(uniforms_);
     ctx_->FlushForDevice(luts_);
 
@@ -92,6 +85,26 @@ class VulkanSkyRenderer final : public SkyRenderer {
   }
 
  private:
+  // The LUTs interpolated (in double, by the shared model's own hook) to this frame's sun
+  // row position: one vec4 per table and column. Tables the variant does not use stay 0.
+  void FillLutSlice(const Preset& preset, const SkyParamsD& params, float* dst) {
+    const CpuLutSource source{&preset.luts};
+    CpuSkyModel m(source);
+    const auto lr = m.lut_row(params.sun_dir.y, params);
+    const int columns = preset.luts.grid.n_gamma;
+    const int tables = preset.variant == ModelVariant::kFfxvIso ? 3 : 2;
+    for (int t = 0; t < 3; ++t) {
+      for (int c = 0; c < columns; ++c) {
+        float* v = dst + 4 * (t * columns + c);
+        const auto texel = t < tables ? m.lut_column_texel(t, lr.row0, lr.frow, c) : glsl::Vec3<double>(0.0);
+        v[0] = static_cast<float>(texel.x);
+        v[1] = static_cast<float>(texel.y);
+        v[2] = static_cast<float>(texel.z);
+        v[3] = 0.0f;
+      }
+    }
+  }
+
   // Per-row (sin, cos) of latitude then per-column (sin, cos) of longitude, in double
   // through the shared model's angle functions, rounded once to float.
   void FillTrigTable(const Preset& preset, int width, int height) {
@@ -153,6 +166,10 @@ class VulkanSkyRenderer final : public SkyRenderer {
     cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     cpci.stage.module = shader_;
     cpci.stage.pName = "main";
+    const uint32_t local_size[2] = {kLocalX, kLocalY};
+    const VkSpecializationMapEntry entries[2] = {{0, 0, sizeof(uint32_t)}, {1, sizeof(uint32_t), sizeof(uint32_t)}};
+    VkSpecializationInfo spec{2, entries, sizeof(local_size), local_size};
+    cpci.stage.pSpecializationInfo = &spec;
     cpci.layout = pipeline_layout_;
     CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
 
