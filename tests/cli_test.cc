@@ -1,0 +1,160 @@
+// The skycal binary end to end: exit codes, JSON summaries, outputs, and bad input
+// (clear message, non-zero exit, nothing left behind).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/core/json_file.h"
+#include "skycal/render/preset.h"
+#include "test_presets.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+
+using testing::ScratchDir;
+
+struct Result {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// Runs `skycal ARGS` (with optional environment prefix) capturing stdout and stderr.
+Result Skycal(const std::string& args, const std::string& env = "") {
+  static int n = 0;
+  const std::string base = (std::filesystem::temp_directory_path() / ("skycal-cli-" + std::to_string(::getpid()) + "-" +
+                                                                      std::to_string(n++)))
+                               .string();
+  const std::string cmd = env + " " + SKYCAL_BINARY + " " + args + " >" + base + ".out 2>" + base + ".err";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(base + ".out");
+  r.err = Slurp(base + ".err");
+  std::filesystem::remove(base + ".out");
+  std::filesystem::remove(base + ".err");
+  return r;
+}
+
+TEST(Cli, VersionAndHelp) {
+  Result r = Skycal("--version");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_NE(r.out.find("skycal 0."), std::string::npos);
+  r = Skycal("render --help");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_NE(r.out.find("--sun-elevation"), std::string::npos);
+  EXPECT_NE(Skycal("no-such-verb").rc, 0);
+}
+
+TEST(Cli, RenderDefaultPresetWritesExrPngAndJson) {
+  ScratchDir dir("cli-render");
+  const Result r = Skycal("render --sun-elevation 30 --sun-azimuth 90 --size 256x128 --out " + (dir / "sky.exr") +
+                          " --png " + (dir / "sky.png") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["ok"].get<bool>());
+  EXPECT_EQ(j["backend"], "vulkan");
+  EXPECT_NEAR(j["sun_elevation_deg"].get<double>(), 30.0, 1e-9);
+  EXPECT_NEAR(j["sun_azimuth_deg"].get<double>(), 90.0, 1e-9);
+  const capture::LatLongFrame f = capture::ReadLatLongFrame(dir / "sky.exr");
+  ASSERT_TRUE(f.sun_direction.has_value());
+  EXPECT_NEAR((*f.sun_direction)[0], std::cos(M_PI / 6), 1e-6);  // azimuth 90 deg -> +X
+  EXPECT_NEAR((*f.sun_direction)[1], 0.5, 1e-6);
+  EXPECT_EQ(f.radiance.width, 256);
+  EXPECT_GT(std::filesystem::file_size(dir / "sky.png"), 1000u);
+  EXPECT_EQ(dir.CountEntries(), 2);  // no temporaries left
+}
+
+TEST(Cli, CpuAndVulkanBackendsAgreeThroughTheBinary) {
+  ScratchDir dir("cli-backends");
+  ASSERT_EQ(Skycal("render --sun-dir 0.3,0.5,-0.8 --size 128x64 --backend cpu --out " + (dir / "c.exr")).rc, 0);
+  ASSERT_EQ(Skycal("render --sun-dir 0.3,0.5,-0.8 --size 128x64 --backend vulkan --out " + (dir / "v.exr")).rc, 0);
+  const auto c = capture::ReadLatLongFrame(dir / "c.exr"), v = capture::ReadLatLongFrame(dir / "v.exr");
+  double worst = 0.0;
+  for (size_t i = 0; i < c.radiance.pixels.size(); ++i) {
+    const double a = c.radiance.pixels[i], b = v.radiance.pixels[i];
+    if (a > 1e6) continue;  // sun disc pixels (edge pixels may flip): covered by the parity test
+    worst = std::max(worst, std::abs(a - b) / std::max(a, 1e-30));
+  }
+  EXPECT_LT(worst, 2e-5);  // same threshold and reason as render_parity_test
+}
+
+// Expects failure: exit code 1, `needle` in stderr, and nothing written in `dir`.
+void ExpectFailure(const std::string& args, const std::string& needle, const ScratchDir& dir, const std::string& env = "") {
+  const int before = dir.CountEntries();
+  const Result r = Skycal(args, env);
+  EXPECT_EQ(r.rc, 1) << args << "\n" << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << "expected '" << needle << "' in: " << r.err;
+  EXPECT_EQ(dir.CountEntries(), before) << "output left behind by: " << args;
+}
+
+TEST(Cli, BadInputIsRefusedClearlyAndLeavesNothing) {
+  ScratchDir dir("cli-bad");
+  const std::string out = " --out " + (dir / "o.exr");
+  const std::string sun = " --sun-elevation 10 --sun-azimuth 0";
+  ExpectFailure("render" + sun + " --preset " + (dir / "nope.json") + out, "nope.json", dir);
+  testing::WriteText(dir / "corrupt.json", "{ not json");
+  ExpectFailure("render" + sun + " --preset " + (dir / "corrupt.json") + out, "not valid JSON", dir);
+  // A preset with a NaN parameter and one with an unknown variant.
+  render::SavePreset(testing::RandomPreset(4, render::ModelVariant::kFfxv), dir / "p.json");
+  auto j = ReadJsonFile(dir / "p.json");
+  j["parameters"]["haziness_g"]["value"] = "nan";
+  testing::WriteText(dir / "nan.json", j.dump());
+  ExpectFailure("render" + sun + " --preset " + (dir / "nan.json") + out, "haziness_g", dir);
+  j = ReadJsonFile(dir / "p.json");
+  j["parameters"]["sun_angular_radius"]["value"] = 45.0;
+  testing::WriteText(dir / "oob.json", j.dump());
+  ExpectFailure("render" + sun + " --preset " + (dir / "oob.json") + out, "sun_angular_radius", dir);
+  j = ReadJsonFile(dir / "p.json");
+  j["model"] = "ffxv-pro";
+  testing::WriteText(dir / "variant.json", j.dump());
+  ExpectFailure("render" + sun + " --preset " + (dir / "variant.json") + out, "unknown model variant 'ffxv-pro'", dir);
+  ExpectFailure("render" + sun + " --backend metal" + out, "unknown backend 'metal'", dir);
+  ExpectFailure("render --sun-elevation 100 --sun-azimuth 0" + out, "--sun-elevation", dir);
+  ExpectFailure("render --sun-elevation nan --sun-azimuth 0" + out, "--sun-elevation", dir);
+  ExpectFailure("render --sun-dir 0,0,0" + out, "--sun-dir", dir);
+  ExpectFailure("render" + sun + " --sun-dir 0,1,0" + out, "not both", dir);
+  ExpectFailure("render" + out, "sun direction is required", dir);
+  ExpectFailure("render" + sun + " --size 0x10" + out, "--size", dir);
+  ExpectFailure("render" + sun + " --out " + (dir / "missing-dir/o.exr"), "does not exist", dir);
+  ExpectFailure("render" + sun + " --out " + (dir / "o.png"), "--out", dir);
+  ExpectFailure("render" + sun + " --frobnicate 3" + out, "unknown option '--frobnicate'", dir);
+  // The PNG cannot be written: the EXR must not be left behind either.
+  ExpectFailure("render" + sun + out + " --png " + (dir / "missing-dir/o.png"), "does not exist", dir);
+  // Inputs are never modified.
+  EXPECT_EQ(Slurp(dir / "corrupt.json"), "{ not json");
+}
+
+TEST(Cli, NoVulkanDeviceGivesAClearMessage) {
+  ScratchDir dir("cli-novk");
+  const std::string env = "VK_DRIVER_FILES=/nonexistent/icd.json VK_ICD_FILENAMES=/nonexistent/icd.json";
+  ExpectFailure("render --sun-elevation 10 --sun-azimuth 0 --out " + (dir / "o.exr"), "no Vulkan device", dir, env);
+  // The CPU reference still works without a driver.
+  const Result r = Skycal("render --sun-elevation 10 --sun-azimuth 0 --size 64x32 --backend cpu --out " + (dir / "o.exr"), env);
+  EXPECT_EQ(r.rc, 0) << r.err;
+}
+
+TEST(Cli, JsonFailureSummary) {
+  ScratchDir dir("cli-json");
+  const Result r = Skycal("render --json --sun-elevation 10 --sun-azimuth 0 --backend x --out " + (dir / "o.exr"));
+  EXPECT_EQ(r.rc, 1);
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["ok"].get<bool>());
+  EXPECT_NE(j["error"].get<std::string>().find("unknown backend"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace skycal
