@@ -141,8 +141,10 @@ json PresetToJson(const Preset& preset_in, const std::string& lut_stem) {
       {"mie", lut_stem + ".mie.exr"},
       {"sun_transmittance", lut_stem + ".sun_transmittance.exr"}};
   if (preset.variant == ModelVariant::kFfxvIso) luts["isotropic"] = lut_stem + ".isotropic.exr";
-  return {{"format", kFormat}, {"format_version", kFormatVersion}, {"tool_version", kSkycalVersion},
-          {"name", preset.name}, {"model", ToString(preset.variant)}, {"parameters", params}, {"luts", luts}};
+  json j = {{"format", kFormat}, {"format_version", kFormatVersion}, {"tool_version", kSkycalVersion},
+            {"name", preset.name}, {"model", ToString(preset.variant)}, {"parameters", params}, {"luts", luts}};
+  if (std::isfinite(preset.time_of_day_h)) j["time_of_day_h"] = preset.time_of_day_h;
+  return j;
 }
 
 namespace {
@@ -197,6 +199,12 @@ Preset LoadPreset(const std::string& path) {
   const json& model = Require(j, "model", path, "");
   if (!model.is_string()) throw Error(Field(path, "model") + ": expected a string");
   p.variant = ParseModelVariant(model.get<std::string>(), Field(path, "model"));
+  if (j.contains("time_of_day_h")) {
+    p.time_of_day_h = RequireNumber(j["time_of_day_h"], path, "time_of_day_h");
+    if (!(p.time_of_day_h >= 0.0 && p.time_of_day_h < 24.0)) {
+      throw Error(Field(path, "time_of_day_h") + ": expected hours in [0, 24)");
+    }
+  }
   const json& params = Require(j, "parameters", path, "");
   for (const ParamSpec& s : PresetParameterSpecs()) {
     const std::string field = std::string("parameters.") + s.name + ".value";
@@ -240,7 +248,7 @@ Preset LoadPreset(const std::string& path) {
   return p;
 }
 
-void SavePreset(const Preset& preset, const std::string& json_path) {
+void SavePreset(const Preset& preset, const std::string& json_path, const json* extra) {
   ValidatePreset(preset, json_path);
   const fs::path jp(json_path);
   const std::string stem = jp.stem().string();
@@ -254,7 +262,11 @@ void SavePreset(const Preset& preset, const std::string& json_path) {
   WriteLutImage((dir / (stem + ".sun_transmittance.exr")).string(), preset.luts.sun_transmittance, 1, g.n_theta,
                 "sun_transmittance", g);
   // The JSON goes last: a preset whose JSON exists has all its LUTs.
-  WriteJsonFileAtomically(json_path, PresetToJson(preset, stem));
+  json j = PresetToJson(preset, stem);
+  if (extra) {
+    for (auto it = extra->begin(); it != extra->end(); ++it) j[it.key()] = it.value();
+  }
+  WriteJsonFileAtomically(json_path, j);
 }
 
 double LutRowSunZenithRad(const LutGrid& g, int row) {

@@ -2,6 +2,7 @@
 // plus the RGB LUTs (stored as EXR files next to the preset JSON).
 #pragma once
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,7 @@ struct Preset {
   double sun_angular_radius_deg = 0.2666;   // deg (mean solar semi-diameter)
   double sun_limb_darkening = 0.6;          // linear limb-darkening coefficient u, 1
   double ground_albedo = 0.1;               // 1, diffuse ground below the horizon
+  double time_of_day_h = std::numeric_limits<double>::quiet_NaN();  // hours [0, 24), NaN: none
   SkyLuts luts;
 };
 
@@ -66,8 +68,9 @@ void ValidatePreset(const Preset& preset, const std::string& origin);
 nlohmann::json PresetToJson(const Preset& preset, const std::string& lut_stem);
 // Reads a preset JSON and its LUT EXRs (paths relative to the JSON's directory).
 Preset LoadPreset(const std::string& path);
-// Writes `<dir>/<stem>.json` and `<dir>/<stem>.<lut>.exr`, each atomically.
-void SavePreset(const Preset& preset, const std::string& json_path);
+// Writes `<dir>/<stem>.json` and `<dir>/<stem>.<lut>.exr`, each atomically. `extra`
+// (optional) adds top-level keys to the JSON, e.g. the fit's provenance.
+void SavePreset(const Preset& preset, const std::string& json_path, const nlohmann::json* extra = nullptr);
 
 // Where the LUT nodes sit (see render/model/sky_model.glsl.h): the sun zenith angle of a
 // row and the view elevation of a column, radians.

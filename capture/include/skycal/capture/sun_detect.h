@@ -1,0 +1,27 @@
+// Finding the sun in a lat-long frame: the centroid of the brightest region of the upper
+// hemisphere, with clipping detected.
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+
+#include "skycal/core/image.h"
+
+namespace skycal::capture {
+
+struct SunDetection {
+  std::array<double, 3> direction{};  // unit vector toward the region's centroid
+  double peak_luminance = 0.0;        // cd/m^2 (Rec.709 luminance of the brightest pixel)
+  double contrast = 0.0;              // peak / median luminance of the upper hemisphere
+  int region_pixels = 0;              // pixels in the region (>= half the peak, within 5 deg)
+  bool clipped = false;               // the peak is a plateau of equal values (sensor/encoder clamp)
+};
+
+// Returns nothing (and says why in *why) when the upper hemisphere has no distinct sun:
+// peak under `min_contrast` times the median, or no finite positive pixel.
+std::optional<SunDetection> DetectSun(const ImageRGB& latlong, std::string* why, double min_contrast = 20.0);
+
+// Rec.709 / sRGB luminance weights (ITU-R BT.709).
+inline double Luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+
+}  // namespace skycal::capture

@@ -1,0 +1,267 @@
+#include "fit_verb.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <iostream>
+#include <sstream>
+
+#include "args.h"
+#include "fit_report.h"
+#include "render_verb.h"
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/sha256.h"
+#include "skycal/core/version.h"
+#include "skycal/fit/reference.h"
+#include "skycal/fit/sky_fit.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference skies
+
+  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]
+             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]
+             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]
+
+  --reference F.exr     lat-long EXR (project convention); repeat for a day of references
+  --model NAME          ffxv-iso (default: + isotropic LUT) or ffxv (the talk's two terms)
+  --backend NAME        vulkan (default: the objective renders through the compute shaders) or cpu
+  --sun-dir X,Y,Z       sun direction for every reference (else the EXR's sunDirection
+  --sun-elevation DEG   attribute, else detected in the image, with a warning)
+  --sun-azimuth DEG
+  --mask MASK.exr       user mask, same size as the references: R < 0.5 excludes a pixel
+  --init PRESET.json    starting preset (default: the bundled default_clear preset)
+  --absolute            references are calibrated (cd/m^2): the exposure is not fitted
+  --sun-cone DEG        mask this cone around the sun (default 3)
+  --loss NAME           cauchy (default), huber or none: robust loss on log residuals
+  --loss-scale S        robust loss scale in natural-log units (default 0.05, ~5%)
+  --pyramid W1,W2,...   coarse-to-fine level widths (default 64,128,... up to min(width, 512))
+  --max-iterations N    per pyramid level (default 50)
+  --smoothness L        second-difference prior along sun zenith (default 1e-3)
+  --prior-weight L      pull toward the initial LUT (default 1e-7)
+  --time HOURS          time of day of the reference(s), recorded for `skycal export`
+  --no-haziness         hold g at its initial value
+  --numeric-derivatives central-difference Jacobians (the benchmark's baseline)
+  --quiet               no per-iteration progress
+  --out DIR             output directory: preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json
+  --json                print fit.json on stdout
+)";
+
+// Stage outputs in a sibling temporary directory; move into place only when complete.
+class StagedDirectory {
+ public:
+  explicit StagedDirectory(const std::string& dir) : final_(fs::absolute(dir)) {
+    std::error_code ec;
+    if (!fs::is_directory(final_.parent_path(), ec)) {
+      throw Error("--out " + dir + ": parent directory '" + final_.parent_path().string() + "' does not exist");
+    }
+    if (fs::exists(final_, ec)) {
+      if (!fs::is_directory(final_, ec)) throw Error("--out " + dir + ": exists and is not a directory");
+      const bool empty = fs::is_empty(final_, ec);
+      const bool previous_fit = fs::exists(final_ / "fit.json", ec);
+      if (!empty && !previous_fit) {
+        throw Error("--out " + dir + ": directory exists and holds files that are not a previous skycal fit; "
+                    "refusing to overwrite");
+      }
+    }
+    staging_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    fs::remove_all(staging_, ec);
+    if (!fs::create_directories(staging_ / "fit", ec)) {
+      throw Error("--out " + dir + ": cannot create a staging directory beside it (" + ec.message() + ")");
+    }
+  }
+  ~StagedDirectory() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(staging_, ec);
+  }
+  std::string operator/(const std::string& name) const { return (staging_ / name).string(); }
+  void Commit() {
+    std::error_code ec;
+    if (fs::exists(final_, ec)) fs::remove_all(final_, ec);
+    fs::rename(staging_, final_, ec);
+    if (ec) throw Error(final_.string() + ": could not move the finished output into place (" + ec.message() + ")");
+    committed_ = true;
+  }
+
+ private:
+  fs::path final_, staging_;
+  bool committed_ = false;
+};
+
+const char* LossName(fit::RobustLoss l) {
+  return l == fit::RobustLoss::kCauchy ? "cauchy" : (l == fit::RobustLoss::kHuber ? "huber" : "none");
+}
+
+}  // namespace
+
+bool FitVerbOptions::IsValid(std::string* why) const {
+  if (references.empty()) {
+    *why = "at least one --reference is required";
+    return false;
+  }
+  if (out_dir.empty()) {
+    *why = "--out DIR is required";
+    return false;
+  }
+  return fit.IsValid(why);
+}
+
+nlohmann::json RunFitImpl(const FitVerbOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  StagedDirectory out(o.out_dir);  // fails early on an unusable --out
+  const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
+  render::Preset init = render::LoadPreset(init_path);
+  std::vector<fit::Reference> refs;
+  std::set<std::string> names;
+  for (const std::string& path : o.references) {
+    refs.push_back(fit::LoadReference(path, o.fit));
+    if (!names.insert(refs.back().name).second) {
+      throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
+    }
+    const auto& r = refs.back();
+    Log("fit", r.path + ": " + std::to_string(r.radiance.width) + "x" + std::to_string(r.radiance.height) + ", sun from " +
+                   r.sun_source + " (elevation " + std::to_string(latlong::ElevationDeg(r.sun_dir)) + " deg), " +
+                   std::to_string(r.counts.sky) + " sky pixels fitted");
+    for (const auto& w : r.warnings) Log("fit", "warning: " + w);
+  }
+  fit::FitOptions fo = o.fit;
+  if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
+  auto renderer = render::CreateRenderer(fo.backend);
+  Log("fit", "objective backend: " + renderer->Describe());
+  fit::FitResult result = fit::FitSky(refs, init, fo, *renderer);
+  result.preset.name = fs::path(o.out_dir).filename().string();
+  if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
+
+  nlohmann::json per_ref = nlohmann::json::array();
+  nlohmann::json inputs = nlohmann::json::array();
+  nlohmann::json warnings = nlohmann::json::array();
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const auto& ref = refs[r];
+    const auto& rf = result.references[r];
+    capture::LatLongFrame frame;
+    frame.radiance = rf.rendered;
+    frame.sun_direction = ref.sun_dir;
+    frame.extra.strings["skycalReference"] = ref.path;
+    frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
+    capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);
+    per_ref.push_back({{"name", ref.name},
+                       {"path", ref.path},
+                       {"rel_rmse", rf.errors.rel_rmse},
+                       {"log_rmse", rf.errors.log_rmse},
+                       {"exposure", rf.exposure},
+                       {"sun_direction", ref.sun_dir},
+                       {"sun_elevation_deg", latlong::ElevationDeg(ref.sun_dir)},
+                       {"sun_source", ref.sun_source},
+                       {"observed_lut_rows", rf.observed_rows},
+                       {"clip_level", ref.clip_level},
+                       {"pixels", fit::MaskCountsToJson(ref.counts)}});
+    inputs.push_back({{"path", ref.path}, {"sha256", ref.sha256}});
+    for (const auto& w : ref.warnings) warnings.push_back(w);
+  }
+  const nlohmann::json resolved = {
+      {"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
+      {"absolute", fo.absolute},               {"sun_cone_deg", fo.sun_cone_deg},
+      {"clip_fraction", fo.clip_fraction},     {"mask", fo.mask_path},
+      {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
+      {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
+      {"smoothness", fo.smoothness},           {"column_smoothness", fo.column_smoothness},
+      {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
+      {"numeric_derivatives", fo.numeric_derivatives}};
+  nlohmann::json summary = {{"references", per_ref},
+                            {"haziness_g", result.preset.haziness_g},
+                            {"time_s", result.time_s},
+                            {"iterations", result.iterations},
+                            {"termination", result.termination},
+                            {"levels", result.levels},
+                            {"skipped", result.skipped},
+                            {"unobserved_lut_rows", result.unobserved_rows},
+                            {"backend_device", result.backend_description},
+                            {"warnings", warnings},
+                            {"options", resolved}};
+  const nlohmann::json provenance = {{"provenance",
+                                      {{"tool", std::string("skycal ") + kSkycalVersion},
+                                       {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
+                                       {"inputs", inputs},
+                                       {"options", resolved},
+                                       {"final_errors", per_ref}}}};
+  render::SavePreset(result.preset, out / "preset.json", &provenance);
+  WriteFitReport(out / "report.png", refs, result);
+  summary["out"] = o.out_dir;
+  WriteJsonFileAtomically(out / "fit.json", summary);
+  out.Commit();
+  for (const auto& r : per_ref) {
+    Log("fit", r["name"].get<std::string>() + ": rel RMSE " + std::to_string(100.0 * r["rel_rmse"].get<double>()) +
+                   "%, log RMSE " + std::to_string(r["log_rmse"].get<double>()));
+  }
+  Log("fit", "wrote " + o.out_dir + " in " + std::to_string(result.time_s) + " s (" +
+                 std::to_string(result.iterations) + " iterations)");
+  return summary;
+}
+
+int RunFit(int argc, char** argv) {
+  if (WantsHelp(argc, argv)) {
+    std::cout << kHelp;
+    return 0;
+  }
+  return RunVerb("fit", WantsJson(argc, argv), [&]() {
+    Args a(argc, argv,
+           {"reference", "model", "backend", "sun-dir", "sun-elevation", "sun-azimuth", "mask", "init", "out", "sun-cone",
+            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction"},
+           {"json", "absolute", "no-haziness", "numeric-derivatives", "quiet"});
+    FitVerbOptions o;
+    o.references = a.Values("reference");
+    o.init_preset = a.Value("init").value_or("");
+    o.out_dir = a.Value("out").value_or("");
+    fit::FitOptions& f = o.fit;
+    if (auto m = a.Value("model")) f.variant = render::ParseModelVariant(*m, "--model");
+    if (auto b = a.Value("backend")) f.backend = render::ParseBackend(*b, "--backend");
+    const auto el = a.Number("sun-elevation"), az = a.Number("sun-azimuth");
+    if (a.Has("sun-dir") && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
+    if (el.has_value() != az.has_value()) throw Error("--sun-elevation and --sun-azimuth go together");
+    if (el && (*el < -90.0 || *el > 90.0)) throw Error("--sun-elevation: expected degrees in [-90, 90]");
+    if (el) f.sun_dir = latlong::DirectionFromElevationAzimuthDeg(*el, *az);
+    if (auto d = a.Vec3("sun-dir")) f.sun_dir = *d;
+    f.mask_path = a.Value("mask").value_or("");
+    f.absolute = a.Has("absolute");
+    if (auto v = a.Number("sun-cone")) f.sun_cone_deg = *v;
+    if (auto v = a.Number("clip-fraction")) f.clip_fraction = *v;
+    if (auto l = a.Value("loss")) {
+      if (*l == "cauchy") f.loss = fit::RobustLoss::kCauchy;
+      else if (*l == "huber") f.loss = fit::RobustLoss::kHuber;
+      else if (*l == "none") f.loss = fit::RobustLoss::kNone;
+      else throw Error("--loss: unknown loss '" + *l + "' (expected cauchy, huber or none)");
+    }
+    if (auto v = a.Number("loss-scale")) f.loss_scale = *v;
+    if (auto p = a.Value("pyramid")) {
+      std::stringstream ss(*p);
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        const double w = ParseNumber(item, "pyramid");
+        if (w != std::floor(w)) throw Error("--pyramid: expected integer widths");
+        f.pyramid_widths.push_back(static_cast<int>(w));
+      }
+    }
+    if (auto v = a.Number("max-iterations")) {
+      if (*v != std::floor(*v)) throw Error("--max-iterations: expected an integer");
+      f.max_iterations_per_level = static_cast<int>(*v);
+    }
+    if (auto v = a.Number("smoothness")) f.smoothness = *v;
+    if (auto v = a.Number("prior-weight")) f.prior_weight = *v;
+    if (auto v = a.Number("time")) f.time_of_day_h = *v;
+    f.fit_haziness = !a.Has("no-haziness");
+    f.numeric_derivatives = a.Has("numeric-derivatives");
+    f.verbose = !a.Has("quiet");
+    return RunFitImpl(o);
+  });
+}
+
+}  // namespace skycal::cli

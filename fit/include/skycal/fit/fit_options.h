@@ -1,0 +1,44 @@
+// Options of a sky fit (`skycal fit`), validated once with IsValid (Ceres style).
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
+
+namespace skycal::fit {
+
+enum class RobustLoss { kNone, kCauchy, kHuber };
+
+struct FitOptions {
+  render::ModelVariant variant = render::ModelVariant::kFfxvIso;
+  render::Backend backend = render::Backend::kVulkan;  // evaluates the objective
+  // Sun direction for every reference (else each reference's sunDirection attribute, else
+  // detection in the image).
+  std::optional<std::array<double, 3>> sun_dir;
+  double sun_cone_deg = 3.0;        // pixels within this angle of the sun are masked, degrees
+  double clip_fraction = 0.98;      // with a clipping plateau, pixels >= this x the clip level are masked
+  std::string mask_path;            // optional user mask EXR (R < 0.5 excludes the pixel)
+  bool absolute = false;            // references are calibrated: the exposure is fixed at 1
+  RobustLoss loss = RobustLoss::kCauchy;
+  double loss_scale = 0.05;         // residual scale of the robust loss, natural-log units (~5%)
+  // Coarse-to-fine widths of the area-averaged pyramid, last = full fit resolution (pixels).
+  // Empty: automatic (64, 128, ... up to the reference width, at most 512).
+  std::vector<int> pyramid_widths;
+  int max_iterations_per_level = 50;
+  double smoothness = 1e-3;         // weight of the second-difference prior along sun zenith (rows)
+  double column_smoothness = 1e-4;  // second-difference prior along view elevation, only where a
+                                    // column has no data (it extrapolates, e.g. to the horizon)
+  double prior_weight = 1e-7;       // weight pulling each LUT entry (log) toward the initial preset
+  bool fit_haziness = true;
+  bool fit_overcast = true;         // fit the overcast zenith luminance (weight held, see docs)
+  bool numeric_derivatives = false; // baseline for the benchmark: central differences
+  bool verbose = true;              // progress on stderr
+  std::optional<double> time_of_day_h;  // hours, recorded in the preset for export
+
+  bool IsValid(std::string* why) const;
+};
+
+}  // namespace skycal::fit

@@ -1,0 +1,34 @@
+#include "skycal/fit/fit_options.h"
+
+#include <cmath>
+
+namespace skycal::fit {
+
+bool FitOptions::IsValid(std::string* why) const {
+  auto bad = [&](const std::string& w) {
+    *why = w;
+    return false;
+  };
+  if (!(sun_cone_deg >= 0.0 && sun_cone_deg <= 45.0)) return bad("--sun-cone: expected degrees in [0, 45]");
+  if (!(clip_fraction > 0.0 && clip_fraction <= 1.0)) return bad("--clip-fraction: expected a value in (0, 1]");
+  if (!(loss_scale > 0.0 && loss_scale <= 10.0)) return bad("--loss-scale: expected natural-log units in (0, 10]");
+  if (max_iterations_per_level < 1 || max_iterations_per_level > 10000) return bad("--max-iterations: expected 1..10000");
+  for (double w : {smoothness, column_smoothness, prior_weight}) {
+    if (!(w >= 0.0 && w <= 1e6)) return bad("--smoothness/--prior-weight: expected a weight in [0, 1e6]");
+  }
+  int last = 0;
+  for (int w : pyramid_widths) {
+    if (w < 16 || w > 16384 || w % 2 || w <= last) {
+      return bad("--pyramid: expected increasing even widths in [16, 16384], got " + std::to_string(w));
+    }
+    last = w;
+  }
+  if (sun_dir) {
+    const auto& d = *sun_dir;
+    if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 1e-9)) return bad("--sun-dir: expected a non-zero vector");
+  }
+  if (time_of_day_h && !(*time_of_day_h >= 0.0 && *time_of_day_h < 24.0)) return bad("--time: expected hours in [0, 24)");
+  return true;
+}
+
+}  // namespace skycal::fit

@@ -1,0 +1,29 @@
+// The fitted quantities, in the form the optimiser sees them: LUT entries in log space (so
+// they stay positive and relative changes are uniform across five orders of magnitude),
+// haziness g, log overcast zenith luminance, and one log exposure per reference.
+#pragma once
+#include <vector>
+
+#include "skycal/render/preset.h"
+
+namespace skycal::fit {
+
+struct FitState {
+  render::Preset preset;        // everything not fitted (grid, variant, sun, overcast weight)
+  int tables = 2;               // 2: Rayleigh, Mie (ffxv); 3: + isotropic (ffxv-iso)
+  std::vector<double> log_lut;  // [table][row][col][channel], natural log of cd/m^2 * sr
+  double g = 0.8;
+  double log_overcast_zenith = 0.0;  // log cd/m^2
+  std::vector<double> log_exposure;  // per reference: fitted image = exposure * model
+
+  size_t Index(int table, int row, int col, int ch) const {
+    const auto& gr = preset.luts.grid;
+    return ((static_cast<size_t>(table) * gr.n_theta + row) * gr.n_gamma + col) * 3 + ch;
+  }
+  // Initial state from a preset; tables with zeros start at a floor (log of 0 is -inf).
+  static FitState FromPreset(const render::Preset& init, render::ModelVariant variant, int references);
+  // The model the state describes (floats, as the renderer and the preset files hold it).
+  render::Preset ToPreset() const;
+};
+
+}  // namespace skycal::fit

@@ -1,0 +1,126 @@
+#include "skycal/fit/reference.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/sun_detect.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/sha256.h"
+
+namespace skycal::fit {
+
+nlohmann::json MaskCountsToJson(const MaskCounts& c) {
+  return {{"sky_fitted", c.sky},     {"below_horizon", c.below_horizon}, {"sun_cone", c.sun_cone},
+          {"invalid", c.invalid},    {"clipped", c.clipped},             {"user_masked", c.user_masked}};
+}
+
+namespace {
+
+// A clipping plateau: the largest channel value shared (to 1e-4) by more than 4 pixels.
+double FindClipLevel(const ImageRGB& img) {
+  float peak = 0.0f;
+  for (float v : img.pixels) {
+    if (std::isfinite(v)) peak = std::max(peak, v);
+  }
+  if (!(peak > 0.0f)) return 0.0;
+  int at_peak = 0;
+  for (float v : img.pixels) {
+    if (std::isfinite(v) && v >= peak * (1.0f - 1e-4f)) ++at_peak;
+  }
+  return at_peak > 4 ? peak : 0.0;
+}
+
+}  // namespace
+
+Reference LoadReference(const std::string& path, const FitOptions& o) {
+  Reference r;
+  r.path = path;
+  r.name = std::filesystem::path(path).stem().string();
+  capture::LatLongFrame frame = capture::ReadLatLongFrame(path);
+  r.sha256 = Sha256OfFile(path);
+  r.radiance = std::move(frame.radiance);
+  if (auto it = frame.extra.strings.find("skycalWarning"); it != frame.extra.strings.end()) {
+    r.warnings.push_back(path + ": " + it->second);
+  }
+  if (auto it = frame.extra.floats.find("skycalTimeOfDay"); it != frame.extra.floats.end()) r.time_of_day_h = it->second;
+  const int w = r.radiance.width, h = r.radiance.height;
+
+  if (o.sun_dir) {
+    r.sun_dir = latlong::Normalized(*o.sun_dir, "--sun-dir");
+    r.sun_source = "option";
+  } else if (frame.sun_direction) {
+    r.sun_dir = *frame.sun_direction;
+    r.sun_source = "attribute";
+  } else {
+    std::string why;
+    auto d = capture::DetectSun(r.radiance, &why);
+    if (!d) {
+      throw Error(path + ": no sun direction: no --sun-dir/--sun-elevation option, no 'sunDirection' attribute, and "
+                  "detection failed (" + why + ")");
+    }
+    r.sun_dir = d->direction;
+    r.sun_source = "detected";
+    r.warnings.push_back(path + ": sun direction detected from the image (elevation " +
+                         std::to_string(latlong::ElevationDeg(r.sun_dir)) + " deg, azimuth " +
+                         std::to_string(latlong::AzimuthDeg(r.sun_dir)) + " deg" + (d->clipped ? ", clipped" : "") +
+                         "); pass --sun-dir to override");
+  }
+
+  std::vector<float> user;
+  if (!o.mask_path.empty()) {
+    ExrRGB m = ReadExrRGB(o.mask_path);
+    if (m.image.width != w || m.image.height != h) {
+      throw Error(o.mask_path + ": mask is " + std::to_string(m.image.width) + "x" + std::to_string(m.image.height) +
+                  ", expected the reference's " + std::to_string(w) + "x" + std::to_string(h));
+    }
+    user = std::move(m.image.pixels);
+  }
+
+  r.clip_level = FindClipLevel(r.radiance);
+  const double clip_threshold = r.clip_level > 0 ? o.clip_fraction * r.clip_level : INFINITY;
+  const double cos_cone = std::cos(o.sun_cone_deg * M_PI / 180.0);
+  r.pixel_class.assign(static_cast<size_t>(w) * h, PixelClass::kSky);
+  for (int y = 0; y < h; ++y) {
+    const double lat = latlong::Latitude(y, h);
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const float* p = &r.radiance.pixels[3 * i];
+      PixelClass c = PixelClass::kSky;
+      const auto v = latlong::PixelDirection(x, y, w, h);
+      if (lat <= 0.0) {
+        c = PixelClass::kBelowHorizon;
+      } else if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) || !(p[0] > 0.0f) ||
+                 !(p[1] > 0.0f) || !(p[2] > 0.0f)) {
+        c = PixelClass::kInvalid;
+      } else if (v[0] * r.sun_dir[0] + v[1] * r.sun_dir[1] + v[2] * r.sun_dir[2] >= cos_cone) {
+        c = PixelClass::kSunCone;
+      } else if (std::max({p[0], p[1], p[2]}) >= clip_threshold) {
+        c = PixelClass::kClipped;
+      } else if (!user.empty() && !(user[3 * i] >= 0.5f)) {
+        c = PixelClass::kUserMasked;
+      }
+      r.pixel_class[i] = c;
+      switch (c) {
+        case PixelClass::kSky: ++r.counts.sky; break;
+        case PixelClass::kBelowHorizon: ++r.counts.below_horizon; break;
+        case PixelClass::kSunCone: ++r.counts.sun_cone; break;
+        case PixelClass::kInvalid: ++r.counts.invalid; break;
+        case PixelClass::kClipped: ++r.counts.clipped; break;
+        case PixelClass::kUserMasked: ++r.counts.user_masked; break;
+      }
+    }
+  }
+  if (r.counts.sky == 0) {
+    throw Error(path + ": no valid sky pixel to fit (below horizon " + std::to_string(r.counts.below_horizon) +
+                ", invalid " + std::to_string(r.counts.invalid) + ", sun cone " + std::to_string(r.counts.sun_cone) +
+                ", clipped " + std::to_string(r.counts.clipped) + ", user-masked " + std::to_string(r.counts.user_masked) + ")");
+  }
+  return r;
+}
+
+}  // namespace skycal::fit

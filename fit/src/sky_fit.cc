@@ -1,0 +1,372 @@
+#include "skycal/fit/sky_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <set>
+
+#include "fit_state.h"
+#include "pyramid.h"
+#include "sky_row_cost.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+
+namespace skycal::fit {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// sqrt(lambda) * (u - u0): pulls a LUT entry toward its initial value (gauge for
+// combinations the data cannot separate, e.g. the two LUT rows around one sun angle).
+struct PriorResidual {
+  double sqrt_lambda, u0;
+  template <typename T>
+  bool operator()(const T* u, T* r) const {
+    r[0] = T(sqrt_lambda) * (u[0] - T(u0));
+    return true;
+  }
+};
+
+// sqrt(lambda) * (u[i-1] - 2 u[i] + u[i+1]): smoothness along a LUT axis (log space).
+struct SecondDifference {
+  double sqrt_lambda;
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* c, T* r) const {
+    r[0] = T(sqrt_lambda) * (a[0] - T(2.0) * b[0] + c[0]);
+    return true;
+  }
+};
+
+// Renders the model at the current point for every reference, once per new evaluation
+// point, before Ceres evaluates the residual blocks (the Vulkan backend's objective).
+class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
+ public:
+  RenderAtEvaluationPoint(const FitState* state, const std::vector<Reference>* refs, render::SkyRenderer* renderer,
+                          int width, int height, std::vector<ImageRGB>* images)
+      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images) {}
+  void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
+    if (!new_evaluation_point && renders_ > 0) return;
+    const render::Preset preset = state_->ToPreset();
+    for (size_t r = 0; r < refs_->size(); ++r) {
+      render::RenderRequest req;
+      req.sun_dir = (*refs_)[r].sun_dir;
+      req.width = width_;
+      req.height = height_;
+      req.sun_disc = false;
+      req.ground = render::GroundMode::kZero;
+      (*images_)[r] = renderer_->Render(preset, req);
+    }
+    ++renders_;
+  }
+  int renders() const { return renders_; }
+
+ private:
+  const FitState* state_;
+  const std::vector<Reference>* refs_;
+  render::SkyRenderer* renderer_;
+  int width_, height_;
+  std::vector<ImageRGB>* images_;
+  int renders_ = 0;
+};
+
+// Wraps a row cost for central-difference Jacobians (the benchmark's baseline).
+struct NumericRow {
+  const SkyRowCost* cost;
+  bool operator()(double const* const* parameters, double* residuals) const {
+    return cost->EvaluateCpu(parameters, residuals);
+  }
+};
+
+class ProgressPrinter final : public ceres::IterationCallback {
+ public:
+  ProgressPrinter(std::string level, Clock::time_point start) : level_(std::move(level)), start_(start) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    std::cerr << "[fit] " << level_ << " iteration " << s.iteration << "  cost " << s.cost << "  |step| "
+              << s.step_norm << "  elapsed " << Seconds(start_, Clock::now()) << " s" << std::endl;
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::string level_;
+  Clock::time_point start_;
+};
+
+}  // namespace
+
+ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit) {
+  ImageErrors e;
+  double wsum = 0.0, rel = 0.0, lg = 0.0;
+  const int w = ref.radiance.width, h = ref.radiance.height;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (ref.pixel_class[i] != PixelClass::kSky) continue;
+      const double omega = latlong::PixelSolidAngle(x, y, w, h);
+      for (int c = 0; c < 3; ++c) {
+        const double r = ref.radiance.pixels[3 * i + c], f = fit.pixels[3 * i + c];
+        rel += omega * ((f - r) / r) * ((f - r) / r);
+        const double d = f > 0.0 ? std::log(f / r) : 50.0;
+        lg += omega * d * d;
+      }
+      wsum += 3.0 * omega;
+      ++e.pixels;
+    }
+  }
+  e.rel_rmse = std::sqrt(rel / wsum);
+  e.log_rmse = std::sqrt(lg / wsum);
+  return e;
+}
+
+FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init, const FitOptions& o,
+                 render::SkyRenderer& renderer) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  if (refs.empty()) throw Error("fit: no reference given");
+  const auto t_start = Clock::now();
+  FitResult result;
+  result.backend_description = renderer.Describe();
+  FitState state = FitState::FromPreset(init, o.variant, static_cast<int>(refs.size()));
+  const std::vector<double> initial_log_lut = state.log_lut;
+  const render::LutGrid& grid = state.preset.luts.grid;
+
+  // What this scene does not need.
+  if (state.tables == 2) result.skipped.push_back({{"block", "isotropic LUT"}, {"reason", "model ffxv has no isotropic term"}});
+  const bool fit_overcast = o.fit_overcast && state.preset.overcast_weight > 0.0;
+  if (!fit_overcast) {
+    result.skipped.push_back({{"block", "overcast_zenith_luminance"},
+                              {"reason", state.preset.overcast_weight > 0.0
+                                             ? "disabled by option"
+                                             : "overcast_weight is 0 in the initial preset: the term is absent (its "
+                                               "weight is not separable from the LUT scale, so the fit never changes it)"}});
+  }
+  if (o.absolute) result.skipped.push_back({{"block", "exposure"}, {"reason", "--absolute: references are calibrated"}});
+  if (!o.fit_haziness) result.skipped.push_back({{"block", "haziness_g"}, {"reason", "disabled by option"}});
+
+  // LUT rows each reference constrains (its sun position between two rows).
+  std::set<int> observed;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const double one_minus_cos_max = 1.0 - std::cos(grid.theta_max_deg * M_PI / 180.0);
+    const double pos = std::clamp((1.0 - refs[r].sun_dir[1]) / one_minus_cos_max, 0.0, 1.0) * (grid.n_theta - 1);
+    const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
+    ReferenceFit rf;
+    rf.observed_rows.push_back(r0);
+    if (pos - r0 > 0.0) rf.observed_rows.push_back(r0 + 1);
+    for (int row : rf.observed_rows) observed.insert(row);
+    result.references.push_back(rf);
+  }
+  // With several references the rows between the observed ones are fitted too (held by
+  // the smoothness prior); rows outside the observed range are not parameters at all.
+  const int first_row = *observed.begin(), last_row = *observed.rbegin();
+  std::vector<bool> row_fitted(grid.n_theta, false);
+  for (int row = first_row; row <= last_row; ++row) row_fitted[row] = refs.size() > 1 || observed.count(row);
+  for (int row = 0; row < grid.n_theta; ++row) {
+    if (row_fitted[row]) continue;
+    result.unobserved_rows.push_back({{"row", row},
+                                      {"sun_zenith_deg", render::LutRowSunZenithRad(grid, row) * 180.0 / M_PI},
+                                      {"reason", "no reference has its sun near this row: held at the initial preset"}});
+  }
+  if (!result.unobserved_rows.empty()) {
+    result.skipped.push_back({{"block", "LUT rows without observations"},
+                              {"reason", std::to_string(result.unobserved_rows.size()) +
+                                             " of " + std::to_string(grid.n_theta) +
+                                             " rows: no reference sun angle near them (see unobserved_rows)"}});
+  }
+
+  const std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
+  const bool use_gpu = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
+  for (size_t li = 0; li < widths.size(); ++li) {
+    const auto t_level = Clock::now();
+    std::vector<FitLevel> levels;
+    double total_weight = 0.0;
+    for (const Reference& ref : refs) {
+      levels.push_back(BuildLevel(ref, widths[li]));
+      total_weight += levels.back().total_weight;
+    }
+    const int lw = levels[0].width, lh = levels[0].height;
+    std::vector<ImageRGB> rendered(refs.size());
+
+    ceres::Problem::Options popts;
+    popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+    std::unique_ptr<RenderAtEvaluationPoint> callback;
+    if (use_gpu) {
+      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered);
+      popts.evaluation_callback = callback.get();
+    }
+    ceres::Problem problem(popts);
+    std::set<double*> texel_blocks;
+    std::vector<std::unique_ptr<SkyRowCost>> numeric_owners;
+    long long residual_count = 0;
+
+    for (size_t r = 0; r < refs.size(); ++r) {
+      const FitLevel& lv = levels[r];
+      for (int y = 0; y < lh; ++y) {
+        for (int ch = 0; ch < 3; ++ch) {
+          RowCostSetup setup;
+          setup.state = &state;
+          setup.sun_dir = refs[r].sun_dir;
+          setup.channel = ch;
+          setup.level_row = y;
+          setup.loss = o.loss;
+          setup.loss_scale = o.loss_scale;
+          setup.rendered = use_gpu ? &rendered[r] : nullptr;
+          for (int x = 0; x < lw; ++x) {
+            const size_t i = static_cast<size_t>(y) * lw + x;
+            if (lv.weight[i] <= 0.0) continue;
+            const auto v = latlong::PixelDirection(x, y, lw, lh);
+            setup.pixels.push_back({x, std::log(static_cast<double>(lv.radiance[3 * i + ch])),
+                                    std::sqrt(lv.weight[i] / total_weight), v});
+          }
+          if (setup.pixels.empty()) continue;
+          residual_count += static_cast<long long>(setup.pixels.size());
+          std::vector<size_t> index;
+          auto cost = std::make_unique<SkyRowCost>(std::move(setup), &index);
+          std::vector<double*> blocks;
+          for (size_t k : index) blocks.push_back(&state.log_lut[k]);
+          blocks.push_back(&state.g);
+          blocks.push_back(&state.log_overcast_zenith);
+          blocks.push_back(&state.log_exposure[r]);
+          ceres::CostFunction* fn = nullptr;
+          if (o.numeric_derivatives) {
+            auto* numeric = new ceres::DynamicNumericDiffCostFunction<NumericRow, ceres::CENTRAL>(new NumericRow{cost.get()});
+            for (size_t k = 0; k < blocks.size(); ++k) numeric->AddParameterBlock(1);
+            numeric->SetNumResiduals(cost->num_residuals());
+            numeric_owners.push_back(std::move(cost));
+            fn = numeric;
+          } else {
+            fn = cost.release();
+          }
+          problem.AddResidualBlock(fn, nullptr, blocks);
+          for (size_t k = 0; k < index.size(); ++k) texel_blocks.insert(blocks[k]);
+        }
+      }
+    }
+    // Texel blocks of fitted rows not reached by any pixel (e.g. the two horizon columns)
+    // still join the problem through the priors below; the column smoothness acts only
+    // where a column has no data (extrapolation), so it never biases observed entries.
+    const std::set<double*> observed_blocks = texel_blocks;
+    for (int t = 0; t < state.tables; ++t) {
+      for (int row = 0; row < grid.n_theta; ++row) {
+        if (!row_fitted[row]) continue;
+        for (int col = 0; col < grid.n_gamma; ++col) {
+          for (int ch = 0; ch < 3; ++ch) {
+            double* u = &state.log_lut[state.Index(t, row, col, ch)];
+            problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
+                                         new PriorResidual{std::sqrt(o.prior_weight), initial_log_lut[u - state.log_lut.data()]}),
+                                     nullptr, u);
+            texel_blocks.insert(u);
+            const bool column_has_gap = !observed_blocks.count(u - 3) || !observed_blocks.count(u) ||
+                                        !observed_blocks.count(u + 3);
+            if (col >= 1 && col + 1 < grid.n_gamma && o.column_smoothness > 0.0 && column_has_gap) {
+              problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifference, 1, 1, 1, 1>(
+                                           new SecondDifference{std::sqrt(o.column_smoothness)}),
+                                       nullptr, u - 3, u, u + 3);
+            }
+            if (row >= 1 && row + 1 < grid.n_theta && row_fitted[row - 1] && row_fitted[row + 1] && o.smoothness > 0.0) {
+              const ptrdiff_t stride = static_cast<ptrdiff_t>(grid.n_gamma) * 3;
+              problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifference, 1, 1, 1, 1>(
+                                           new SecondDifference{std::sqrt(o.smoothness)}),
+                                       nullptr, u - stride, u, u + stride);
+            }
+          }
+        }
+      }
+    }
+    if (problem.HasParameterBlock(&state.g)) {
+      if (o.fit_haziness) {
+        problem.SetParameterLowerBound(&state.g, 0, 0.0);
+        problem.SetParameterUpperBound(&state.g, 0, 0.999);
+      } else {
+        problem.SetParameterBlockConstant(&state.g);
+      }
+    }
+    if (problem.HasParameterBlock(&state.log_overcast_zenith) && !fit_overcast) {
+      problem.SetParameterBlockConstant(&state.log_overcast_zenith);
+    }
+    for (size_t r = 0; r < refs.size(); ++r) {
+      // Gauge: exposure x LUT scale is one degree of freedom. The first reference's
+      // exposure is held during the solve and the scale is moved to it afterwards.
+      if (problem.HasParameterBlock(&state.log_exposure[r]) && (o.absolute || r == 0)) {
+        problem.SetParameterBlockConstant(&state.log_exposure[r]);
+      }
+    }
+
+    ceres::Solver::Options so;
+    so.max_num_iterations = o.max_iterations_per_level;
+    so.num_threads = 2;
+    // The Jacobian has ~10^5 rows but each row block touches <= 15 parameters: a sparse
+    // normal-equation Cholesky; dense solvers would materialise a ~0.5 GB dense Jacobian.
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.sparse_linear_algebra_library_type =
+        ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ? ceres::SUITE_SPARSE : ceres::EIGEN_SPARSE;
+    so.function_tolerance = 1e-10;
+    so.gradient_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-10;
+    so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
+    so.logging_type = ceres::SILENT;
+    const std::string level_name = std::to_string(lw) + "x" + std::to_string(lh);
+    ProgressPrinter progress("level " + level_name, t_start);
+    if (o.verbose) so.callbacks.push_back(&progress);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    if (summary.termination_type == ceres::FAILURE) {
+      throw Error("fit: Ceres failed at level " + level_name + ": " + summary.message);
+    }
+    result.iterations += static_cast<int>(summary.iterations.size()) - 1;
+    result.termination = ceres::TerminationTypeToString(summary.termination_type);
+    result.levels.push_back({{"size", {lw, lh}},
+                             {"residuals", residual_count},
+                             {"parameters", summary.num_effective_parameters},
+                             {"iterations", static_cast<int>(summary.iterations.size()) - 1},
+                             {"initial_cost", summary.initial_cost},
+                             {"final_cost", summary.final_cost},
+                             {"termination", ceres::TerminationTypeToString(summary.termination_type)},
+                             {"renders", callback ? callback->renders() : 0},
+                             {"time_s", Seconds(t_level, Clock::now())}});
+  }
+
+  // Move the LUT scale gauge onto the exposures: the mean log change of the fitted texels
+  // goes to the exposure, so the LUT stays at the initial preset's absolute level.
+  if (!o.absolute) {
+    double shift = 0.0;
+    long long n = 0;
+    for (int t = 0; t < state.tables; ++t)
+      for (int row = 0; row < grid.n_theta; ++row)
+        if (row_fitted[row])
+          for (int col = 0; col < grid.n_gamma; ++col)
+            for (int ch = 0; ch < 3; ++ch) {
+              const size_t k = state.Index(t, row, col, ch);
+              shift += state.log_lut[k] - initial_log_lut[k];
+              ++n;
+            }
+    shift /= std::max<long long>(n, 1);
+    for (int t = 0; t < state.tables; ++t)
+      for (int row = 0; row < grid.n_theta; ++row)
+        if (row_fitted[row])
+          for (size_t k = state.Index(t, row, 0, 0); k < state.Index(t, row, 0, 0) + grid.n_gamma * 3; ++k)
+            state.log_lut[k] -= shift;
+    if (fit_overcast) state.log_overcast_zenith -= shift;
+    for (double& e : state.log_exposure) e += shift;
+  }
+
+  result.preset = state.ToPreset();
+  render::ValidatePreset(result.preset, "fitted preset");
+  for (size_t r = 0; r < refs.size(); ++r) {
+    ReferenceFit& rf = result.references[r];
+    rf.exposure = std::exp(state.log_exposure[r]);
+    render::RenderRequest req;
+    req.sun_dir = refs[r].sun_dir;
+    req.width = refs[r].radiance.width;
+    req.height = refs[r].radiance.height;
+    rf.rendered = renderer.Render(result.preset, req);
+    for (float& v : rf.rendered.pixels) v = static_cast<float>(v * rf.exposure);
+    rf.errors = CompareToReference(refs[r], rf.rendered);
+  }
+  result.time_s = Seconds(t_start, Clock::now());
+  return result;
+}
+
+}  // namespace skycal::fit

@@ -1,0 +1,162 @@
+#include "sky_row_cost.h"
+
+#include <cmath>
+
+#include "skycal/render/sky_model.h"
+
+namespace skycal::fit {
+namespace {
+
+// LUT source over the few texels of one row block and one channel: texel (row0 + dr,
+// col0 + dc) of table t is values[t][dr][dc], replicated over r, g, b.
+struct BlockLut {
+  int row0 = 0, col0 = 0;
+  double values[3][2][2] = {};
+  template <typename S>
+  glsl::Vec3<S> texel(int lut, int row, int col) const {
+    const int dr = row - row0, dc = col - col0;
+    const double v = (dr >= 0 && dr < 2 && dc >= 0 && dc < 2) ? values[lut][dr][dc] : 0.0;
+    return glsl::Vec3<S>(S(v));
+  }
+};
+
+template <typename S>
+using Model = model::SkyModel<S, BlockLut>;
+
+// Robust loss rho(z), z = (e/s)^2, and rho'(z).
+void Rho(RobustLoss loss, double z, double* rho, double* drho) {
+  switch (loss) {
+    case RobustLoss::kNone: *rho = z; *drho = 1.0; return;
+    case RobustLoss::kCauchy: *rho = std::log1p(z); *drho = 1.0 / (1.0 + z); return;
+    case RobustLoss::kHuber:
+      if (z <= 1.0) { *rho = z; *drho = 1.0; }
+      else { const double r = std::sqrt(z); *rho = 2.0 * r - 1.0; *drho = 1.0 / r; }
+      return;
+  }
+}
+
+Model<double>::SkyParams MakeParams(const FitState& st, const std::array<double, 3>& sun, double g, double lz) {
+  Model<double>::SkyParams p;
+  p.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
+  p.haziness_g = g;
+  p.isotropic_weight = st.tables == 3 ? 1.0 : 0.0;
+  p.overcast_weight = st.preset.overcast_weight;
+  p.overcast_zenith = lz;
+  p.sun_one_minus_cos_radius = 0.0;
+  p.sun_radius = 1.0;
+  p.sun_limb_u = 0.0;
+  p.sun_centre_radiance = glsl::Vec3<double>(0.0);
+  p.ground_radiance = glsl::Vec3<double>(0.0);
+  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(st.preset.luts.grid.theta_max_deg * M_PI / 180.0);
+  p.lut_n_theta = st.preset.luts.grid.n_theta;
+  p.lut_n_gamma = st.preset.luts.grid.n_gamma;
+  return p;
+}
+
+}  // namespace
+
+SkyRowCost::SkyRowCost(RowCostSetup setup, std::vector<size_t>* texel_index) : s_(std::move(setup)) {
+  const FitState& st = *s_.state;
+  BlockLut lut;
+  Model<double> m(lut);
+  const auto p = MakeParams(st, s_.sun_dir, st.g, 1.0);
+  const auto lr = m.lut_row(p.sun_dir.y, p);
+  // Every pixel of the row has the same elevation; take it from the first pixel.
+  const auto lc = m.lut_col(s_.pixels.front().view[1], p);
+  row0_ = lr.row0;
+  col0_ = lc.col0;
+  texel_index->clear();
+  for (int t = 0; t < st.tables; ++t) {
+    for (int dr = 0; dr < 2; ++dr) {
+      const double wr = dr ? lr.frow : 1.0 - lr.frow;
+      if (wr <= 0.0) continue;  // row not touched: not a parameter of this block
+      for (int dc = 0; dc < 2; ++dc) {
+        const double wc = dc ? lc.fcol : 1.0 - lc.fcol;
+        if (wc <= 0.0) continue;
+        texels_.push_back({t, dr, dc, wr * wc});
+        texel_index->push_back(st.Index(t, row0_ + dr, col0_ + dc, s_.channel));
+      }
+    }
+  }
+  for (const RowPixel& px : s_.pixels) {
+    const double d[3] = {px.view[0] - s_.sun_dir[0], px.view[1] - s_.sun_dir[1], px.view[2] - s_.sun_dir[2]};
+    const double omm = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    one_minus_mu_.push_back(omm);
+    mu_.push_back(1.0 - omm);
+    phase_r_.push_back(m.phase_rayleigh(1.0 - omm));
+  }
+  overcast_shape_ = (1.0 + 2.0 * std::max(s_.pixels.front().view[1], 0.0)) / 3.0;
+  set_num_residuals(static_cast<int>(s_.pixels.size()));
+  for (size_t i = 0; i < texels_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
+  for (int i = 0; i < 3; ++i) mutable_parameter_block_sizes()->push_back(1);  // g, log Lz, log k
+}
+
+bool SkyRowCost::Evaluate(double const* const* parameters, double* residuals, double** jacobians) const {
+  return EvaluateImpl(parameters, residuals, jacobians, s_.rendered != nullptr);
+}
+
+bool SkyRowCost::EvaluateCpu(double const* const* parameters, double* residuals) const {
+  return EvaluateImpl(parameters, residuals, nullptr, false);
+}
+
+bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals, double** jacobians,
+                              bool use_rendered) const {
+  const FitState& st = *s_.state;
+  const int nt = static_cast<int>(texels_.size());
+  const double g = parameters[nt][0];
+  const double lz = std::exp(parameters[nt + 1][0]);
+  const double log_k = parameters[nt + 2][0];
+  if (!(g >= 0.0 && g < 1.0)) return false;  // outside the model's domain: Ceres shrinks the step
+
+  BlockLut lut;
+  lut.row0 = row0_;
+  lut.col0 = col0_;
+  std::vector<double> texel_value(nt);
+  for (int k = 0; k < nt; ++k) {
+    texel_value[k] = std::exp(parameters[k][0]);
+    lut.values[texels_[k].table][texels_[k].drow][texels_[k].dcol] = texel_value[k];
+  }
+  Model<double> m(lut);
+  const auto p = MakeParams(st, s_.sun_dir, g, lz);
+  using Jet1 = ceres::Jet<double, 1>;
+  BlockLut lut_unused;
+  Model<Jet1> mj(lut_unused);
+  const double w_oc = st.preset.overcast_weight;
+  // Bilinear sums of each table (this channel), for the g derivative.
+  double table_sum[3] = {0.0, 0.0, 0.0};
+  for (int k = 0; k < nt; ++k) table_sum[texels_[k].table] += texels_[k].weight * texel_value[k];
+
+  for (size_t i = 0; i < s_.pixels.size(); ++i) {
+    const RowPixel& px = s_.pixels[i];
+    const glsl::Vec3<double> view(px.view[0], px.view[1], px.view[2]);
+    const double model_cpu = m.sky_radiance(view, p).x;  // channel value (texels replicated)
+    double model_value = model_cpu;
+    if (use_rendered) model_value = s_.rendered->at(px.x, s_.level_row, s_.channel);
+    if (!(model_value > 0.0) || !(model_cpu > 0.0)) return false;
+    const double e = log_k + std::log(model_value) - px.log_ref;
+    const double sc = s_.loss_scale;
+    const double z = (e / sc) * (e / sc);
+    double rho, drho;
+    Rho(s_.loss, z, &rho, &drho);
+    const double root = std::sqrt(rho);
+    residuals[i] = px.sqrt_weight * sc * (e >= 0.0 ? root : -root);
+    if (!jacobians) continue;
+    // dr/de = sqrt(w) rho'(z) |e| / (s sqrt(rho)); -> sqrt(w) as e -> 0.
+    const double dr_de = z < 1e-16 ? px.sqrt_weight : px.sqrt_weight * drho * std::abs(e) / (sc * root);
+    const double inv_m = 1.0 / model_cpu;
+    // Phase values of each table at this pixel.
+    const Jet1 pm = mj.phase_cornette_shanks(Jet1(mu_[i]), Jet1(one_minus_mu_[i]), Jet1(g, 0));
+    const double phase[3] = {phase_r_[i], pm.a, 1.0 / (4.0 * M_PI)};
+    for (int k = 0; k < nt; ++k) {
+      if (!jacobians[k]) continue;
+      const Texel& t = texels_[k];
+      jacobians[k][i] = dr_de * (1.0 - w_oc) * t.weight * texel_value[k] * phase[t.table] * inv_m;
+    }
+    if (jacobians[nt]) jacobians[nt][i] = dr_de * (1.0 - w_oc) * table_sum[1] * pm.v[0] * inv_m;
+    if (jacobians[nt + 1]) jacobians[nt + 1][i] = dr_de * w_oc * lz * overcast_shape_ * inv_m;
+    if (jacobians[nt + 2]) jacobians[nt + 2][i] = dr_de;
+  }
+  return true;
+}
+
+}  // namespace skycal::fit
