@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bake_verb.h"
 #include "fit_verb.h"
 #include "render_verb.h"
 #include "skycal/core/version.h"
@@ -20,6 +21,7 @@ struct Verb {
 const std::vector<Verb>& Verbs() {
   static const std::vector<Verb> verbs = {
       {"render", "render a sky preset to a lat-long EXR (+ PNG preview)", &skycal::cli::RunRender},
+      {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
   };
   return verbs;
