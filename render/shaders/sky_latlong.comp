@@ -15,7 +15,7 @@ layout(std140, set = 0, binding = 0) uniform SkyUniformBlock {
 
 // The LUTs at this frame's sun position, interpolated between rows by the host:
 // [table (rayleigh, mie, isotropic)][column] -> rgb (w unused).
-layout(std430, set = 0, binding = 1) readonly buffer LutSliceBuffer { vec4 lut_slice[]; };
+layout(std140, set = 0, binding = 1) uniform LutSliceBlock { vec4 lut_slice[3 * 256]; };
 // Output: interleaved RGB float, row 0 at the top.
 layout(std430, set = 0, binding = 2) writeonly buffer OutBuffer { float out_rgb[]; };
 // Direction tables filled by the host in double: (sin, cos) of latitude per row
@@ -32,7 +32,10 @@ vec3 lut_column_texel(int lut, int row0, float frow, int col) {
 
 void main() {
   int x = int(gl_GlobalInvocationID.x);
-  int y = int(gl_GlobalInvocationID.y);
+  // One image row per workgroup (local size (N, 1)): y is uniform across the workgroup,
+  // so everything that depends only on the row (latitude, the LUT column and its loads)
+  // is uniform too, and the compiler emits scalar loads instead of per-lane gathers.
+  int y = int(gl_WorkGroupID.y);
   int width = U.sizes.z;
   int height = U.sizes.w;
   if (x >= width || y >= height) return;

@@ -21,10 +21,12 @@
 #include "skycal/render/atmosphere_bake.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include "skycal/core/error.h"
@@ -256,7 +258,16 @@ Integrals IntegrateViewRay(const Atmosphere& atm, const AtmosphereOptions& opts,
   }
   if (!shadow.empty()) {
     if (shadow.lo > 0.0) nodes.push_back(shadow.lo);
-    if (shadow.hi < length) nodes.push_back(shadow.hi);
+    if (shadow.hi < length) {
+      // Twilight: the lit part beyond the shadow is where all the light comes from, but it
+      // lies where the base nodes are sparsest; give it its own nodes, crowded toward the
+      // shadow's edge (the lowest, densest lit air).
+      const double span = length - shadow.hi;
+      for (int i = 0; i < n; ++i) {
+        const double u = static_cast<double>(i) / n;
+        nodes.push_back(shadow.hi + span * u * u);
+      }
+    }
     std::sort(nodes.begin(), nodes.end());
     nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   }
@@ -384,16 +395,17 @@ void BakeSingleScattering(const AtmosphereOptions& opts, SkyLuts& luts) {
   // next to the LUT's interpolation (only n_theta rays).
   const int observer_sun_steps = std::max(opts.sun_steps, 2048);
 
-  std::vector<double> nodes;
-  std::vector<char> lit;
-  for (int row = 0; row < g.n_theta; ++row) {
+  // One LUT row (sun zenith) at a time; rows are independent, so workers take them in
+  // turn and the result does not depend on the number of threads.
+  auto bake_row = [&](int row, std::vector<double>& nodes, std::vector<char>& lit) {
     // The model's row coordinate is linear in cos(sun zenith).
     const double cos_ts = std::clamp(1.0 - static_cast<double>(row) / (g.n_theta - 1) * one_minus_cos_max, -1.0, 1.0);
     const double sin_ts = std::sqrt((1.0 - cos_ts) * (1.0 + cos_ts));
 
     // Direct sun: blocked when the ray from the observer meets the planet.
     const bool blocked = cos_ts < 0.0 && r0 * sin_ts < opts.planet_radius_m;
-    const auto tau_sun = atm.Tau(atm.ColumnToTop(r0, cos_ts, observer_sun_steps));
+    std::array<double, 3> tau_sun{};
+    if (!blocked) tau_sun = atm.Tau(atm.ColumnToTop(r0, cos_ts, observer_sun_steps));
     for (int c = 0; c < 3; ++c) {
       luts.sun_transmittance[static_cast<size_t>(row) * 3 + c] = blocked ? 0.0f : static_cast<float>(std::exp(-tau_sun[c]));
     }
@@ -422,7 +434,19 @@ void BakeSingleScattering(const AtmosphereOptions& opts, SkyLuts& luts) {
         luts.isotropic[i + c] = 0.0f;  // multiple scattering is not estimated
       }
     }
-  }
+  };
+
+  std::atomic<int> next_row{0};
+  auto worker = [&] {
+    std::vector<double> nodes;
+    std::vector<char> lit;
+    for (int row = next_row++; row < g.n_theta; row = next_row++) bake_row(row, nodes, lit);
+  };
+  const int n_workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(g.n_theta, 16));
+  std::vector<std::thread> threads;
+  for (int w = 1; w < n_workers; ++w) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
 }
 
 }  // namespace skycal::render

@@ -18,11 +18,14 @@ extern const size_t sky_latlong_size;
 namespace skycal::render {
 namespace {
 
-constexpr uint32_t kLocalX = 16, kLocalY = 4;  // workgroup size, passed as specialization constants 0, 1
+// Workgroup size (specialization constants 0, 1). The shader maps one image row to one
+// workgroup (y = gl_WorkGroupID.y), so the second dimension must stay 1.
+constexpr uint32_t kLocalX = 64, kLocalY = 1;
 // Bindings of sky_latlong.comp: 0 uniforms, 1 LUTs, 2 output, 3 direction trig table.
 constexpr uint32_t kBindings = 4;
+constexpr int kMaxLutColumns = 256;  // size of the LutSliceBlock array in sky_latlong.comp
 constexpr VkDescriptorType kBindingTypes[kBindings] = {
-    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 
 class VulkanSkyRenderer final : public SkyRenderer {
@@ -49,11 +52,12 @@ class VulkanSkyRenderer final : public SkyRenderer {
     const SkyUniforms u = PackSkyUniforms(params, request.width, request.height);
 
     const int columns = preset.luts.grid.n_gamma;
-    const VkDeviceSize lut_bytes = 3 * static_cast<VkDeviceSize>(columns) * 4 * sizeof(float);
+    const VkDeviceSize lut_bytes = 3 * static_cast<VkDeviceSize>(kMaxLutColumns) * 4 * sizeof(float);
+    if (columns > kMaxLutColumns) throw Error("Vulkan renderer: LUT has " + std::to_string(columns) + " columns, at most " + std::to_string(kMaxLutColumns) + " supported");
     const VkDeviceSize out_bytes = static_cast<VkDeviceSize>(request.width) * request.height * 3 * sizeof(float);
     bool rebind = false;
     rebind |= Ensure(uniforms_, sizeof(SkyUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, false);
-    rebind |= Ensure(luts_, lut_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
+    rebind |= Ensure(luts_, lut_bytes, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, false);
     rebind |= Ensure(output_, out_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
     const VkDeviceSize trig_bytes = static_cast<VkDeviceSize>(request.width + request.height) * 2 * sizeof(float);
     rebind |= Ensure(trig_, trig_bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false);
@@ -173,8 +177,8 @@ class VulkanSkyRenderer final : public SkyRenderer {
     cpci.layout = pipeline_layout_;
     CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
 
-    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBindings - 1}};
+    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
+                                     {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kBindings - 2}};
     VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dpci.maxSets = 1;
     dpci.poolSizeCount = 2;
@@ -223,7 +227,8 @@ class VulkanSkyRenderer final : public SkyRenderer {
     CheckVk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
     vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
     vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_layout_, 0, 1, &set_, 0, nullptr);
-    vkCmdDispatch(cmd_, (width + kLocalX - 1) / kLocalX, (height + kLocalY - 1) / kLocalY, 1);
+    static_assert(kLocalY == 1, "sky_latlong.comp renders one row per workgroup");
+    vkCmdDispatch(cmd_, (width + kLocalX - 1) / kLocalX, height, 1);
     // Make the shader's writes visible to the host once the fence signals.
     VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
