@@ -14,8 +14,10 @@ layout(std140, set = 0, binding = 0) uniform SkyUniformBlock {
 } U;
 
 // The LUTs at this frame's sun position, interpolated between rows by the host:
-// [table (rayleigh, mie, isotropic)][column] -> rgb (w unused).
-layout(std140, set = 0, binding = 1) uniform LutSliceBlock { vec4 lut_slice[3 * 256]; };
+// [table (rayleigh, mie, isotropic)][column] -> rgb (w unused). A uniform block: every
+// invocation of a workgroup (one image row) reads the same entries.
+#include "limits.glsl.h"
+layout(std140, set = 0, binding = 1) uniform LutSliceBlock { vec4 lut_slice[3 * SC_MAX_LUT_COLUMNS]; };
 // Output: interleaved RGB float, row 0 at the top.
 layout(std430, set = 0, binding = 2) writeonly buffer OutBuffer { float out_rgb[]; };
 // Direction tables filled by the host in double: (sin, cos) of latitude per row

@@ -89,8 +89,9 @@ void ValidatePreset(const Preset& preset_in, const std::string& origin) {
     }
   }
   const LutGrid& g = preset.luts.grid;
-  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > 4096 || g.n_gamma > 4096) {
-    throw Error(Field(origin, "luts.grid") + ": expected 2..4096 rows and columns, got " +
+  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > kMaxLutRows || g.n_gamma > kMaxLutColumns) {
+    throw Error(Field(origin, "luts.grid") + ": expected 2.." + std::to_string(kMaxLutRows) + " rows and 2.." +
+                std::to_string(kMaxLutColumns) + " columns, got " +
                 std::to_string(g.n_theta) + " x " + std::to_string(g.n_gamma));
   }
   if (!std::isfinite(g.theta_max_deg) || g.theta_max_deg < 90.0 || g.theta_max_deg > 180.0) {
@@ -229,8 +230,9 @@ Preset LoadPreset(const std::string& path) {
   g.n_theta = static_cast<int>(RequireNumber(Require(grid, "n_theta", path, "luts.grid."), path, "luts.grid.n_theta"));
   g.n_gamma = static_cast<int>(RequireNumber(Require(grid, "n_gamma", path, "luts.grid."), path, "luts.grid.n_gamma"));
   g.theta_max_deg = RequireNumber(Require(grid, "theta_max_deg", path, "luts.grid."), path, "luts.grid.theta_max_deg");
-  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > 4096 || g.n_gamma > 4096) {
-    throw Error(Field(path, "luts.grid") + ": expected 2..4096 rows and columns");
+  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > kMaxLutRows || g.n_gamma > kMaxLutColumns) {
+    throw Error(Field(path, "luts.grid") + ": expected 2.." + std::to_string(kMaxLutRows) + " rows and 2.." +
+                std::to_string(kMaxLutColumns) + " columns");
   }
   p.luts.Resize(g);
   const fs::path dir = fs::path(path).parent_path();

@@ -23,7 +23,6 @@ namespace {
 constexpr uint32_t kLocalX = 64, kLocalY = 1;
 // Bindings of sky_latlong.comp: 0 uniforms, 1 LUTs, 2 output, 3 direction trig table.
 constexpr uint32_t kBindings = 4;
-constexpr int kMaxLutColumns = 256;  // size of the LutSliceBlock array in sky_latlong.comp
 constexpr VkDescriptorType kBindingTypes[kBindings] = {
     VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};

@@ -8,12 +8,19 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "../../../model/limits.glsl.h"
+
 namespace skycal::render {
 
 enum class ModelVariant { kFfxv, kFfxvIso };
 const char* ToString(ModelVariant v);
 // Throws skycal::Error naming `what` unless `name` is "ffxv" or "ffxv-iso".
 ModelVariant ParseModelVariant(const std::string& name, const std::string& what);
+
+// Grid limits: the Vulkan renderer holds a frame's LUT slice (3 tables x columns) in a
+// uniform block sized by render/model/limits.glsl.h.
+inline constexpr int kMaxLutColumns = SC_MAX_LUT_COLUMNS;
+inline constexpr int kMaxLutRows = 1024;
 
 // LUT grid (node-centred, see render/model/sky_model.glsl.h for the mapping).
 struct LutGrid {
