@@ -158,3 +158,31 @@ TEST(Cli, JsonFailureSummary) {
 
 }  // namespace
 }  // namespace skycal
+
+namespace skycal {
+namespace {
+
+// Golden files: the bundled preset is exactly what `skycal bake` produces today. Update
+// path (after a deliberate change to the baker or the defaults):
+//   build/skycal bake --out datasets/presets/default_clear.json   and commit the files.
+TEST(Cli, BundledPresetMatchesTheBaker) {
+  ScratchDir dir("cli-bake");
+  const Result r = Skycal("bake --out " + (dir / "default_clear.json"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const render::Preset fresh = render::LoadPreset(dir / "default_clear.json");
+  const render::Preset bundled = render::LoadPreset(std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json");
+  ASSERT_EQ(fresh.luts.rayleigh.size(), bundled.luts.rayleigh.size());
+  double worst = 0.0;
+  for (auto [a, b] : {std::pair{&fresh.luts.rayleigh, &bundled.luts.rayleigh}, std::pair{&fresh.luts.mie, &bundled.luts.mie}}) {
+    for (size_t i = 0; i < a->size(); ++i) {
+      worst = std::max(worst, std::abs((*a)[i] - (*b)[i]) / std::max<double>((*b)[i], 1e-3));
+    }
+  }
+  // 1e-5: the bake is deterministic (thread count does not change it); this only allows
+  // for a different libm rounding on another machine.
+  EXPECT_LT(worst, 1e-5) << "re-bake the bundled preset (see the comment above)";
+  EXPECT_EQ(fresh.haziness_g, bundled.haziness_g);
+}
+
+}  // namespace
+}  // namespace skycal

@@ -84,8 +84,8 @@ void SavePreset(const Preset& preset, const std::string& json_path, const nlohma
 double LutRowSunZenithRad(const LutGrid& grid, int row);
 double LutColumnElevationRad(const LutGrid& grid, int col);
 
-// Direct-sun transmittance at a sun zenith angle (radians), linear between rows in the
-// LUT's row coordinate (linear in cos(sun zenith)).
+// Direct-sun transmittance at a sun zenith angle (radians), between rows in the LUT's row
+// coordinate (linear in cos(sun zenith)): geometric where both rows are non-zero.
 std::array<double, 3> SunTransmittance(const SkyLuts& luts, double sun_zenith_rad);
 
 }  // namespace skycal::render
