@@ -77,8 +77,12 @@ class VulkanSkyRenderer final : public SkyRenderer {
     CheckVk(vkResetFences(ctx_->device(), 1, &fence_), "vkResetFences");
     ctx_->InvalidateForRead(output_);
 
-    ImageRGB image(request.width, request.height);
-    std::memcpy(image.pixels.data(), output_.mapped, out_bytes);
+    // One pass over the mapped memory (no zero-fill of a fresh vector first).
+    ImageRGB image;
+    image.width = request.width;
+    image.height = request.height;
+    const float* mapped = static_cast<const float*>(output_.mapped);
+    image.pixels.assign(mapped, mapped + out_bytes / sizeof(float));
     return image;
   }
 
