@@ -45,8 +45,8 @@ constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference 
   --loss-scale S        robust loss scale in natural-log units (default 0.05, ~5%)
   --pyramid W1,W2,...   coarse-to-fine level widths (default 64,128,... up to min(width, 512))
   --max-iterations N    per pyramid level (default 50)
-  --smoothness L        second-difference prior along sun zenith (default 1e-3)
-  --prior-weight L      pull toward the initial LUT (default 1e-7)
+  --smoothness L        second-difference prior on the LUT change along sun zenith (default 1e-6)
+  --prior-weight L      pull toward the initial LUT (default 1e-8)
   --time HOURS          time of day of the reference(s), recorded for `skycal export`
   --no-haziness         hold g at its initial value
   --numeric-derivatives central-difference Jacobians (the benchmark's baseline)
@@ -173,7 +173,7 @@ nlohmann::json RunFitImpl(const FitVerbOptions& o) {
       {"clip_fraction", fo.clip_fraction},     {"mask", fo.mask_path},
       {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
       {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
-      {"smoothness", fo.smoothness},           {"column_smoothness", fo.column_smoothness},
+      {"smoothness", fo.smoothness},
       {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
       {"numeric_derivatives", fo.numeric_derivatives}};
   nlohmann::json summary = {{"references", per_ref},

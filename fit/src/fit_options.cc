@@ -13,7 +13,7 @@ bool FitOptions::IsValid(std::string* why) const {
   if (!(clip_fraction > 0.0 && clip_fraction <= 1.0)) return bad("--clip-fraction: expected a value in (0, 1]");
   if (!(loss_scale > 0.0 && loss_scale <= 10.0)) return bad("--loss-scale: expected natural-log units in (0, 10]");
   if (max_iterations_per_level < 1 || max_iterations_per_level > 10000) return bad("--max-iterations: expected 1..10000");
-  for (double w : {smoothness, column_smoothness, prior_weight}) {
+  for (double w : {smoothness, prior_weight}) {
     if (!(w >= 0.0 && w <= 1e6)) return bad("--smoothness/--prior-weight: expected a weight in [0, 1e6]");
   }
   int last = 0;

@@ -29,10 +29,28 @@ FitState FitState::FromPreset(const render::Preset& init, render::ModelVariant v
   s.g = init.haziness_g;
   s.log_overcast_zenith = std::log(std::max(init.overcast_zenith_cd_m2, 1e-6));
   s.log_exposure.assign(references, 0.0);
+  s.log_delta.assign(static_cast<size_t>(3) * init.luts.grid.n_gamma * 3, 0.0);
+  s.initial_log_lut = s.log_lut;
   return s;
 }
 
+void FitState::ApplyTiedRows() {
+  const auto& g = preset.luts.grid;
+  for (int row : tied_rows)
+    for (int t = 0; t < 3; ++t)
+      for (int col = 0; col < g.n_gamma; ++col)
+        for (int ch = 0; ch < 3; ++ch) log_lut[Index(t, row, col, ch)] = initial_log_lut[Index(t, row, col, ch)] + log_delta[DeltaIndex(t, col, ch)];
+  tied_rows.clear();
+  std::fill(log_delta.begin(), log_delta.end(), 0.0);
+}
+
 render::Preset FitState::ToPreset() const {
+  FitState applied = *this;
+  applied.ApplyTiedRows();
+  return applied.ToPresetUntied();
+}
+
+render::Preset FitState::ToPresetUntied() const {
   render::Preset p = preset;
   const size_t table = p.luts.table_size();
   std::vector<float>* dst[3] = {&p.luts.rayleigh, &p.luts.mie, &p.luts.isotropic};

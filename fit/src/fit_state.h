@@ -15,6 +15,18 @@ struct FitState {
   double g = 0.8;
   double log_overcast_zenith = 0.0;  // log cd/m^2
   std::vector<double> log_exposure;  // per reference: fitted image = exposure * model
+  // Tied rows (one reference): log change per [table][col][channel] applied to both rows
+  // around the sun angle (see sky_row_cost.h).
+  std::vector<double> log_delta;
+  std::vector<int> tied_rows;              // rows whose value is initial + log_delta
+  std::vector<double> initial_log_lut;     // u0, from the initial preset
+
+  // Writes initial + log_delta into log_lut for the tied rows, then unties them.
+  void ApplyTiedRows();
+
+  size_t DeltaIndex(int table, int col, int ch) const {
+    return (static_cast<size_t>(table) * preset.luts.grid.n_gamma + col) * 3 + ch;
+  }
 
   size_t Index(int table, int row, int col, int ch) const {
     const auto& gr = preset.luts.grid;
@@ -24,6 +36,9 @@ struct FitState {
   static FitState FromPreset(const render::Preset& init, render::ModelVariant variant, int references);
   // The model the state describes (floats, as the renderer and the preset files hold it).
   render::Preset ToPreset() const;
+
+ private:
+  render::Preset ToPresetUntied() const;
 };
 
 }  // namespace skycal::fit

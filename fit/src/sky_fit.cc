@@ -31,12 +31,14 @@ struct PriorResidual {
   }
 };
 
-// sqrt(lambda) * (u[i-1] - 2 u[i] + u[i+1]): smoothness along a LUT axis (log space).
-struct SecondDifference {
-  double sqrt_lambda;
+// sqrt(lambda) * second difference of the change u - u0 along the sun-zenith axis (log
+// space): the change from the initial preset must be smooth, not the LUT itself, so a
+// physically shaped start (twilight falls by decades within a few rows) is not flattened.
+struct SecondDifferenceOfChange {
+  double sqrt_lambda, a0, b0, c0;
   template <typename T>
   bool operator()(const T* a, const T* b, const T* c, T* r) const {
-    r[0] = T(sqrt_lambda) * (a[0] - T(2.0) * b[0] + c[0]);
+    r[0] = T(sqrt_lambda) * ((a[0] - T(a0)) - T(2.0) * (b[0] - T(b0)) + (c[0] - T(c0)));
     return true;
   }
 };
@@ -46,11 +48,25 @@ struct SecondDifference {
 class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
  public:
   RenderAtEvaluationPoint(const FitState* state, const std::vector<Reference>* refs, render::SkyRenderer* renderer,
-                          int width, int height, std::vector<ImageRGB>* images)
-      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images) {}
+                          int width, int height, std::vector<ImageRGB>* images, bool* valid)
+      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images), valid_(valid) {}
   void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
     if (!new_evaluation_point && renders_ > 0) return;
-    const render::Preset preset = state_->ToPreset();
+    // A trial step far outside the model's domain (an overflowing LUT entry) is not
+    // rendered: the residual blocks then report failure and Ceres shrinks the step.
+    *valid_ = false;
+    for (const auto* v : {&state_->log_lut, &state_->log_delta}) {
+      for (double x : *v) {
+        if (!(std::abs(x) < 80.0)) return;
+      }
+    }
+    render::Preset preset;
+    try {
+      preset = state_->ToPreset();
+      render::ValidatePreset(preset, "trial point");
+    } catch (const Error&) {
+      return;
+    }
     for (size_t r = 0; r < refs_->size(); ++r) {
       render::RenderRequest req;
       req.sun_dir = (*refs_)[r].sun_dir;
@@ -61,6 +77,7 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
       (*images_)[r] = renderer_->Render(preset, req);
     }
     ++renders_;
+    *valid_ = true;
   }
   int renders() const { return renders_; }
 
@@ -70,6 +87,7 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
   render::SkyRenderer* renderer_;
   int width_, height_;
   std::vector<ImageRGB>* images_;
+  bool* valid_;
   int renders_ = 0;
 };
 
@@ -130,7 +148,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   FitResult result;
   result.backend_description = renderer.Describe();
   FitState state = FitState::FromPreset(init, o.variant, static_cast<int>(refs.size()));
-  const std::vector<double> initial_log_lut = state.log_lut;
+  const std::vector<double>& initial_log_lut = state.initial_log_lut;
+  // One reference sees only a blend of the two rows around its sun angle: tie them.
+  const bool tied = refs.size() == 1;
   const render::LutGrid& grid = state.preset.luts.grid;
 
   // What this scene does not need.
@@ -163,6 +183,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   const int first_row = *observed.begin(), last_row = *observed.rbegin();
   std::vector<bool> row_fitted(grid.n_theta, false);
   for (int row = first_row; row <= last_row; ++row) row_fitted[row] = refs.size() > 1 || observed.count(row);
+  if (tied) state.tied_rows.assign(observed.begin(), observed.end());
   for (int row = 0; row < grid.n_theta; ++row) {
     if (row_fitted[row]) continue;
     result.unobserved_rows.push_back({{"row", row},
@@ -176,6 +197,8 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                                              " rows: no reference sun angle near them (see unobserved_rows)"}});
   }
 
+  const size_t table_size = state.preset.luts.table_size();
+  std::set<std::pair<int, int>> last_observed_columns;  // at the finest level
   const std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
   const bool use_gpu = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
   for (size_t li = 0; li < widths.size(); ++li) {
@@ -188,16 +211,17 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     }
     const int lw = levels[0].width, lh = levels[0].height;
     std::vector<ImageRGB> rendered(refs.size());
+    bool rendered_valid = false;
 
     ceres::Problem::Options popts;
     popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
     std::unique_ptr<RenderAtEvaluationPoint> callback;
     if (use_gpu) {
-      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered);
+      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered, &rendered_valid);
       popts.evaluation_callback = callback.get();
     }
     ceres::Problem problem(popts);
-    std::set<double*> texel_blocks;
+    std::set<double*> texel_blocks;  // LUT parameters reached by data
     std::vector<std::unique_ptr<SkyRowCost>> numeric_owners;
     long long residual_count = 0;
 
@@ -207,12 +231,17 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
         for (int ch = 0; ch < 3; ++ch) {
           RowCostSetup setup;
           setup.state = &state;
+          setup.tied_rows = tied;
+          setup.initial_log_lut = &initial_log_lut;
           setup.sun_dir = refs[r].sun_dir;
           setup.channel = ch;
           setup.level_row = y;
           setup.loss = o.loss;
-          setup.loss_scale = o.loss_scale;
+          // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per
+          // level above the finest) so a far start is not trapped by down-weighted pixels.
+          setup.loss_scale = o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
           setup.rendered = use_gpu ? &rendered[r] : nullptr;
+          setup.rendered_valid = &rendered_valid;
           for (int x = 0; x < lw; ++x) {
             const size_t i = static_cast<size_t>(y) * lw + x;
             if (lv.weight[i] <= 0.0) continue;
@@ -225,7 +254,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
           std::vector<size_t> index;
           auto cost = std::make_unique<SkyRowCost>(std::move(setup), &index);
           std::vector<double*> blocks;
-          for (size_t k : index) blocks.push_back(&state.log_lut[k]);
+          for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
           blocks.push_back(&state.g);
           blocks.push_back(&state.log_overcast_zenith);
           blocks.push_back(&state.log_exposure[r]);
@@ -244,37 +273,50 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
         }
       }
     }
-    // Texel blocks of fitted rows not reached by any pixel (e.g. the two horizon columns)
-    // still join the problem through the priors below; the column smoothness acts only
-    // where a column has no data (extrapolation), so it never biases observed entries.
-    const std::set<double*> observed_blocks = texel_blocks;
-    for (int t = 0; t < state.tables; ++t) {
-      for (int row = 0; row < grid.n_theta; ++row) {
-        if (!row_fitted[row]) continue;
-        for (int col = 0; col < grid.n_gamma; ++col) {
-          for (int ch = 0; ch < 3; ++ch) {
-            double* u = &state.log_lut[state.Index(t, row, col, ch)];
-            problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
-                                         new PriorResidual{std::sqrt(o.prior_weight), initial_log_lut[u - state.log_lut.data()]}),
-                                     nullptr, u);
-            texel_blocks.insert(u);
-            const bool column_has_gap = !observed_blocks.count(u - 3) || !observed_blocks.count(u) ||
-                                        !observed_blocks.count(u + 3);
-            if (col >= 1 && col + 1 < grid.n_gamma && o.column_smoothness > 0.0 && column_has_gap) {
-              problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifference, 1, 1, 1, 1>(
-                                           new SecondDifference{std::sqrt(o.column_smoothness)}),
-                                       nullptr, u - 3, u, u + 3);
-            }
-            if (row >= 1 && row + 1 < grid.n_theta && row_fitted[row - 1] && row_fitted[row + 1] && o.smoothness > 0.0) {
-              const ptrdiff_t stride = static_cast<ptrdiff_t>(grid.n_gamma) * 3;
-              problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifference, 1, 1, 1, 1>(
-                                           new SecondDifference{std::sqrt(o.smoothness)}),
-                                       nullptr, u - stride, u, u + stride);
-            }
+    // Regularisation. Only LUT parameters some pixel reaches are in the problem; columns
+    // no pixel reaches (the lowest, horizon-hugging ones at coarse sizes) are filled in
+    // after the solve from their nearest observed column (see ExtrapolateColumns): as
+    // free parameters held only by a weak prior they made the normal equations nearly
+    // singular and Levenberg-Marquardt slow.
+    // - free rows (a day): a second-difference prior along the sun zenith links each
+    //   observed column's rows, which also fills rows between the references' sun angles;
+    // - every parameter: a very weak pull toward the initial preset, for the blends of two
+    //   rows that no combination of references separates.
+    std::set<std::pair<int, int>> observed_columns;  // (table, column)
+    for (double* b : texel_blocks) {
+      const bool is_delta = tied;
+      const size_t k = is_delta ? static_cast<size_t>(b - state.log_delta.data()) : static_cast<size_t>(b - state.log_lut.data());
+      const int col = static_cast<int>((k / 3) % grid.n_gamma);
+      const int table = is_delta ? static_cast<int>(k / (3 * grid.n_gamma)) : static_cast<int>(k / table_size);
+      observed_columns.insert({table, col});
+    }
+    for (const auto& [t, col] : observed_columns) {
+      for (int ch = 0; ch < 3; ++ch) {
+        if (tied) {
+          double* d = &state.log_delta[state.DeltaIndex(t, col, ch)];
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
+                                       new PriorResidual{std::sqrt(o.prior_weight), 0.0}),
+                                   nullptr, d);
+          continue;
+        }
+        for (int row = 0; row < grid.n_theta; ++row) {
+          if (!row_fitted[row]) continue;
+          double* u = &state.log_lut[state.Index(t, row, col, ch)];
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
+                                       new PriorResidual{std::sqrt(o.prior_weight), initial_log_lut[u - state.log_lut.data()]}),
+                                   nullptr, u);
+          if (row >= 1 && row + 1 < grid.n_theta && row_fitted[row - 1] && row_fitted[row + 1] && o.smoothness > 0.0) {
+            const ptrdiff_t stride = static_cast<ptrdiff_t>(grid.n_gamma) * 3;
+            const size_t k = static_cast<size_t>(u - state.log_lut.data());
+            problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifferenceOfChange, 1, 1, 1, 1>(
+                                         new SecondDifferenceOfChange{std::sqrt(o.smoothness), initial_log_lut[k - stride],
+                                                                      initial_log_lut[k], initial_log_lut[k + stride]}),
+                                     nullptr, u - stride, u, u + stride);
           }
         }
       }
     }
+    last_observed_columns = observed_columns;
     if (problem.HasParameterBlock(&state.g)) {
       if (o.fit_haziness) {
         problem.SetParameterLowerBound(&state.g, 0, 0.0);
@@ -302,9 +344,11 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
     so.sparse_linear_algebra_library_type =
         ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ? ceres::SUITE_SPARSE : ceres::EIGEN_SPARSE;
-    so.function_tolerance = 1e-10;
-    so.gradient_tolerance = 1e-12;
-    so.parameter_tolerance = 1e-10;
+    // Coarse levels only need to bring the start close; the finest level converges fully.
+    const bool finest = li + 1 == widths.size();
+    so.function_tolerance = finest ? 1e-9 : 1e-5;
+    so.gradient_tolerance = finest ? 1e-12 : 1e-8;
+    so.parameter_tolerance = finest ? 1e-9 : 1e-6;
     so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
     so.logging_type = ceres::SILENT;
     const std::string level_name = std::to_string(lw) + "x" + std::to_string(lh);
@@ -328,6 +372,35 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                              {"time_s", Seconds(t_level, Clock::now())}});
   }
 
+  state.ApplyTiedRows();
+  // Columns no pixel reached: the change (log) of the nearest observed column, per row.
+  int extrapolated = 0;
+  for (int t = 0; t < state.tables; ++t) {
+    for (int col = 0; col < grid.n_gamma; ++col) {
+      if (last_observed_columns.count({t, col})) continue;
+      int nearest = -1;
+      for (int d = 1; d < grid.n_gamma && nearest < 0; ++d) {
+        if (col + d < grid.n_gamma && last_observed_columns.count({t, col + d})) nearest = col + d;
+        else if (col - d >= 0 && last_observed_columns.count({t, col - d})) nearest = col - d;
+      }
+      if (nearest < 0) continue;
+      for (int row = 0; row < grid.n_theta; ++row) {
+        if (!row_fitted[row]) continue;
+        for (int ch = 0; ch < 3; ++ch) {
+          const size_t k = state.Index(t, row, col, ch), kn = state.Index(t, row, nearest, ch);
+          state.log_lut[k] = initial_log_lut[k] + (state.log_lut[kn] - initial_log_lut[kn]);
+        }
+      }
+      ++extrapolated;
+    }
+  }
+  if (extrapolated > 0) {
+    result.skipped.push_back({{"block", "LUT columns without observations"},
+                              {"reason", std::to_string(extrapolated) +
+                                             " (table, column) pairs no fitted pixel reaches (view elevations the reference "
+                                             "does not sample, e.g. within ~0.1 deg of the horizon): given the change of "
+                                             "the nearest observed column"}});
+  }
   // Move the LUT scale gauge onto the exposures: the mean log change of the fitted texels
   // goes to the exposure, so the LUT stays at the initial preset's absolute level.
   if (!o.absolute) {

@@ -66,15 +66,28 @@ SkyRowCost::SkyRowCost(RowCostSetup setup, std::vector<size_t>* texel_index) : s
   row0_ = lr.row0;
   col0_ = lc.col0;
   texel_index->clear();
+  const double wr[2] = {1.0 - lr.frow, lr.frow};
+  const double wc[2] = {1.0 - lc.fcol, lc.fcol};
   for (int t = 0; t < st.tables; ++t) {
-    for (int dr = 0; dr < 2; ++dr) {
-      const double wr = dr ? lr.frow : 1.0 - lr.frow;
-      if (wr <= 0.0) continue;  // row not touched: not a parameter of this block
-      for (int dc = 0; dc < 2; ++dc) {
-        const double wc = dc ? lc.fcol : 1.0 - lc.fcol;
-        if (wc <= 0.0) continue;
-        texels_.push_back({t, dr, dc, wr * wc});
-        texel_index->push_back(st.Index(t, row0_ + dr, col0_ + dc, s_.channel));
+    for (int dc = 0; dc < 2; ++dc) {
+      if (wc[dc] <= 0.0) continue;  // column not touched: not a parameter of this block
+      if (s_.tied_rows) {
+        Texel tx{t, dc, wc[dc], 0, {0, 0}, {0.0, 0.0}, {0.0, 0.0}};
+        for (int dr = 0; dr < 2; ++dr) {
+          if (wr[dr] <= 0.0) continue;
+          tx.drow[tx.nrows] = dr;
+          tx.wrow[tx.nrows] = wr[dr];
+          tx.offset[tx.nrows] = (*s_.initial_log_lut)[st.Index(t, row0_ + dr, col0_ + dc, s_.channel)];
+          ++tx.nrows;
+        }
+        texels_.push_back(tx);
+        texel_index->push_back(st.DeltaIndex(t, col0_ + dc, s_.channel));
+      } else {
+        for (int dr = 0; dr < 2; ++dr) {
+          if (wr[dr] <= 0.0) continue;
+          texels_.push_back({t, dc, wc[dc], 1, {dr, 0}, {wr[dr], 0.0}, {0.0, 0.0}});
+          texel_index->push_back(st.Index(t, row0_ + dr, col0_ + dc, s_.channel));
+        }
       }
     }
   }
@@ -107,14 +120,22 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
   const double lz = std::exp(parameters[nt + 1][0]);
   const double log_k = parameters[nt + 2][0];
   if (!(g >= 0.0 && g < 1.0)) return false;  // outside the model's domain: Ceres shrinks the step
+  if (use_rendered && s_.rendered_valid && !*s_.rendered_valid) return false;
 
   BlockLut lut;
   lut.row0 = row0_;
   lut.col0 = col0_;
-  std::vector<double> texel_value(nt);
+  // Per parameter: its rows' values; the bilinear sum it contributes (its derivative with
+  // respect to the log parameter, before the phase factor).
+  std::vector<double> texel_sum(nt);
   for (int k = 0; k < nt; ++k) {
-    texel_value[k] = std::exp(parameters[k][0]);
-    lut.values[texels_[k].table][texels_[k].drow][texels_[k].dcol] = texel_value[k];
+    const Texel& tx = texels_[k];
+    texel_sum[k] = 0.0;
+    for (int j = 0; j < tx.nrows; ++j) {
+      const double v = std::exp(parameters[k][0] + tx.offset[j]);
+      lut.values[tx.table][tx.drow[j]][tx.dcol] = v;
+      texel_sum[k] += tx.wcol * tx.wrow[j] * v;
+    }
   }
   Model<double> m(lut);
   const auto p = MakeParams(st, s_.sun_dir, g, lz);
@@ -124,7 +145,7 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
   const double w_oc = st.preset.overcast_weight;
   // Bilinear sums of each table (this channel), for the g derivative.
   double table_sum[3] = {0.0, 0.0, 0.0};
-  for (int k = 0; k < nt; ++k) table_sum[texels_[k].table] += texels_[k].weight * texel_value[k];
+  for (int k = 0; k < nt; ++k) table_sum[texels_[k].table] += texel_sum[k];
 
   for (size_t i = 0; i < s_.pixels.size(); ++i) {
     const RowPixel& px = s_.pixels[i];
@@ -149,8 +170,7 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
     const double phase[3] = {phase_r_[i], pm.a, 1.0 / (4.0 * M_PI)};
     for (int k = 0; k < nt; ++k) {
       if (!jacobians[k]) continue;
-      const Texel& t = texels_[k];
-      jacobians[k][i] = dr_de * (1.0 - w_oc) * t.weight * texel_value[k] * phase[t.table] * inv_m;
+      jacobians[k][i] = dr_de * (1.0 - w_oc) * texel_sum[k] * phase[texels_[k].table] * inv_m;
     }
     if (jacobians[nt]) jacobians[nt][i] = dr_de * (1.0 - w_oc) * table_sum[1] * pm.v[0] * inv_m;
     if (jacobians[nt + 1]) jacobians[nt + 1][i] = dr_de * w_oc * lz * overcast_shape_ * inv_m;

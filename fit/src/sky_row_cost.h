@@ -1,8 +1,15 @@
 // The data term of the sky fit: one Ceres residual block per (reference, image row,
 // channel). In a lat-long every pixel of a row has the same view elevation, so the whole
-// row reads the same two LUT columns: the block's parameters are the (up to) 2 rows x 2
-// columns x tables LUT entries of its channel, then g, log L_z and the reference's log
-// exposure. Blocks per channel keep the Jacobian free of structural zeros.
+// row reads the same two LUT columns: the block's parameters are, per table and column,
+// the LUT entries of its channel, then g, log L_z and the reference's log exposure.
+// Blocks per channel keep the Jacobian free of structural zeros.
+//
+// Two LUT parameterisations:
+//  - free rows (several references, a day): each LUT entry u = log T is a parameter;
+//  - tied rows (one reference): the image sees only (1-f) T(row0) + f T(row0+1), so the
+//    two rows around the sun angle move together: T(row) = exp(u0(row) + d), one log
+//    change d per (table, column, channel). This removes an exact degeneracy instead of
+//    leaning on a prior, and keeps the initial preset's shape across sun angles.
 //
 // Residual of pixel i (natural-log radiance, solid-angle weighted, robust):
 //   e_i = log(k * M_i) - log(R_i),   M_i = model radiance (shared model source),
@@ -36,6 +43,8 @@ struct RowPixel {
 
 struct RowCostSetup {
   const FitState* state;               // grid, variant, overcast weight (not the fitted values)
+  bool tied_rows = false;              // one log change for both rows around the sun (see above)
+  const std::vector<double>* initial_log_lut = nullptr;  // u0, needed for tied rows
   std::array<double, 3> sun_dir;
   int channel;
   int level_row;                       // y in the level image
@@ -43,12 +52,14 @@ struct RowCostSetup {
   RobustLoss loss = RobustLoss::kCauchy;
   double loss_scale = 0.05;
   const ImageRGB* rendered = nullptr;  // Vulkan backend: the model image at the current point
+  const bool* rendered_valid = nullptr;  // false: the point could not be rendered (out of domain)
 };
 
 class SkyRowCost final : public ceres::CostFunction {
  public:
-  // `texel_index` receives, in parameter-block order, the FitState::log_lut index of each
-  // LUT parameter; g, log L_z and log exposure follow them.
+  // `texel_index` receives, in parameter-block order, the index of each LUT parameter:
+  // FitState::log_lut index (free rows) or FitState::DeltaIndex (tied rows); g, log L_z
+  // and log exposure follow them.
   SkyRowCost(RowCostSetup setup, std::vector<size_t>* texel_index);
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override;
   int num_texels() const { return static_cast<int>(texels_.size()); }
@@ -56,9 +67,15 @@ class SkyRowCost final : public ceres::CostFunction {
   bool EvaluateCpu(double const* const* parameters, double* residuals) const;
 
  private:
+  // One LUT parameter: a table and column, and the 1 or 2 rows it sets. Row value =
+  // exp(parameter + offset[r]) (offset 0 for free rows, u0(row) for tied rows).
   struct Texel {
-    int table, drow, dcol;  // which LUT, offset from (row0, col0)
-    double weight;          // bilinear weight
+    int table, dcol;
+    double wcol;            // bilinear column weight
+    int nrows;
+    int drow[2];            // offset from row0
+    double wrow[2];         // bilinear row weight
+    double offset[2];
   };
   bool EvaluateImpl(double const* const* parameters, double* residuals, double** jacobians, bool use_rendered) const;
   RowCostSetup s_;

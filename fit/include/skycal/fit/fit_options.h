@@ -28,10 +28,8 @@ struct FitOptions {
   // Empty: automatic (64, 128, ... up to the reference width, at most 512).
   std::vector<int> pyramid_widths;
   int max_iterations_per_level = 50;
-  double smoothness = 1e-3;         // weight of the second-difference prior along sun zenith (rows)
-  double column_smoothness = 1e-4;  // second-difference prior along view elevation, only where a
-                                    // column has no data (it extrapolates, e.g. to the horizon)
-  double prior_weight = 1e-7;       // weight pulling each LUT entry (log) toward the initial preset
+  double smoothness = 1e-6;         // second-difference prior on the LUT change along sun zenith (rows)
+  double prior_weight = 1e-8;       // weight pulling each LUT entry (log) toward the initial preset
   bool fit_haziness = true;
   bool fit_overcast = true;         // fit the overcast zenith luminance (weight held, see docs)
   bool numeric_derivatives = false; // baseline for the benchmark: central differences
