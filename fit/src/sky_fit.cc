@@ -348,7 +348,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     const bool finest = li + 1 == widths.size();
     so.function_tolerance = finest ? 1e-9 : 1e-5;
     so.gradient_tolerance = finest ? 1e-12 : 1e-8;
-    so.parameter_tolerance = finest ? 1e-9 : 1e-6;
+    so.parameter_tolerance = finest ? 1e-7 : 1e-6;
     so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
     so.logging_type = ceres::SILENT;
     const std::string level_name = std::to_string(lw) + "x" + std::to_string(lh);

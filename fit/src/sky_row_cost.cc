@@ -150,10 +150,11 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
   for (size_t i = 0; i < s_.pixels.size(); ++i) {
     const RowPixel& px = s_.pixels[i];
     const glsl::Vec3<double> view(px.view[0], px.view[1], px.view[2]);
-    const double model_cpu = m.sky_radiance(view, p).x;  // channel value (texels replicated)
-    double model_value = model_cpu;
-    if (use_rendered) model_value = s_.rendered->at(px.x, s_.level_row, s_.channel);
-    if (!(model_value > 0.0) || !(model_cpu > 0.0)) return false;
+    // The model value: the Vulkan render at this point, or the shared source in double.
+    // (Both backends use the same analytic Jacobian below, scaled by 1/value.)
+    const double model_value =
+        use_rendered ? static_cast<double>(s_.rendered->at(px.x, s_.level_row, s_.channel)) : m.sky_radiance(view, p).x;
+    if (!(model_value > 0.0)) return false;
     const double e = log_k + std::log(model_value) - px.log_ref;
     const double sc = s_.loss_scale;
     const double z = (e / sc) * (e / sc);
@@ -164,7 +165,7 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
     if (!jacobians) continue;
     // dr/de = sqrt(w) rho'(z) |e| / (s sqrt(rho)); -> sqrt(w) as e -> 0.
     const double dr_de = z < 1e-16 ? px.sqrt_weight : px.sqrt_weight * drho * std::abs(e) / (sc * root);
-    const double inv_m = 1.0 / model_cpu;
+    const double inv_m = 1.0 / model_value;
     // Phase values of each table at this pixel.
     const Jet1 pm = mj.phase_cornette_shanks(Jet1(mu_[i]), Jet1(one_minus_mu_[i]), Jet1(g, 0));
     const double phase[3] = {phase_r_[i], pm.a, 1.0 / (4.0 * M_PI)};
