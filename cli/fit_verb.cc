@@ -10,6 +10,7 @@
 
 #include "args.h"
 #include "fit_report.h"
+#include "staged_directory.h"
 #include "render_verb.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"
@@ -55,47 +56,6 @@ constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference 
   --json                print fit.json on stdout
 )";
 
-// Stage outputs in a sibling temporary directory; move into place only when complete.
-class StagedDirectory {
- public:
-  explicit StagedDirectory(const std::string& dir) : final_(fs::absolute(dir)) {
-    std::error_code ec;
-    if (!fs::is_directory(final_.parent_path(), ec)) {
-      throw Error("--out " + dir + ": parent directory '" + final_.parent_path().string() + "' does not exist");
-    }
-    if (fs::exists(final_, ec)) {
-      if (!fs::is_directory(final_, ec)) throw Error("--out " + dir + ": exists and is not a directory");
-      const bool empty = fs::is_empty(final_, ec);
-      const bool previous_fit = fs::exists(final_ / "fit.json", ec);
-      if (!empty && !previous_fit) {
-        throw Error("--out " + dir + ": directory exists and holds files that are not a previous skycal fit; "
-                    "refusing to overwrite");
-      }
-    }
-    staging_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    fs::remove_all(staging_, ec);
-    if (!fs::create_directories(staging_ / "fit", ec)) {
-      throw Error("--out " + dir + ": cannot create a staging directory beside it (" + ec.message() + ")");
-    }
-  }
-  ~StagedDirectory() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(staging_, ec);
-  }
-  std::string operator/(const std::string& name) const { return (staging_ / name).string(); }
-  void Commit() {
-    std::error_code ec;
-    if (fs::exists(final_, ec)) fs::remove_all(final_, ec);
-    fs::rename(staging_, final_, ec);
-    if (ec) throw Error(final_.string() + ": could not move the finished output into place (" + ec.message() + ")");
-    committed_ = true;
-  }
-
- private:
-  fs::path final_, staging_;
-  bool committed_ = false;
-};
-
 const char* LossName(fit::RobustLoss l) {
   return l == fit::RobustLoss::kCauchy ? "cauchy" : (l == fit::RobustLoss::kHuber ? "huber" : "none");
 }
@@ -117,7 +77,8 @@ bool FitVerbOptions::IsValid(std::string* why) const {
 nlohmann::json RunFitImpl(const FitVerbOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
-  StagedDirectory out(o.out_dir);  // fails early on an unusable --out
+  StagedDirectory out(o.out_dir, "--out", "fit.json");  // fails early on an unusable --out
+  std::filesystem::create_directories(out.staging() / "fit");
   const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
   render::Preset init = render::LoadPreset(init_path);
   std::vector<fit::Reference> refs;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bake_verb.h"
+#include "export_verb.h"
 #include "fit_verb.h"
 #include "render_verb.h"
 #include "skycal/core/version.h"
@@ -22,6 +23,7 @@ const std::vector<Verb>& Verbs() {
   static const std::vector<Verb> verbs = {
       {"render", "render a sky preset to a lat-long EXR (+ PNG preview)", &skycal::cli::RunRender},
       {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
+      {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
   };
   return verbs;

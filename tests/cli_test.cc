@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/render/preset.h"
 #include "test_presets.h"
@@ -182,6 +183,101 @@ TEST(Cli, BundledPresetMatchesTheBaker) {
   // for a different libm rounding on another machine.
   EXPECT_LT(worst, 1e-5) << "re-bake the bundled preset (see the comment above)";
   EXPECT_EQ(fresh.haziness_g, bundled.haziness_g);
+}
+
+}  // namespace
+}  // namespace skycal
+
+namespace skycal {
+namespace {
+
+// A small reference rendered from the bundled preset, for fit/export tests.
+std::string SmallReference(const ScratchDir& dir, const std::string& name, double elevation) {
+  const Result r = Skycal("render --sun-elevation " + std::to_string(elevation) +
+                          " --sun-azimuth 30 --size 128x64 --backend cpu --out " + (dir / (name + ".exr")));
+  EXPECT_EQ(r.rc, 0) << r.err;
+  return dir / (name + ".exr");
+}
+
+TEST(Cli, FitWritesItsOutputsAndExportMakesGameTables) {
+  ScratchDir dir("cli-fit");
+  const std::string a = SmallReference(dir, "morning", 12.0), b = SmallReference(dir, "noon", 55.0);
+  Result r = Skycal("fit --reference " + a + " --time 8 --quiet --backend cpu --out " + (dir / "fit_a") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_LT(j["references"][0]["rel_rmse"].get<double>(), 0.01);
+  EXPECT_GT(j["references"][0]["pixels"]["sky_fitted"].get<long long>(), 1000);
+  EXPECT_GT(j["references"][0]["pixels"]["below_horizon"].get<long long>(), 1000);
+  EXPECT_FALSE(j["skipped"].empty());
+  for (const char* f : {"preset.json", "preset.rayleigh.exr", "fit/morning.exr", "report.png", "fit.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "fit_a" / f)) << f;
+  }
+  const auto preset = ReadJsonFile(dir / "fit_a/preset.json");
+  EXPECT_EQ(preset["provenance"]["inputs"][0]["sha256"].get<std::string>().size(), 64u);
+  EXPECT_EQ(preset["time_of_day_h"].get<double>(), 8.0);
+  ASSERT_EQ(Skycal("fit --reference " + b + " --time 12 --quiet --backend cpu --out " + (dir / "fit_b")).rc, 0);
+
+  r = Skycal("export --preset " + (dir / "fit_b/preset.json") + " --preset " + (dir / "fit_a/preset.json") + " --out " +
+             (dir / "game") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto m = nlohmann::json::parse(r.out);
+  const double scale = m["pre_exposure"].get<double>();
+  EXPECT_EQ(std::exp2(std::round(std::log2(scale))), scale);  // a power of two
+  const ExrRGB mie = ReadExrRGB(dir / "game/fit_a/mie.exr");
+  EXPECT_EQ(mie.attributes.floats.at("preExposure"), static_cast<float>(scale));
+  const render::Preset pa = render::LoadPreset(dir / "fit_a/preset.json");
+  float peak = 0.0f;
+  for (size_t i = 0; i < mie.image.pixels.size(); ++i) {
+    peak = std::max(peak, mie.image.pixels[i]);
+    EXPECT_NEAR(mie.image.pixels[i], pa.luts.mie[i] * scale, 1e-3 * pa.luts.mie[i] * scale + 1e-7);  // half precision
+  }
+  EXPECT_LE(peak, 0.25f * 65504.0f);
+  const std::string csv = Slurp(dir / "game/keyframes.csv");
+  EXPECT_EQ(csv.find("time_of_day_h,preset,haziness_g"), 0u);
+  EXPECT_LT(csv.find("\n8,fit_a"), csv.find("\n12,fit_b"));  // sorted by time
+}
+
+TEST(Cli, FitBadInputLeavesNothing) {
+  ScratchDir dir("cli-fitbad");
+  const std::string good = SmallReference(dir, "good", 20.0);
+  const std::string out = " --quiet --out " + (dir / "out");
+  // No valid pixel: every sky pixel NaN.
+  {
+    capture::LatLongFrame f = capture::ReadLatLongFrame(good);
+    for (int y = 0; y < f.radiance.height / 2; ++y)
+      for (int x = 0; x < f.radiance.width; ++x) f.radiance.at(x, y, 1) = std::nanf("");
+    capture::WriteLatLongFrame(dir / "nan.exr", f);
+  }
+  ExpectFailure("fit --reference " + (dir / "nan.exr") + out, "no valid sky pixel", dir);
+  // No sun attribute and nothing to detect: a uniform sky.
+  {
+    capture::LatLongFrame f;
+    f.radiance = ImageRGB(128, 64);
+    std::fill(f.radiance.pixels.begin(), f.radiance.pixels.end(), 100.0f);
+    capture::WriteLatLongFrame(dir / "uniform.exr", f);
+  }
+  ExpectFailure("fit --reference " + (dir / "uniform.exr") + out, "no sun direction", dir);
+  // Truncated EXR and wrong channels.
+  {
+    const std::string bytes = Slurp(good);
+    std::ofstream(dir / "trunc.exr", std::ios::binary).write(bytes.data(), bytes.size() / 3);
+  }
+  ExpectFailure("fit --reference " + (dir / "trunc.exr") + out, "trunc.exr", dir);
+  ExpectFailure("fit --reference " + (dir / "nope.exr") + out, "no such file", dir);
+  // Absurd options.
+  ExpectFailure("fit --reference " + good + " --sun-cone 90" + out, "--sun-cone", dir);
+  ExpectFailure("fit --reference " + good + " --loss-scale 0" + out, "--loss-scale", dir);
+  ExpectFailure("fit --reference " + good + " --pyramid 64,32" + out, "--pyramid", dir);
+  ExpectFailure("fit --reference " + good + " --model bruneton" + out, "unknown model variant", dir);
+  ExpectFailure("fit --reference " + good + " --time 25" + out, "--time", dir);
+  ExpectFailure("fit --reference " + good + " --out " + (dir / "missing/out"), "does not exist", dir);
+  // An output directory holding somebody else's files is never overwritten.
+  std::filesystem::create_directory(dir.path() / "mine");
+  testing::WriteText(dir / "mine/notes.txt", "keep me");
+  const Result r = Skycal("fit --reference " + good + " --quiet --out " + (dir / "mine"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(Slurp(dir / "mine/notes.txt"), "keep me");
+  ExpectFailure("export --preset " + (dir / "nope.json") + " --out " + (dir / "game"), "nope.json", dir);
 }
 
 }  // namespace
