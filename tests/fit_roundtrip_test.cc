@@ -149,8 +149,8 @@ TEST(FitRoundTrip, NoiseAndOutliersAreHandledByTheRobustLoss) {
   const fit::ImageErrors e = fit::CompareToReference(fit::LoadReference(clean, o), r.references[0].rendered);
   std::cout << "[noise] rel_rmse vs clean " << e.rel_rmse << " g " << r.preset.haziness_g << "\n";
   // Tolerances: 2% pixel noise averages down over ~10^2 pixels per LUT column and row
-  // (measured 0.16%), and the Cauchy loss (scale 5%) gives a 5x outlier ~1/60 of a normal
-  // pixel's pull; 0.5% leaves 3x margin.
+  // (measured 0.16%), and the Cauchy loss (scale 5%) gives a 5x outlier the weight
+  // rho' = 1/1000 (its pull ~1/16 of a pixel 5% off); 0.5% leaves 3x margin.
   EXPECT_LT(e.rel_rmse, 0.005);
   EXPECT_NEAR(r.preset.haziness_g, truth.haziness_g, 0.02);
 }
