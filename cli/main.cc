@@ -8,6 +8,7 @@
 #include "bake_verb.h"
 #include "export_verb.h"
 #include "fit_verb.h"
+#include "import_verb.h"
 #include "render_verb.h"
 #include "skycal/core/version.h"
 
@@ -25,6 +26,7 @@ const std::vector<Verb>& Verbs() {
       {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
+      {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
   };
   return verbs;
 }
