@@ -198,3 +198,34 @@ TEST(FitRoundTrip, SyntheticDayRecoversTheObservedLut) {
 
 }  // namespace
 }  // namespace skycal
+
+namespace skycal {
+namespace {
+
+TEST(FitReference, ClipDetectionFindsClampsButNotUniformSkies) {
+  testing::ScratchDir dir("clip");
+  fit::FitOptions o;
+  o.sun_dir = latlong::DirectionFromElevationAzimuthDeg(40.0, 0.0);
+  // A uniform sky: large equal regions are not a clamp.
+  capture::LatLongFrame f;
+  f.radiance = ImageRGB(128, 64);
+  std::fill(f.radiance.pixels.begin(), f.radiance.pixels.end(), 3000.0f);
+  capture::WriteLatLongFrame(dir / "uniform.exr", f);
+  const fit::Reference u = fit::LoadReference(dir / "uniform.exr", o);
+  EXPECT_EQ(u.clip_level, 0.0);
+  EXPECT_EQ(u.counts.clipped, 0);
+  // A sky with a clamped sun (Blender's studio lights clamp it at 32000): masked.
+  for (int y = 20; y < 24; ++y)
+    for (int x = 60; x < 66; ++x)
+      for (int c = 0; c < 3; ++c) f.radiance.at(x, y, c) = 32000.0f;
+  for (int c = 0; c < 3; ++c) f.radiance.at(10, 10, c) = 31500.0f;  // 98.4% of the clamp: masked too
+  capture::WriteLatLongFrame(dir / "clamped.exr", f);
+  fit::FitOptions far = o;
+  far.sun_dir = latlong::DirectionFromElevationAzimuthDeg(80.0, 90.0);  // cone away from the clamp
+  const fit::Reference c = fit::LoadReference(dir / "clamped.exr", far);
+  EXPECT_EQ(c.clip_level, 32000.0);
+  EXPECT_EQ(c.counts.clipped, 25);
+}
+
+}  // namespace
+}  // namespace skycal

@@ -21,18 +21,28 @@ nlohmann::json MaskCountsToJson(const MaskCounts& c) {
 
 namespace {
 
-// A clipping plateau: the largest channel value shared (to 1e-4) by more than 4 pixels.
+// A clipping plateau: the largest channel value shared (to 1e-4) by more than 4 pixels of
+// distinct directions (the pole rows repeat one direction W times and are left out), over
+// at most 10% of the image: a sensor or encoder clamp saturates a compact bright region
+// (the sun), while an overcast or uniform sky legitimately has large equal regions.
 double FindClipLevel(const ImageRGB& img) {
+  const int w = img.width, h = img.height;
   float peak = 0.0f;
-  for (float v : img.pixels) {
-    if (std::isfinite(v)) peak = std::max(peak, v);
-  }
+  for (int y = 1; y + 1 < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float v = img.at(x, y, c);
+        if (std::isfinite(v)) peak = std::max(peak, v);
+      }
   if (!(peak > 0.0f)) return 0.0;
-  int at_peak = 0;
-  for (float v : img.pixels) {
-    if (std::isfinite(v) && v >= peak * (1.0f - 1e-4f)) ++at_peak;
-  }
-  return at_peak > 4 ? peak : 0.0;
+  long long at_peak = 0;
+  for (int y = 1; y + 1 < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float m = std::max({img.at(x, y, 0), img.at(x, y, 1), img.at(x, y, 2)});
+      if (std::isfinite(m) && m >= peak * (1.0f - 1e-4f)) ++at_peak;
+    }
+  const long long pixels = static_cast<long long>(w) * std::max(h - 2, 1);
+  return (at_peak > 4 && at_peak * 10 < pixels) ? peak : 0.0;
 }
 
 }  // namespace
