@@ -9,7 +9,7 @@
 #include "skycal/core/json_file.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
-#include "synthetic_sky.h"
+#include "../tests/synthetic_sky.h"
 
 using namespace skycal;
 
@@ -49,10 +49,10 @@ int main(int argc, char** argv) {
   // Single reference, 512x256, sun 30 deg.
   nlohmann::json single = nlohmann::json::object();
   for (auto variant : {render::ModelVariant::kFfxv, render::ModelVariant::kFfxvIso}) {
-    const render::Preset truth = bench::TruthPreset(variant);
+    const render::Preset truth = synthetic::TruthPreset(variant);
     const std::string path = (dir / (std::string("single_") + render::ToString(variant) + ".exr")).string();
-    bench::WriteSyntheticReference(path, truth, 30.0, 25.0, 512);
-    const render::Preset start = bench::PerturbedStart(truth, 3);
+    synthetic::WriteSyntheticReference(path, truth, 30.0, 25.0, 512);
+    const render::Preset start = synthetic::PerturbedStart(truth, 3);
     for (auto backend : {render::Backend::kVulkan, render::Backend::kCpu}) {
       fit::FitOptions o;
       o.variant = variant;
@@ -72,9 +72,9 @@ int main(int argc, char** argv) {
   // Baseline: numeric (central-difference) Jacobians, one level at full resolution, CPU
   // model; against the default (analytic, pyramid) on the same reference, same run.
   {
-    const render::Preset truth = bench::TruthPreset(render::ModelVariant::kFfxvIso);
+    const render::Preset truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
     const std::string path = (dir / "single_ffxv-iso.exr").string();
-    const render::Preset start = bench::PerturbedStart(truth, 3);
+    const render::Preset start = synthetic::PerturbedStart(truth, 3);
     fit::FitOptions fast;
     fast.variant = render::ModelVariant::kFfxvIso;
     fast.backend = render::Backend::kCpu;
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
 
   // A day: 24 references at 256x128, sun from -4 to 80 deg elevation, one fit.
   {
-    const render::Preset truth = bench::TruthPreset(render::ModelVariant::kFfxvIso);
+    const render::Preset truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
     fit::FitOptions o;
     o.variant = render::ModelVariant::kFfxvIso;
     o.backend = render::Backend::kVulkan;
@@ -106,10 +106,10 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 24; ++i) {
       const double elevation = -4.0 + 84.0 * i / 23.0;
       const std::string path = (dir / ("day_" + std::to_string(i) + ".exr")).string();
-      bench::WriteSyntheticReference(path, truth, elevation, -100.0 + 9.0 * i, 256);
+      synthetic::WriteSyntheticReference(path, truth, elevation, -100.0 + 9.0 * i, 256);
       refs.push_back(fit::LoadReference(path, o));
     }
-    const Run d = TimeFit(refs, bench::PerturbedStart(truth, 4), o, *vulkan, 3);
+    const Run d = TimeFit(refs, synthetic::PerturbedStart(truth, 4), o, *vulkan, 3);
     result["day_24_references_256x128_vulkan"] = Describe(d);
     std::cerr << "[bench fit] day: median " << d.timing.median_ms << " ms\n";
   }

@@ -9,6 +9,7 @@
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/render/renderer.h"
+#include "synthetic_sky.h"
 #include "test_util.h"
 
 namespace skycal {
@@ -16,59 +17,17 @@ namespace {
 
 using render::ModelVariant;
 
-render::Preset Truth(ModelVariant variant) {
-  render::Preset p = render::LoadPreset(std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json");
-  p.variant = variant;
-  p.haziness_g = 0.76;
-  if (variant == ModelVariant::kFfxvIso) {
-    // A multiple-scattering-like isotropic term: 15% of the single-scattering tables.
-    for (size_t i = 0; i < p.luts.isotropic.size(); ++i) p.luts.isotropic[i] = 0.15f * (p.luts.rayleigh[i] + p.luts.mie[i]);
-  }
-  return p;
-}
+render::Preset Truth(ModelVariant variant) { return synthetic::TruthPreset(variant); }
 
-// Smooth multiplicative perturbation of every LUT entry (up to ~exp(+-amplitude)) and g.
 render::Preset Perturbed(const render::Preset& truth, unsigned seed, double amplitude, double dg) {
-  render::Preset p = truth;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 6.28);
-  const int rows = p.luts.grid.n_theta, cols = p.luts.grid.n_gamma;
-  for (auto* t : {&p.luts.rayleigh, &p.luts.mie, &p.luts.isotropic}) {
-    const double a = u(rng), b = u(rng);
-    for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c)
-        for (int ch = 0; ch < 3; ++ch) {
-          const double f = std::exp(amplitude * std::sin(a + 0.3 * r + 0.2 * c + ch) * std::cos(b + 0.1 * c));
-          float& v = (*t)[(static_cast<size_t>(r) * cols + c) * 3 + ch];
-          v = static_cast<float>(v * f);
-        }
-  }
-  p.haziness_g = truth.haziness_g + dg;
-  return p;
+  return synthetic::PerturbedStart(truth, seed, amplitude, dg);
 }
 
-// Renders the truth (CPU reference, sun disc on) into a reference EXR.
 std::string WriteReference(const testing::ScratchDir& dir, const std::string& name, const render::Preset& truth,
                            double elevation, double azimuth, int width, double noise = 0.0, double outliers = 0.0,
                            unsigned seed = 1) {
-  auto cpu = render::CreateRenderer(render::Backend::kCpu);
-  render::RenderRequest req;
-  req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(elevation, azimuth);
-  req.width = width;
-  req.height = width / 2;
-  capture::LatLongFrame f;
-  f.radiance = cpu->Render(truth, req);
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss(0.0, noise);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (size_t i = 0; i < f.radiance.pixels.size(); i += 3) {
-    const bool outlier = unit(rng) < outliers;  // a bird, a cloud, a lamp: 0.2x .. 5x
-    const double o = outlier ? std::exp(std::log(5.0) * (2.0 * unit(rng) - 1.0)) : 1.0;
-    for (int c = 0; c < 3; ++c) f.radiance.pixels[i + c] = static_cast<float>(f.radiance.pixels[i + c] * o * (1.0 + gauss(rng)));
-  }
-  f.sun_direction = req.sun_dir;
   const std::string path = dir / (name + ".exr");
-  capture::WriteLatLongFrame(path, f);
+  synthetic::WriteSyntheticReference(path, truth, elevation, azimuth, width, noise, outliers, seed);
   return path;
 }
 
