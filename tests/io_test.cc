@@ -179,3 +179,27 @@ TEST(PresetIo, NanTexelAndCorruptJsonAreRejected) {
 
 }  // namespace
 }  // namespace skycal
+
+namespace skycal {
+namespace {
+
+TEST(ExrIo, ExtraPlanesRoundTrip) {
+  testing::ScratchDir dir("planes");
+  ImageRGB img(16, 8);
+  for (size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<float>(i);
+  ExrPlane mask{"mask.valid", std::vector<float>(16 * 8, 1.0f)};
+  mask.values[5] = 0.0f;
+  WriteExrRGBWithPlanes(dir / "p.exr", img, {mask}, {});
+  int w = 0, h = 0;
+  const std::vector<float> back = ReadExrChannel(dir / "p.exr", "mask.valid", &w, &h);
+  EXPECT_EQ(w, 16);
+  EXPECT_EQ(h, 8);
+  EXPECT_EQ(back, mask.values);
+  EXPECT_EQ(ReadExrRGB(dir / "p.exr").image.pixels, img.pixels);
+  EXPECT_THROW(ReadExrChannel(dir / "p.exr", "mask.cloud", &w, &h), Error);
+  EXPECT_THROW(WriteExrRGBWithPlanes(dir / "q.exr", img, {{"R", mask.values}}, {}), Error);
+  EXPECT_EQ(dir.CountEntries(), 1);
+}
+
+}  // namespace
+}  // namespace skycal

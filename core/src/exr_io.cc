@@ -56,6 +56,20 @@ ExrAttributes CollectAttributes(const Imf::Header& header) {
 
 ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
                            const ExrAttributes& attributes, ExrPixelType type) {
+  return WriteExrRGBWithPlanes(path, image, {}, attributes, type);
+}
+
+ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& image, const std::vector<ExrPlane>& planes,
+                                     const ExrAttributes& attributes, ExrPixelType type) {
+  for (const ExrPlane& p : planes) {
+    if (p.values.size() != static_cast<size_t>(image.width) * image.height) {
+      throw Error(path + ": channel '" + p.name + "' has " + std::to_string(p.values.size()) + " values, expected " +
+                  std::to_string(static_cast<size_t>(image.width) * image.height));
+    }
+    if (p.name == "R" || p.name == "G" || p.name == "B" || p.name.empty()) {
+      throw Error(path + ": extra channel name '" + p.name + "' is reserved or empty");
+    }
+  }
   if (image.empty()) throw Error(path + ": refusing to write an empty image");
   AtomicOutput out(path);
   ExrWriteReport report;
@@ -82,6 +96,11 @@ ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
       const size_t elem = type == ExrPixelType::kHalf ? sizeof(half) : sizeof(float);
       fb.insert(kChannels[c], Imf::Slice(pt, base, 3 * elem, 3 * elem * image.width));
     }
+    for (const ExrPlane& p : planes) {
+      header.channels().insert(p.name, Imf::Channel(Imf::FLOAT));
+      fb.insert(p.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(p.values.data())), sizeof(float),
+                                   sizeof(float) * static_cast<size_t>(image.width)));
+    }
     Imf::OutputFile file(out.temp_path().c_str(), header);
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
@@ -90,6 +109,31 @@ ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
   }
   out.Commit();
   return report;
+}
+
+std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    if (!file.header().channels().findChannel(channel)) throw Error(path + ": channel '" + channel + "' missing");
+    std::vector<float> v(static_cast<size_t>(w) * h);
+    Imf::FrameBuffer fb;
+    char* base = reinterpret_cast<char*>(v.data()) -
+                 (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * w) * static_cast<ptrdiff_t>(sizeof(float));
+    fb.insert(channel, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * static_cast<size_t>(w)));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    *width = w;
+    *height = h;
+    return v;
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path + ": not a readable OpenEXR image (" + e.what() + ")");
+  }
 }
 
 ExrRGB ReadExrRGB(const std::string& path) {

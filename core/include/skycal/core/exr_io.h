@@ -40,4 +40,16 @@ struct ExrRGB {
 // data window.
 ExrRGB ReadExrRGB(const std::string& path);
 
+// Extra single-channel float planes (e.g. masks) written after R, G, B, each
+// width * height floats, row-major. Same atomicity and errors as WriteExrRGB.
+struct ExrPlane {
+  std::string name;
+  std::vector<float> values;
+};
+ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& image, const std::vector<ExrPlane>& planes,
+                                     const ExrAttributes& attributes, ExrPixelType type = ExrPixelType::kFloat);
+// Reads one named channel as float (width * height values); throws skycal::Error naming the
+// file and the channel when it is missing.
+std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height);
+
 }  // namespace skycal
