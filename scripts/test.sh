@@ -8,6 +8,6 @@ bash scripts/setup.sh
 # datasets/cache/) for the real-sky fit tests.
 # A failed download (mirror or network) must not hide the other results: the real-sky
 # tests then report SKIPPED, and this says why.
-bash datasets/fetch_real_skies.sh || echo "[test] WARNING: real skies not fetched; real_sky_test will skip" >&2
+bash datasets/fetch_real_skies.sh --with-npm || echo "[test] WARNING: real skies not fetched; real_sky_test will skip" >&2
 cd build
 ctest --output-on-failure -j2 --timeout 900
