@@ -10,6 +10,7 @@
 #include "fit_verb.h"
 #include "import_verb.h"
 #include "render_verb.h"
+#include "sun_verb.h"
 #include "skycal/core/version.h"
 
 namespace {
@@ -27,6 +28,7 @@ const std::vector<Verb>& Verbs() {
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
+      {"sun", "the sun's position (zenith, azimuth, lat-long direction) for a place and time", &skycal::cli::RunSun},
   };
   return verbs;
 }
