@@ -9,6 +9,7 @@ PACKAGES=(
   libceres-dev libeigen3-dev libopencv-dev libopenexr-dev libopencolorio-dev opencolorio-tools
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc glslang-tools spirv-tools
   nlohmann-json3-dev libgtest-dev
+  libexiv2-dev
 )
 
 missing=()

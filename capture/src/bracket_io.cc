@@ -1,0 +1,123 @@
+// Reading bracket images (OpenCV) and their exposure settings (explicit or EXIF).
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "parallel_rows.h"
+#include "skycal/capture/exif_exposure.h"
+#include "skycal/capture/hdr_merge.h"
+#include "skycal/core/error.h"
+
+namespace skycal::capture {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+template <class T>
+void CopyBgrToRgb(const cv::Mat& m, BracketImage* out) {
+  for (int y = 0; y < m.rows; ++y) {
+    const T* row = m.ptr<T>(y);
+    uint16_t* dst = out->rgb.data() + out->index(0, y);
+    for (int x = 0; x < m.cols; ++x) {
+      dst[3 * x + 0] = row[3 * x + 2];
+      dst[3 * x + 1] = row[3 * x + 1];
+      dst[3 * x + 2] = row[3 * x + 0];
+    }
+  }
+}
+
+}  // namespace
+
+BracketImage ReadBracketImage(const std::string& path) {
+  cv::Mat m;
+  try {
+    m = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw Error(path + ": cannot read image (OpenCV: " + e.what() + ")");
+  }
+  if (m.empty()) throw Error(path + ": cannot read image (missing, truncated, or a format OpenCV does not decode)");
+  if (m.channels() != 3) throw Error(path + ": expected a colour image, got " + std::to_string(m.channels()) + " channels");
+  BracketImage img;
+  img.width = m.cols;
+  img.height = m.rows;
+  if (m.depth() == CV_8U) {
+    img.bits = 8;
+  } else if (m.depth() == CV_16U) {
+    img.bits = 16;
+  } else {
+    throw Error(path + ": expected an 8- or 16-bit camera image, got OpenCV depth " + std::to_string(m.depth()) +
+                " (float images are already HDR)");
+  }
+  img.rgb.resize(static_cast<size_t>(img.width) * img.height * 3);
+  if (img.bits == 8)
+    CopyBgrToRgb<uint8_t>(m, &img);
+  else
+    CopyBgrToRgb<uint16_t>(m, &img);
+  return img;
+}
+
+std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const std::vector<double>& exposure_times_s,
+                                  int threads, nlohmann::json* report) {
+  if (!exposure_times_s.empty() && exposure_times_s.size() != paths.size())
+    throw Error("exposure times: " + std::to_string(exposure_times_s.size()) + " given for " +
+                std::to_string(paths.size()) + " images (one per image, in the same order, or none to use EXIF)");
+  const auto t0 = Clock::now();
+  std::vector<Bracket> brackets(paths.size());
+  // Decoding dominates loading (PNG/JPEG inflate); one image per worker at a time.
+  const int workers = detail::ResolveThreads(threads);
+  detail::ParallelChunks(static_cast<int>(paths.size()), workers, [&](int b, int e, int) {
+    for (int i = b; i < e; ++i) {
+      brackets[i].path = paths[i];
+      brackets[i].image = ReadBracketImage(paths[i]);
+    }
+  });
+  const auto t1 = Clock::now();
+  nlohmann::json files = nlohmann::json::array();
+  for (size_t i = 0; i < paths.size(); ++i) {
+    Bracket& b = brackets[i];
+    const ExifExposure exif = ReadExifExposure(paths[i]);
+    std::string time_source;
+    if (!exposure_times_s.empty()) {
+      b.exposure_time_s = exposure_times_s[i];
+      time_source = "explicit";
+      if (!std::isfinite(b.exposure_time_s) || b.exposure_time_s <= 0.0) {
+        std::ostringstream s;
+        s << paths[i] << ": exposure time " << b.exposure_time_s << " s given; expected a finite time > 0 s";
+        throw Error(s.str());
+      }
+    } else if (std::isfinite(exif.exposure_time_s)) {
+      b.exposure_time_s = exif.exposure_time_s;
+      time_source = "exif";
+    } else {
+      throw Error(paths[i] + ": no exposure time: none given explicitly and the file has no EXIF ExposureTime (" +
+                  (exif.error.empty() ? std::string("EXIF present without it") : exif.error) +
+                  "); pass the times in bracket order");
+    }
+    b.f_number = exif.f_number;
+    b.iso = exif.iso;
+    auto opt = [](double v) { return std::isnan(v) ? nlohmann::json() : nlohmann::json(v); };
+    files.push_back({{"path", paths[i]},
+                     {"width", b.image.width},
+                     {"height", b.image.height},
+                     {"bits", b.image.bits},
+                     {"exposure_time_s", b.exposure_time_s},
+                     {"exposure_time_source", time_source},
+                     {"exif_exposure_time_s", opt(exif.exposure_time_s)},
+                     {"f_number", opt(b.f_number)},
+                     {"iso", opt(b.iso)},
+                     {"exif_error", exif.error}});
+  }
+  const auto t2 = Clock::now();
+  if (report) {
+    (*report)["files"] = files;
+    (*report)["threads"] = workers;
+    (*report)["timings_ms"] = {{"decode", Ms(t0, t1)}, {"exif", Ms(t1, t2)}, {"total", Ms(t0, t2)}};
+  }
+  return brackets;
+}
+
+}  // namespace skycal::capture

@@ -1,0 +1,41 @@
+// Camera response curves for the merge (internal to skycal_capture): analytic ones and
+// recovery from brackets with OpenCV's photo module.
+#pragma once
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/capture/hdr_merge.h"
+
+namespace skycal::capture::detail {
+
+// Well-exposedness weights per code (MergeOptions::weight); with `thresholded`, 0 at or
+// below low_code and at or above high_code, > 0 strictly between (the "well exposed" codes).
+struct WeightTable {
+  std::vector<float> w;
+  int low_code = 0;   // codes <= low_code are black
+  int high_code = 0;  // codes >= high_code are clipped
+};
+WeightTable MakeWeights(const MergeOptions& options, int max_code, bool thresholded = true);
+
+// kLinear / kSrgb: linear value per code, `levels` codes, R G B interleaved (levels * 3).
+std::vector<float> AnalyticResponse(ResponseModel model, int levels);
+
+// kDebevec / kRobertson on 8-bit codes (16-bit brackets are rounded to 8 bits for this):
+// 256 * 3 values, normalised (NormaliseResponse). `images` sorted by exposure, ascending;
+// `relative_exposure[i]` = k_i / k_max. Fills report["calibration"]. Unless
+// options.opencv_calibration, only well-exposed samples enter the fit and the curve beyond
+// the well-exposed codes is extrapolated (log-linear), so the top code's value, which fixes
+// the normalisation, is an extrapolation rather than an average over clipped samples.
+std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
+                                   const std::vector<double>& relative_exposure, const MergeOptions& options,
+                                   nlohmann::json* report);
+
+// Fills non-finite entries from their neighbours, clamps negatives to 0 and scales each
+// channel so the top code is 1. Returns the number of decreasing steps (all channels).
+int NormaliseResponse(std::vector<float>* curve, int levels);
+
+// A 256-level curve resampled to 65536 codes (code / 257, linear interpolation).
+std::vector<float> ExpandResponse(const std::vector<float>& curve256);
+
+}  // namespace skycal::capture::detail
