@@ -1,0 +1,349 @@
+#include "capture_verb.h"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include "args.h"
+#include "skycal/capture/rig.h"
+#include "skycal/capture/solar_position.h"
+#include "skycal/capture/sun_detect.h"
+#include "skycal/color/preview.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/sha256.h"
+#include "skycal/core/version.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace {
+
+constexpr const char* kHelp = R"(skycal capture: exposure brackets to a calibrated lat-long reference frame
+
+  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|robertson|linear|srgb]
+                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]
+                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]
+                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json
+                 [--input-colorspace NAME] [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]
+                 [--size WxH] --out FRAME.exr [--json]
+
+  --brackets IMG...       8/16-bit images of one camera, one per exposure (repeat the flag or list them)
+  --exposure-times T,...  seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from
+                          EXIF put frames of a time-lapse on one scale)
+  --response NAME         camera response: debevec (default, recovered), robertson, linear, srgb
+  --lens NAME             lens model of the single camera (default equisolid); --lens-fov-deg (180),
+                          --lens-center (image centre), --lens-radius (half the shorter side), --kb-k,
+                          --vignetting (gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius)
+  --camera-rotation Y,P,R the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,
+                          degrees (default 0,90,0: looking straight up)
+  --rig RIG.json          several cameras (format: capture/include/skycal/capture/rig.h; each camera's
+                          image is an HDR EXR, e.g. merged by an earlier capture of that camera with
+                          --lens latlong... or any linear EXR); replaces --brackets and the lens flags
+  --input-colorspace CS   OCIO colour space of the camera data (default lin_rec709; $OCIO or
+                          config/skycal.ocio), converted to lin_rec709
+  --time ISO8601 --lat --lon   capture time (with UTC offset) and place: the sun by NREL SPA
+  --north-longitude DEG   lat-long longitude that points to geographic north (default 0)
+  --size WxH              output lat-long (default 2048x1024)
+  --out FRAME.exr         reference frame: R, G, B radiance + mask.valid + mask.belowHorizon channels,
+                          sunDirection, time, place, exposure scale, sources, lens
+Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.
+)";
+
+using Clock = std::chrono::steady_clock;
+double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+std::vector<double> ParseList(const std::string& text, const std::string& option) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) v.push_back(ParseNumber(item, option));
+  return v;
+}
+
+// The bracket-merge flags of a pixel as a 0/1 "measured well" image, RGB-replicated, so the
+// same unwrap carries it into the lat-long.
+ImageRGB PlaneAsImage(const std::vector<float>& plane, int w, int h) {
+  ImageRGB img(w, h);
+  for (size_t i = 0; i < plane.size(); ++i) img.pixels[3 * i] = img.pixels[3 * i + 1] = img.pixels[3 * i + 2] = plane[i];
+  return img;
+}
+
+}  // namespace
+
+bool CaptureOptions::IsValid(std::string* why) const {
+  if (brackets.empty() == rig_path.empty()) {
+    *why = "give either --brackets IMG... (one camera) or --rig RIG.json";
+    return false;
+  }
+  if (!brackets.empty() && brackets.size() < 2) {
+    *why = "--brackets: at least two exposures are needed to merge (got 1)";
+    return false;
+  }
+  if (!exposure_times_s.empty() && exposure_times_s.size() != brackets.size()) {
+    *why = "--exposure-times: " + std::to_string(exposure_times_s.size()) + " times for " +
+           std::to_string(brackets.size()) + " brackets";
+    return false;
+  }
+  if (width < 16 || height < 8 || width > 16384 || width != 2 * height) {
+    *why = "--size: expected a 2:1 lat-long between 16x8 and 16384x8192";
+    return false;
+  }
+  if (out.size() < 5 || out.substr(out.size() - 4) != ".exr") {
+    *why = "--out: expected a path ending in .exr";
+    return false;
+  }
+  const bool any_place = !time_iso.empty() || latitude_deg || longitude_deg;
+  const bool all_place = !time_iso.empty() && latitude_deg && longitude_deg;
+  if (any_place && !all_place) {
+    *why = "--time, --lat and --lon go together (the sun by NREL SPA needs all three)";
+    return false;
+  }
+  if (!(std::abs(north_longitude_deg) <= 360.0)) {
+    *why = "--north-longitude: expected degrees in [-360, 360]";
+    return false;
+  }
+  return merge.IsValid(why);
+}
+
+nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
+  // The sun by SPA first: a bad time or place is refused before any heavy work.
+  std::optional<capture::SpaResult> spa;
+  capture::SpaInput spa_input;
+  if (!o.time_iso.empty()) {
+    spa_input = capture::ParseIso8601(o.time_iso, "--time");
+    spa_input.latitude_deg = *o.latitude_deg;
+    spa_input.longitude_deg = *o.longitude_deg;
+    spa = capture::ComputeSolarPosition(spa_input);
+  }
+  nlohmann::json stages = nlohmann::json::object();
+  nlohmann::json skipped = nlohmann::json::array();
+  nlohmann::json sources = nlohmann::json::array();
+  const auto t0 = Clock::now();
+
+  // 1. Merge (single camera) or load the rig's HDR images.
+  std::vector<capture::RigCamera> cameras;
+  std::vector<ImageRGB> images, measured;
+  double exposure_scale = 1.0;
+  nlohmann::json merge_report;
+  if (!o.brackets.empty()) {
+    nlohmann::json load_report;
+    const auto brackets = capture::LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
+    capture::MergeResult merged = capture::MergeBrackets(brackets, o.merge);
+    exposure_scale = merged.exposure_scale;
+    merge_report = merged.report;
+    capture::RigCamera cam;
+    cam.lens = o.lens;
+    cam.width = merged.radiance.width;
+    cam.height = merged.radiance.height;
+    if (!o.lens_center_given) {
+      cam.lens.center_x = 0.5 * (cam.width - 1);
+      cam.lens.center_y = 0.5 * (cam.height - 1);
+    }
+    if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
+    if (cam.lens.model == capture::LensModel::kLatLong) cam.lens = capture::LatLongLens(cam.width, cam.height);
+    if (!cam.lens.IsValid(&why, cam.width, cam.height)) throw Error("lens: " + why);
+    cam.rotation = capture::RotationFromYawPitchRollDeg(o.camera_ypr_deg[0], o.camera_ypr_deg[1], o.camera_ypr_deg[2]);
+    cam.name = "camera";
+    measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
+    images.push_back(std::move(merged.radiance));
+    cameras.push_back(cam);
+    for (const auto& p : o.brackets) sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
+    Log("capture", "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
+                       " pixels no exposure measured well)");
+  } else {
+    cameras = capture::ReadRigFile(o.rig_path);
+    for (const auto& cam : cameras) {
+      ExrRGB exr = ReadExrRGB(cam.image);
+      measured.push_back(PlaneAsImage(std::vector<float>(static_cast<size_t>(exr.image.width) * exr.image.height, 1.0f),
+                                      exr.image.width, exr.image.height));
+      images.push_back(std::move(exr.image));
+      sources.push_back({{"path", cam.image}, {"sha256", Sha256OfFile(cam.image)}});
+    }
+    skipped.push_back({{"stage", "merge"}, {"reason", "--rig: the cameras' images are HDR already"}});
+  }
+  const auto t1 = Clock::now();
+  stages["merge_ms"] = Ms(t0, t1);
+
+  // 2. Colour: camera space -> the working space (scene-linear Rec.709).
+  if (o.input_colorspace != "lin_rec709") {
+    for (ImageRGB& img : images) color::ConvertColorspace(img, o.input_colorspace, "lin_rec709");
+  } else {
+    skipped.push_back({{"stage", "colour"}, {"reason", "input already lin_rec709"}});
+  }
+  const auto t2 = Clock::now();
+  stages["colour_ms"] = Ms(t1, t2);
+
+  // 3. Unwrap / stitch.
+  std::vector<std::pair<capture::RigCamera, const ImageRGB*>> views, measured_views;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    views.push_back({cameras[i], &images[i]});
+    measured_views.push_back({cameras[i], &measured[i]});
+  }
+  std::vector<float> coverage;
+  ImageRGB frame = capture::UnwrapToLatLong(views, o.width, o.height, &coverage);
+  const ImageRGB measured_frame = capture::UnwrapToLatLong(measured_views, o.width, o.height, nullptr);
+  const auto t3 = Clock::now();
+  stages["unwrap_ms"] = Ms(t2, t3);
+
+  // 4. The sun: SPA and detection; the camera heading from the two when both exist.
+  nlohmann::json sun = nlohmann::json::object();
+  std::optional<std::array<double, 3>> sun_dir;
+  if (spa) {
+    sun_dir = capture::SunDirectionInFrame(*spa, o.north_longitude_deg);
+    sun["spa"] = {{"zenith_deg", spa->zenith_deg}, {"azimuth_deg", spa->azimuth_deg}};
+  }
+  std::string detect_why;
+  if (auto d = capture::DetectSun(frame, &detect_why)) {
+    sun["detected"] = {{"direction", d->direction},
+                       {"elevation_deg", latlong::ElevationDeg(d->direction)},
+                       {"azimuth_deg", latlong::AzimuthDeg(d->direction)},
+                       {"clipped", d->clipped},
+                       {"contrast", d->contrast}};
+    if (spa) {
+      // Heading: how far the rig's longitude 0 is from where north was assumed.
+      double offset = latlong::AzimuthDeg(d->direction) - latlong::AzimuthDeg(*sun_dir);
+      offset = std::remainder(offset, 360.0);
+      sun["camera_heading_offset_deg"] = offset;
+      sun["suggested_north_longitude_deg"] = std::remainder(o.north_longitude_deg + offset, 360.0);
+      Log("capture", "camera heading: the detected sun is " + std::to_string(offset) +
+                         " deg of longitude from the SPA sun; --north-longitude " +
+                         std::to_string(sun["suggested_north_longitude_deg"].get<double>()) + " aligns them");
+    } else {
+      sun_dir = d->direction;
+    }
+  } else {
+    sun["detection"] = "no distinct sun: " + detect_why;
+  }
+  if (!sun_dir) skipped.push_back({{"stage", "sunDirection"}, {"reason", "no --time/--lat/--lon and no sun detected"}});
+  const auto t4 = Clock::now();
+  stages["sun_ms"] = Ms(t3, t4);
+
+  // 5. Masks and the frame.
+  const size_t n = static_cast<size_t>(o.width) * o.height;
+  ExrPlane valid{"mask.valid", std::vector<float>(n, 0.0f)}, below{"mask.belowHorizon", std::vector<float>(n, 0.0f)};
+  long long valid_count = 0;
+  for (int y = 0; y < o.height; ++y) {
+    const bool under = latlong::Latitude(y, o.height) <= 0.0;
+    for (int x = 0; x < o.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * o.width + x;
+      const bool ok = coverage[i] > 0.0f && measured_frame.pixels[3 * i] > 0.5f;
+      valid.values[i] = ok ? 1.0f : 0.0f;
+      below.values[i] = under ? 1.0f : 0.0f;
+      valid_count += ok;
+    }
+  }
+  skipped.push_back({{"stage", "cloud mask"}, {"reason", "not implemented yet (issue 4)"}});
+  ExrAttributes attrs;
+  attrs.envmap_latlong = true;
+  if (sun_dir) {
+    attrs.v3fs["sunDirection"] = {static_cast<float>((*sun_dir)[0]), static_cast<float>((*sun_dir)[1]),
+                                  static_cast<float>((*sun_dir)[2])};
+  }
+  if (spa) {
+    attrs.strings["skycalCaptureTime"] = o.time_iso;
+    attrs.floats["skycalLatitudeDeg"] = static_cast<float>(*o.latitude_deg);
+    attrs.floats["skycalLongitudeDeg"] = static_cast<float>(*o.longitude_deg);
+    const double local_h = spa_input.hour + spa_input.minute / 60.0 + spa_input.second / 3600.0;
+    attrs.floats["skycalTimeOfDay"] = static_cast<float>(local_h);
+  }
+  attrs.floats["skycalExposureScale"] = static_cast<float>(exposure_scale);
+  attrs.strings["skycalSources"] = sources.dump();
+  attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(capture::LensModelName(o.lens.model)) : "rig " + o.rig_path;
+  attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
+  attrs.strings["skycalVersion"] = kSkycalVersion;
+  WriteExrRGBWithPlanes(o.out, frame, {valid, below}, attrs);
+  const auto t5 = Clock::now();
+  stages["write_ms"] = Ms(t4, t5);
+  stages["total_ms"] = Ms(t0, t5);
+  Log("capture", "wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
+                     std::to_string(valid_count) + " valid pixels, " + std::to_string(Ms(t0, t5)) + " ms)");
+  return {{"out", o.out},
+          {"size", {o.width, o.height}},
+          {"cameras", static_cast<int>(cameras.size())},
+          {"valid_pixels", valid_count},
+          {"exposure_scale", exposure_scale},
+          {"sun", sun},
+          {"merge", merge_report},
+          {"stages", stages},
+          {"skipped", skipped},
+          {"sources", sources}};
+}
+
+int RunCapture(int argc, char** argv) {
+  if (WantsHelp(argc, argv)) {
+    std::cout << kHelp;
+    return 0;
+  }
+  // --brackets takes every following argument up to the next option.
+  std::vector<std::string> brackets;
+  std::vector<char*> rest;
+  for (int i = 0; i < argc; ++i) {
+    if (std::string(argv[i]) == "--brackets") {
+      while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) brackets.push_back(argv[++i]);
+    } else {
+      rest.push_back(argv[i]);
+    }
+  }
+  return RunVerb("capture", WantsJson(argc, argv), [&]() {
+    Args a(static_cast<int>(rest.size()), rest.data(),
+           {"exposure-times", "response", "lens", "lens-fov-deg", "lens-center", "lens-radius", "kb-k", "vignetting",
+            "camera-rotation", "rig", "input-colorspace", "time", "lat", "lon", "north-longitude", "size", "out"},
+           {"json"});
+    CaptureOptions o;
+    o.brackets = brackets;
+    if (auto t = a.Value("exposure-times")) o.exposure_times_s = ParseList(*t, "exposure-times");
+    if (auto r = a.Value("response")) o.merge.response = capture::ParseResponseModel(*r, "--response");
+    if (auto l = a.Value("lens")) {
+      auto m = capture::LensModelFromName(*l);
+      if (!m) throw Error("--lens: unknown model '" + *l + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
+      o.lens.model = *m;
+    }
+    if (auto f = a.Number("lens-fov-deg")) o.lens.fov_deg = *f;
+    if (auto c = a.Value("lens-center")) {
+      const auto v = ParseList(*c, "lens-center");
+      if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
+      o.lens.center_x = v[0];
+      o.lens.center_y = v[1];
+      o.lens_center_given = true;
+    }
+    if (auto r = a.Number("lens-radius")) {
+      o.lens.radius_px = *r;
+      o.lens_radius_given = true;
+    }
+    if (auto k = a.Value("kb-k")) {
+      const auto v = ParseList(*k, "kb-k");
+      if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
+      for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
+    }
+    if (auto g = a.Value("vignetting")) {
+      const auto v = ParseList(*g, "vignetting");
+      if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
+      for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
+    }
+    if (auto r = a.Value("camera-rotation")) {
+      const auto v = ParseList(*r, "camera-rotation");
+      if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
+      o.camera_ypr_deg = {v[0], v[1], v[2]};
+    }
+    o.rig_path = a.Value("rig").value_or("");
+    if (auto cs = a.Value("input-colorspace")) o.input_colorspace = *cs;
+    o.time_iso = a.Value("time").value_or("");
+    o.latitude_deg = a.Number("lat");
+    o.longitude_deg = a.Number("lon");
+    if (auto n = a.Number("north-longitude")) o.north_longitude_deg = *n;
+    if (auto s = a.Size("size")) {
+      o.width = (*s)[0];
+      o.height = (*s)[1];
+    }
+    o.out = a.Value("out").value_or("");
+    return RunCaptureImpl(o);
+  });
+}
+
+}  // namespace skycal::cli
