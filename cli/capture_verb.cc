@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include "args.h"
+#include "render_verb.h"
+#include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/rig.h"
 #include "skycal/capture/solar_position.h"
 #include "skycal/capture/sun_detect.h"
@@ -16,6 +18,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
+#include "skycal/render/renderer.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -47,7 +50,8 @@ constexpr const char* kHelp = R"(skycal capture: exposure brackets to a calibrat
   --time ISO8601 --lat --lon   capture time (with UTC offset) and place: the sun by NREL SPA
   --north-longitude DEG   lat-long longitude that points to geographic north (default 0)
   --size WxH              output lat-long (default 2048x1024)
-  --out FRAME.exr         reference frame: R, G, B radiance + mask.valid + mask.belowHorizon channels,
+  --out FRAME.exr         reference frame: R, G, B radiance + mask.valid, mask.belowHorizon and (with a
+                          sun) mask.cloud (probability) channels,
                           sunDirection, time, place, exposure scale, sources, lens
 Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.
 )";
@@ -238,7 +242,24 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
       valid_count += ok;
     }
   }
-  skipped.push_back({{"stage", "cloud mask"}, {"reason", "not implemented yet (issue 4)"}});
+  // Cloud probability: colour against the clear-sky model at this sun (bundled preset).
+  std::vector<ExrPlane> planes = {valid, below};
+  if (sun_dir) {
+    render::RenderRequest req;
+    req.sun_dir = *sun_dir;
+    req.width = o.width;
+    req.height = o.height;
+    req.sun_disc = false;
+    const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(DefaultPresetPath()), req);
+    const capture::CloudMask cm = capture::EstimateCloudProbability(frame, clear, sun_dir, {});
+    planes.push_back({"mask.cloud", cm.probability});
+    sun["cloud_offset_ln_rb"] = cm.clear_offset;
+    stages["cloudy_pixels"] = cm.cloudy_pixels;
+  } else {
+    skipped.push_back({{"stage", "cloud mask"}, {"reason", "needs the sun direction for the clear-sky expectation"}});
+  }
+  const auto t_mask = Clock::now();
+  stages["mask_ms"] = Ms(t4, t_mask);
   ExrAttributes attrs;
   attrs.envmap_latlong = true;
   if (sun_dir) {
@@ -257,9 +278,9 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(capture::LensModelName(o.lens.model)) : "rig " + o.rig_path;
   attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
   attrs.strings["skycalVersion"] = kSkycalVersion;
-  WriteExrRGBWithPlanes(o.out, frame, {valid, below}, attrs);
+  WriteExrRGBWithPlanes(o.out, frame, planes, attrs);
   const auto t5 = Clock::now();
-  stages["write_ms"] = Ms(t4, t5);
+  stages["write_ms"] = Ms(t_mask, t5);
   stages["total_ms"] = Ms(t0, t5);
   Log("capture", "wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
                      std::to_string(valid_count) + " valid pixels, " + std::to_string(Ms(t0, t5)) + " ms)");

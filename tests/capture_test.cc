@@ -76,6 +76,8 @@ TEST(Capture, BracketsOfAFisheyeBecomeTheLatLong) {
   int w = 0, h = 0;
   const std::vector<float> valid = ReadExrChannel(dir / "frame.exr", "mask.valid", &w, &h);
   const std::vector<float> below = ReadExrChannel(dir / "frame.exr", "mask.belowHorizon", &w, &h);
+  const std::vector<float> cloud = ReadExrChannel(dir / "frame.exr", "mask.cloud", &w, &h);
+  EXPECT_TRUE(std::all_of(cloud.begin(), cloud.end(), [](float p) { return p >= 0.0f && p <= 1.0f; }));
   ASSERT_EQ(w, 512);
   // Against the truth (point-sampled at the frame's nodes): relative luminance error over
   // valid sky pixels above 5 deg (the fisheye's edge is at the horizon, where the image
