@@ -36,13 +36,6 @@ fit::FitOptions Options(ModelVariant variant, render::Backend backend) {
   o.variant = variant;
   o.backend = backend;
   o.verbose = false;
-  if (const char* e = std::getenv("FIT_ITER")) o.max_iterations_per_level = std::atoi(e);
-  if (const char* e = std::getenv("FIT_PYR")) {
-    o.pyramid_widths.clear();
-    for (const char* p = e; *p;) { o.pyramid_widths.push_back(std::atoi(p)); while (*p && *p != ',') ++p; if (*p) ++p; }
-  }
-  if (const char* e = std::getenv("FIT_PRIOR")) o.prior_weight = std::atof(e);
-  if (const char* e = std::getenv("FIT_SMOOTH")) o.smoothness = std::atof(e);
   return o;
 }
 
@@ -60,7 +53,6 @@ TEST(FitRoundTrip, NoiselessRecoversImageAndHaziness) {
       std::cout << "[roundtrip] " << render::ToString(variant) << " el " << el << " rel_rmse "
                 << r.references[0].errors.rel_rmse << " g " << r.preset.haziness_g << " iterations " << r.iterations
                 << " time " << r.time_s << " s\n";
-      if (std::getenv("FIT_DEBUG")) std::cout << r.levels.dump() << "\n";
       EXPECT_LT(r.references[0].errors.rel_rmse, 1e-4);
       EXPECT_NEAR(r.preset.haziness_g, truth.haziness_g, 0.005);
     }
