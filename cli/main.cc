@@ -10,6 +10,7 @@
 #include "export_verb.h"
 #include "fit_verb.h"
 #include "import_verb.h"
+#include "probe_predict_verb.h"
 #include "render_verb.h"
 #include "sun_verb.h"
 #include "skycal/core/version.h"
@@ -30,6 +31,7 @@ const std::vector<Verb>& Verbs() {
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
+      {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
       {"sun", "the sun's position (zenith, azimuth, lat-long direction) for a place and time", &skycal::cli::RunSun},
   };
   return verbs;
@@ -38,7 +40,7 @@ const std::vector<Verb>& Verbs() {
 void PrintUsage() {
   std::cout << "skycal " << skycal::kSkycalVersion << ": calibration and fitting workbench for real-time game skies\n\n"
             << "usage: skycal VERB [options]   (skycal VERB --help for a verb's options)\n\nverbs:\n";
-  for (const Verb& v : Verbs()) std::cout << "  " << v.name << std::string(12 - std::strlen(v.name), ' ') << v.summary << "\n";
+  for (const Verb& v : Verbs()) std::cout << "  " << v.name << std::string(std::strlen(v.name) < 12 ? 12 - std::strlen(v.name) : 1, ' ') << v.summary << "\n";
   std::cout << "\n  --version   print the version\n";
 }
 

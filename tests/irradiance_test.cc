@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "probe_predict_verb.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
@@ -211,4 +212,26 @@ TEST(Irradiance, RejectsBadInput) {
   EXPECT_THROW(render::IrradianceQuadrature(ImageRGB(1, 1), Dir3{0, 1, 0}), Error);
   EXPECT_THROW(render::IrradianceQuadrature(UniformSky(1.0, true), Dir3{0, 0, 0}), Error);
   EXPECT_THROW(render::FibonacciSphere(0), Error);
+}
+
+TEST(ProbePredictVerb, ImplReturnsUpNormalShAndErrors) {
+  cli::ProbePredictOptions o;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));  // no sun direction
+  o.sun_elevation_deg = 35.0;
+  o.sun_azimuth_deg = 20.0;
+  o.normals = 8;
+  o.backend = render::Backend::kCpu;
+  ASSERT_TRUE(o.IsValid(&why)) << why;
+  const nlohmann::json j = cli::RunProbePredictImpl(o);
+  EXPECT_EQ(j["normals"].size(), 9u);
+  EXPECT_EQ(j["sh9_radiance"].size(), 9u);
+  EXPECT_GT(j["up"]["irradiance_lux"][1].get<double>(), j["up"]["sky_irradiance_lux"][1].get<double>());
+  EXPECT_LT(j["sh9_vs_quadrature"]["sky_max_rel"].get<double>(), 0.1);
+  o.albedo = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--albedo"), std::string::npos);
+  o.albedo = 0.5;
+  o.width = 7;
+  EXPECT_FALSE(o.IsValid(&why));
 }
