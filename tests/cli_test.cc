@@ -282,3 +282,132 @@ TEST(Cli, FitBadInputLeavesNothing) {
 
 }  // namespace
 }  // namespace skycal
+
+#include "skycal/core/latlong.h"
+
+namespace skycal {
+namespace {
+
+std::string Vec17(const nlohmann::json& v) {
+  std::ostringstream ss;
+  ss.precision(17);
+  ss << v[0].get<double>() << "," << v[1].get<double>() << "," << v[2].get<double>();
+  return ss.str();
+}
+
+TEST(Cli, ExportWritesSunColumnsSh9AndFogAtTheFittedSun) {
+  ScratchDir dir("cli-export-sun");
+  const std::string ref = SmallReference(dir, "morning", 12.0);
+  ASSERT_EQ(Skycal("fit --reference " + ref + " --time 8 --quiet --backend cpu --out " + (dir / "fit_a")).rc, 0);
+  const Result r = Skycal("export --preset " + (dir / "fit_a/preset.json") + " --backend cpu --out " + (dir / "game") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto m = nlohmann::json::parse(r.out);
+  const double scale = m["pre_exposure"].get<double>();
+  const auto& p = m["presets"][0];
+  for (const auto& s : m["skipped"]) EXPECT_EQ(s["block"].get<std::string>().find("sun"), std::string::npos) << s;
+
+  // Keyframe columns.
+  const std::string csv = Slurp(dir / "game/keyframes.csv");
+  EXPECT_NE(csv.find(",pre_exposure,sun_elevation_deg,sun_illuminance_r,sun_illuminance_g,sun_illuminance_b,"
+                     "sun_illuminance_lux\n"),
+            std::string::npos)
+      << csv;
+  const auto keys = ReadJsonFile(dir / "game/keyframes.json")["keys"];
+  ASSERT_EQ(keys.size(), 1u);
+  const auto& k = keys[0];
+  EXPECT_NEAR(k["sun_elevation_deg"].get<double>(), 12.0, 1e-3);
+  const double er = k["sun_illuminance_r"].get<double>(), eg = k["sun_illuminance_g"].get<double>(),
+               eb = k["sun_illuminance_b"].get<double>();
+  EXPECT_GT(eg, 1000.0);
+  EXPECT_LT(eg, 128000.0);  // attenuated at 12 degrees
+  EXPECT_NEAR(k["sun_illuminance_lux"].get<double>(), 0.2126 * er + 0.7152 * eg + 0.0722 * eb, 1e-6 * eg);
+  const render::Preset pa = render::LoadPreset(dir / "fit_a/preset.json");
+  const std::array<double, 3> sun = {p["sun"]["direction"][0].get<double>(), p["sun"]["direction"][1].get<double>(),
+                            p["sun"]["direction"][2].get<double>()};
+  const double zenith = std::acos(sun[1]);
+  const auto t = render::SunTransmittance(pa.luts, zenith);
+  EXPECT_NEAR(er, pa.sun_illuminance_lux * pa.sun_tint_rgb[0] * t[0], 1e-6 * er);
+
+  // SH-9: 27 numbers, DC term = mean radiance over the sphere / Y00.
+  const auto sh = ReadJsonFile(dir / "game/fit_a/sh9.json");
+  ASSERT_EQ(sh["coefficients"].size(), 9u);
+  int numbers = 0;
+  for (const auto& c : sh["coefficients"])
+    for (const auto& v : c) numbers += v.is_number() ? 1 : 0;
+  EXPECT_EQ(numbers, 27);
+  EXPECT_EQ(p["sh9"]["coefficients"], sh["coefficients"]);
+  ASSERT_EQ(Skycal("render --preset " + (dir / "fit_a/preset.json") + " --sun-dir " + Vec17(p["sun"]["direction"]) +
+                   " --size 256x128 --backend cpu --no-sun-disc --out " + (dir / "sky.exr"))
+                .rc,
+            0);
+  const ImageRGB sky = ReadExrRGB(dir / "sky.exr").image;
+  double sum[3] = {0, 0, 0}, upper[3] = {0, 0, 0}, omega = 0.0, upper_omega = 0.0;
+  for (int y = 0; y < sky.height; ++y)
+    for (int x = 0; x < sky.width; ++x) {
+      const double w = latlong::PixelSolidAngle(x, y, sky.width, sky.height);
+      omega += w;
+      const bool up = latlong::Latitude(y, sky.height) > 0.0;
+      upper_omega += up ? w : 0.0;
+      for (int c = 0; c < 3; ++c) {
+        sum[c] += w * sky.at(x, y, c);
+        if (up) upper[c] += w * sky.at(x, y, c);
+      }
+    }
+  EXPECT_NEAR(omega, 4.0 * M_PI, 1e-9);
+  const double y00 = 0.5 / std::sqrt(M_PI);
+  for (int c = 0; c < 3; ++c) {
+    const double mean = sum[c] / (4.0 * M_PI);
+    EXPECT_NEAR(sh["coefficients"][0][c].get<double>() * y00, mean, 1e-3 * mean) << c;
+    EXPECT_NEAR(p["fog"]["color_rgb"][c].get<double>(), upper[c] / upper_omega, 1e-4 * upper[c] / upper_omega) << c;
+  }
+
+  // Fog lat-long: 64x32 half float, pre-exposed, smooth and near the fog colour above the horizon.
+  const ExrRGB fog = ReadExrRGB(dir / "game/fit_a/fog.exr");
+  EXPECT_EQ(fog.attributes.floats.at("preExposure"), static_cast<float>(scale));
+  ASSERT_EQ(fog.image.width, 64);
+  ASSERT_EQ(fog.image.height, 32);
+  double fog_upper = 0.0, fog_w = 0.0;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 64; ++x) {
+      for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(fog.image.at(x, y, c)) && fog.image.at(x, y, c) > 0.0f);
+      const double w = latlong::PixelSolidAngle(x, y, 64, 32);
+      fog_upper += w * fog.image.at(x, y, 1) / scale;
+      fog_w += w;
+    }
+  const double fog_g = p["fog"]["color_rgb"][1].get<double>();
+  EXPECT_NEAR(fog_upper / fog_w, fog_g, 0.3 * fog_g);
+  for (int y = 0; y < 32; ++y)  // the seam columns hold the same direction
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(fog.image.at(0, y, c), fog.image.at(63, y, c), 2e-3 * fog.image.at(0, y, c));
+}
+
+TEST(Cli, ExportOfAPresetWithoutProvenanceSkipsTheSunColumns) {
+  ScratchDir dir("cli-export-nosun");
+  const std::string ref = SmallReference(dir, "noon", 50.0);
+  ASSERT_EQ(Skycal("fit --reference " + ref + " --time 12 --quiet --backend cpu --out " + (dir / "fit")).rc, 0);
+  auto j = ReadJsonFile(dir / "fit/preset.json");
+  j.erase("provenance");
+  j["name"] = "bare";
+  WriteJsonFileAtomically(dir / "fit/bare.json", j);  // next to the LUT EXRs it names
+  const Result r = Skycal("export --preset " + (dir / "fit/bare.json") + " --backend cpu --out " + (dir / "game") + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto m = nlohmann::json::parse(r.out);
+  bool sun_reason = false, columns_reason = false;
+  for (const auto& s : m["skipped"]) {
+    const std::string block = s["block"], reason = s["reason"];
+    if (block.find("sun, SH-9 and fog of preset 'bare'") != std::string::npos && reason.find("no provenance") != std::string::npos)
+      sun_reason = true;
+    if (block == "keyframe sun columns" && reason.find("'bare'") != std::string::npos) columns_reason = true;
+  }
+  EXPECT_TRUE(sun_reason) << m["skipped"];
+  EXPECT_TRUE(columns_reason) << m["skipped"];
+  const std::string csv = Slurp(dir / "game/keyframes.csv");
+  EXPECT_EQ(csv.find("sun_illuminance_r"), std::string::npos);
+  EXPECT_NE(csv.find("\n12,bare"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "game/bare/mie.exr"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "game/bare/sh9.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "game/bare/fog.exr"));
+  EXPECT_TRUE(m["presets"][0]["sh9"].is_null());
+}
+
+}  // namespace
+}  // namespace skycal
