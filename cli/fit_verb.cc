@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <set>
 #include <iostream>
 #include <sstream>
@@ -52,9 +54,58 @@ constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference 
   --no-haziness         hold g at its initial value
   --numeric-derivatives central-difference Jacobians (the benchmark's baseline)
   --quiet               no per-iteration progress
+  --probe STEM=S.json   probe samples (skycal probe-extract) for the reference named STEM
+                        (repeatable; default: <reference without .exr>.probe.json when present):
+                        the sun's illuminance is recovered from the ball after the sky fit
+  --require-probe       error unless every reference has probe samples
   --out DIR             output directory: preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json
   --json                print fit.json on stdout
 )";
+
+// The probe options live here (not in FitVerbOptions, fit_verb.h) : RunFitImpl(o) uses the
+// defaults (auto-discovery of <reference stem>.probe.json, not required).
+struct FitProbeOptions {
+  std::vector<std::string> probes;  // --probe REF_STEM=SAMPLES.json
+  bool require_probe = false;       // every reference must have probe samples
+};
+
+// Probe samples per reference name: --probe STEM=FILE, else <reference stem>.probe.json beside it.
+std::vector<std::optional<fit::ProbeSamples>> ProbesFor(const FitProbeOptions& o, const std::vector<fit::Reference>& refs) {
+  std::map<std::string, std::string> given;
+  for (const std::string& spec : o.probes) {
+    const auto eq = spec.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
+      throw Error("--probe " + spec + ": expected REF_STEM=SAMPLES.json");
+    }
+    if (!given.emplace(spec.substr(0, eq), spec.substr(eq + 1)).second) {
+      throw Error("--probe: two sample files for '" + spec.substr(0, eq) + "'");
+    }
+  }
+  for (const auto& [stem, file] : given) {
+    bool found = false;
+    for (const auto& r : refs) found = found || r.name == stem;
+    if (!found) throw Error("--probe " + stem + "=" + file + ": no reference named '" + stem + "'");
+  }
+  std::vector<std::optional<fit::ProbeSamples>> out;
+  for (const auto& r : refs) {
+    std::string file;
+    if (auto it = given.find(r.name); it != given.end()) {
+      file = it->second;
+    } else {
+      fs::path p(r.path);
+      if (p.extension() == ".exr" || p.extension() == ".EXR") p.replace_extension("");
+      const std::string candidate = p.string() + ".probe.json";
+      if (fs::exists(candidate)) file = candidate;
+    }
+    if (file.empty()) {
+      if (o.require_probe) throw Error("--require-probe: no probe samples for reference " + r.path);
+      out.emplace_back();
+    } else {
+      out.emplace_back(fit::LoadProbeSamples(file));
+    }
+  }
+  return out;
+}
 
 const char* LossName(fit::RobustLoss l) {
   return l == fit::RobustLoss::kCauchy ? "cauchy" : (l == fit::RobustLoss::kHuber ? "huber" : "none");
@@ -74,7 +125,14 @@ bool FitVerbOptions::IsValid(std::string* why) const {
   return fit.IsValid(why);
 }
 
-nlohmann::json RunFitImpl(const FitVerbOptions& o) {
+namespace {
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po);
+}  // namespace
+
+nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}); }
+
+namespace {
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   StagedDirectory out(o.out_dir, "--out", "fit.json");  // fails early on an unusable --out
@@ -94,6 +152,7 @@ nlohmann::json RunFitImpl(const FitVerbOptions& o) {
                    std::to_string(r.counts.sky) + " sky pixels fitted");
     for (const auto& w : r.warnings) Log("fit", "warning: " + w);
   }
+  const auto probes = ProbesFor(po, refs);  // before the fit: a missing or bad file fails early
   fit::FitOptions fo = o.fit;
   if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
   auto renderer = render::CreateRenderer(fo.backend);
@@ -105,6 +164,61 @@ nlohmann::json RunFitImpl(const FitVerbOptions& o) {
   nlohmann::json per_ref = nlohmann::json::array();
   nlohmann::json inputs = nlohmann::json::array();
   nlohmann::json warnings = nlohmann::json::array();
+  // The sun from the probe, sequentially after the sky solve (why that is exact for the
+  // sky and needs no weighting: fit/src/sun_from_probe.cc).
+  std::vector<std::optional<fit::ProbeSun>> suns(refs.size());
+  std::vector<nlohmann::json> sun_json(refs.size());
+  for (size_t r = 0; r < refs.size(); ++r) {
+    if (!probes[r]) continue;
+    try {
+      const fit::ProbeSun s = fit::SunFromProbe(refs[r], result.references[r], result.preset, *probes[r], *renderer);
+      suns[r] = s;
+      sun_json[r] = {{"visible", s.visible},
+                     {"illuminance_rgb", s.illuminance_ref},
+                     {"illuminance_rgb_model", s.illuminance_model},
+                     {"fitted_illuminance_rgb_model", s.fitted_model},
+                     {"fraction", s.fraction},
+                     {"residual", s.residual},
+                     {"samples", s.samples},
+                     {"sun_facing_samples", s.sun_facing_samples},
+                     {"probe", probes[r]->path}};
+      if (fo.absolute) sun_json[r]["illuminance_lux"] = s.lux;
+      Log("fit", refs[r].name + ": probe sun " + (s.visible ? "visible" : "occluded") + ", fraction " +
+                     std::to_string(s.fraction) + ", E_sun (model) " + std::to_string(s.illuminance_model[0]) + ", " +
+                     std::to_string(s.illuminance_model[1]) + ", " + std::to_string(s.illuminance_model[2]));
+    } catch (const Error& e) {
+      if (po.require_probe) throw;
+      sun_json[r] = {{"visible", false}, {"error", e.what()}, {"probe", probes[r]->path}};
+      warnings.push_back(refs[r].name + ": sun from the probe: " + e.what());
+      Log("fit", "warning: " + refs[r].name + ": sun from the probe: " + e.what());
+    }
+  }
+  {
+    std::vector<size_t> visible;
+    for (size_t r = 0; r < refs.size(); ++r) {
+      if (suns[r] && suns[r]->visible) visible.push_back(r);
+    }
+    if (visible.size() == 1) {
+      const size_t r = visible[0];
+      bool clamped = false;
+      result.preset.sun_tint_rgb = fit::SunTintFor(result.preset, refs[r].sun_dir, suns[r]->illuminance_model, &clamped);
+      sun_json[r]["sun_tint_rgb"] = result.preset.sun_tint_rgb;
+      if (clamped) {
+        const std::string w = refs[r].name + ": the probe's sun needs a sun_tint_rgb outside its bounds: clamped";
+        warnings.push_back(w);
+        Log("fit", "warning: " + w);
+      }
+    } else if (visible.size() > 1) {
+      for (size_t r : visible) {
+        sun_json[r]["sun_tint_rgb"] = fit::SunTintFor(result.preset, refs[r].sun_dir, suns[r]->illuminance_model, nullptr);
+      }
+      const std::string w = std::to_string(visible.size()) +
+                            " references see the sun on the probe: the preset's sun_tint_rgb is left as fitted "
+                            "(per-reference tints in fit.json)";
+      warnings.push_back(w);
+      Log("fit", "warning: " + w);
+    }
+  }
   for (size_t r = 0; r < refs.size(); ++r) {
     const auto& ref = refs[r];
     const auto& rf = result.references[r];
@@ -125,6 +239,7 @@ nlohmann::json RunFitImpl(const FitVerbOptions& o) {
                        {"observed_lut_rows", rf.observed_rows},
                        {"clip_level", ref.clip_level},
                        {"pixels", fit::MaskCountsToJson(ref.counts)}});
+    if (!sun_json[r].is_null()) per_ref.back()["sun"] = sun_json[r];
     inputs.push_back({{"path", ref.path}, {"sha256", ref.sha256}});
     for (const auto& w : ref.warnings) warnings.push_back(w);
   }
@@ -167,6 +282,7 @@ nlohmann::json RunFitImpl(const FitVerbOptions& o) {
                  std::to_string(result.iterations) + " iterations)");
   return summary;
 }
+}  // namespace
 
 int RunFit(int argc, char** argv) {
   if (WantsHelp(argc, argv)) {
@@ -176,10 +292,13 @@ int RunFit(int argc, char** argv) {
   return RunVerb("fit", WantsJson(argc, argv), [&]() {
     Args a(argc, argv,
            {"reference", "model", "backend", "sun-dir", "sun-elevation", "sun-azimuth", "mask", "init", "out", "sun-cone",
-            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction"},
-           {"json", "absolute", "no-haziness", "numeric-derivatives", "quiet"});
+            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction", "probe"},
+           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet"});
     FitVerbOptions o;
     o.references = a.Values("reference");
+    FitProbeOptions po;
+    po.probes = a.Values("probe");
+    po.require_probe = a.Has("require-probe");
     o.init_preset = a.Value("init").value_or("");
     o.out_dir = a.Value("out").value_or("");
     fit::FitOptions& f = o.fit;
@@ -221,7 +340,7 @@ int RunFit(int argc, char** argv) {
     f.fit_haziness = !a.Has("no-haziness");
     f.numeric_derivatives = a.Has("numeric-derivatives");
     f.verbose = !a.Has("quiet");
-    return RunFitImpl(o);
+    return RunFitWithProbes(o, po);
   });
 }
 

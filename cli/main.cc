@@ -10,6 +10,7 @@
 #include "export_verb.h"
 #include "fit_verb.h"
 #include "import_verb.h"
+#include "probe_extract_verb.h"
 #include "probe_predict_verb.h"
 #include "render_verb.h"
 #include "sun_verb.h"
@@ -31,6 +32,7 @@ const std::vector<Verb>& Verbs() {
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
+      {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},
       {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
       {"sun", "the sun's position (zenith, azimuth, lat-long direction) for a place and time", &skycal::cli::RunSun},
   };

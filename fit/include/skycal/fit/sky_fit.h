@@ -1,10 +1,12 @@
 // Fitting the game's sky model to reference skies with Ceres (`skycal fit`).
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "skycal/capture/probe.h"
 #include "skycal/core/image.h"
 #include "skycal/fit/fit_options.h"
 #include "skycal/fit/reference.h"
@@ -44,5 +46,36 @@ struct FitResult {
 // selected backend (kept alive by the caller so its pipelines are reused).
 FitResult FitSky(const std::vector<Reference>& references, const render::Preset& init, const FitOptions& options,
                  render::SkyRenderer& renderer);
+
+// ---- The sun from the gray diffuse probe (fit/src/sun_from_probe.cc) ------------------
+// Probe samples of one frame, as `skycal probe-extract` writes them ("skycal-probe-samples").
+struct ProbeSamples {
+  std::string path;
+  double albedo = 0.18;
+  std::vector<capture::ProbeSample> samples;
+  double max_luminance = 0.0;
+  bool max_luminance_clipped = false;
+};
+// Throws skycal::Error naming the file when it is unreadable or not a valid samples file.
+ProbeSamples LoadProbeSamples(const std::string& path);
+
+struct ProbeSun {
+  bool visible = false;
+  std::array<double, 3> illuminance_ref{};    // recovered E_sun, the reference's units (0 when occluded)
+  std::array<double, 3> illuminance_model{};  // illuminance_ref / exposure (model units; lux when absolute)
+  std::array<double, 3> fitted_model{};       // the least-squares E_sun / exposure, whatever the decision
+  double lux = 0.0;                           // Rec.709 luminance of illuminance_model
+  double fraction = 0.0, residual = 0.0;      // capture::SunRecovery sun_fraction, residual_rms_rel
+  int samples = 0, sun_facing_samples = 0;
+};
+// Renders `fitted` at the reference's sun without the disc (sky_width x sky_width/2),
+// E_sky at the sample normals by quadrature times rf.exposure, then capture::RecoverSun.
+ProbeSun SunFromProbe(const Reference& ref, const ReferenceFit& rf, const render::Preset& fitted,
+                      const ProbeSamples& probe, render::SkyRenderer& renderer, int sky_width = 512);
+
+// sun_tint_rgb such that sun_illuminance_lux * tint * SunTransmittance(sun zenith) equals
+// `illuminance_model`, clamped to the parameter's bounds (*clamped set when it was).
+std::array<double, 3> SunTintFor(const render::Preset& preset, const std::array<double, 3>& sun_dir,
+                                 const std::array<double, 3>& illuminance_model, bool* clamped);
 
 }  // namespace skycal::fit

@@ -1,0 +1,271 @@
+// The sun from the gray diffuse probe in `skycal fit` (fit/src/sun_from_probe.cc) and
+// `skycal probe-extract`: synthetic probe scenes with a known sun, a day with clouds over
+// the sun in some frames, and bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/capture/probe.h"
+#include "skycal/capture/rig.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
+#include "skycal/render/irradiance.h"
+#include "skycal/render/renderer.h"
+#include "synthetic_sky.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+
+struct Result {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string Slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+Result Skycal(const std::string& args) {
+  static int n = 0;
+  const std::string base =
+      (std::filesystem::temp_directory_path() / ("skycal-probefit-" + std::to_string(::getpid()) + "-" + std::to_string(n++)))
+          .string();
+  const std::string cmd = std::string(SKYCAL_BINARY) + " " + args + " >" + base + ".out 2>" + base + ".err";
+  const int status = std::system(cmd.c_str());
+  Result r;
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(base + ".out");
+  r.err = Slurp(base + ".err");
+  std::filesystem::remove(base + ".out");
+  std::filesystem::remove(base + ".err");
+  return r;
+}
+
+const std::string kPreset = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json";
+
+// Probe samples of a ball of `albedo` under the preset's sky (rendered without the disc,
+// E_sky by quadrature, exactly as the fit computes it) and a sun of illuminance e_sun (0:
+// behind cloud): radiance = albedo/pi (E_sky(n) + E_sun max(0, n.s)) (1 + noise). Normals:
+// the hemisphere facing a camera that looks 40 degrees off the sun's azimuth; samples with
+// n.s > 0.9 are clipped on the photograph and dropped.
+void WriteSyntheticProbe(const std::string& path, const render::Preset& preset, const std::array<double, 3>& sun,
+                         const render::Rgb& e_sun, double albedo, double noise, unsigned seed) {
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  render::RenderRequest req;
+  req.sun_dir = sun;
+  req.width = 512;
+  req.height = 256;
+  req.sun_disc = false;
+  const ImageRGB sky = cpu->Render(preset, req);
+  const double az = std::atan2(sun[0], sun[2]) + 40.0 * M_PI / 180.0;
+  const std::array<double, 3> to_camera = {std::sin(az), 0.2, std::cos(az)};
+  std::vector<render::Dir3> normals;
+  for (const auto& n : render::FibonacciSphere(400)) {
+    const double facing = n[0] * to_camera[0] + n[1] * to_camera[1] + n[2] * to_camera[2];
+    const double ns = n[0] * sun[0] + n[1] * sun[1] + n[2] * sun[2];
+    if (facing > 0.1 && ns <= 0.9) normals.push_back(n);
+  }
+  const auto e_sky = render::IrradianceQuadrature(sky, normals);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, noise);
+  nlohmann::json samples = nlohmann::json::array();
+  for (size_t i = 0; i < normals.size(); ++i) {
+    const auto e = render::SunIrradiance(e_sun, sun, normals[i], true);
+    std::array<double, 3> radiance{};
+    for (int c = 0; c < 3; ++c) radiance[c] = albedo / M_PI * (e_sky[i][c] + e[c]) * (1.0 + gauss(rng));
+    samples.push_back({{"normal", normals[i]}, {"radiance", radiance}, {"pixels", 20}});
+  }
+  WriteJsonFileAtomically(path, {{"format", "skycal-probe-samples"},
+                                 {"format_version", 1},
+                                 {"image", "synthetic"},
+                                 {"albedo", albedo},
+                                 {"max_luminance", 0.0},
+                                 {"max_luminance_clipped", true},
+                                 {"samples", samples}});
+}
+
+const char* kFitArgs = " --backend cpu --model ffxv --pyramid 64,128 --max-iterations 8 --quiet --json";
+
+TEST(ProbeFit, RecoversTheSunWithinOnePercent) {
+  testing::ScratchDir dir("probe-fit-sun");
+  const render::Preset truth = render::LoadPreset(kPreset);  // the fit starts at the bundled preset
+  const double el = 35.0, az = 50.0;
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(el, az);
+  synthetic::WriteSyntheticReference(dir / "noon.exr", truth, el, az, 128);
+  const render::Rgb at_ground = render::SunIlluminanceAtGround(truth, sun);
+  const std::array<double, 3> tint_scale = {0.85, 1.0, 1.12};
+  render::Rgb e_sun{};
+  for (int c = 0; c < 3; ++c) e_sun[c] = at_ground[c] * tint_scale[c];
+  WriteSyntheticProbe(dir / "noon_ball.json", truth, sun, e_sun, 0.18, 0.01, 7);
+
+  const Result r = Skycal("fit --reference " + dir / "noon.exr" + " --probe noon=" + dir / "noon_ball.json" +
+                          " --require-probe --absolute --out " + dir / "out" + kFitArgs);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto fit = ReadJsonFile(dir / "out/fit.json");
+  const auto& s = fit["references"][0]["sun"];
+  ASSERT_TRUE(s.is_object()) << fit.dump(1);
+  EXPECT_TRUE(s["visible"].get<bool>());
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c) {
+    const double rel = s["illuminance_rgb"][c].get<double>() / e_sun[c] - 1.0;
+    worst = std::max(worst, std::abs(rel));
+  }
+  const double lux_true = 0.2126 * e_sun[0] + 0.7152 * e_sun[1] + 0.0722 * e_sun[2];
+  const double lux_rel = s["illuminance_lux"].get<double>() / lux_true - 1.0;
+  std::cout << "[probe-fit] E_sun true " << e_sun[0] << ", " << e_sun[1] << ", " << e_sun[2] << " recovered "
+            << s["illuminance_rgb"].dump() << " worst rel " << worst << " lux rel " << lux_rel << " fraction "
+            << s["fraction"] << " residual " << s["residual"] << " sky rel_rmse " << fit["references"][0]["rel_rmse"]
+            << "\n";
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(std::abs(lux_rel), 0.01);
+  // The preset carries it: sun_illuminance * tint * T(sun zenith) = the recovered illuminance.
+  const render::Preset out = render::LoadPreset(dir / "out/preset.json");
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(out.sun_tint_rgb[c] / (truth.sun_tint_rgb[c] * tint_scale[c]), 1.0, 0.01) << c;
+  }
+  const render::Rgb again = render::SunIlluminanceAtGround(out, sun);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(again[c] / e_sun[c], 1.0, 0.01) << c;
+}
+
+TEST(ProbeFit, DayWithCloudsOverTheSunDecidesVisibilityEveryFrame) {
+  testing::ScratchDir dir("probe-fit-day");
+  const render::Preset truth = render::LoadPreset(kPreset);
+  const double els[] = {8.0, 20.0, 33.0, 45.0, 33.0, 20.0, 8.0};
+  const double azs[] = {-100.0, -70.0, -40.0, 0.0, 40.0, 70.0, 100.0};
+  const bool cloud_over_sun[] = {false, true, false, false, true, false, true};
+  std::string args = "fit";
+  for (int f = 0; f < 7; ++f) {
+    const std::string stem = dir / ("frame" + std::to_string(f));
+    const auto sun = latlong::DirectionFromElevationAzimuthDeg(els[f], azs[f]);
+    synthetic::WriteSyntheticReference(stem + ".exr", truth, els[f], azs[f], 128);
+    render::Rgb e_sun = render::SunIlluminanceAtGround(truth, sun);
+    if (cloud_over_sun[f]) e_sun = {0.0, 0.0, 0.0};
+    WriteSyntheticProbe(stem + ".probe.json", truth, sun, e_sun, 0.18, 0.01, 100 + f);  // auto-discovered
+    args += " --reference " + stem + ".exr";
+  }
+  const Result r = Skycal(args + " --require-probe --out " + dir / "out" + kFitArgs);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto fit = ReadJsonFile(dir / "out/fit.json");
+  for (int f = 0; f < 7; ++f) {
+    const auto& s = fit["references"][f]["sun"];
+    ASSERT_TRUE(s.is_object()) << f;
+    std::cout << "[probe-day] frame " << f << " elevation " << els[f] << (cloud_over_sun[f] ? " cloud" : " clear")
+              << ": visible " << s["visible"] << " fraction " << s["fraction"] << " E_sun(model) "
+              << s["illuminance_rgb_model"].dump() << " exposure " << fit["references"][f]["exposure"] << "\n";
+    EXPECT_EQ(s["visible"].get<bool>(), !cloud_over_sun[f]) << "frame " << f;
+    if (!cloud_over_sun[f]) {
+      const auto sun = latlong::DirectionFromElevationAzimuthDeg(els[f], azs[f]);
+      const render::Rgb e_true = render::SunIlluminanceAtGround(truth, sun);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(s["illuminance_rgb_model"][c].get<double>() / e_true[c], 1.0, 0.02) << "frame " << f << " ch " << c;
+      }
+    }
+  }
+  // Several frames see the sun: the preset's tint is left alone, with a warning.
+  EXPECT_NE(fit["warnings"].dump().find("see the sun on the probe"), std::string::npos);
+}
+
+TEST(ProbeFit, RequireProbeWithoutSamplesFailsAndWritesNothing) {
+  testing::ScratchDir dir("probe-fit-require");
+  const render::Preset truth = render::LoadPreset(kPreset);
+  synthetic::WriteSyntheticReference(dir / "ref.exr", truth, 30.0, 0.0, 64);
+  const Result r = Skycal("fit --reference " + dir / "ref.exr" + " --require-probe --out " + dir / "out" + kFitArgs);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("require-probe"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out") && !std::filesystem::is_empty(dir / "out"));
+  EXPECT_EQ(dir.CountEntries(), 1);  // ref.exr only: no staging directory left behind
+  // A --probe for a reference that does not exist is refused as well.
+  WriteSyntheticProbe(dir / "p.json", truth, latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0), {1e5, 1e5, 1e5}, 0.18,
+                      0.0, 1);
+  const Result r2 = Skycal("fit --reference " + dir / "ref.exr" + " --probe other=" + dir / "p.json" + " --out " +
+                           dir / "out" + kFitArgs);
+  EXPECT_EQ(r2.rc, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+// A photograph of a ball: background 0.5, ball radiance a + b max(0, n.s) per channel.
+void WriteBallImage(const std::string& path, const capture::BallCircle& c, const std::array<double, 9>& rot,
+                    const std::array<double, 3>& s) {
+  ImageRGB img;
+  img.width = 200;
+  img.height = 150;
+  img.pixels.assign(static_cast<size_t>(img.width) * img.height * 3, 0.5f);
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      const auto n = capture::BallNormalAt(c, rot, x, y);
+      if (!n) continue;
+      const double cs = std::max(0.0, (*n)[0] * s[0] + (*n)[1] * s[1] + (*n)[2] * s[2]);
+      for (int ch = 0; ch < 3; ++ch) {
+        img.pixels[(static_cast<size_t>(y) * img.width + x) * 3 + ch] = static_cast<float>(1.0 + 0.1 * ch + 8.0 * cs);
+      }
+    }
+  }
+  WriteExrRGB(path, img, {});
+}
+
+TEST(ProbeExtract, SamplesAGivenBallAndRefusesBadInput) {
+  testing::ScratchDir dir("probe-extract");
+  const capture::BallCircle c{100.0, 75.0, 40.0};
+  const auto rot = capture::RotationFromYawPitchRollDeg(30.0, 10.0, 0.0);
+  const std::array<double, 3> s = latlong::DirectionFromElevationAzimuthDeg(40.0, 200.0);
+  WriteBallImage(dir / "ball.exr", c, rot, s);
+
+  const Result ok = Skycal("probe-extract --image " + dir / "ball.exr" +
+                           " --circle 100,75,40 --camera-rotation 30,10,0 --albedo 0.2 --out " + dir / "s.json");
+  ASSERT_EQ(ok.rc, 0) << ok.err;
+  const auto doc = ReadJsonFile(dir / "s.json");
+  EXPECT_EQ(doc["format"], "skycal-probe-samples");
+  EXPECT_EQ(doc["format_version"], 1);
+  EXPECT_EQ(doc["sha256"].get<std::string>().size(), 64u);
+  EXPECT_DOUBLE_EQ(doc["albedo"].get<double>(), 0.2);
+  ASSERT_GT(doc["samples"].size(), 20u);
+  double worst = 0.0;
+  for (const auto& smp : doc["samples"]) {
+    const auto n = smp["normal"].get<std::array<double, 3>>();
+    const double cs = std::max(0.0, n[0] * s[0] + n[1] * s[1] + n[2] * s[2]);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double expect = 1.0 + 0.1 * ch + 8.0 * cs;
+      worst = std::max(worst, std::abs(smp["radiance"][ch].get<double>() / expect - 1.0));
+    }
+  }
+  std::cout << "[probe-extract] " << doc["samples"].size() << " samples, worst rel vs the normal's radiance " << worst
+            << "\n";
+  EXPECT_LT(worst, 0.15);  // measured 0.097 (at the terminator kink of max(0, n.s)): a bin averages radiance over its normals, the normal is their mean
+
+  // Ball outside the image.
+  const Result out = Skycal("probe-extract --image " + dir / "ball.exr" + " --circle 190,75,40 --out " + dir / "o.json");
+  EXPECT_EQ(out.rc, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.json"));
+  // Fully clipped: every ball pixel >= 1.
+  const Result clipped =
+      Skycal("probe-extract --image " + dir / "ball.exr" + " --circle 100,75,40 --clip-level 0.9 --out " + dir / "c.json");
+  EXPECT_EQ(clipped.rc, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "c.json"));
+  // No ball to find in a flat image.
+  ImageRGB flat;
+  flat.width = 64;
+  flat.height = 48;
+  flat.pixels.assign(64 * 48 * 3, 1.0f);
+  WriteExrRGB(dir / "flat.exr", flat, {});
+  const Result none = Skycal("probe-extract --image " + dir / "flat.exr" + " --out " + dir / "n.json");
+  EXPECT_EQ(none.rc, 1);
+  EXPECT_FALSE(std::filesystem::exists(dir / "n.json"));
+  // Only the inputs and the one good output are there.
+  EXPECT_EQ(dir.CountEntries(), 3);
+}
+
+}  // namespace
+}  // namespace skycal
