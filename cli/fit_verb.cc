@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -168,6 +169,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   // sky and needs no weighting: fit/src/sun_from_probe.cc).
   std::vector<std::optional<fit::ProbeSun>> suns(refs.size());
   std::vector<nlohmann::json> sun_json(refs.size());
+  const auto t_probe = std::chrono::steady_clock::now();
   for (size_t r = 0; r < refs.size(); ++r) {
     if (!probes[r]) continue;
     try {
@@ -219,6 +221,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
       Log("fit", "warning: " + w);
     }
   }
+  // The probe step's added cost (a render of each probed reference's sky + quadrature).
+  const double probe_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_probe).count();
   for (size_t r = 0; r < refs.size(); ++r) {
     const auto& ref = refs[r];
     const auto& rf = result.references[r];
@@ -255,6 +259,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   nlohmann::json summary = {{"references", per_ref},
                             {"haziness_g", result.preset.haziness_g},
                             {"time_s", result.time_s},
+                            {"probe_time_s", probe_time_s},
                             {"iterations", result.iterations},
                             {"termination", result.termination},
                             {"levels", result.levels},

@@ -117,6 +117,8 @@ TEST(ProbeFit, RecoversTheSunWithinOnePercent) {
   const auto fit = ReadJsonFile(dir / "out/fit.json");
   const auto& s = fit["references"][0]["sun"];
   ASSERT_TRUE(s.is_object()) << fit.dump(1);
+  std::cout << "[probe fit] sky fit " << fit["time_s"].get<double>() << " s, probe step (added cost) "
+            << fit["probe_time_s"].get<double>() << " s\n";
   EXPECT_TRUE(s["visible"].get<bool>());
   double worst = 0.0;
   for (int c = 0; c < 3; ++c) {
