@@ -15,40 +15,17 @@
 #include "skycal/render/preset.h"
 #include "test_presets.h"
 #include "test_util.h"
+#include "run_binary.h"
 
 namespace skycal {
 namespace {
 
 using testing::ScratchDir;
 
-struct Result {
-  int rc = -1;
-  std::string out, err;
-};
+using Result = testing::ProcessResult;
+using testing::Slurp;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-// Runs `skycal ARGS` (with optional environment prefix) capturing stdout and stderr.
-Result Skycal(const std::string& args, const std::string& env = "") {
-  static int n = 0;
-  const std::string base = (std::filesystem::temp_directory_path() / ("skycal-cli-" + std::to_string(::getpid()) + "-" +
-                                                                      std::to_string(n++)))
-                               .string();
-  const std::string cmd = env + " " + SKYCAL_BINARY + " " + args + " >" + base + ".out 2>" + base + ".err";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(base + ".out");
-  r.err = Slurp(base + ".err");
-  std::filesystem::remove(base + ".out");
-  std::filesystem::remove(base + ".err");
-  return r;
-}
+Result Skycal(const std::string& args, const std::string& env = "") { return testing::RunSkycal(SKYCAL_BINARY, args, env); }
 
 TEST(Cli, VersionAndHelp) {
   Result r = Skycal("--version");

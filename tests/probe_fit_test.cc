@@ -21,38 +21,16 @@
 #include "skycal/render/irradiance.h"
 #include "skycal/render/renderer.h"
 #include "synthetic_sky.h"
+#include "run_binary.h"
 #include "test_util.h"
 
 namespace skycal {
 namespace {
 
-struct Result {
-  int rc = -1;
-  std::string out, err;
-};
+using Result = testing::ProcessResult;
+using testing::Slurp;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-Result Skycal(const std::string& args) {
-  static int n = 0;
-  const std::string base =
-      (std::filesystem::temp_directory_path() / ("skycal-probefit-" + std::to_string(::getpid()) + "-" + std::to_string(n++)))
-          .string();
-  const std::string cmd = std::string(SKYCAL_BINARY) + " " + args + " >" + base + ".out 2>" + base + ".err";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(base + ".out");
-  r.err = Slurp(base + ".err");
-  std::filesystem::remove(base + ".out");
-  std::filesystem::remove(base + ".err");
-  return r;
-}
+Result Skycal(const std::string& args) { return testing::RunSkycal(SKYCAL_BINARY, args); }
 
 const std::string kPreset = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json";
 

@@ -15,6 +15,7 @@
 
 #include "skycal/capture/solar_position.h"
 #include "skycal/core/error.h"
+#include "run_binary.h"
 #include "sun_verb.h"
 
 namespace skycal::capture {
@@ -370,32 +371,9 @@ TEST(SunVerb, OptionsNameTheFieldAtFault) {
   refused(o, "--delta-t");
 }
 
-struct ProcessResult {
-  int rc = -1;
-  std::string out, err;
-};
+using testing::ProcessResult;
 
-std::string Slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
-ProcessResult Skycal(const std::string& args) {
-  static int n = 0;
-  const std::string base =
-      (std::filesystem::temp_directory_path() / ("skycal-sun-" + std::to_string(::getpid()) + "-" + std::to_string(n++))).string();
-  const std::string cmd = std::string(SKYCAL_BINARY) + " " + args + " >" + base + ".out 2>" + base + ".err";
-  const int status = std::system(cmd.c_str());
-  ProcessResult r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(base + ".out");
-  r.err = Slurp(base + ".err");
-  std::filesystem::remove(base + ".out");
-  std::filesystem::remove(base + ".err");
-  return r;
-}
+ProcessResult Skycal(const std::string& args) { return testing::RunSkycal(SKYCAL_BINARY, args); }
 
 TEST(SunVerb, BinaryJsonAndHelp) {
   ProcessResult r = Skycal(
