@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "args.h"
+#include "sun_choice.h"
 #include "render_verb.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -41,34 +42,7 @@ nlohmann::json Rgb(const render::Rgb& v) { return {v[0], v[1], v[2]}; }
 }  // namespace
 
 bool ProbePredictOptions::IsValid(std::string* why) const {
-  const bool have_angles = sun_elevation_deg || sun_azimuth_deg;
-  if (have_angles && sun_dir) {
-    *why = "give either --sun-elevation/--sun-azimuth or --sun-dir, not both";
-    return false;
-  }
-  if (!have_angles && !sun_dir) {
-    *why = "the sun direction is required: --sun-elevation DEG --sun-azimuth DEG or --sun-dir X,Y,Z";
-    return false;
-  }
-  if (have_angles && (!sun_elevation_deg || !sun_azimuth_deg)) {
-    *why = "--sun-elevation and --sun-azimuth go together";
-    return false;
-  }
-  if (sun_elevation_deg && (*sun_elevation_deg < -90.0 || *sun_elevation_deg > 90.0)) {
-    *why = "--sun-elevation " + std::to_string(*sun_elevation_deg) + ": expected degrees in [-90, 90]";
-    return false;
-  }
-  if (sun_azimuth_deg && std::abs(*sun_azimuth_deg) > 360.0) {
-    *why = "--sun-azimuth " + std::to_string(*sun_azimuth_deg) + ": expected degrees in [-360, 360]";
-    return false;
-  }
-  if (sun_dir) {
-    const auto& d = *sun_dir;
-    if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 1e-9)) {
-      *why = "--sun-dir: expected a non-zero vector";
-      return false;
-    }
-  }
+  if (!ValidSunChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir, why)) return false;
   if (!(albedo >= 0.0 && albedo <= 1.0)) {
     *why = "--albedo " + std::to_string(albedo) + ": expected a value in [0, 1]";
     return false;
@@ -85,8 +59,7 @@ bool ProbePredictOptions::IsValid(std::string* why) const {
 }
 
 std::array<double, 3> ProbePredictOptions::SunDirection() const {
-  if (sun_dir) return latlong::Normalized(*sun_dir, "--sun-dir");
-  return latlong::DirectionFromElevationAzimuthDeg(*sun_elevation_deg, *sun_azimuth_deg);
+  return SunDirectionFromChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir);
 }
 
 nlohmann::json RunProbePredictImpl(const ProbePredictOptions& o) {

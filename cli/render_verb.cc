@@ -8,6 +8,7 @@
 #include "skycal/core/atomic_file.h"
 
 #include "args.h"
+#include "sun_choice.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/color/preview.h"
 #include "skycal/core/error.h"
@@ -48,34 +49,7 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 std::string DefaultPresetPath() { return std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json"; }
 
 bool RenderOptions::IsValid(std::string* why) const {
-  const bool have_angles = sun_elevation_deg || sun_azimuth_deg;
-  if (have_angles && sun_dir) {
-    *why = "give either --sun-elevation/--sun-azimuth or --sun-dir, not both";
-    return false;
-  }
-  if (!have_angles && !sun_dir) {
-    *why = "the sun direction is required: --sun-elevation DEG --sun-azimuth DEG or --sun-dir X,Y,Z";
-    return false;
-  }
-  if (have_angles && (!sun_elevation_deg || !sun_azimuth_deg)) {
-    *why = "--sun-elevation and --sun-azimuth go together";
-    return false;
-  }
-  if (sun_elevation_deg && (*sun_elevation_deg < -90.0 || *sun_elevation_deg > 90.0)) {
-    *why = "--sun-elevation " + std::to_string(*sun_elevation_deg) + ": expected degrees in [-90, 90]";
-    return false;
-  }
-  if (sun_azimuth_deg && std::abs(*sun_azimuth_deg) > 360.0) {
-    *why = "--sun-azimuth " + std::to_string(*sun_azimuth_deg) + ": expected degrees in [-360, 360]";
-    return false;
-  }
-  if (sun_dir) {
-    const auto& d = *sun_dir;
-    if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 1e-9)) {
-      *why = "--sun-dir: expected a non-zero vector";
-      return false;
-    }
-  }
+  if (!ValidSunChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir, why)) return false;
   render::RenderRequest r;
   r.width = width;
   r.height = height;
@@ -99,8 +73,7 @@ bool RenderOptions::IsValid(std::string* why) const {
 }
 
 std::array<double, 3> RenderOptions::SunDirection() const {
-  if (sun_dir) return latlong::Normalized(*sun_dir, "--sun-dir");
-  return latlong::DirectionFromElevationAzimuthDeg(*sun_elevation_deg, *sun_azimuth_deg);
+  return SunDirectionFromChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir);
 }
 
 nlohmann::json RunRenderImpl(const RenderOptions& o) {
