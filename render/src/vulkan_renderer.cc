@@ -20,7 +20,7 @@ namespace {
 
 // Workgroup size (specialization constants 0, 1). The shader maps one image row to one
 // workgroup (y = gl_WorkGroupID.y), so the second dimension must stay 1.
-constexpr uint32_t kLocalX = 64, kLocalY = 1;
+constexpr uint32_t kLocalX = 128, kLocalY = 1;
 // Bindings of sky_latlong.comp: 0 uniforms, 1 LUTs, 2 output, 3 direction trig table.
 constexpr uint32_t kBindings = 4;
 constexpr VkDescriptorType kBindingTypes[kBindings] = {
