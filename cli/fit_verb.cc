@@ -57,8 +57,12 @@ constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference 
   --quiet               no per-iteration progress
   --probe STEM=S.json   probe samples (skycal probe-extract) for the reference named STEM
                         (repeatable; default: <reference without .exr>.probe.json when present):
-                        the sun's illuminance is recovered from the ball after the sky fit
+                        the ball's samples join the fit as residuals; the sun's RGB illuminance
+                        (per reference) and the ground albedo become fitted parameters
   --require-probe       error unless every reference has probe samples
+  --probe-weight L      the probe residuals of a reference weigh L times its sky pixels (default 0.1)
+  --probe-quadrature W  lat-long width of the sky irradiance quadrature (default 128)
+  --no-ground-albedo    hold the ground albedo at the initial preset's value
   --out DIR             output directory: preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json
   --json                print fit.json on stdout
 )";
@@ -154,45 +158,47 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     for (const auto& w : r.warnings) Log("fit", "warning: " + w);
   }
   const auto probes = ProbesFor(po, refs);  // before the fit: a missing or bad file fails early
+  std::vector<const fit::ProbeSamples*> probe_ptrs;
+  for (const auto& p : probes) probe_ptrs.push_back(p ? &*p : nullptr);
   fit::FitOptions fo = o.fit;
   if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
   auto renderer = render::CreateRenderer(fo.backend);
   Log("fit", "objective backend: " + renderer->Describe());
-  fit::FitResult result = fit::FitSky(refs, init, fo, *renderer);
+  fit::FitResult result = fit::FitSky(refs, init, fo, *renderer, probe_ptrs);
   result.preset.name = fs::path(o.out_dir).filename().string();
   if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
 
   nlohmann::json per_ref = nlohmann::json::array();
   nlohmann::json inputs = nlohmann::json::array();
   nlohmann::json warnings = nlohmann::json::array();
-  // The sun from the probe, sequentially after the sky solve (why that is exact for the
-  // sky and needs no weighting: fit/src/sun_from_probe.cc).
   std::vector<std::optional<fit::ProbeSun>> suns(refs.size());
   std::vector<nlohmann::json> sun_json(refs.size());
-  const auto t_probe = std::chrono::steady_clock::now();
   for (size_t r = 0; r < refs.size(); ++r) {
     if (!probes[r]) continue;
-    try {
-      const fit::ProbeSun s = fit::SunFromProbe(refs[r], result.references[r], result.preset, *probes[r], *renderer);
-      suns[r] = s;
-      sun_json[r] = {{"visible", s.visible},
-                     {"illuminance_rgb", s.illuminance_ref},
-                     {"illuminance_rgb_model", s.illuminance_model},
-                     {"fitted_illuminance_rgb_model", s.fitted_model},
-                     {"fraction", s.fraction},
-                     {"residual", s.residual},
-                     {"samples", s.samples},
-                     {"sun_facing_samples", s.sun_facing_samples},
-                     {"probe", probes[r]->path}};
-      if (fo.absolute) sun_json[r]["illuminance_lux"] = s.lux;
-      Log("fit", refs[r].name + ": probe sun " + (s.visible ? "visible" : "occluded") + ", fraction " +
-                     std::to_string(s.fraction) + ", E_sun (model) " + std::to_string(s.illuminance_model[0]) + ", " +
-                     std::to_string(s.illuminance_model[1]) + ", " + std::to_string(s.illuminance_model[2]));
-    } catch (const Error& e) {
-      if (po.require_probe) throw;
-      sun_json[r] = {{"visible", false}, {"error", e.what()}, {"probe", probes[r]->path}};
-      warnings.push_back(refs[r].name + ": sun from the probe: " + e.what());
-      Log("fit", "warning: " + refs[r].name + ": sun from the probe: " + e.what());
+    const fit::ProbeSun& s = *result.references[r].sun;
+    suns[r] = s;
+    sun_json[r] = {{"observable", s.observable},
+                   {"visible", s.visible},
+                   {"illuminance_rgb", s.illuminance_ref},
+                   {"illuminance_rgb_model", s.illuminance_model},
+                   {"fitted_illuminance_rgb_model", s.fitted_model},
+                   {"fraction", s.fraction},
+                   {"residual", s.residual},
+                   {"log_rmse", s.log_rmse},
+                   {"samples", s.samples},
+                   {"sun_facing_samples", s.sun_facing_samples},
+                   {"ground_facing_samples", s.ground_facing_samples},
+                   {"probe", probes[r]->path}};
+    if (!s.note.empty()) sun_json[r]["note"] = s.note;
+    if (fo.absolute) sun_json[r]["illuminance_lux"] = s.lux;
+    Log("fit", refs[r].name + ": probe sun " + (!s.observable ? "not observable (" + s.note + ")"
+                                                              : s.visible ? std::string("visible") : std::string("occluded")) +
+                   ", fraction " + std::to_string(s.fraction) + ", E_sun (model) " +
+                   std::to_string(s.illuminance_model[0]) + ", " + std::to_string(s.illuminance_model[1]) + ", " +
+                   std::to_string(s.illuminance_model[2]) + ", probe log RMSE " + std::to_string(s.log_rmse));
+    if (!s.observable) {
+      if (po.require_probe) throw Error(refs[r].name + ": --require-probe: the probe cannot observe the sun: " + s.note);
+      warnings.push_back(refs[r].name + ": sun from the probe: " + s.note);
     }
   }
   {
@@ -221,8 +227,6 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
       Log("fit", "warning: " + w);
     }
   }
-  // The probe step's added cost (a render of each probed reference's sky + quadrature).
-  const double probe_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_probe).count();
   for (size_t r = 0; r < refs.size(); ++r) {
     const auto& ref = refs[r];
     const auto& rf = result.references[r];
@@ -255,11 +259,13 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
       {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
       {"smoothness", fo.smoothness},
       {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
+      {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
+      {"fit_ground_albedo", fo.fit_ground_albedo},
       {"numeric_derivatives", fo.numeric_derivatives}};
   nlohmann::json summary = {{"references", per_ref},
                             {"haziness_g", result.preset.haziness_g},
                             {"time_s", result.time_s},
-                            {"probe_time_s", probe_time_s},
+                            {"probe", result.probe},
                             {"iterations", result.iterations},
                             {"termination", result.termination},
                             {"levels", result.levels},
@@ -297,8 +303,9 @@ int RunFit(int argc, char** argv) {
   return RunVerb("fit", WantsJson(argc, argv), [&]() {
     Args a(argc, argv,
            {"reference", "model", "backend", "sun-dir", "sun-elevation", "sun-azimuth", "mask", "init", "out", "sun-cone",
-            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction", "probe"},
-           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet"});
+            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction", "probe",
+            "probe-weight", "probe-quadrature"},
+           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet", "no-ground-albedo"});
     FitVerbOptions o;
     o.references = a.Values("reference");
     FitProbeOptions po;
@@ -343,6 +350,12 @@ int RunFit(int argc, char** argv) {
     if (auto v = a.Number("prior-weight")) f.prior_weight = *v;
     if (auto v = a.Number("time")) f.time_of_day_h = *v;
     f.fit_haziness = !a.Has("no-haziness");
+    if (auto v = a.Number("probe-weight")) f.probe_weight = *v;
+    if (auto v = a.Number("probe-quadrature")) {
+      if (*v != std::floor(*v)) throw Error("--probe-quadrature: expected an integer width");
+      f.probe_quadrature_width = static_cast<int>(*v);
+    }
+    f.fit_ground_albedo = !a.Has("no-ground-albedo");
     f.numeric_derivatives = a.Has("numeric-derivatives");
     f.verbose = !a.Has("quiet");
     return RunFitWithProbes(o, po);

@@ -240,6 +240,26 @@ ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>
   return m;
 }
 
+double SunShareOfBrightest(const std::vector<ProbeSample>& samples, const std::vector<std::array<double, 3>>& sun_radiance,
+                           const std::vector<double>& sun_cos, double bright_fraction) {
+  if (sun_radiance.size() != samples.size() || sun_cos.size() != samples.size()) {
+    throw Error("sun share: need one sun radiance and cosine per probe sample");
+  }
+  auto lum = [](const std::array<double, 3>& v) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]; };
+  std::vector<std::pair<double, size_t>> bright;  // (measured luminance, index) of sun-facing samples
+  for (size_t i = 0; i < samples.size(); ++i) {
+    if (sun_cos[i] > 0.05) bright.emplace_back(lum(samples[i].radiance), i);
+  }
+  std::sort(bright.begin(), bright.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  const size_t nb = std::max<size_t>(1, static_cast<size_t>(std::ceil(bright_fraction * bright.size())));
+  double sun_lum = 0.0, meas_lum = 0.0;
+  for (size_t j = 0; j < nb && j < bright.size(); ++j) {
+    sun_lum += lum(sun_radiance[bright[j].second]);
+    meas_lum += bright[j].first;
+  }
+  return meas_lum > 0.0 ? sun_lum / meas_lum : 0.0;
+}
+
 SunRecovery RecoverSun(const std::vector<ProbeSample>& samples, const std::array<double, 3>& albedo,
                        const std::vector<std::array<double, 3>>& sky_irradiance,
                        const std::array<double, 3>& sun_direction, const SunRecoveryOptions& options) {
@@ -291,7 +311,6 @@ SunRecovery RecoverSun(const std::vector<ProbeSample>& samples, const std::array
   }
   // Residuals and the sun's share on the brightest sun-facing samples.
   double res2 = 0.0, meas2 = 0.0;
-  std::vector<std::pair<double, size_t>> bright;  // (measured luminance, index)
   for (size_t i = 0; i < n; ++i) {
     double model[3];
     for (int c = 0; c < 3; ++c) {
@@ -300,26 +319,12 @@ SunRecovery RecoverSun(const std::vector<ProbeSample>& samples, const std::array
       res2 += d * d;
       meas2 += samples[i].radiance[c] * samples[i].radiance[c];
     }
-    if (cosv[i] > 0.05) {
-      const float rgb[3] = {static_cast<float>(samples[i].radiance[0]), static_cast<float>(samples[i].radiance[1]),
-                            static_cast<float>(samples[i].radiance[2])};
-      bright.emplace_back(Luminance(rgb), i);
-    }
   }
   r.residual_rms_rel = meas2 > 0.0 ? std::sqrt(res2 / meas2) : 0.0;
-  std::sort(bright.begin(), bright.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  const size_t nb = std::max<size_t>(1, static_cast<size_t>(std::ceil(options.bright_fraction * bright.size())));
-  double sun_lum = 0.0, meas_lum = 0.0;
-  for (size_t j = 0; j < nb && j < bright.size(); ++j) {
-    const size_t i = bright[j].second;
-    const float sun_rgb[3] = {
-        static_cast<float>(albedo[0] / kPi * r.fitted_sun_illuminance[0] * cosv[i]),
-        static_cast<float>(albedo[1] / kPi * r.fitted_sun_illuminance[1] * cosv[i]),
-        static_cast<float>(albedo[2] / kPi * r.fitted_sun_illuminance[2] * cosv[i])};
-    sun_lum += Luminance(sun_rgb);
-    meas_lum += bright[j].first;
-  }
-  r.sun_fraction = meas_lum > 0.0 ? sun_lum / meas_lum : 0.0;
+  std::vector<std::array<double, 3>> sun_radiance(n);
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) sun_radiance[i][c] = albedo[c] / kPi * r.fitted_sun_illuminance[c] * cosv[i];
+  r.sun_fraction = SunShareOfBrightest(samples, sun_radiance, cosv, options.bright_fraction);
   r.visible = r.sun_fraction >= options.visible_threshold;
   if (r.visible) r.sun_illuminance = r.fitted_sun_illuminance;
   return r;

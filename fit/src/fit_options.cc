@@ -27,6 +27,13 @@ bool FitOptions::IsValid(std::string* why) const {
     const auto& d = *sun_dir;
     if (!(std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) > 1e-9)) return bad("--sun-dir: expected a non-zero vector");
   }
+  if (!(probe_weight > 0.0 && probe_weight <= 1e3)) return bad("--probe-weight: expected a weight in (0, 1000]");
+  if (probe_quadrature_width < 16 || probe_quadrature_width > 2048 || probe_quadrature_width % 4) {
+    return bad("--probe-quadrature: expected a lat-long width in [16, 2048], a multiple of 4");
+  }
+  if (!(sun_visible_threshold >= 0.0 && sun_visible_threshold <= 1.0)) {
+    return bad("--sun-visible-threshold: expected a fraction in [0, 1]");
+  }
   if (time_of_day_h && !(*time_of_day_h >= 0.0 && *time_of_day_h < 24.0)) return bad("--time: expected hours in [0, 24)");
   return true;
 }

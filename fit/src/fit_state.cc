@@ -29,6 +29,8 @@ FitState FitState::FromPreset(const render::Preset& init, render::ModelVariant v
   s.g = init.haziness_g;
   s.log_overcast_zenith = std::log(std::max(init.overcast_zenith_cd_m2, 1e-6));
   s.log_exposure.assign(references, 0.0);
+  s.sun_rgb.assign(references, {0.0, 0.0, 0.0});
+  s.ground_albedo = init.ground_albedo;
   s.log_delta.assign(static_cast<size_t>(3) * init.luts.grid.n_gamma * 3, 0.0);
   s.initial_log_lut = s.log_lut;
   return s;
@@ -58,6 +60,7 @@ render::Preset FitState::ToPresetUntied() const {
     for (size_t i = 0; i < table; ++i) (*dst[t])[i] = t < tables ? static_cast<float>(std::exp(log_lut[t * table + i])) : 0.0f;
   }
   p.haziness_g = g;
+  p.ground_albedo = ground_albedo;
   p.overcast_zenith_cd_m2 = std::exp(log_overcast_zenith);
   return p;
 }

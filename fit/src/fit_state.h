@@ -2,6 +2,7 @@
 // they stay positive and relative changes are uniform across five orders of magnitude),
 // haziness g, log overcast zenith luminance, and one log exposure per reference.
 #pragma once
+#include <array>
 #include <vector>
 
 #include "skycal/render/preset.h"
@@ -15,6 +16,10 @@ struct FitState {
   double g = 0.8;
   double log_overcast_zenith = 0.0;  // log cd/m^2
   std::vector<double> log_exposure;  // per reference: fitted image = exposure * model
+  // Per reference: the sun's illuminance at normal incidence (RGB, model units: lux when
+  // the references are absolute), fitted from the gray probe; 0 without one.
+  std::vector<std::array<double, 3>> sun_rgb;
+  double ground_albedo = 0.1;        // diffuse ground below the horizon (fitted from the probe)
   // Tied rows (one reference): log change per [table][col][channel] applied to both rows
   // around the sun angle (see sky_row_cost.h).
   std::vector<double> log_delta;

@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -9,8 +10,10 @@
 #include <set>
 
 #include "fit_state.h"
+#include "probe_terms.h"
 #include "pyramid.h"
 #include "sky_row_cost.h"
+#include "sun_from_probe.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
@@ -47,9 +50,13 @@ struct SecondDifferenceOfChange {
 // point, before Ceres evaluates the residual blocks (the Vulkan backend's objective).
 class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
  public:
+  // probe_images[r] (probed references only, probe_width x probe_width/2): the sky the
+  // probe residuals integrate.
   RenderAtEvaluationPoint(const FitState* state, const std::vector<Reference>* refs, render::SkyRenderer* renderer,
-                          int width, int height, std::vector<ImageRGB>* images, bool* valid)
-      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images), valid_(valid) {}
+                          int width, int height, std::vector<ImageRGB>* images, bool* valid,
+                          const std::vector<bool>* probed, int probe_width, std::vector<ImageRGB>* probe_images)
+      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images), valid_(valid),
+        probed_(probed), probe_width_(probe_width), probe_images_(probe_images) {}
   void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
     if (!new_evaluation_point && renders_ > 0) return;
     // A trial step far outside the model's domain (an overflowing LUT entry) is not
@@ -75,6 +82,11 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
       req.sun_disc = false;
       req.ground = render::GroundMode::kZero;
       (*images_)[r] = renderer_->Render(preset, req);
+      if ((*probed_)[r]) {
+        req.width = probe_width_;
+        req.height = probe_width_ / 2;
+        (*probe_images_)[r] = renderer_->Render(preset, req);
+      }
     }
     ++renders_;
     *valid_ = true;
@@ -88,6 +100,9 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
   int width_, height_;
   std::vector<ImageRGB>* images_;
   bool* valid_;
+  const std::vector<bool>* probed_;
+  int probe_width_;
+  std::vector<ImageRGB>* probe_images_;
   int renders_ = 0;
 };
 
@@ -140,7 +155,7 @@ ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit) {
 }
 
 FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init, const FitOptions& o,
-                 render::SkyRenderer& renderer) {
+                 render::SkyRenderer& renderer, const std::vector<const ProbeSamples*>& probes) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   if (refs.empty()) throw Error("fit: no reference given");
@@ -152,6 +167,38 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   // One reference sees only a blend of the two rows around its sun angle: tie them.
   const bool tied = refs.size() == 1;
   const render::LutGrid& grid = state.preset.luts.grid;
+
+  // The gray probe: which references have one, what it can observe.
+  std::vector<ProbeFrame> frames = PrepareProbeFrames(refs, probes);
+  std::vector<bool> probed(refs.size(), false);
+  int probed_count = 0, ground_facing = 0;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    probed[r] = frames[r].probe != nullptr;
+    probed_count += probed[r] ? 1 : 0;
+    ground_facing += frames[r].ground_facing;
+  }
+  const bool fit_ground = probed_count > 0 && o.fit_ground_albedo && ground_facing >= 3;
+  std::string ground_reason;
+  if (probed_count == 0) {
+    result.skipped.push_back({{"block", "sun illuminance, ground albedo"},
+                              {"reason", "no reference has probe samples: only the probe observes them"}});
+  } else {
+    for (size_t r = 0; r < refs.size(); ++r) {
+      if (!probed[r]) {
+        result.skipped.push_back({{"block", "sun illuminance of " + refs[r].name}, {"reason", "no probe samples"}});
+      } else if (!frames[r].sun_observable) {
+        result.skipped.push_back({{"block", "sun illuminance of " + refs[r].name}, {"reason", frames[r].note}});
+      }
+    }
+    if (!fit_ground) {
+      ground_reason = o.fit_ground_albedo ? "only " + std::to_string(ground_facing) +
+                                                " probe samples face the ground (normal y < -0.1; need 3): not observable"
+                                          : "disabled by option";
+      result.skipped.push_back({{"block", "ground_albedo"}, {"reason", ground_reason}});
+    }
+  }
+  std::atomic<long long> probe_eval_ns{0};
+  long long probe_residuals = 0;
 
   // What this scene does not need.
   if (state.tables == 2) result.skipped.push_back({{"block", "isotropic LUT"}, {"reason", "model ffxv has no isotropic term"}});
@@ -210,14 +257,18 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       total_weight += levels.back().total_weight;
     }
     const int lw = levels[0].width, lh = levels[0].height;
-    std::vector<ImageRGB> rendered(refs.size());
+    std::vector<ImageRGB> rendered(refs.size()), probe_images(refs.size());
     bool rendered_valid = false;
+    // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
+    // above the finest) so a far start is not trapped by down-weighted pixels.
+    const double level_loss_scale = o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
 
     ceres::Problem::Options popts;
     popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
     std::unique_ptr<RenderAtEvaluationPoint> callback;
     if (use_gpu) {
-      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered, &rendered_valid);
+      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered, &rendered_valid,
+                                                           &probed, o.probe_quadrature_width, &probe_images);
       popts.evaluation_callback = callback.get();
     }
     ceres::Problem problem(popts);
@@ -237,9 +288,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
           setup.channel = ch;
           setup.level_row = y;
           setup.loss = o.loss;
-          // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per
-          // level above the finest) so a far start is not trapped by down-weighted pixels.
-          setup.loss_scale = o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
+          setup.loss_scale = level_loss_scale;
           setup.rendered = use_gpu ? &rendered[r] : nullptr;
           setup.rendered_valid = &rendered_valid;
           for (int x = 0; x < lw; ++x) {
@@ -290,6 +339,52 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       const int table = is_delta ? static_cast<int>(k / (3 * grid.n_gamma)) : static_cast<int>(k / table_size);
       observed_columns.insert({table, col});
     }
+    // The probe residuals (fit/src/probe_cost.h, weighting: fit/src/probe_terms.h). The sun
+    // of each probed reference is decided here, at the current point: visible -> its
+    // illuminance is a parameter (started at the linear solution the first time), occluded
+    // -> held at 0 (a dark sun is not fitted).
+    std::vector<ProbeCost*> probe_costs(refs.size(), nullptr);
+    std::vector<std::vector<double*>> probe_blocks(refs.size());
+    for (size_t r = 0; r < refs.size(); ++r) {
+      if (!probed[r]) continue;
+      ProbeFrame& f = frames[r];
+      std::vector<size_t> index;
+      auto cost = MakeProbeCost(f, refs[r], state, o, tied, levels[r].total_weight / total_weight, observed_columns,
+                                level_loss_scale, use_gpu ? &probe_images[r] : nullptr, &rendered_valid, &probe_eval_ns,
+                                &index);
+      std::vector<double*>& blocks = probe_blocks[r];
+      for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
+      for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
+                        &state.ground_albedo}) {
+        blocks.push_back(b);
+      }
+      if (f.sun_observable) {
+        const LinearSun lin = SolveLinearSun(*cost, blocks.data(), f, state.log_exposure[r]);
+        const bool was_visible = li > 0 && f.visible;
+        f.visible = lin.fraction >= o.sun_visible_threshold;
+        f.fraction = lin.fraction;
+        if (f.visible && !was_visible) state.sun_rgb[r] = lin.illuminance;
+        if (!f.visible) state.sun_rgb[r] = {0.0, 0.0, 0.0};
+      }
+      probe_costs[r] = cost.get();
+      if (li == 0) probe_residuals += 3LL * cost->num_samples();
+      residual_count += 3LL * cost->num_samples();
+      problem.AddResidualBlock(cost.release(), nullptr, blocks);
+      if (f.sun_observable && f.visible) {
+        for (int c = 0; c < 3; ++c) problem.SetParameterLowerBound(state.sun_rgb[r].data(), c, 0.0);
+      } else {
+        problem.SetParameterBlockConstant(state.sun_rgb[r].data());
+      }
+    }
+    if (problem.HasParameterBlock(&state.ground_albedo)) {
+      if (fit_ground) {
+        problem.SetParameterLowerBound(&state.ground_albedo, 0, 0.0);
+        problem.SetParameterUpperBound(&state.ground_albedo, 0, 1.0);
+      } else {
+        problem.SetParameterBlockConstant(&state.ground_albedo);
+      }
+    }
+
     for (const auto& [t, col] : observed_columns) {
       for (int ch = 0; ch < 3; ++ch) {
         if (tied) {
@@ -359,6 +454,33 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     if (summary.termination_type == ceres::FAILURE) {
       throw Error("fit: Ceres failed at level " + level_name + ": " + summary.message);
     }
+    if (finest) {
+      // The probe's final state (gauge-invariant parts; illuminances after the gauge move).
+      for (size_t r = 0; r < refs.size(); ++r) {
+        if (!probe_costs[r]) continue;
+        ProbeFrame& f = frames[r];
+        const ProbeCost& cost = *probe_costs[r];
+        double const* const* params = probe_blocks[r].data();
+        ProbeFitErrors(cost, params, f, state.log_exposure[r], &f.residual, &f.log_rmse);
+        if (!f.sun_observable) continue;
+        if (f.visible) {
+          f.fitted_sun = state.sun_rgb[r];
+          f.fraction = SunShare(cost, params, f, state.sun_rgb[r], state.log_exposure[r]);
+          if (f.fraction < o.sun_visible_threshold) {
+            f.visible = false;
+            f.note = "the jointly fitted sun explains only " + std::to_string(f.fraction) +
+                     " of the brightest sun-facing samples: occluded";
+            state.sun_rgb[r] = {0.0, 0.0, 0.0};
+          }
+        } else {
+          const LinearSun lin = SolveLinearSun(cost, params, f, state.log_exposure[r]);
+          f.fitted_sun = lin.illuminance;
+          f.fraction = lin.fraction;
+          f.note = "the probe sits at the ambient level (the sun's share of its brightest sun-facing samples is " +
+                   std::to_string(lin.fraction) + "): sun occluded, held at 0";
+        }
+      }
+    }
     result.iterations += static_cast<int>(summary.iterations.size()) - 1;
     result.termination = ceres::TerminationTypeToString(summary.termination_type);
     result.levels.push_back({{"size", {lw, lh}},
@@ -423,6 +545,13 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
             state.log_lut[k] -= shift;
     if (fit_overcast) state.log_overcast_zenith -= shift;
     for (double& e : state.log_exposure) e += shift;
+    // The probe sees exposure * (sky + sun): the sun's model units move with the LUT.
+    for (size_t r = 0; r < refs.size(); ++r) {
+      for (int c = 0; c < 3; ++c) {
+        state.sun_rgb[r][c] *= std::exp(-shift);
+        frames[r].fitted_sun[c] *= std::exp(-shift);
+      }
+    }
   }
 
   result.preset = state.ToPreset();
@@ -437,6 +566,39 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     rf.rendered = renderer.Render(result.preset, req);
     for (float& v : rf.rendered.pixels) v = static_cast<float>(v * rf.exposure);
     rf.errors = CompareToReference(refs[r], rf.rendered);
+    if (!probed[r]) continue;
+    const ProbeFrame& f = frames[r];
+    ProbeSun ps;
+    ps.observable = f.sun_observable;
+    ps.note = f.note;
+    ps.visible = f.sun_observable && f.visible;
+    for (int c = 0; c < 3; ++c) {
+      ps.illuminance_model[c] = ps.visible ? state.sun_rgb[r][c] : 0.0;
+      ps.illuminance_ref[c] = ps.illuminance_model[c] * rf.exposure;
+      ps.fitted_model[c] = f.fitted_sun[c];
+    }
+    ps.lux = Rec709Luminance(ps.illuminance_model);
+    ps.fraction = f.fraction;
+    ps.residual = f.residual;
+    ps.log_rmse = f.log_rmse;
+    ps.samples = static_cast<int>(f.samples.size());
+    ps.sun_facing_samples = f.sun_facing;
+    ps.ground_facing_samples = f.ground_facing;
+    rf.sun = ps;
+  }
+  if (probed_count > 0) {
+    int dropped = 0;
+    for (const auto& f : frames) dropped += f.dropped;
+    result.probe = {{"references", probed_count},
+                    {"weight", o.probe_weight},
+                    {"quadrature_width", o.probe_quadrature_width},
+                    {"residuals", probe_residuals},
+                    {"dropped_samples", dropped},
+                    {"evaluation_time_s", 1e-9 * static_cast<double>(probe_eval_ns.load())},
+                    {"ground_albedo", {{"fitted", fit_ground},
+                                       {"value", result.preset.ground_albedo},
+                                       {"initial", init.ground_albedo}}}};
+    if (!fit_ground) result.probe["ground_albedo"]["reason"] = ground_reason;
   }
   result.time_s = Seconds(t_start, Clock::now());
   return result;

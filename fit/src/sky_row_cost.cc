@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "robust_residual.h"
 #include "skycal/render/sky_model.h"
 
 namespace skycal::fit {
@@ -22,18 +23,6 @@ struct BlockLut {
 
 template <typename S>
 using Model = model::SkyModel<S, BlockLut>;
-
-// Robust loss rho(z), z = (e/s)^2, and rho'(z).
-void Rho(RobustLoss loss, double z, double* rho, double* drho) {
-  switch (loss) {
-    case RobustLoss::kNone: *rho = z; *drho = 1.0; return;
-    case RobustLoss::kCauchy: *rho = std::log1p(z); *drho = 1.0 / (1.0 + z); return;
-    case RobustLoss::kHuber:
-      if (z <= 1.0) { *rho = z; *drho = 1.0; }
-      else { const double r = std::sqrt(z); *rho = 2.0 * r - 1.0; *drho = 1.0 / r; }
-      return;
-  }
-}
 
 Model<double>::SkyParams MakeParams(const FitState& st, const std::array<double, 3>& sun, double g, double lz) {
   Model<double>::SkyParams p;
@@ -156,15 +145,10 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
         use_rendered ? static_cast<double>(s_.rendered->at(px.x, s_.level_row, s_.channel)) : m.sky_radiance(view, p).x;
     if (!(model_value > 0.0)) return false;
     const double e = log_k + std::log(model_value) - px.log_ref;
-    const double sc = s_.loss_scale;
-    const double z = (e / sc) * (e / sc);
-    double rho, drho;
-    Rho(s_.loss, z, &rho, &drho);
-    const double root = std::sqrt(rho);
-    residuals[i] = px.sqrt_weight * sc * (e >= 0.0 ? root : -root);
+    const RobustResidual rr = MakeRobustResidual(s_.loss, s_.loss_scale, px.sqrt_weight, e);
+    residuals[i] = rr.r;
     if (!jacobians) continue;
-    // dr/de = sqrt(w) rho'(z) |e| / (s sqrt(rho)); -> sqrt(w) as e -> 0.
-    const double dr_de = z < 1e-16 ? px.sqrt_weight : px.sqrt_weight * drho * std::abs(e) / (sc * root);
+    const double dr_de = rr.dr_de;
     const double inv_m = 1.0 / model_value;
     // Phase values of each table at this pixel.
     const Jet1 pm = mj.phase_cornette_shanks(Jet1(mu_[i]), Jet1(one_minus_mu_[i]), Jet1(g, 0));

@@ -1,23 +1,6 @@
-// The sun's illuminance from the gray diffuse probe, after the sky fit (DESIGN.md 1.3,
-// Debevec et al. 2003).
-//
-// Why this is sequential and still exact for the sky. The joint problem would minimise
-// sky residuals (reference pixels) + probe residuals over (sky, E_sun). The sun's disc
-// and a cone around it are masked out of the reference's sky pixels (PixelClass::kSunCone)
-// and the sky renders of the objective have no disc, so no sky residual depends on the
-// sun term: the sky part of the joint optimum is the sky-only optimum that FitSky finds.
-// The probe residual R_i - albedo/pi (E_sky(n_i) + E_sun max(0, n_i.s)) depends on the sky
-// only through E_sky(n_i), which the fitted sky gives, and is linear in E_sun: given the
-// fitted sky, its minimiser is the closed-form least squares of capture::RecoverSun. So
-// the sequential solve reaches the joint optimum without any relative weighting of probe
-// against sky residuals: no weight is needed in the sequential form (a weight would only
-// matter if probe residuals were allowed to pull the sky, which we do not do: the sky
-// pixels measure the sky far better than a few dozen ball bins).
-//
-// One approximation remains: below the horizon the model's ground is lit by the model's
-// own sun (GroundMode::kLit with the preset's current sun_tint_rgb), so E_sky of normals
-// that see the ground uses the starting tint, not the recovered one; with ground albedo
-// 0.1 that is a small second-order term (and exact when the tint does not change).
+// The probe's samples file ("skycal-probe-samples", written by `skycal probe-extract`) and
+// the preset's sun tint from a probed sun. The sun itself is fitted jointly with the sky
+// (fit/src/probe_cost.h, fit/src/sky_fit.cc).
 #include "sun_from_probe.h"
 
 #include <algorithm>
@@ -25,7 +8,7 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
-#include "skycal/render/irradiance.h"
+#include "skycal/render/preset.h"  // SunTransmittance
 
 namespace skycal::fit {
 
@@ -60,38 +43,6 @@ ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& 
 }
 
 ProbeSamples LoadProbeSamples(const std::string& path) { return ProbeSamplesFromJson(ReadJsonFile(path), path); }
-
-ProbeSun SunFromProbe(const Reference& ref, const ReferenceFit& rf, const render::Preset& fitted,
-                      const ProbeSamples& probe, render::SkyRenderer& renderer, int sky_width) {
-  render::RenderRequest req;
-  req.sun_dir = ref.sun_dir;
-  req.width = sky_width;
-  req.height = sky_width / 2;
-  req.sun_disc = false;  // the sun enters analytically (render/irradiance.h: a disc would alias)
-  req.ground = render::GroundMode::kLit;
-  const ImageRGB sky = renderer.Render(fitted, req);
-  std::vector<render::Dir3> normals;
-  for (const auto& s : probe.samples) normals.push_back(s.normal);
-  std::vector<render::Rgb> e_sky = render::IrradianceQuadrature(sky, normals);
-  for (auto& e : e_sky) {
-    for (double& v : e) v *= rf.exposure;  // model units -> the reference's units
-  }
-  const capture::SunRecovery rec =
-      capture::RecoverSun(probe.samples, {probe.albedo, probe.albedo, probe.albedo}, e_sky, ref.sun_dir);
-  ProbeSun out;
-  out.visible = rec.visible;
-  out.illuminance_ref = rec.sun_illuminance;
-  for (int c = 0; c < 3; ++c) {
-    out.illuminance_model[c] = rec.sun_illuminance[c] / rf.exposure;
-    out.fitted_model[c] = rec.fitted_sun_illuminance[c] / rf.exposure;
-  }
-  out.lux = Rec709Luminance(out.illuminance_model);
-  out.fraction = rec.sun_fraction;
-  out.residual = rec.residual_rms_rel;
-  out.samples = rec.samples_used;
-  out.sun_facing_samples = rec.sun_facing_samples;
-  return out;
-}
 
 std::array<double, 3> SunTintFor(const render::Preset& preset, const std::array<double, 3>& sun_dir,
                                  const std::array<double, 3>& illuminance_model, bool* clamped) {

@@ -124,6 +124,13 @@ struct SunRecovery {
   int sun_facing_samples = 0;
 };
 
+// The sun's share of the probe: over the brightest sun-facing samples (sun_cos > 0.05; the
+// top bright_fraction of them by measured Rec.709 luminance, at least one), the luminance
+// of the sun term sun_radiance[i] over the measured luminance. Used for the visibility
+// decision (here and in the joint fit, fit/src/sky_fit.cc). Throws on size mismatch.
+double SunShareOfBrightest(const std::vector<ProbeSample>& samples, const std::vector<std::array<double, 3>>& sun_radiance,
+                           const std::vector<double>& sun_cos, double bright_fraction);
+
 // albedo: RGB reflectance of the ball (0 < albedo <= 1 typical; > 0 required).
 // sky_irradiance[i]: E_sky at samples[i].normal (same size as samples). sun_direction: any
 // non-zero vector (normalised here). Throws skycal::Error on size mismatch, non-positive

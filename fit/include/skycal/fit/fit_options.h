@@ -33,6 +33,14 @@ struct FitOptions {
   bool fit_haziness = true;
   bool fit_overcast = true;         // fit the overcast zenith luminance (weight held, see docs)
   bool numeric_derivatives = false; // baseline for the benchmark: central differences
+  // The gray probe (when a reference has samples, see FitSky). Each probed reference's
+  // probe residuals together weigh probe_weight times that reference's sky pixels (both
+  // are solid-angle / pixel-count normalised squared log errors): why 0.1, and what other
+  // values do, in README "Joint sky and probe fit" and bench/results/probe_weight.md.
+  double probe_weight = 0.1;
+  int probe_quadrature_width = 128; // lat-long width of the model sky's irradiance quadrature
+  bool fit_ground_albedo = true;    // fitted when probe samples face the ground
+  double sun_visible_threshold = 0.25;  // the sun's share of the brightest sun-facing samples
   bool verbose = true;              // progress on stderr
   std::optional<double> time_of_day_h;  // hours, recorded in the preset for export
 
