@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/probe.h"
 #include "skycal/capture/rig.h"
 #include "skycal/core/exr_io.h"
@@ -87,17 +89,37 @@ void WriteSyntheticProbe(const std::string& path, const render::Preset& preset, 
 
 const char* kFitArgs = " --backend cpu --model ffxv --pyramid 64,128 --max-iterations 8 --quiet --json";
 
+// The synthetic probe scene: a sky with a known sun (tinted away from the preset's),
+// photographed with 2% noise and clipped like a single exposure (every channel above the
+// 99.5th percentile of the sky's luminance clips: the disc and ~8 degrees of aureole), a
+// gray ball (albedo 0.18) with 1% noise and its sun side clipped, on a ground of albedo
+// 0.25 where the fit starts at the preset's 0.1. One joint fit: sun within 1%, ground
+// albedo within 0.01, the sky within the noisy round trip's tolerance (0.5%,
+// tests/fit_roundtrip_test.cc) of the clean truth.
 TEST(ProbeFit, RecoversTheSunWithinOnePercent) {
   testing::ScratchDir dir("probe-fit-sun");
   const render::Preset truth = render::LoadPreset(kPreset);  // the fit starts at the bundled preset
   const double el = 35.0, az = 50.0;
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(el, az);
-  synthetic::WriteSyntheticReference(dir / "noon.exr", truth, el, az, 128);
+  synthetic::WriteSyntheticReference(dir / "noon.exr", truth, el, az, 128, 0.02, 0.0, 11);
+  capture::LatLongFrame frame = capture::ReadLatLongFrame(dir / "noon.exr");
+  std::vector<float> lum;
+  for (size_t i = 0; i < frame.radiance.pixels.size(); i += 3) lum.push_back(frame.radiance.pixels[i + 1]);
+  std::nth_element(lum.begin(), lum.begin() + lum.size() * 995 / 1000, lum.end());
+  const float clip = lum[lum.size() * 995 / 1000];
+  int clipped = 0;
+  for (float& v : frame.radiance.pixels) {
+    if (v > clip) {
+      v = clip;
+      ++clipped;
+    }
+  }
+  capture::WriteLatLongFrame(dir / "noon.exr", frame);
   const render::Rgb at_ground = render::SunIlluminanceAtGround(truth, sun);
   const std::array<double, 3> tint_scale = {0.85, 1.0, 1.12};
   render::Rgb e_sun{};
   for (int c = 0; c < 3; ++c) e_sun[c] = at_ground[c] * tint_scale[c];
-  WriteSyntheticProbe(dir / "noon_ball.json", truth, sun, e_sun, 0.18, 0.01, 7);
+  WriteSyntheticProbe(dir / "noon_ball.json", truth, sun, e_sun, 0.18, 0.01, 7, 0.25);
 
   const Result r = Skycal("fit --reference " + dir / "noon.exr" + " --probe noon=" + dir / "noon_ball.json" +
                           " --require-probe --absolute --out " + dir / "out" + kFitArgs);
@@ -105,8 +127,10 @@ TEST(ProbeFit, RecoversTheSunWithinOnePercent) {
   const auto fit = ReadJsonFile(dir / "out/fit.json");
   const auto& s = fit["references"][0]["sun"];
   ASSERT_TRUE(s.is_object()) << fit.dump(1);
-  std::cout << "[probe fit] joint fit " << fit["time_s"].get<double>() << " s, of which probe residual evaluations "
+  std::cout << "[probe fit] " << clipped << " channel values clipped at " << clip << "; joint fit "
+            << fit["time_s"].get<double>() << " s, of which probe residual evaluations "
             << fit["probe"]["evaluation_time_s"].get<double>() << " s\n";
+  EXPECT_GT(fit["references"][0]["pixels"]["clipped"].get<int>(), 0);
   EXPECT_TRUE(s["visible"].get<bool>());
   double worst = 0.0;
   for (int c = 0; c < 3; ++c) {
@@ -115,19 +139,63 @@ TEST(ProbeFit, RecoversTheSunWithinOnePercent) {
   }
   const double lux_true = 0.2126 * e_sun[0] + 0.7152 * e_sun[1] + 0.0722 * e_sun[2];
   const double lux_rel = s["illuminance_lux"].get<double>() / lux_true - 1.0;
+  const double ground = fit["probe"]["ground_albedo"]["value"].get<double>();
+  // The fitted sky against the clean truth (above the horizon, outside 3 degrees of the sun).
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  render::RenderRequest req;
+  req.sun_dir = sun;
+  req.width = 128;
+  req.height = 64;
+  const ImageRGB clean = cpu->Render(truth, req);
+  auto sky_error = [&](const std::string& out_dir) {
+    const ImageRGB fitted = capture::ReadLatLongFrame(out_dir + "/fit/noon.exr").radiance;
+    double se = 0.0, sw = 0.0;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 128; ++x) {
+        const auto v = latlong::PixelDirection(x, y, 128, 64);
+        if (v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2] > std::cos(3.0 * M_PI / 180.0)) continue;
+        const double w = latlong::PixelSolidAngle(x, y, 128, 64);
+        for (int c = 0; c < 3; ++c) {
+          const double d = fitted.at(x, y, c) / clean.at(x, y, c) - 1.0;
+          se += w * d * d;
+          sw += w;
+        }
+      }
+    return std::sqrt(se / sw);
+  };
+  const double sky_vs_truth = sky_error(dir / "out");
   std::cout << "[probe-fit] E_sun true " << e_sun[0] << ", " << e_sun[1] << ", " << e_sun[2] << " recovered "
             << s["illuminance_rgb"].dump() << " worst rel " << worst << " lux rel " << lux_rel << " fraction "
-            << s["fraction"] << " residual " << s["residual"] << " sky rel_rmse " << fit["references"][0]["rel_rmse"]
-            << "\n";
+            << s["fraction"] << " probe log RMSE " << s["log_rmse"] << "; ground albedo " << ground
+            << " (truth 0.25); sky vs clean truth " << sky_vs_truth << "\n";
   EXPECT_LT(worst, 0.01);
   EXPECT_LT(std::abs(lux_rel), 0.01);
+  EXPECT_NEAR(ground, 0.25, 0.01);
+  EXPECT_LT(sky_vs_truth, 0.005);
+  EXPECT_TRUE(fit["probe"]["ground_albedo"]["fitted"].get<bool>());
   // The preset carries it: sun_illuminance * tint * T(sun zenith) = the recovered illuminance.
   const render::Preset out = render::LoadPreset(dir / "out/preset.json");
+  EXPECT_NEAR(out.ground_albedo, ground, 1e-12);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(out.sun_tint_rgb[c] / (truth.sun_tint_rgb[c] * tint_scale[c]), 1.0, 0.01) << c;
   }
   const render::Rgb again = render::SunIlluminanceAtGround(out, sun);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(again[c] / e_sun[c], 1.0, 0.01) << c;
+
+  // A probe the model cannot match (the ground albedo held at 0.1 where it is 0.25) at ten
+  // times the default weight: the probe's error goes into the sun (biased, reported), not
+  // into the sky (the LUT is the sky pixels', fit/src/probe_terms.h).
+  const Result held = Skycal("fit --reference " + dir / "noon.exr" + " --probe noon=" + dir / "noon_ball.json" +
+                             " --no-ground-albedo --probe-weight 1 --absolute --out " + dir / "held" + kFitArgs);
+  ASSERT_EQ(held.rc, 0) << held.err;
+  const auto held_fit = ReadJsonFile(dir / "held/fit.json");
+  const double held_sky = sky_error(dir / "held");
+  std::cout << "[probe-fit] ground held at 0.1, probe weight 1: sky vs clean truth " << held_sky << ", probe log RMSE "
+            << held_fit["references"][0]["sun"]["log_rmse"] << ", E_sun " << held_fit["references"][0]["sun"]["illuminance_rgb"]
+            << "\n";
+  EXPECT_LT(held_sky, 0.005);
+  EXPECT_FALSE(held_fit["probe"]["ground_albedo"]["fitted"].get<bool>());
+  EXPECT_GT(held_fit["references"][0]["sun"]["log_rmse"].get<double>(), 0.1);  // the mismatch is visible
 }
 
 TEST(ProbeFit, DayWithCloudsOverTheSunDecidesVisibilityEveryFrame) {

@@ -3,6 +3,7 @@
 #pragma once
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -16,7 +17,9 @@ class ScratchDir {
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
-  ~ScratchDir() { std::filesystem::remove_all(path_); }
+  ~ScratchDir() {
+    if (!std::getenv("SKYCAL_KEEP_SCRATCH")) std::filesystem::remove_all(path_);
+  }
   std::string operator/(const std::string& file) const { return (path_ / file).string(); }
   const std::filesystem::path& path() const { return path_; }
   // Number of entries (files and folders, hidden ones included) in the directory.

@@ -3,21 +3,32 @@
 // albedo needs samples facing the ground), the linear start and visibility decision for
 // the sun, and the report. The residual block itself is fit/src/probe_cost.h.
 //
+// What the probe steers. Its block holds the sun's RGB illuminance (only the probe sees
+// it), the ground albedo (likewise), and shares g, log L_z and the exposure with the sky
+// rows. The LUT entries are held for the probe: it reads their current values from the
+// state (Ceres writes each accepted iterate there) but has no Jacobian on them, so the sky
+// pixels alone set the LUT. Why: a ball's few dozen samples see the LUT only through
+// hemispherical integrals, and what they could add is exactly what the sky pixels cannot
+// see (differences between neighbouring LUT columns one pixel row blends, the masked and
+// clipped aureole, which on the ball is indistinguishable from the sun). With LUT entries
+// in its block, the synthetic scene of tests/probe_fit_test.cc with the ground albedo held
+// 60% too low drove those combinations to 370% sky rel RMSE (probe weight 0.1; a per-entry
+// information cap still reached 4000% at weight 1); held, the sky stays at the noise
+// level (1.99%) for weights 0.01 .. 1.
+//
 // Weighting against the sky pixels. The sky rows of reference r carry weights summing to
 // S_r = (its fitted solid angle) / (all references' fitted solid angle) per channel, so
 // the sky term is S_r times a solid-angle mean of squared log errors. Its probe residuals
 // carry weights summing to probe_weight * S_r, each sample in proportion to the ball
 // pixels it averages: the probe term is probe_weight times the pixel mean of squared log
-// errors over the ball. Both are relative errors of the same frame and the same exposure,
-// so probe_weight = 1 would say "the ball matters as much as the whole sky". It is 0.1 by
-// default because the two differ in what they measure and how well:
-//  - the parameters only the probe sees (sun illuminance, ground albedo) are set by the
-//    probe whatever its weight (they have no sky residual);
-//  - what both see (the sky's irradiance at each normal) the sky pixels measure directly,
-//    tens of thousands of them, while the ball's few dozen bins are integrals of the same
-//    sky carrying the ball's own systematic errors (albedo known to a few percent, sheen,
-//    flare, the photographer): a 5% albedo error at probe_weight 1 pulls the sky's level
-//    by ~2.5%; at 0.1 by ~0.5% (bench/results/probe_weight.md measures this).
+// errors over the ball. Both are relative errors of the same frame under the same
+// exposure. The weight decides nothing about the parameters only the probe sees (the sun,
+// the ground albedo); it trades the probe against the sky only for what both see: g, the
+// overcast zenith luminance and (uncalibrated references) the exposure. Default 0.1: the
+// sky's tens of thousands of pixels measure those directly, the ball's bins through
+// integrals carrying the ball's own systematic errors (albedo known to a few percent,
+// sheen, flare, a non-uniform ground); at 0.1 the probe cannot move them beyond what the
+// sky allows, and at 10 it drags g to its bound (bench/results/probe_weight.md).
 #pragma once
 #include <ceres/ceres.h>
 

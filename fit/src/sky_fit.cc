@@ -348,16 +348,23 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     for (size_t r = 0; r < refs.size(); ++r) {
       if (!probed[r]) continue;
       ProbeFrame& f = frames[r];
-      std::vector<size_t> index;
-      auto cost = MakeProbeCost(f, refs[r], state, o, tied, levels[r].total_weight / total_weight, observed_columns,
-                                level_loss_scale, use_gpu ? &probe_images[r] : nullptr, &rendered_valid, &probe_eval_ns,
-                                &index);
       std::vector<double*>& blocks = probe_blocks[r];
-      for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
-      for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
-                        &state.ground_albedo}) {
-        blocks.push_back(b);
-      }
+      auto make = [&](const std::set<std::pair<int, int>>& columns) {
+        std::vector<size_t> index;
+        auto cost = MakeProbeCost(f, refs[r], state, o, tied, levels[r].total_weight / total_weight, columns,
+                                  level_loss_scale, use_gpu ? &probe_images[r] : nullptr, &rendered_valid,
+                                  &probe_eval_ns, &index);
+        blocks.clear();
+        for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
+        for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
+                          &state.ground_albedo}) {
+          blocks.push_back(b);
+        }
+        return cost;
+      };
+      // The LUT is held for the probe (no LUT parameter in its block; it reads the current
+      // LUT from the state): see "what the probe steers" in fit/src/probe_terms.h.
+      auto cost = make({});
       if (f.sun_observable) {
         const LinearSun lin = SolveLinearSun(*cost, blocks.data(), f, state.log_exposure[r]);
         const bool was_visible = li > 0 && f.visible;
@@ -444,7 +451,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     so.function_tolerance = finest ? 1e-9 : 1e-5;
     so.gradient_tolerance = finest ? 1e-12 : 1e-8;
     so.parameter_tolerance = finest ? 1e-7 : 1e-6;
-    so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
+    // The callback reads the parameter memory, and so do the probe blocks for the LUT
+    // entries they hold (fit/src/probe_terms.h).
+    so.update_state_every_iteration = use_gpu || probed_count > 0;
     so.logging_type = ceres::SILENT;
     const std::string level_name = std::to_string(lw) + "x" + std::to_string(lh);
     ProgressPrinter progress("level " + level_name, t_start);
