@@ -22,6 +22,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/render/irradiance.h"
 #include "skycal/render/renderer.h"
+#include "synthetic_probe.h"
 #include "synthetic_sky.h"
 #include "run_binary.h"
 #include "test_util.h"
@@ -36,55 +37,20 @@ Result Skycal(const std::string& args) { return testing::RunSkycal(SKYCAL_BINARY
 
 const std::string kPreset = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json";
 
-// Probe samples of a ball of `albedo` under the preset's sky and a sun of illuminance
-// e_sun (0: behind cloud), on a diffuse ground of albedo ground_albedo lit by that sun and
-// the sky: radiance = albedo/pi (E_sky(n) + E_sun max(0, n.s) + ground_albedo (1 - n_y)/2
-// (E_sky(up) + E_sun max(0, s_y))) (1 + noise), E_sky by quadrature over a 512x256 render
-// without the disc or the ground (finer than the fit's 128x64 quadrature, so the test also
-// carries the fit's quadrature error). Normals: the hemisphere facing a camera that looks
-// 40 degrees off the sun's azimuth from slightly above; samples with n.s > 0.9 are clipped
-// on the photograph and dropped.
+// Writes synthetic::ProbeSamplesFor as a "skycal-probe-samples" file.
 void WriteSyntheticProbe(const std::string& path, const render::Preset& preset, const std::array<double, 3>& sun,
                          const render::Rgb& e_sun, double albedo, double noise, unsigned seed,
                          double ground_albedo = 0.1) {
-  auto cpu = render::CreateRenderer(render::Backend::kCpu);
-  render::RenderRequest req;
-  req.sun_dir = sun;
-  req.width = 512;
-  req.height = 256;
-  req.sun_disc = false;
-  req.ground = render::GroundMode::kZero;
-  const ImageRGB sky = cpu->Render(preset, req);
-  const double az = std::atan2(sun[0], sun[2]) + 40.0 * M_PI / 180.0;
-  const std::array<double, 3> to_camera = {std::sin(az), 0.2, std::cos(az)};
-  std::vector<render::Dir3> normals;
-  for (const auto& n : render::FibonacciSphere(400)) {
-    const double facing = n[0] * to_camera[0] + n[1] * to_camera[1] + n[2] * to_camera[2];
-    const double ns = n[0] * sun[0] + n[1] * sun[1] + n[2] * sun[2];
-    if (facing > 0.1 && ns <= 0.9) normals.push_back(n);
-  }
-  const auto e_sky = render::IrradianceQuadrature(sky, normals);
-  const auto e_up = render::IrradianceQuadrature(sky, render::Dir3{0.0, 1.0, 0.0});
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> gauss(0.0, noise);
-  nlohmann::json samples = nlohmann::json::array();
-  for (size_t i = 0; i < normals.size(); ++i) {
-    const auto e = render::SunIrradiance(e_sun, sun, normals[i], true);
-    const double h = 0.5 * (1.0 - normals[i][1]);
-    std::array<double, 3> radiance{};
-    for (int c = 0; c < 3; ++c) {
-      const double ground = ground_albedo * h * (e_up[c] + e_sun[c] * std::max(0.0, sun[1]));
-      radiance[c] = albedo / M_PI * (e_sky[i][c] + e[c] + ground) * (1.0 + gauss(rng));
-    }
-    samples.push_back({{"normal", normals[i]}, {"radiance", radiance}, {"pixels", 20}});
-  }
+  const auto samples = synthetic::ProbeSamplesFor(preset, sun, e_sun, albedo, noise, seed, ground_albedo);
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& smp : samples) list.push_back({{"normal", smp.normal}, {"radiance", smp.radiance}, {"pixels", smp.pixels}});
   WriteJsonFileAtomically(path, {{"format", "skycal-probe-samples"},
                                  {"format_version", 1},
                                  {"image", "synthetic"},
                                  {"albedo", albedo},
                                  {"max_luminance", 0.0},
                                  {"max_luminance_clipped", true},
-                                 {"samples", samples}});
+                                 {"samples", list}});
 }
 
 const char* kFitArgs = " --backend cpu --model ffxv --pyramid 64,128 --max-iterations 8 --quiet --json";

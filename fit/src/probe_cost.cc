@@ -135,31 +135,11 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
     g_isotropic_.col(row_col0_[y] + 1) += row_fcol_[y] * ai;
   }
   a_overcast_ = w_ * shape;
-  for (int i = 0; i < n; ++i) {
-    const auto& nn = setup_.samples[i].normal;
-    h_.push_back(0.5 * (1.0 - nn[1]));
-    cos_sun_.push_back(std::max(0.0, nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]));
-  }
-
-  set_num_residuals(3 * n);
-  for (size_t i = 0; i < slots_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
-  for (int size : {1, 1, 1, 3, 1}) mutable_parameter_block_sizes()->push_back(size);  // g, log Lz, log k, sun, rho_g
-}
-
-bool ProbeCost::Compute(double const* const* parameters, bool use_rendered, bool with_derivatives,
-                        Irradiance* out) const {
-  const FitState& st = *setup_.state;
-  const int nt = num_texels();
-  const double g = parameters[nt][0];
-  if (!(g >= 0.0 && g < 1.0)) return false;
-  const double lz = std::exp(parameters[nt + 1][0]);
-  const int n1 = num_samples() + 1;
-
-  // Effective LUT values at the sun's row position: parameters where they are, else the
-  // state's current values (columns that are not parameters at this level).
-  const double wr[2] = {1.0 - frow_, frow_};
+  // The LUT at the sun's row position, from the state now: the values of the columns that
+  // are not parameters (constants of this block).
+  overcast_weight_ = st.preset.overcast_weight;
   for (int t = 0; t < 3; ++t) {
-    out->teff[t].assign(static_cast<size_t>(n_gamma_) * 3, 0.0);
+    constant_teff_[t].assign(static_cast<size_t>(n_gamma_) * 3, 0.0);
     if (t >= st.tables) continue;
     for (int col = 0; col < n_gamma_; ++col) {
       for (int ch = 0; ch < 3; ++ch) {
@@ -171,10 +151,28 @@ bool ProbeCost::Compute(double const* const* parameters, bool use_rendered, bool
                                             : st.log_lut[k];
           v += wr[dr] * std::exp(u);
         }
-        out->teff[t][col * 3 + ch] = v;
+        constant_teff_[t][col * 3 + ch] = v;
       }
     }
   }
+  for (int i = 0; i < n; ++i) {
+    const auto& nn = setup_.samples[i].normal;
+    h_.push_back(0.5 * (1.0 - nn[1]));
+    cos_sun_.push_back(std::max(0.0, nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]));
+  }
+
+  set_num_residuals(3 * n);
+  for (size_t i = 0; i < slots_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
+  for (int size : {1, 1, 1, 3, 1}) mutable_parameter_block_sizes()->push_back(size);  // g, log Lz, log k, sun, rho_g
+}
+
+bool ProbeCost::Compute(double const* const* parameters, bool with_derivatives, Irradiance* out) const {
+  const int nt = num_texels();
+  const double g = parameters[nt][0];
+  if (!(g >= 0.0 && g < 1.0)) return false;
+  const double lz = std::exp(parameters[nt + 1][0]);
+  const int n1 = num_samples() + 1;
+  for (int t = 0; t < 3; ++t) out->teff[t] = constant_teff_[t];
   // The parameter columns from the parameters: every row with a weight > 0 is a slot (one
   // slot for both rows when tied), so such a column is rebuilt from its slots alone.
   out->slot_value.assign(nt, 0.0);
@@ -214,26 +212,16 @@ bool ProbeCost::Compute(double const* const* parameters, bool use_rendered, bool
     }
   }
 
-  const double w_oc = st.preset.overcast_weight;
+  const double w_oc = overcast_weight_;
   out->e_sky.resize(n1, 3);
-  if (use_rendered) {
-    if (setup_.rendered_valid && !*setup_.rendered_valid) return false;
-    const ImageRGB& img = *setup_.rendered;
-    Eigen::MatrixXd l(npix, 3);
-    for (int y = 0; y < rows_; ++y)
-      for (int x = 0; x < qw_; ++x)
-        for (int ch = 0; ch < 3; ++ch) l(y * qw_ + x, ch) = img.at(x, y, ch);
-    out->e_sky = w_ * l;
-  } else {
-    for (int ch = 0; ch < 3; ++ch) {
-      Eigen::VectorXd tr(n_gamma_), tm(n_gamma_), ti(n_gamma_);
-      for (int col = 0; col < n_gamma_; ++col) {
-        tr[col] = out->teff[0][col * 3 + ch];
-        tm[col] = out->teff[1][col * 3 + ch];
-        ti[col] = out->teff[2][col * 3 + ch];
-      }
-      out->e_sky.col(ch) = (1.0 - w_oc) * (g_rayleigh_ * tr + out->g_mie * tm + g_isotropic_ * ti) + (w_oc * lz) * a_overcast_;
+  for (int ch = 0; ch < 3; ++ch) {
+    Eigen::VectorXd tr(n_gamma_), tm(n_gamma_), ti(n_gamma_);
+    for (int col = 0; col < n_gamma_; ++col) {
+      tr[col] = out->teff[0][col * 3 + ch];
+      tm[col] = out->teff[1][col * 3 + ch];
+      ti[col] = out->teff[2][col * 3 + ch];
     }
+    out->e_sky.col(ch) = (1.0 - w_oc) * (g_rayleigh_ * tr + out->g_mie * tm + g_isotropic_ * ti) + (w_oc * lz) * a_overcast_;
   }
   return true;
 }
@@ -241,7 +229,7 @@ bool ProbeCost::Compute(double const* const* parameters, bool use_rendered, bool
 ProbeIrradianceParts ProbeCost::Parts(double const* const* parameters) const {
   Irradiance irr;
   ProbeIrradianceParts parts;
-  if (!Compute(parameters, false, false, &irr)) return parts;
+  if (!Compute(parameters, false, &irr)) return parts;
   const int nt = num_texels(), n = num_samples();
   const double rho_g = parameters[nt + 4][0];
   const double sy = std::max(0.0, setup_.sun_dir[1]);
@@ -265,16 +253,14 @@ bool ProbeCost::Evaluate(double const* const* parameters, double* residuals, dou
     }
   } add_time{start, setup_.evaluation_ns};
   Irradiance irr;
-  const bool use_rendered = setup_.rendered != nullptr;
-  if (!Compute(parameters, use_rendered, jacobians != nullptr, &irr)) return false;
-  const FitState& st = *setup_.state;
+  if (!Compute(parameters, jacobians != nullptr, &irr)) return false;
   const int nt = num_texels(), n = num_samples();
   const double lz = std::exp(parameters[nt + 1][0]);
   const double log_k = parameters[nt + 2][0];
   const double* sun = parameters[nt + 3];
   const double rho_g = parameters[nt + 4][0];
   const double sy = std::max(0.0, setup_.sun_dir[1]);
-  const double w_oc = st.preset.overcast_weight;
+  const double w_oc = overcast_weight_;
   const double log_a_pi = std::log(setup_.albedo / kPi);
 
   if (jacobians) {

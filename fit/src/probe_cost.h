@@ -22,8 +22,13 @@
 // elevation) over the sky, E_sky = (1 - w_oc) sum_t,col G^t_i,col T_t,col(sun row) +
 // w_oc L_z A^oc_i, and d/d(log T) = T d/dT. G for Rayleigh and isotropic is fixed; the Mie
 // G and dG/dg are recomputed per evaluation (one matrix-vector product per pixel row).
-// Values: the Vulkan backend's render of the current point (quadrature of the rendered
-// pixels) when `rendered` is set, else the same decomposition on the CPU.
+// Values come from the same decomposition (the shared model source's phase functions and
+// LUT coordinates, in double); tests/probe_cost_test.cc checks it against the quadrature of
+// CPU and Vulkan renders of the same sky (1e-6 and 2e-5: float pixels).
+//
+// LUT entries that are not parameters of the block are constants taken from the state when
+// the block is built (the joint fit builds its probe blocks at the start of each level and
+// once more on the final sky: fit/src/probe_terms.h).
 #pragma once
 #include <ceres/ceres.h>
 
@@ -47,7 +52,7 @@ struct ProbeResidualSample {
 };
 
 struct ProbeCostSetup {
-  const FitState* state = nullptr;   // grid, variant, overcast weight; constant LUT columns are read from it
+  const FitState* state = nullptr;   // grid, variant, overcast weight, the constant LUT entries (read when built)
   bool tied_rows = false;            // as RowCostSetup::tied_rows
   const std::vector<double>* initial_log_lut = nullptr;
   std::array<double, 3> sun_dir{};   // unit
@@ -56,11 +61,9 @@ struct ProbeCostSetup {
   RobustLoss loss = RobustLoss::kCauchy;
   double loss_scale = 0.05;
   int quadrature_width = 128;        // lat-long width of the sky quadrature (height = width / 2)
-  // (table, column) pairs whose LUT entries are parameters of the problem at this level;
-  // the other columns enter with their current values from `state` (constants here).
+  // (table, column) pairs whose LUT entries are parameters of this block; the other
+  // columns enter with their values in `state` when the block is built.
   std::set<std::pair<int, int>> parameter_columns;
-  const ImageRGB* rendered = nullptr;      // Vulkan: the sky at the current point (no disc, no ground)
-  const bool* rendered_valid = nullptr;
   std::atomic<long long>* evaluation_ns = nullptr;  // optional: time spent in Evaluate is added here
 };
 
@@ -91,9 +94,11 @@ class ProbeCost final : public ceres::CostFunction {
     double wrow[2], offset[2];
   };
   struct Irradiance;  // per evaluation (probe_cost.cc)
-  bool Compute(double const* const* parameters, bool use_rendered, bool with_derivatives, Irradiance* out) const;
+  bool Compute(double const* const* parameters, bool with_derivatives, Irradiance* out) const;
 
   ProbeCostSetup setup_;
+  double overcast_weight_ = 0.0;
+  std::vector<double> constant_teff_[3];  // [table][col * 3 + ch]: LUT at the sun's row, from the state when built
   int n_gamma_ = 0, row0_ = 0, qw_ = 0, rows_ = 0;  // rows_: pixel rows above the horizon
   double frow_ = 0.0;
   std::vector<int> row_col0_;      // per pixel row: the LUT column pair's first column

@@ -70,7 +70,6 @@ std::vector<ProbeFrame> PrepareProbeFrames(const std::vector<Reference>& refs,
 std::unique_ptr<ProbeCost> MakeProbeCost(const ProbeFrame& frame, const Reference& ref, const FitState& state,
                                          const FitOptions& o, bool tied_rows, double sky_share,
                                          const std::set<std::pair<int, int>>& parameter_columns, double loss_scale,
-                                         const ImageRGB* rendered, const bool* rendered_valid,
                                          std::atomic<long long>* evaluation_ns, std::vector<size_t>* texel_index) {
   ProbeCostSetup setup;
   setup.state = &state;
@@ -82,8 +81,6 @@ std::unique_ptr<ProbeCost> MakeProbeCost(const ProbeFrame& frame, const Referenc
   setup.loss_scale = loss_scale;
   setup.quadrature_width = o.probe_quadrature_width;
   setup.parameter_columns = parameter_columns;
-  setup.rendered = rendered;
-  setup.rendered_valid = rendered_valid;
   setup.evaluation_ns = evaluation_ns;
   for (size_t i = 0; i < frame.samples.size(); ++i) {
     ProbeResidualSample s;

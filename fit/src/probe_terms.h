@@ -70,7 +70,6 @@ std::vector<ProbeFrame> PrepareProbeFrames(const std::vector<Reference>& refs,
 std::unique_ptr<ProbeCost> MakeProbeCost(const ProbeFrame& frame, const Reference& ref, const FitState& state,
                                          const FitOptions& options, bool tied_rows, double sky_share,
                                          const std::set<std::pair<int, int>>& parameter_columns, double loss_scale,
-                                         const ImageRGB* rendered, const bool* rendered_valid,
                                          std::atomic<long long>* evaluation_ns, std::vector<size_t>* texel_index);
 
 struct LinearSun {

@@ -50,13 +50,9 @@ struct SecondDifferenceOfChange {
 // point, before Ceres evaluates the residual blocks (the Vulkan backend's objective).
 class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
  public:
-  // probe_images[r] (probed references only, probe_width x probe_width/2): the sky the
-  // probe residuals integrate.
   RenderAtEvaluationPoint(const FitState* state, const std::vector<Reference>* refs, render::SkyRenderer* renderer,
-                          int width, int height, std::vector<ImageRGB>* images, bool* valid,
-                          const std::vector<bool>* probed, int probe_width, std::vector<ImageRGB>* probe_images)
-      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images), valid_(valid),
-        probed_(probed), probe_width_(probe_width), probe_images_(probe_images) {}
+                          int width, int height, std::vector<ImageRGB>* images, bool* valid)
+      : state_(state), refs_(refs), renderer_(renderer), width_(width), height_(height), images_(images), valid_(valid) {}
   void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
     if (!new_evaluation_point && renders_ > 0) return;
     // A trial step far outside the model's domain (an overflowing LUT entry) is not
@@ -82,11 +78,6 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
       req.sun_disc = false;
       req.ground = render::GroundMode::kZero;
       (*images_)[r] = renderer_->Render(preset, req);
-      if ((*probed_)[r]) {
-        req.width = probe_width_;
-        req.height = probe_width_ / 2;
-        (*probe_images_)[r] = renderer_->Render(preset, req);
-      }
     }
     ++renders_;
     *valid_ = true;
@@ -100,9 +91,6 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
   int width_, height_;
   std::vector<ImageRGB>* images_;
   bool* valid_;
-  const std::vector<bool>* probed_;
-  int probe_width_;
-  std::vector<ImageRGB>* probe_images_;
   int renders_ = 0;
 };
 
@@ -257,7 +245,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       total_weight += levels.back().total_weight;
     }
     const int lw = levels[0].width, lh = levels[0].height;
-    std::vector<ImageRGB> rendered(refs.size()), probe_images(refs.size());
+    std::vector<ImageRGB> rendered(refs.size());
     bool rendered_valid = false;
     // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
     // above the finest) so a far start is not trapped by down-weighted pixels.
@@ -267,8 +255,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
     std::unique_ptr<RenderAtEvaluationPoint> callback;
     if (use_gpu) {
-      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered, &rendered_valid,
-                                                           &probed, o.probe_quadrature_width, &probe_images);
+      callback = std::make_unique<RenderAtEvaluationPoint>(&state, &refs, &renderer, lw, lh, &rendered, &rendered_valid);
       popts.evaluation_callback = callback.get();
     }
     ceres::Problem problem(popts);
@@ -343,28 +330,22 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     // of each probed reference is decided here, at the current point: visible -> its
     // illuminance is a parameter (started at the linear solution the first time), occluded
     // -> held at 0 (a dark sun is not fitted).
-    std::vector<ProbeCost*> probe_costs(refs.size(), nullptr);
     std::vector<std::vector<double*>> probe_blocks(refs.size());
+    auto MakeProbeBlock = [&](const ProbeFrame& f, size_t r, std::vector<double*>* blocks) {
+      std::vector<size_t> no_lut_parameters;
+      auto cost = MakeProbeCost(f, refs[r], state, o, tied, levels[r].total_weight / total_weight, {}, level_loss_scale,
+                                &probe_eval_ns, &no_lut_parameters);
+      *blocks = {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
+                 &state.ground_albedo};
+      return cost;
+    };
     for (size_t r = 0; r < refs.size(); ++r) {
       if (!probed[r]) continue;
       ProbeFrame& f = frames[r];
       std::vector<double*>& blocks = probe_blocks[r];
-      auto make = [&](const std::set<std::pair<int, int>>& columns) {
-        std::vector<size_t> index;
-        auto cost = MakeProbeCost(f, refs[r], state, o, tied, levels[r].total_weight / total_weight, columns,
-                                  level_loss_scale, use_gpu ? &probe_images[r] : nullptr, &rendered_valid,
-                                  &probe_eval_ns, &index);
-        blocks.clear();
-        for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
-        for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
-                          &state.ground_albedo}) {
-          blocks.push_back(b);
-        }
-        return cost;
-      };
-      // The LUT is held for the probe (no LUT parameter in its block; it reads the current
-      // LUT from the state): see "what the probe steers" in fit/src/probe_terms.h.
-      auto cost = make({});
+      // The LUT is held for the probe at this level's starting values: see "what the probe
+      // steers" in fit/src/probe_terms.h.
+      auto cost = MakeProbeBlock(f, r, &blocks);
       if (f.sun_observable) {
         const LinearSun lin = SolveLinearSun(*cost, blocks.data(), f, state.log_exposure[r]);
         const bool was_visible = li > 0 && f.visible;
@@ -373,7 +354,6 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
         if (f.visible && !was_visible) state.sun_rgb[r] = lin.illuminance;
         if (!f.visible) state.sun_rgb[r] = {0.0, 0.0, 0.0};
       }
-      probe_costs[r] = cost.get();
       if (li == 0) probe_residuals += 3LL * cost->num_samples();
       residual_count += 3LL * cost->num_samples();
       problem.AddResidualBlock(cost.release(), nullptr, blocks);
@@ -451,9 +431,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     so.function_tolerance = finest ? 1e-9 : 1e-5;
     so.gradient_tolerance = finest ? 1e-12 : 1e-8;
     so.parameter_tolerance = finest ? 1e-7 : 1e-6;
-    // The callback reads the parameter memory, and so do the probe blocks for the LUT
-    // entries they hold (fit/src/probe_terms.h).
-    so.update_state_every_iteration = use_gpu || probed_count > 0;
+    so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
     so.logging_type = ceres::SILENT;
     const std::string level_name = std::to_string(lw) + "x" + std::to_string(lh);
     ProgressPrinter progress("level " + level_name, t_start);
@@ -463,12 +441,44 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     if (summary.termination_type == ceres::FAILURE) {
       throw Error("fit: Ceres failed at level " + level_name + ": " + summary.message);
     }
-    if (finest) {
-      // The probe's final state (gauge-invariant parts; illuminances after the gauge move).
+    int probe_final_iterations = 0;
+    if (finest && probed_count > 0) {
+      // The probe on the final sky: the solve above held the LUT at this level's start, so
+      // the sun and the ground albedo are refitted once with the final LUT, g and exposure
+      // (a small problem: these blocks only), then the decisions are checked.
+      ceres::Problem::Options polish_options;
+      polish_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+      ceres::Problem polish(polish_options);
+      std::vector<ProbeCost*> final_costs(refs.size(), nullptr);
       for (size_t r = 0; r < refs.size(); ++r) {
-        if (!probe_costs[r]) continue;
+        if (!probed[r]) continue;
+        auto cost = MakeProbeBlock(frames[r], r, &probe_blocks[r]);
+        final_costs[r] = cost.get();
+        polish.AddResidualBlock(cost.release(), nullptr, probe_blocks[r]);
+        for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r]}) polish.SetParameterBlockConstant(b);
+        if (frames[r].sun_observable && frames[r].visible) {
+          for (int c = 0; c < 3; ++c) polish.SetParameterLowerBound(state.sun_rgb[r].data(), c, 0.0);
+        } else {
+          polish.SetParameterBlockConstant(state.sun_rgb[r].data());
+        }
+      }
+      if (fit_ground) {
+        polish.SetParameterLowerBound(&state.ground_albedo, 0, 0.0);
+        polish.SetParameterUpperBound(&state.ground_albedo, 0, 1.0);
+      } else {
+        polish.SetParameterBlockConstant(&state.ground_albedo);
+      }
+      ceres::Solver::Options po;
+      po.max_num_iterations = 50;
+      po.linear_solver_type = ceres::DENSE_QR;
+      po.logging_type = ceres::SILENT;
+      ceres::Solver::Summary polish_summary;
+      ceres::Solve(po, &polish, &polish_summary);
+      probe_final_iterations = static_cast<int>(polish_summary.iterations.size()) - 1;
+      for (size_t r = 0; r < refs.size(); ++r) {
+        if (!final_costs[r]) continue;
         ProbeFrame& f = frames[r];
-        const ProbeCost& cost = *probe_costs[r];
+        const ProbeCost& cost = *final_costs[r];
         double const* const* params = probe_blocks[r].data();
         ProbeFitErrors(cost, params, f, state.log_exposure[r], &f.residual, &f.log_rmse);
         if (!f.sun_observable) continue;
@@ -500,6 +510,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                              {"final_cost", summary.final_cost},
                              {"termination", ceres::TerminationTypeToString(summary.termination_type)},
                              {"renders", callback ? callback->renders() : 0},
+                             {"probe_final_solve_iterations", probe_final_iterations},
                              {"time_s", Seconds(t_level, Clock::now())}});
   }
 
