@@ -5,16 +5,19 @@
 //
 // What the probe steers. Its block holds the sun's RGB illuminance (only the probe sees
 // it), the ground albedo (likewise), and shares g, log L_z and the exposure with the sky
-// rows. The LUT entries are held for the probe: it reads their current values from the
-// state (Ceres writes each accepted iterate there) but has no Jacobian on them, so the sky
-// pixels alone set the LUT. Why: a ball's few dozen samples see the LUT only through
-// hemispherical integrals, and what they could add is exactly what the sky pixels cannot
-// see (differences between neighbouring LUT columns one pixel row blends, the masked and
-// clipped aureole, which on the ball is indistinguishable from the sun). With LUT entries
-// in its block, the synthetic scene of tests/probe_fit_test.cc with the ground albedo held
-// 60% too low drove those combinations to 370% sky rel RMSE (probe weight 0.1; a per-entry
-// information cap still reached 4000% at weight 1); held, the sky stays at the noise
-// level (1.99%) for weights 0.01 .. 1.
+// rows. The LUT entries are not in it: each level's probe blocks are built with the LUT as
+// it stands at the level's start (constants), and after the last level the sun and ground
+// albedo are solved once more on the final sky. So the sky pixels alone set the LUT. Why:
+// a ball's few dozen samples see the LUT only through hemispherical integrals, and what
+// they could add is what the sky pixels cannot see (differences between neighbouring LUT
+// columns that one pixel row blends, the masked and clipped aureole, which on the ball is
+// indistinguishable from the sun). Measured on the synthetic scene of
+// tests/probe_fit_test.cc with the ground albedo held at 0.1 where it is 0.25 (a probe the
+// model cannot match): with LUT entries in the probe block the sky went to 370% rel RMSE
+// (weight 0.1), and a per-entry information cap (probe <= 0.25 x sky on the diagonal of
+// J^T J) still let it reach 4000% at weight 1, through column combinations the diagonal
+// does not see. Reading the LUT's current values instead of level-start constants cost 34
+// instead of 26 iterations (the probe then changed in ways its Jacobian did not predict).
 //
 // Weighting against the sky pixels. The sky rows of reference r carry weights summing to
 // S_r = (its fitted solid angle) / (all references' fitted solid angle) per channel, so
@@ -23,12 +26,13 @@
 // pixels it averages: the probe term is probe_weight times the pixel mean of squared log
 // errors over the ball. Both are relative errors of the same frame under the same
 // exposure. The weight decides nothing about the parameters only the probe sees (the sun,
-// the ground albedo); it trades the probe against the sky only for what both see: g, the
-// overcast zenith luminance and (uncalibrated references) the exposure. Default 0.1: the
-// sky's tens of thousands of pixels measure those directly, the ball's bins through
-// integrals carrying the ball's own systematic errors (albedo known to a few percent,
-// sheen, flare, a non-uniform ground); at 0.1 the probe cannot move them beyond what the
-// sky allows, and at 10 it drags g to its bound (bench/results/probe_weight.md).
+// the ground albedo); it trades the probe against the sky for what both see: g, the
+// overcast zenith luminance and (several uncalibrated references) the exposures. Default
+// 0.1: the sky's tens of thousands of pixels measure those directly, the ball's bins
+// through integrals that carry the ball's own systematic errors (albedo known to a few
+// percent, sheen, flare, a non-uniform ground). bench/results/probe_weight.md: with the
+// mismatched ground above, g moves by 0.0006 at 0.1 (sky error vs truth 0.233% against
+// 0.232% without a probe), by 0.006 at 1 and by 0.072 at 10 (sky error 1.05%).
 #pragma once
 #include <ceres/ceres.h>
 
