@@ -218,6 +218,22 @@ TEST(ProbeFit, RequireProbeWithoutSamplesFailsAndWritesNothing) {
                            dir / "out" + kFitArgs);
   EXPECT_EQ(r2.rc, 1);
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  // A probe whose every sample is black (a lens cap, a wrong exposure) names its file.
+  WriteSyntheticProbe(dir / "black.json", truth, latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0), {0.0, 0.0, 0.0},
+                      1e-30, 0.0, 1, 0.0);
+  auto doc = ReadJsonFile(dir / "black.json");
+  for (auto& smp : doc["samples"]) smp["radiance"] = {0.0, 0.0, 0.0};
+  WriteJsonFileAtomically(dir / "black.json", doc);
+  const Result r3 = Skycal("fit --reference " + dir / "ref.exr" + " --probe ref=" + dir / "black.json" + " --out " +
+                           dir / "out" + kFitArgs);
+  EXPECT_EQ(r3.rc, 1);
+  EXPECT_NE(r3.err.find("black.json: no usable probe sample"), std::string::npos) << r3.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  // An absurd weight is refused before any work.
+  const Result r4 = Skycal("fit --reference " + dir / "ref.exr" + " --probe-weight -1 --out " + dir / "out" + kFitArgs);
+  EXPECT_EQ(r4.rc, 1);
+  EXPECT_NE(r4.err.find("--probe-weight"), std::string::npos) << r4.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
 }
 
 // A photograph of a ball: background 0.5, ball radiance a + b max(0, n.s) per channel.
