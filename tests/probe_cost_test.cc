@@ -22,6 +22,17 @@ namespace {
 
 const std::array<double, 3> kSun = latlong::DirectionFromElevationAzimuthDeg(27.0, 40.0);
 
+// The sky the probe integrates: no disc (the sun is analytic), no ground (added analytically).
+render::RenderRequest SkyOnly(const std::array<double, 3>& sun, int width) {
+  render::RenderRequest req;
+  req.sun_dir = sun;
+  req.width = width;
+  req.height = width / 2;
+  req.sun_disc = false;
+  req.ground = render::GroundMode::kZero;
+  return req;
+}
+
 // A cost over Fibonacci normals (and one straight down), every LUT column a parameter
 // except those in `constant_columns_below` (they are read from the state).
 struct Fixture {
@@ -120,12 +131,7 @@ TEST(ProbeCost, SkyIrradianceMatchesQuadratureOfTheRenderedSky) {
     f.values.back() = 0.0;  // no ground light: the ambient part is the sky alone
     const ProbeIrradianceParts parts = f.cost->Parts(f.blocks.data());
     ASSERT_EQ(parts.ambient.size(), f.normals.size());
-    render::RenderRequest req;
-    req.sun_dir = kSun;
-    req.width = 128;
-    req.height = 64;
-    req.sun_disc = false;
-    req.ground = render::GroundMode::kZero;
+    const render::RenderRequest req = SkyOnly(kSun, 128);
     for (auto backend : {render::Backend::kCpu, render::Backend::kVulkan}) {
       auto renderer = render::CreateRenderer(backend);
       const auto e = render::IrradianceQuadrature(renderer->Render(f.state.ToPreset(), req), f.normals);
@@ -152,13 +158,7 @@ TEST(ProbeCost, GroundIdentity) {
   const size_t down = f.normals.size() - 1;
   // E(up) of the sky: the up-facing part from a separate render's quadrature.
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
-  render::RenderRequest req;
-  req.sun_dir = kSun;
-  req.width = 128;
-  req.height = 64;
-  req.sun_disc = false;
-  req.ground = render::GroundMode::kZero;
-  const ImageRGB sky = cpu->Render(f.state.ToPreset(), req);
+  const ImageRGB sky = cpu->Render(f.state.ToPreset(), SkyOnly(kSun, 128));
   const auto e_up = render::IrradianceQuadrature(sky, render::Dir3{0.0, 1.0, 0.0});
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(parts.ambient[down][c] / (0.23 * e_up[c]), 1.0, 1e-6) << c;
   EXPECT_NEAR(parts.sun_factor[down], 0.23 * kSun[1], 1e-12);
@@ -176,10 +176,7 @@ TEST(ProbeCost, QuadratureResolutionError) {
   const auto normals = render::FibonacciSphere(64);
   const render::Dir3 up{0.0, 1.0, 0.0};
   for (double el : {5.0, 30.0, 70.0}) {
-    render::RenderRequest req;
-    req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(el, 15.0);
-    req.sun_disc = false;
-    req.ground = render::GroundMode::kZero;
+    render::RenderRequest req = SkyOnly(latlong::DirectionFromElevationAzimuthDeg(el, 15.0), 1024);
     const render::Rgb e_sun = render::SunIlluminanceAtGround(preset, req.sun_dir);
     auto ball = [&](int width, std::vector<render::Rgb>* sky_only) {
       req.width = width;
