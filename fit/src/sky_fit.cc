@@ -450,6 +450,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       polish_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
       ceres::Problem polish(polish_options);
       std::vector<ProbeCost*> final_costs(refs.size(), nullptr);
+      bool any_free = fit_ground;
       for (size_t r = 0; r < refs.size(); ++r) {
         if (!probed[r]) continue;
         auto cost = MakeProbeBlock(frames[r], r, &probe_blocks[r]);
@@ -458,6 +459,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
         for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r]}) polish.SetParameterBlockConstant(b);
         if (frames[r].sun_observable && frames[r].visible) {
           for (int c = 0; c < 3; ++c) polish.SetParameterLowerBound(state.sun_rgb[r].data(), c, 0.0);
+          any_free = true;
         } else {
           polish.SetParameterBlockConstant(state.sun_rgb[r].data());
         }
@@ -472,9 +474,11 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       po.max_num_iterations = 50;
       po.linear_solver_type = ceres::DENSE_QR;
       po.logging_type = ceres::SILENT;
-      ceres::Solver::Summary polish_summary;
-      ceres::Solve(po, &polish, &polish_summary);
-      probe_final_iterations = static_cast<int>(polish_summary.iterations.size()) - 1;
+      if (any_free) {  // else nothing to refit (every sun occluded or unobservable, ground held)
+        ceres::Solver::Summary polish_summary;
+        ceres::Solve(po, &polish, &polish_summary);
+        probe_final_iterations = static_cast<int>(polish_summary.iterations.size()) - 1;
+      }
       for (size_t r = 0; r < refs.size(); ++r) {
         if (!final_costs[r]) continue;
         ProbeFrame& f = frames[r];
