@@ -92,9 +92,7 @@ std::unique_ptr<ProbeCost> MakeProbeCost(const ProbeFrame& frame, const Referenc
   return std::make_unique<ProbeCost>(std::move(setup), texel_index);
 }
 
-LinearSun SolveLinearSun(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame,
-                         double log_exposure) {
-  const ProbeIrradianceParts parts = cost.Parts(parameters);
+LinearSun SolveLinearSun(const ProbeIrradianceParts& parts, const ProbeFrame& frame, double log_exposure) {
   LinearSun out;
   if (parts.ambient.size() != frame.samples.size()) return out;  // outside the model's domain
   const double k = std::exp(log_exposure), a = frame.probe->albedo;
@@ -108,13 +106,12 @@ LinearSun SolveLinearSun(const ProbeCost& cost, double const* const* parameters,
     }
     out.illuminance[c] = ff > 0.0 ? std::max(0.0, fy / ff) : 0.0;
   }
-  out.fraction = SunShare(cost, parameters, frame, out.illuminance, log_exposure);
+  out.fraction = SunShare(parts, frame, out.illuminance, log_exposure);
   return out;
 }
 
-double SunShare(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame,
-                const std::array<double, 3>& sun, double log_exposure) {
-  const ProbeIrradianceParts parts = cost.Parts(parameters);
+double SunShare(const ProbeIrradianceParts& parts, const ProbeFrame& frame, const std::array<double, 3>& sun,
+                double log_exposure) {
   if (parts.ambient.size() != frame.samples.size()) return 0.0;
   const double k = std::exp(log_exposure), a = frame.probe->albedo;
   std::vector<std::array<double, 3>> sun_radiance(frame.samples.size());
@@ -123,13 +120,10 @@ double SunShare(const ProbeCost& cost, double const* const* parameters, const Pr
   return capture::SunShareOfBrightest(frame.samples, sun_radiance, parts.sun_direct, 0.1);
 }
 
-void ProbeFitErrors(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame, double log_exposure,
-                    double* residual, double* log_rmse) {
-  const ProbeIrradianceParts parts = cost.Parts(parameters);
+void ProbeFitErrors(const ProbeIrradianceParts& parts, const ProbeFrame& frame, const std::array<double, 3>& sun,
+                    double log_exposure, double* residual, double* log_rmse) {
   *residual = *log_rmse = 0.0;
   if (parts.ambient.size() != frame.samples.size()) return;
-  const int nt = cost.num_texels();
-  std::array<double, 3> sun{parameters[nt + 3][0], parameters[nt + 3][1], parameters[nt + 3][2]};
   double d2 = 0.0, m2 = 0.0, l2 = 0.0;
   for (size_t i = 0; i < frame.samples.size(); ++i) {
     const auto p = Predict(parts, i, sun, std::exp(log_exposure), frame.probe->albedo);

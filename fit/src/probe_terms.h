@@ -80,17 +80,20 @@ struct LinearSun {
   std::array<double, 3> illuminance{};  // model units, >= 0
   double fraction = 0.0;                // the sun's share of the brightest sun-facing samples
 };
-// Least squares of the sun illuminance with everything else at `parameters` (the cost's
-// blocks), exposure exp(log_exposure): E_c = sum w f y / sum w f^2, y = pi R / (a k) - ambient.
-LinearSun SolveLinearSun(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame,
-                         double log_exposure);
+// The functions below take the irradiance parts of one probe block at the current point
+// (ProbeCost::Parts, computed once by the caller); empty parts (outside the model's
+// domain) give zeros.
+
+// Least squares of the sun illuminance with everything else fixed, exposure
+// exp(log_exposure): E_c = sum w f y / sum w f^2, y = pi R / (a k) - ambient.
+LinearSun SolveLinearSun(const ProbeIrradianceParts& parts, const ProbeFrame& frame, double log_exposure);
 
 // The sun's share of the brightest sun-facing samples for illuminance `sun` (model units).
-double SunShare(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame,
-                const std::array<double, 3>& sun, double log_exposure);
+double SunShare(const ProbeIrradianceParts& parts, const ProbeFrame& frame, const std::array<double, 3>& sun,
+                double log_exposure);
 
-// RMS(R - P) / RMS(R) and RMS log(P / R) over samples and channels at `parameters`.
-void ProbeFitErrors(const ProbeCost& cost, double const* const* parameters, const ProbeFrame& frame,
+// RMS(R - P) / RMS(R) and RMS log(P / R) over samples and channels for illuminance `sun`.
+void ProbeFitErrors(const ProbeIrradianceParts& parts, const ProbeFrame& frame, const std::array<double, 3>& sun,
                     double log_exposure, double* residual, double* log_rmse);
 
 }  // namespace skycal::fit

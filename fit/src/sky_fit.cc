@@ -347,7 +347,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       // steers" in fit/src/probe_terms.h.
       auto cost = MakeProbeBlock(f, r, &blocks);
       if (f.sun_observable) {
-        const LinearSun lin = SolveLinearSun(*cost, blocks.data(), f, state.log_exposure[r]);
+        const LinearSun lin = SolveLinearSun(cost->Parts(blocks.data()), f, state.log_exposure[r]);
         const bool was_visible = li > 0 && f.visible;
         f.visible = lin.fraction >= o.sun_visible_threshold;
         f.fraction = lin.fraction;
@@ -482,13 +482,12 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       for (size_t r = 0; r < refs.size(); ++r) {
         if (!final_costs[r]) continue;
         ProbeFrame& f = frames[r];
-        const ProbeCost& cost = *final_costs[r];
-        double const* const* params = probe_blocks[r].data();
-        ProbeFitErrors(cost, params, f, state.log_exposure[r], &f.residual, &f.log_rmse);
+        const ProbeIrradianceParts parts = final_costs[r]->Parts(probe_blocks[r].data());
+        ProbeFitErrors(parts, f, state.sun_rgb[r], state.log_exposure[r], &f.residual, &f.log_rmse);
         if (!f.sun_observable) continue;
         if (f.visible) {
           f.fitted_sun = state.sun_rgb[r];
-          f.fraction = SunShare(cost, params, f, state.sun_rgb[r], state.log_exposure[r]);
+          f.fraction = SunShare(parts, f, state.sun_rgb[r], state.log_exposure[r]);
           if (f.fraction < o.sun_visible_threshold) {
             f.visible = false;
             f.note = "the jointly fitted sun explains only " + std::to_string(f.fraction) +
@@ -496,7 +495,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
             state.sun_rgb[r] = {0.0, 0.0, 0.0};
           }
         } else {
-          const LinearSun lin = SolveLinearSun(cost, params, f, state.log_exposure[r]);
+          const LinearSun lin = SolveLinearSun(parts, f, state.log_exposure[r]);
           f.fitted_sun = lin.illuminance;
           f.fraction = lin.fraction;
           f.note = "the probe sits at the ambient level (the sun's share of its brightest sun-facing samples is " +
