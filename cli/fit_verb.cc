@@ -45,7 +45,13 @@ constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference 
   --absolute            references are calibrated (cd/m^2): the exposure is not fitted
   --sun-cone DEG        mask this cone around the sun (default 3)
   --loss NAME           cauchy (default), huber or none: robust loss on log residuals
-  --loss-scale S        robust loss scale in natural-log units (default 0.05, ~5%)
+  --loss-scale S        floor of the robust loss scale, natural-log units (default 0.05, ~5%);
+                        the fit widens it to 2.385 x the MAD-sigma of its least-squares residuals
+  --no-linear-start     skip the linear start (variable projection over g): coarse-to-fine
+                        Ceres from the initial preset (the slower path of earlier versions)
+  --linear-width W      level width of the linear start's g search (default 128)
+  --polish              always polish the linear start with Ceres through the backend
+                        (it runs anyway with probe samples or a failed render check)
   --pyramid W1,W2,...   coarse-to-fine level widths (default 64,128,... up to min(width, 512))
   --max-iterations N    per pyramid level (default 50)
   --smoothness L        second-difference prior on the LUT change along sun zenith (default 1e-6)
@@ -250,6 +256,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     inputs.push_back({{"path", ref.path}, {"sha256", ref.sha256}});
     for (const auto& w : ref.warnings) warnings.push_back(w);
   }
+  for (const auto& w : result.warnings) warnings.push_back(w);
   const nlohmann::json resolved = {
       {"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
       {"absolute", fo.absolute},               {"sun_cone_deg", fo.sun_cone_deg},
@@ -257,6 +264,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
       {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
       {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
       {"smoothness", fo.smoothness},
+      {"linear_start", fo.linear_start},       {"linear_width", fo.linear_width},
+      {"polish", fo.polish},
       {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
       {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
       {"fit_ground_albedo", fo.fit_ground_albedo},
@@ -267,6 +276,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                             {"probe", result.probe},
                             {"iterations", result.iterations},
                             {"termination", result.termination},
+                            {"linear_start", result.linear_start},
                             {"levels", result.levels},
                             {"skipped", result.skipped},
                             {"unobserved_lut_rows", result.unobserved_rows},
@@ -303,8 +313,9 @@ int RunFit(int argc, char** argv) {
     Args a(argc, argv,
            {"reference", "model", "backend", "sun-dir", "sun-elevation", "sun-azimuth", "mask", "init", "out", "sun-cone",
             "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction", "probe",
-            "probe-weight", "probe-quadrature"},
-           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet", "no-ground-albedo"});
+            "probe-weight", "probe-quadrature", "linear-width"},
+           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet", "no-ground-albedo",
+            "no-linear-start", "polish"});
     FitVerbOptions o;
     o.references = a.Values("reference");
     FitProbeOptions po;
@@ -356,6 +367,12 @@ int RunFit(int argc, char** argv) {
     }
     f.fit_ground_albedo = !a.Has("no-ground-albedo");
     f.numeric_derivatives = a.Has("numeric-derivatives");
+    f.linear_start = !a.Has("no-linear-start");
+    f.polish = a.Has("polish");
+    if (auto v = a.Number("linear-width")) {
+      if (*v != std::floor(*v)) throw Error("--linear-width: expected an integer width");
+      f.linear_width = static_cast<int>(*v);
+    }
     f.verbose = !a.Has("quiet");
     return RunFitWithProbes(o, po);
   });

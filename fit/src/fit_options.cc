@@ -12,6 +12,9 @@ bool FitOptions::IsValid(std::string* why) const {
   if (!(sun_cone_deg >= 0.0 && sun_cone_deg <= 45.0)) return bad("--sun-cone: expected degrees in [0, 45]");
   if (!(clip_fraction > 0.0 && clip_fraction <= 1.0)) return bad("--clip-fraction: expected a value in (0, 1]");
   if (!(loss_scale > 0.0 && loss_scale <= 10.0)) return bad("--loss-scale: expected natural-log units in (0, 10]");
+  if (linear_width < 16 || linear_width > 16384 || linear_width % 2) {
+    return bad("--linear-width: expected an even width in [16, 16384], got " + std::to_string(linear_width));
+  }
   if (max_iterations_per_level < 1 || max_iterations_per_level > 10000) return bad("--max-iterations: expected 1..10000");
   for (double w : {smoothness, prior_weight}) {
     if (!(w >= 0.0 && w <= 1e6)) return bad("--smoothness/--prior-weight: expected a weight in [0, 1e6]");

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "fit_state.h"
+#include "linear_start.h"
 #include "probe_terms.h"
 #include "pyramid.h"
 #include "sky_row_cost.h"
@@ -22,6 +23,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// The linear start's render check (see FitSky): the backends' parity bound (2e-5,
+// tests/render_parity_test.cc) plus the LUT's float storage.
+constexpr double kRenderCheckThreshold = 5e-5;
 
 // sqrt(lambda) * (u - u0): pulls a LUT entry toward its initial value (gauge for
 // combinations the data cannot separate, e.g. the two LUT rows around one sun angle).
@@ -234,8 +239,121 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
 
   const size_t table_size = state.preset.luts.table_size();
   std::set<std::pair<int, int>> last_observed_columns;  // at the finest level
-  const std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
+  std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
   const bool use_gpu = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
+  // The linear start (fit/src/linear_start.h): the LUT, g, L_z and the exposures at the
+  // least-squares / annealed-robust optimum of the linear structure; the Ceres solve is
+  // then a polish at the finest level under the loss scale the residuals asked for.
+  double polish_loss_scale = 0.0;
+  std::vector<double*> held_at_floor;
+  double render_check_difference = 0.0;
+  std::set<std::pair<int, int>> linear_observed_columns;
+  if (o.linear_start) {
+    const auto t_linear = Clock::now();
+    const int linear_width = std::min(o.linear_width, widths.back());
+    // Three levels: the g search, the robust steps (twice the search width), the final
+    // Gauss-Newton steps (the finest pyramid width); fewer when the reference is small.
+    const int robust_width = std::min(2 * linear_width, widths.back());
+    std::vector<std::vector<FitLevel>> linear_levels;
+    std::vector<std::vector<const FitLevel*>> level_ptrs;
+    for (int w : {linear_width, robust_width, widths.back()}) {
+      if (!linear_levels.empty() && linear_levels.back()[0].width == w) continue;
+      linear_levels.emplace_back();
+      for (const Reference& ref : refs) linear_levels.back().push_back(BuildLevel(ref, w));
+    }
+    for (const auto& lvs : linear_levels) {
+      level_ptrs.emplace_back();
+      for (const FitLevel& lv : lvs) level_ptrs.back().push_back(&lv);
+    }
+    const std::vector<const FitLevel*>& final_ptrs = level_ptrs.back();
+    LinearSkyOptions lo;
+    lo.unknowns = tied ? LinearUnknowns::kTiedRows : LinearUnknowns::kFreeRows;
+    lo.row_fitted = row_fitted;
+    lo.fit_overcast = fit_overcast;
+    lo.prior_weight = o.prior_weight;
+    lo.smoothness = o.smoothness;
+    std::vector<std::unique_ptr<LinearSky>> skies;
+    for (const auto& ptrs : level_ptrs) skies.push_back(std::make_unique<LinearSky>(state, ptrs, refs, lo));
+    const LinearSky& sky = *skies.back();
+    const LinearSky& robust = *skies[std::min<size_t>(1, skies.size() - 1)];
+    const LinearStartReport rep =
+        RunLinearStart(*skies[0], robust, sky, &state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
+    polish_loss_scale = rep.loss_scale;
+    held_at_floor = rep.held;
+    if (!held_at_floor.empty()) {
+      result.skipped.push_back({{"block", std::to_string(held_at_floor.size()) + " LUT parameters"},
+                                {"reason", "the linear least-squares solve wants them <= 0 (a table the sky does not "
+                                           "need there): held at 1e-3 of their start, not polished in log space"}});
+    }
+    const double linear_time = Seconds(t_linear, Clock::now());
+    result.linear_start = {{"search_width", linear_width},
+                           {"robust_width", robust_width},
+                           {"width", final_ptrs[0]->width},
+                           {"unknowns", sky.num_unknowns()},
+                           {"samples", sky.num_samples()},
+                           {"solves", rep.solves},
+                           {"gauss_newton_steps", rep.gauss_newton_steps},
+                           {"search_time_s", rep.search_time_s},
+                           {"robust_time_s", rep.robust_time_s},
+                           {"final_time_s", rep.final_time_s},
+                           {"haziness_g", rep.g},
+                           {"rel_rmse_least_squares", rep.rel_rmse_least_squares},
+                           {"rel_rmse_robust", rep.rel_rmse_robust},
+                           {"residual_sigma_log", rep.residual_sigma},
+                           {"loss_scale", rep.loss_scale},
+                           {"loss_scale_floor", o.loss_scale},
+                           {"held_non_positive", rep.held_non_positive},
+                           {"time_s", linear_time}};
+    if (o.verbose) {
+      std::cerr << "[fit] linear start at " << linear_width << " wide: g " << rep.g << ", rel RMSE "
+                << rep.rel_rmse_least_squares << " (least squares) -> " << rep.rel_rmse_robust << " (robust, scale "
+                << rep.loss_scale << "), " << rep.solves << " solves, " << linear_time << " s" << std::endl;
+    }
+    // The render check: the selected backend draws the linear solution at the final level,
+    // and must reproduce the linear structure's values (threshold: the backends' parity
+    // bound, tests/render_parity_test.cc, 2e-5, plus float LUT storage: 5e-5).
+    {
+      const auto t_check = Clock::now();
+      const render::Preset candidate = state.ToPreset();
+      std::vector<ImageRGB> images;
+      for (size_t r = 0; r < refs.size(); ++r) {
+        render::RenderRequest req;
+        req.sun_dir = refs[r].sun_dir;
+        req.width = final_ptrs[r]->width;
+        req.height = final_ptrs[r]->height;
+        req.sun_disc = false;
+        req.ground = render::GroundMode::kZero;
+        images.push_back(renderer.Render(candidate, req));
+      }
+      render_check_difference = sky.MaxRelativeDifference(rep.solution, rep.exposures, images);
+      result.linear_start["render_check"] = {{"backend", renderer.Describe()},
+                                             {"max_relative_difference", render_check_difference},
+                                             {"threshold", kRenderCheckThreshold},
+                                             {"time_s", Seconds(t_check, Clock::now())}};
+    }
+    linear_observed_columns.clear();
+    for (const auto& tc : sky.ObservedColumns()) linear_observed_columns.insert(tc);
+    const bool render_agrees = render_check_difference <= kRenderCheckThreshold;
+    const bool polish = o.polish || probed_count > 0 || !render_agrees;
+    if (!polish) {
+      result.skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
+                                {"reason", "the linear start converged on the robust log objective itself and the " +
+                                               std::string(render::ToString(o.backend)) +
+                                               " render reproduces its values (render_check): nothing left to polish"}});
+      widths.clear();
+    } else if (!render_agrees) {
+      result.warnings.push_back("the render check failed (max relative difference " +
+                                std::to_string(render_check_difference) + "): the Ceres polish runs through the backend");
+    }
+    if (widths.size() > 1) {
+      std::string skipped_widths;
+      for (size_t i = 0; i + 1 < widths.size(); ++i) skipped_widths += (i ? ", " : "") + std::to_string(widths[i]);
+      result.skipped.push_back({{"block", "coarse pyramid levels (" + skipped_widths + " wide)"},
+                                {"reason", "the linear start already placed the LUT and g at the optimum of the linear "
+                                           "structure: only the finest level is polished"}});
+      widths = {widths.back()};
+    }
+  }
   for (size_t li = 0; li < widths.size(); ++li) {
     const auto t_level = Clock::now();
     std::vector<FitLevel> levels;
@@ -249,7 +367,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     bool rendered_valid = false;
     // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
     // above the finest) so a far start is not trapped by down-weighted pixels.
-    const double level_loss_scale = o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
+    const double level_loss_scale = polish_loss_scale > 0.0
+                                        ? polish_loss_scale
+                                        : o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
 
     ceres::Problem::Options popts;
     popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
@@ -399,6 +519,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       }
     }
     last_observed_columns = observed_columns;
+    for (double* p : held_at_floor) {
+      if (problem.HasParameterBlock(p)) problem.SetParameterBlockConstant(p);
+    }
     if (problem.HasParameterBlock(&state.g)) {
       if (o.fit_haziness) {
         problem.SetParameterLowerBound(&state.g, 0, 0.0);
@@ -428,7 +551,11 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
         ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE) ? ceres::SUITE_SPARSE : ceres::EIGEN_SPARSE;
     // Coarse levels only need to bring the start close; the finest level converges fully.
     const bool finest = li + 1 == widths.size();
-    so.function_tolerance = finest ? 1e-9 : 1e-5;
+    // After the linear start the polish only converts the relative-error optimum to the
+    // robust log one: it stops once an iteration gains < 1e-4 of the cost (measured on
+    // clean skies: the tail beyond that is ~40 iterations that gain 0.3% of the cost,
+    // 0.15% of the rel RMSE, moving LUT entries the image barely sees).
+    so.function_tolerance = !finest ? 1e-5 : o.linear_start ? 1e-4 : 1e-9;
     so.gradient_tolerance = finest ? 1e-12 : 1e-8;
     so.parameter_tolerance = finest ? 1e-7 : 1e-6;
     so.update_state_every_iteration = use_gpu;  // the callback reads the parameter memory
@@ -517,6 +644,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                              {"time_s", Seconds(t_level, Clock::now())}});
   }
 
+  if (widths.empty()) last_observed_columns = linear_observed_columns;  // no Ceres level ran
   state.ApplyTiedRows();
   // Columns no pixel reached: the change (log) of the nearest observed column, per row.
   int extrapolated = 0;

@@ -23,11 +23,22 @@ struct FitOptions {
   std::string mask_path;            // optional user mask EXR (R < 0.5 excludes the pixel)
   bool absolute = false;            // references are calibrated: the exposure is fixed at 1
   RobustLoss loss = RobustLoss::kCauchy;
-  double loss_scale = 0.05;         // residual scale of the robust loss, natural-log units (~5%)
+  // Floor of the robust loss's scale, natural-log units (~5%). With the linear start the
+  // scale used is max(loss_scale, 2.385 x the MAD-sigma of the least-squares residuals):
+  // a sky the model fits only to 10% keeps its worst regions (fit/src/linear_start.h).
+  double loss_scale = 0.05;
+  // Variable projection before the Ceres polish (fit/src/linear_start.h): g searched with
+  // the LUT solved linearly, robust weights annealed; the coarse pyramid levels are then
+  // skipped. Off: the coarse-to-fine Ceres solve from the initial preset (the old path).
+  bool linear_start = true;
+  int linear_width = 128;           // level width of the linear start's g search (pixels; capped at the finest)
+  // Run the Ceres polish through the backend after the linear start even when nothing
+  // needs it (it always runs with probe samples, or when the render check fails).
+  bool polish = false;
   // Coarse-to-fine widths of the area-averaged pyramid, last = full fit resolution (pixels).
   // Empty: automatic (64, 128, ... up to the reference width, at most 512).
   std::vector<int> pyramid_widths;
-  int max_iterations_per_level = 50;
+  int max_iterations_per_level = 50;  // Ceres iterations per pyramid level (the polish: its only level)
   double smoothness = 1e-6;         // second-difference prior on the LUT change along sun zenith (rows)
   double prior_weight = 1e-8;       // weight pulling each LUT entry (log) toward the initial preset
   bool fit_haziness = true;

@@ -68,6 +68,9 @@ struct FitResult {
   nlohmann::json skipped = nlohmann::json::array();  // parameter blocks / passes not needed, with reasons
   nlohmann::json unobserved_rows = nlohmann::json::array();
   std::string backend_description;
+  std::vector<std::string> warnings;  // e.g. a failed render check
+  // The linear start's report (fit/src/linear_start.h); null when it did not run.
+  nlohmann::json linear_start;
   // With probe samples: weight, quadrature, residual counts, the ground albedo (fitted or
   // held, and why), the time spent evaluating the probe residuals.
   nlohmann::json probe;

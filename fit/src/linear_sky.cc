@@ -1,0 +1,429 @@
+#include "linear_sky.h"
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <cmath>
+
+#include "robust_residual.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+#include "skycal/render/sky_model.h"
+
+namespace skycal::fit {
+namespace {
+
+// The shared model source, for its coordinate and phase functions only (no LUT reads).
+struct NoLut {
+  template <typename S>
+  glsl::Vec3<S> texel(int, int, int) const {
+    return glsl::Vec3<S>(S(0.0));
+  }
+};
+using ModelD = model::SkyModel<double, NoLut>;
+
+ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
+  ModelD::SkyParams p{};
+  p.sun_dir = glsl::Vec3<double>(0.0, sun_height, 0.0);
+  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(st.preset.luts.grid.theta_max_deg * M_PI / 180.0);
+  p.lut_n_theta = st.preset.luts.grid.n_theta;
+  p.lut_n_gamma = st.preset.luts.grid.n_gamma;
+  return p;
+}
+
+constexpr double kIsotropicPhase = 1.0 / (4.0 * M_PI);
+constexpr double kFloorFraction = 1e-3;   // non-positive entries are held at this x their start
+constexpr double kActiveSetPenalty = 1e3; // weight of the hold, against data weights summing to 1
+constexpr int kActiveSetRounds = 6;
+
+}  // namespace
+
+LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& levels,
+                     const std::vector<Reference>& refs, LinearSkyOptions options)
+    : state_(state), o_(std::move(options)), n_refs_(static_cast<int>(refs.size())) {
+  const auto& grid = state.preset.luts.grid;
+  const int w = levels.at(0)->width, h = levels.at(0)->height;
+  const bool single = refs.size() == 1;
+  if (o_.unknowns != LinearUnknowns::kFreeRows && !single) throw Error("LinearSky: tied or per-row unknowns need one reference");
+  if (o_.unknowns == LinearUnknowns::kFreeRows && static_cast<int>(o_.row_fitted.size()) != grid.n_theta) {
+    throw Error("LinearSky: free rows need row_fitted for every LUT row");
+  }
+  NoLut none;
+  ModelD m(none);
+  // Unknown layout.
+  const int per_table = o_.unknowns == LinearUnknowns::kTiedRows   ? grid.n_gamma
+                        : o_.unknowns == LinearUnknowns::kFreeRows ? grid.n_theta * grid.n_gamma
+                                                                   : h;
+  num_unknowns_ = state.tables * per_table * 3;
+  if (o_.fit_overcast) lz_index_ = num_unknowns_++;
+  initial_.assign(num_unknowns_, 1.0);
+  if (lz_index_ >= 0) initial_[lz_index_] = std::exp(state.log_overcast_zenith);
+  const size_t table_size = state.preset.luts.table_size();
+  auto initial_lut = [&](int t, int row, int col, int ch) {
+    return std::exp(state.initial_log_lut[t * table_size + ((static_cast<size_t>(row) * grid.n_gamma + col) * 3 + ch)]);
+  };
+
+  double total_weight = 0.0;
+  for (const FitLevel* lv : levels) total_weight += lv->total_weight;
+  size_t sample = 0;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const FitLevel& lv = *levels[r];
+    if (lv.width != w || lv.height != h) throw Error("LinearSky: level sizes differ");
+    const auto p = GridParams(state, refs[r].sun_dir[1]);
+    const auto lr = m.lut_row(p.sun_dir.y, p);
+    const double wr[2] = {1.0 - lr.frow, lr.frow};
+    for (int y = 0; y < h; ++y) {
+      Row row;
+      row.ref = r;
+      row.y = y;
+      row.first_sample = sample;
+      const auto v0 = latlong::PixelDirection(0, y, w, h);
+      row.overcast_shape = (1.0 + 2.0 * std::max(v0[1], 0.0)) / 3.0;
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        if (lv.weight[i] <= 0.0) continue;
+        const auto v = latlong::PixelDirection(x, y, w, h);
+        const double d[3] = {v[0] - refs[r].sun_dir[0], v[1] - refs[r].sun_dir[1], v[2] - refs[r].sun_dir[2]};
+        Pixel px;
+        px.x = x;
+        px.sqrt_weight = std::sqrt(lv.weight[i] / total_weight);
+        px.one_minus_mu = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        px.mu = 1.0 - px.one_minus_mu;
+        px.phase_r = m.phase_rayleigh(px.mu);
+        for (int c = 0; c < 3; ++c) px.ref[c] = lv.radiance[3 * i + c];
+        row.pixels.push_back(px);
+        for (int c = 0; c < 3; ++c) error_weight_.push_back(lv.weight[i] / total_weight);
+        sample += 3;
+      }
+      if (row.pixels.empty()) continue;
+      const auto lc = m.lut_col(v0[1], p);
+      const double wc[2] = {1.0 - lc.fcol, lc.fcol};
+      for (int t = 0; t < state.tables; ++t) {
+        if (o_.unknowns == LinearUnknowns::kPerImageRow) {
+          const int u = ((t * h) + y) * 3;
+          row.nodes.push_back({t, -1, u, 1.0});
+          for (int c = 0; c < 3; ++c) {
+            double v = 0.0;
+            for (int dc = 0; dc < 2; ++dc)
+              for (int dr = 0; dr < 2; ++dr) v += wc[dc] * wr[dr] * initial_lut(t, lr.row0 + dr, lc.col0 + dc, c);
+            initial_[u + c] = v;
+          }
+          continue;
+        }
+        for (int dc = 0; dc < 2; ++dc) {
+          if (wc[dc] <= 0.0) continue;
+          const int col = lc.col0 + dc;
+          if (o_.unknowns == LinearUnknowns::kTiedRows) {
+            const int u = (t * grid.n_gamma + col) * 3;
+            row.nodes.push_back({t, col, u, wc[dc]});
+            for (int c = 0; c < 3; ++c) {
+              initial_[u + c] = wr[0] * initial_lut(t, lr.row0, col, c) + wr[1] * initial_lut(t, lr.row0 + 1, col, c);
+            }
+            continue;
+          }
+          for (int dr = 0; dr < 2; ++dr) {
+            if (wr[dr] <= 0.0) continue;
+            const int lut_row = lr.row0 + dr;
+            if (!o_.row_fitted[lut_row]) throw Error("LinearSky: a reference reads LUT row " + std::to_string(lut_row) + ", which is not fitted");
+            const int u = ((t * grid.n_theta + lut_row) * grid.n_gamma + col) * 3;
+            row.nodes.push_back({t, col, u, wc[dc] * wr[dr]});
+          }
+        }
+      }
+      rows_.push_back(std::move(row));
+    }
+  }
+  if (o_.unknowns == LinearUnknowns::kFreeRows) {
+    for (int t = 0; t < state.tables; ++t)
+      for (int row = 0; row < grid.n_theta; ++row)
+        for (int col = 0; col < grid.n_gamma; ++col)
+          for (int c = 0; c < 3; ++c) initial_[((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c] = initial_lut(t, row, col, c);
+  }
+}
+
+std::vector<double> LinearSky::MiePhases(double g) const {
+  NoLut none;
+  ModelD m(none);
+  std::vector<double> out;
+  out.reserve(error_weight_.size() / 3);
+  for (const Row& row : rows_)
+    for (const Pixel& px : row.pixels) out.push_back(m.phase_cornette_shanks(px.mu, px.one_minus_mu, g));
+  return out;
+}
+
+double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const {
+  const double w_o = state_.preset.overcast_weight;
+  double lut = 0.0;
+  for (const Row::Node& n : row.nodes) {
+    const double phase = n.table == 0 ? px.phase_r : n.table == 1 ? phase_m : kIsotropicPhase;
+    lut += n.weight * phase * s.values[n.unknown_ch0 + ch];
+  }
+  const double lz = lz_index_ >= 0 ? s.values[lz_index_] : std::exp(state_.log_overcast_zenith);
+  return (1.0 - w_o) * lut + w_o * lz * row.overcast_shape;
+}
+
+LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposures,
+                                   const std::vector<double>& robust_weights,
+                                   const LinearSkySolution* linearize_at) const {
+  const double w_o = state_.preset.overcast_weight;
+  const std::vector<double> phase_m = MiePhases(g);
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(num_unknowns_);
+  // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
+  // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once.
+  constexpr int kMax = 13;
+  size_t pixel_index = 0;
+  for (const Row& row : rows_) {
+    const int k = static_cast<int>(row.nodes.size());
+    const int kk = k + (lz_index_ >= 0 ? 1 : 0);
+    if (kk > kMax) throw Error("LinearSky: too many nodes in a row");
+    const double exposure = exposures[row.ref];
+    const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * std::exp(state_.log_overcast_zenith) * row.overcast_shape;
+    for (int c = 0; c < 3; ++c) {
+      double n[kMax][kMax] = {};
+      double b[kMax] = {};
+      double a[kMax];
+      for (size_t p = 0; p < row.pixels.size(); ++p) {
+        const Pixel& px = row.pixels[p];
+        const size_t smp = row.first_sample + 3 * p + c;
+        const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
+        const double s = px.sqrt_weight * std::sqrt(rw);
+        const double pm = phase_m[pixel_index + p];
+        // Relative error: a . x / R - 1. Log error linearised at M0:
+        // a . x / M0 - (1 - ln(k M0 / R)).
+        double norm = px.ref[c], target = s;
+        if (linearize_at) {
+          const double m0 = exposure * Model(row, px, c, pm, *linearize_at);
+          if (m0 > 0.0) {
+            norm = m0;
+            target = s * (1.0 - std::log(m0 / px.ref[c]));
+          }
+        }
+        const double scale = s * exposure / norm;
+        for (int j = 0; j < k; ++j) {
+          const auto& nd = row.nodes[j];
+          const double phase = nd.table == 0 ? px.phase_r : nd.table == 1 ? pm : kIsotropicPhase;
+          a[j] = scale * (1.0 - w_o) * nd.weight * phase;
+        }
+        if (lz_index_ >= 0) a[k] = scale * w_o * row.overcast_shape;
+        target -= scale * fixed_lz;
+        for (int i = 0; i < kk; ++i) {
+          b[i] += target * a[i];
+          for (int j = i; j < kk; ++j) n[i][j] += a[i] * a[j];
+        }
+      }
+      auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
+      for (int i = 0; i < kk; ++i) {
+        rhs[global(i)] += b[i];
+        for (int j = 0; j < kk; ++j) triplets.emplace_back(global(i), global(j), i <= j ? n[i][j] : n[j][i]);
+      }
+    }
+    pixel_index += row.pixels.size();
+  }
+  // Priors, linearised: sqrt(lambda) (x / x0 - 1).
+  const double lambda = std::max(o_.prior_weight, 1e-14);
+  for (int j = 0; j < num_unknowns_; ++j) {
+    if (j == lz_index_) continue;
+    triplets.emplace_back(j, j, lambda / (initial_[j] * initial_[j]));
+    rhs[j] += lambda / initial_[j];
+  }
+  if (o_.unknowns == LinearUnknowns::kFreeRows && o_.smoothness > 0.0) {
+    const auto& grid = state_.preset.luts.grid;
+    for (int t = 0; t < state_.tables; ++t)
+      for (int row = 1; row + 1 < grid.n_theta; ++row) {
+        if (!o_.row_fitted[row - 1] || !o_.row_fitted[row] || !o_.row_fitted[row + 1]) continue;
+        for (int col = 0; col < grid.n_gamma; ++col)
+          for (int c = 0; c < 3; ++c) {
+            const int ub = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
+            const int stride = grid.n_gamma * 3;
+            const int idx[3] = {ub - stride, ub, ub + stride};
+            const double coef[3] = {1.0 / initial_[idx[0]], -2.0 / initial_[idx[1]], 1.0 / initial_[idx[2]]};
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], o_.smoothness * coef[i] * coef[j]);
+          }
+      }
+  }
+  Eigen::SparseMatrix<double> normal(num_unknowns_, num_unknowns_);
+  normal.setFromTriplets(triplets.begin(), triplets.end());
+
+  LinearSkySolution sol;
+  sol.g = g;
+  Eigen::VectorXd x;
+  std::vector<char> held(num_unknowns_, 0);
+  for (int round = 0; round < kActiveSetRounds; ++round) {
+    Eigen::SparseMatrix<double> sys = normal;
+    Eigen::VectorXd rb = rhs;
+    for (int j = 0; j < num_unknowns_; ++j) {
+      if (!held[j]) continue;
+      const double x0 = initial_[j], floor_value = kFloorFraction * x0;
+      sys.coeffRef(j, j) += kActiveSetPenalty / (x0 * x0);
+      rb[j] += kActiveSetPenalty * floor_value / (x0 * x0);
+    }
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sys);
+    if (ldlt.info() != Eigen::Success) throw Error("linear sky solve: the normal equations are not positive definite");
+    x = ldlt.solve(rb);
+    bool changed = false;
+    for (int j = 0; j < num_unknowns_; ++j) {
+      if (!held[j] && !(x[j] > kFloorFraction * initial_[j])) {
+        held[j] = 1;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  sol.held = held;
+  sol.values.resize(num_unknowns_);
+  for (int j = 0; j < num_unknowns_; ++j) {
+    sol.values[j] = std::max(x[j], kFloorFraction * initial_[j]);
+    sol.held_non_positive += held[j];
+  }
+  sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);
+  // Cost and relative error of the data terms.
+  double cost = 0.0, sq = 0.0, wsum = 0.0;
+  pixel_index = 0;
+  for (const Row& row : rows_) {
+    for (size_t p = 0; p < row.pixels.size(); ++p) {
+      const Pixel& px = row.pixels[p];
+      for (int c = 0; c < 3; ++c) {
+        const size_t smp = row.first_sample + 3 * p + c;
+        const double e = (exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], sol) - px.ref[c]) / px.ref[c];
+        const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
+        cost += 0.5 * rw * error_weight_[smp] * e * e;
+        sq += error_weight_[smp] * e * e;
+        wsum += error_weight_[smp];
+      }
+    }
+    pixel_index += row.pixels.size();
+  }
+  sol.cost = cost;
+  sol.rel_rmse = wsum > 0.0 ? std::sqrt(sq / wsum) : 0.0;
+  return sol;
+}
+
+std::vector<std::pair<int, int>> LinearSky::ObservedColumns() const {
+  std::vector<std::pair<int, int>> out;
+  for (const Row& row : rows_)
+    for (const Row::Node& n : row.nodes) out.emplace_back(n.table, n.col);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+double LinearSky::MaxRelativeDifference(const LinearSkySolution& s, const std::vector<double>& exposures,
+                                        const std::vector<ImageRGB>& images) const {
+  const std::vector<double> values = ModelValues(s, exposures);
+  double worst = 0.0;
+  for (const Row& row : rows_)
+    for (size_t p = 0; p < row.pixels.size(); ++p)
+      for (int c = 0; c < 3; ++c) {
+        const double predicted = values[row.first_sample + 3 * p + c];
+        const double rendered = exposures[row.ref] * images[row.ref].at(row.pixels[p].x, row.y, c);
+        worst = std::max(worst, std::abs(rendered - predicted) / std::max(std::abs(predicted), 1e-30));
+      }
+  return worst;
+}
+
+double LinearSky::RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
+                                double scale) const {
+  const std::vector<double> e = LogErrors(s, exposures);
+  double cost = 0.0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    double rho = 0.0, drho = 1.0;
+    RobustRho(loss, (e[i] / scale) * (e[i] / scale), &rho, &drho);
+    cost += 0.5 * error_weight_[i] * scale * scale * rho;
+  }
+  return cost;
+}
+
+std::vector<double> LinearSky::ModelValues(const LinearSkySolution& s, const std::vector<double>& exposures) const {
+  const std::vector<double> phase_m = MiePhases(s.g);
+  std::vector<double> out(error_weight_.size(), 0.0);
+  size_t pixel_index = 0;
+  for (const Row& row : rows_) {
+    for (size_t p = 0; p < row.pixels.size(); ++p)
+      for (int c = 0; c < 3; ++c)
+        out[row.first_sample + 3 * p + c] = exposures[row.ref] * Model(row, row.pixels[p], c, phase_m[pixel_index + p], s);
+    pixel_index += row.pixels.size();
+  }
+  return out;
+}
+
+std::vector<double> LinearSky::LogErrors(const LinearSkySolution& s, const std::vector<double>& exposures) const {
+  const std::vector<double> phase_m = MiePhases(s.g);
+  std::vector<double> out(error_weight_.size(), 0.0);
+  size_t pixel_index = 0;
+  for (const Row& row : rows_) {
+    for (size_t p = 0; p < row.pixels.size(); ++p) {
+      const Pixel& px = row.pixels[p];
+      for (int c = 0; c < 3; ++c) {
+        const double mv = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], s);
+        out[row.first_sample + 3 * p + c] = mv > 0.0 ? std::clamp(std::log(mv / px.ref[c]), -20.0, 20.0) : 20.0;
+      }
+    }
+    pixel_index += row.pixels.size();
+  }
+  return out;
+}
+
+double LinearSky::BestExposure(const LinearSkySolution& s, size_t r, const std::vector<double>& robust_weights) const {
+  const std::vector<double> phase_m = MiePhases(s.g);
+  double num = 0.0, den = 0.0;
+  size_t pixel_index = 0;
+  for (const Row& row : rows_) {
+    if (row.ref == r) {
+      for (size_t p = 0; p < row.pixels.size(); ++p) {
+        const Pixel& px = row.pixels[p];
+        for (int c = 0; c < 3; ++c) {
+          const size_t smp = row.first_sample + 3 * p + c;
+          const double w = error_weight_[smp] * (robust_weights.empty() ? 1.0 : robust_weights[smp]);
+          const double q = Model(row, px, c, phase_m[pixel_index + p], s) / px.ref[c];
+          num += w * q;
+          den += w * q * q;
+        }
+      }
+    }
+    pixel_index += row.pixels.size();
+  }
+  return den > 0.0 && num > 0.0 ? num / den : 1.0;
+}
+
+std::vector<double*> LinearSky::HeldParameters(const LinearSkySolution& s, FitState* state) const {
+  std::vector<double*> out;
+  const auto& grid = state->preset.luts.grid;
+  for (int u = 0; u < num_unknowns_; ++u) {
+    if (!s.held[u] || u == lz_index_) continue;
+    const int c = u % 3;
+    if (o_.unknowns == LinearUnknowns::kTiedRows) {
+      const int col = (u / 3) % grid.n_gamma, t = u / (3 * grid.n_gamma);
+      out.push_back(&state->log_delta[state->DeltaIndex(t, col, c)]);
+    } else if (o_.unknowns == LinearUnknowns::kFreeRows) {
+      const int col = (u / 3) % grid.n_gamma, row = (u / (3 * grid.n_gamma)) % grid.n_theta;
+      const int t = u / (3 * grid.n_gamma * grid.n_theta);
+      if (o_.row_fitted[row]) out.push_back(&state->log_lut[state->Index(t, row, col, c)]);
+    }
+  }
+  return out;
+}
+
+void LinearSky::Apply(const LinearSkySolution& s, FitState* state) const {
+  const auto& grid = state->preset.luts.grid;
+  if (o_.unknowns == LinearUnknowns::kPerImageRow) throw Error("LinearSky: per-row solutions are not LUTs");
+  for (int t = 0; t < state->tables; ++t)
+    for (int col = 0; col < grid.n_gamma; ++col)
+      for (int c = 0; c < 3; ++c) {
+        if (o_.unknowns == LinearUnknowns::kTiedRows) {
+          const int u = (t * grid.n_gamma + col) * 3 + c;
+          state->log_delta[state->DeltaIndex(t, col, c)] = std::log(s.values[u]) - std::log(initial_[u]);
+          continue;
+        }
+        for (int row = 0; row < grid.n_theta; ++row) {
+          if (!o_.row_fitted[row]) continue;
+          const int u = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
+          state->log_lut[state->Index(t, row, col, c)] = std::log(s.values[u]);
+        }
+      }
+  if (lz_index_ >= 0) state->log_overcast_zenith = std::log(std::max(s.overcast_zenith, 1e-6));
+}
+
+}  // namespace skycal::fit

@@ -1,0 +1,144 @@
+// The sky model's linear structure, used directly (variable projection).
+//
+// For a fixed haziness g the model of sky_model.glsl.h is linear in every LUT entry and in
+// the overcast zenith luminance L_z: at a pixel of a level image, channel c,
+//   M = (1 - w_o) sum_t sum_(row, col) wr(row) wc(col) LUT_t(row, col, c) phase_t(mu)
+//       + w_o L_z (1 + 2 sin(elevation)) / 3,
+// with wr / wc the bilinear weights of lut_row / lut_col and phase_t the Rayleigh,
+// Cornette-Shanks (g) and isotropic phases, all taken from the shared model source. So the
+// LUT that best fits a reference for a given g (and exposures) is a linear least-squares
+// solve, and only g is searched (a 1-D problem). The error measure is the relative error
+// (k M - R) / R, weighted by solid angle: its square is what fit::CompareToReference
+// reports as rel_rmse, and to first order it is the log error the Ceres polish minimises.
+//
+// Unknowns, per channel (and L_z, grey, shared):
+//  - tied rows (one reference, see sky_row_cost.h): V_t(col, c) = the LUT blended between
+//    the two rows around the sun angle; the fit then sets both rows to exp(u0 + d) with
+//    d = log(V / V0), V0 the same blend of the initial preset;
+//  - free rows (several references): T_t(row, col, c) for every fitted row;
+//  - per image row (the ceiling tool only): one value per (table, level row, channel), no
+//    interpolation between LUT columns: what the model could do with an unlimited number
+//    of LUT columns (the LUT's resolution cost, seen against the LUT ceiling).
+// Priors of the Ceres problem in their linearised form, (x / x0 - 1) for log(x / x0):
+// the weak pull toward the initial preset and, with free rows, the second difference of
+// the change along the sun zenith. Entries the solve would make non-positive are held at
+// 1e-3 of their initial value (an active set; the log-space polish takes over from there).
+#pragma once
+#include <array>
+#include <utility>
+#include <vector>
+
+#include "fit_state.h"
+#include "skycal/core/image.h"
+#include "skycal/fit/fit_options.h"
+#include "pyramid.h"
+#include "skycal/fit/reference.h"
+
+namespace skycal::fit {
+
+enum class LinearUnknowns { kTiedRows, kFreeRows, kPerImageRow };
+
+struct LinearSkyOptions {
+  LinearUnknowns unknowns = LinearUnknowns::kTiedRows;
+  std::vector<bool> row_fitted;  // free rows: which LUT rows are unknowns (others held)
+  bool fit_overcast = false;     // L_z is an unknown (needs overcast_weight > 0)
+  double prior_weight = 1e-8;    // as FitOptions::prior_weight
+  double smoothness = 1e-6;      // as FitOptions::smoothness (free rows)
+};
+
+// One solve's result, in the units of the model (cd/m^2 * sr for the LUT).
+struct LinearSkySolution {
+  double g = 0.0;
+  double cost = 0.0;              // 1/2 sum of weighted squared relative errors (data only)
+  double rel_rmse = 0.0;          // sqrt(sum w e^2 / sum w) over fitted pixels and channels
+  std::vector<double> values;     // per unknown (layout: see LinearSky::Index*)
+  double overcast_zenith = 0.0;   // L_z, cd/m^2
+  int held_non_positive = 0;      // entries held at their floor by the active set
+  std::vector<char> held;         // per unknown: held at its floor
+};
+
+class LinearSky {
+ public:
+  // levels[r] is the level image of refs[r] (all the same size); the state gives the grid,
+  // the variant, w_o and the initial values (priors, floors, tied blends).
+  LinearSky(const FitState& state, const std::vector<const FitLevel*>& levels, const std::vector<Reference>& refs,
+            LinearSkyOptions options);
+
+  // Solves for the LUT (and L_z) at haziness g with the given exposures (model -> image
+  // factor per reference) and robust weights (per pixel and channel, LogErrors layout;
+  // empty: all 1). Error measure: the relative error (k M - R) / R, or, with
+  // `linearize_at`, one Gauss-Newton step of the log error ln(k M / R) linearised at that
+  // solution's model values M0: ln(k M0 / R) + (M - M0) / M0 (the same linear unknowns,
+  // rows scaled by 1 / M0 instead of 1 / R). Repeated, it converges to the log-space
+  // optimum the Ceres polish would reach.
+  LinearSkySolution Solve(double g, const std::vector<double>& exposures, const std::vector<double>& robust_weights,
+                          const LinearSkySolution* linearize_at = nullptr) const;
+  // 1/2 sum w s^2 rho((e / s)^2) of the log errors: the robust cost of the Ceres problem's
+  // sky rows (without priors), for comparing g values.
+  double RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
+                       double scale) const;
+  // Model values k M per pixel and channel (LogErrors layout), for the render check.
+  std::vector<double> ModelValues(const LinearSkySolution& s, const std::vector<double>& exposures) const;
+
+  // Log errors ln(k M / R) of a solution, per pixel and channel (a non-positive model
+  // value gives +-20, far outside any loss scale).
+  std::vector<double> LogErrors(const LinearSkySolution& s, const std::vector<double>& exposures) const;
+  // Solid-angle weights matching LogErrors (w / total, summing to 1 per channel).
+  const std::vector<double>& error_weights() const { return error_weight_; }
+  // Least-squares exposure of reference r for a solution (relative error; the others held).
+  double BestExposure(const LinearSkySolution& s, size_t r, const std::vector<double>& robust_weights) const;
+
+  // Writes a tied-rows or free-rows solution into the state (log_delta or log_lut, and
+  // log L_z when it was fitted).
+  void Apply(const LinearSkySolution& s, FitState* state) const;
+
+  // The state's parameters (log_delta or log_lut entries) of the unknowns a solution held
+  // at their floor: the data want them <= 0, so the log-space polish holds them too (a
+  // log parameter chasing zero only slows Levenberg-Marquardt down).
+  std::vector<double*> HeldParameters(const LinearSkySolution& s, FitState* state) const;
+
+  // (table, LUT column) pairs some fitted pixel reads (-1 column: per-image-row unknowns).
+  std::vector<std::pair<int, int>> ObservedColumns() const;
+  // Largest relative difference between the solution's model values and `images` (one
+  // per reference, level size, without exposure), over the fitted pixels: the check that
+  // the renderer computes what the linear structure predicted.
+  double MaxRelativeDifference(const LinearSkySolution& s, const std::vector<double>& exposures,
+                               const std::vector<ImageRGB>& images) const;
+
+  int num_unknowns() const { return num_unknowns_; }
+  size_t num_samples() const { return error_weight_.size(); }
+
+ private:
+  struct Pixel {
+    int x;                    // column in the level image
+    double sqrt_weight;       // sqrt(solid angle / total)
+    double mu, one_minus_mu;  // cos(view, sun) and 1 - it (the shared source's form)
+    double phase_r;           // Rayleigh phase (independent of g)
+    std::array<double, 3> ref;
+  };
+  // One level row of one reference: its pixels, and per (table, k) the unknown and the
+  // bilinear weight it enters with (k runs over the 1, 2 or 4 (row, col) nodes).
+  struct Row {
+    size_t ref;
+    int y;                    // row in the level image
+    double overcast_shape;    // (1 + 2 sin(elevation)) / 3
+    std::vector<Pixel> pixels;
+    size_t first_sample;      // index of its first (pixel, channel) in the samples layout
+    struct Node { int table; int col; int unknown_ch0; double weight; };  // unknown of channel c: unknown_ch0 + c
+    std::vector<Node> nodes;
+  };
+  // M / exposure at a pixel for channel ch, given the Mie phase there.
+  double Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const;
+  std::vector<double> MiePhases(double g) const;  // per pixel, rows in order
+
+  const FitState& state_;
+  LinearSkyOptions o_;
+  std::vector<Row> rows_;
+  std::vector<double> error_weight_;   // per sample
+  std::vector<double> initial_;        // x0 per unknown (prior reference and floor)
+  int num_unknowns_ = 0;
+  int lz_index_ = -1;
+  int n_refs_ = 0;
+};
+
+}  // namespace skycal::fit
