@@ -39,7 +39,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_util.h"
-#include "cie_sky.h"
+#include "skycal/refsky/reference_skies.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
@@ -81,29 +81,29 @@ std::string Str(double v) {
   return s.str();
 }
 
-nlohmann::json SelfCheck(const std::vector<bench::CieSkyType>& types) {
+nlohmann::json SelfCheck(const std::vector<refsky::CieSkyType>& types) {
   nlohmann::json notes = nlohmann::json::array();
   // 1. Zenith: chi = Zs there, so L/Lz = 1 for every type, sun elevation and azimuth.
   for (const auto& t : types) {
     for (double elev : {1.0, 10.0, 30.0, 60.0, 89.0}) {
       for (double az : {0.0, 77.0, -140.0}) {
         const auto sun = latlong::DirectionFromElevationAzimuthDeg(elev, az);
-        const double v = bench::CieRelativeLuminance(t, {0.0, 1.0, 0.0}, sun);
+        const double v = refsky::CieRelativeLuminance(t, {0.0, 1.0, 0.0}, sun);
         Check(Near(v, 1.0, 1e-12), "type " + std::to_string(t.type) + " zenith L/Lz = " + Str(v) + ", expected 1");
       }
     }
     // 2. f(pi/2) = 1 by construction (the exp(d pi/2) offset).
-    Check(Near(bench::CieIndicatrix(t, kPi / 2), 1.0, 1e-14), "type " + std::to_string(t.type) + " f(pi/2) != 1");
+    Check(Near(refsky::CieIndicatrix(t, kPi / 2), 1.0, 1e-14), "type " + std::to_string(t.type) + " f(pi/2) != 1");
     // 3. Horizon exactly (Z = 90 deg, cos Z = 0): phi = 1, finite, equal to the limit just above.
     for (double chi_deg : {5.0, 60.0, 90.0, 170.0}) {
       const double zs = 60.0 * kDeg, chi = chi_deg * kDeg;
-      const double at = bench::CieRelativeLuminance(t, kPi / 2, zs, chi);
-      const double above = bench::CieRelativeLuminance(t, kPi / 2 - 1e-9, zs, chi);
-      const double expected = bench::CieIndicatrix(t, chi) / (bench::CieIndicatrix(t, zs) * (1.0 + t.a * std::exp(t.b)));
+      const double at = refsky::CieRelativeLuminance(t, kPi / 2, zs, chi);
+      const double above = refsky::CieRelativeLuminance(t, kPi / 2 - 1e-9, zs, chi);
+      const double expected = refsky::CieIndicatrix(t, chi) / (refsky::CieIndicatrix(t, zs) * (1.0 + t.a * std::exp(t.b)));
       Check(std::isfinite(at) && Near(at, expected, 1e-12 * expected) && Near(at, above, 1e-9 * expected),
             "type " + std::to_string(t.type) + " horizon L/Lz = " + Str(at) + ", expected " + Str(expected));
     }
-    Check(bench::CieGradation(t, 0.0) == 1.0 && bench::CieGradation(t, -0.0) == 1.0 && bench::CieGradation(t, -0.5) == 1.0,
+    Check(refsky::CieGradation(t, 0.0) == 1.0 && refsky::CieGradation(t, -0.0) == 1.0 && refsky::CieGradation(t, -0.5) == 1.0,
           "type " + std::to_string(t.type) + " phi at/below the horizon != 1");
     // 4. The vector overload agrees with the angle overload (view and sun by spherical
     //    trigonometry: cos chi = cos Z cos Zs + sin Z sin Zs cos(delta azimuth)).
@@ -115,14 +115,14 @@ nlohmann::json SelfCheck(const std::vector<bench::CieSkyType>& types) {
         const double z = (90.0 - ve) * kDeg, zs = (90.0 - se) * kDeg;
         const double cos_chi = std::cos(z) * std::cos(zs) + std::sin(z) * std::sin(zs) * std::cos(daz * kDeg);
         const double chi = std::acos(std::clamp(cos_chi, -1.0, 1.0));
-        const double a = bench::CieRelativeLuminance(t, z, zs, chi), b = bench::CieRelativeLuminance(t, view, sun);
+        const double a = refsky::CieRelativeLuminance(t, z, zs, chi), b = refsky::CieRelativeLuminance(t, view, sun);
         Check(Near(a, b, 1e-9 * a), "type " + std::to_string(t.type) + " vector vs angle overload: " + Str(b) + " vs " + Str(a));
       }
     }
   }
   // 5. Type 5 is the uniform sky (a = c = e = 0): 1 everywhere above the horizon.
   for (double ve : {0.0, 5.0, 40.0}) {
-    const double v = bench::CieRelativeLuminance(types[4], latlong::DirectionFromElevationAzimuthDeg(ve, 20.0),
+    const double v = refsky::CieRelativeLuminance(types[4], latlong::DirectionFromElevationAzimuthDeg(ve, 20.0),
                                                  latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0));
     Check(Near(v, 1.0, 1e-14), "type 5 not uniform: " + Str(v));
   }
@@ -130,9 +130,9 @@ nlohmann::json SelfCheck(const std::vector<bench::CieSkyType>& types) {
   //    type 12, sun elevation 30, view elevation 45, 90 deg azimuth apart -> 1.1256362392620813;
   //    type 15, sun elevation 60, view elevation 20, 180 deg apart      -> 0.3570088299116401.
   {
-    const double v12 = bench::CieRelativeLuminance(types[11], latlong::DirectionFromElevationAzimuthDeg(45.0, 90.0),
+    const double v12 = refsky::CieRelativeLuminance(types[11], latlong::DirectionFromElevationAzimuthDeg(45.0, 90.0),
                                                    latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0));
-    const double v15 = bench::CieRelativeLuminance(types[14], latlong::DirectionFromElevationAzimuthDeg(20.0, 180.0),
+    const double v15 = refsky::CieRelativeLuminance(types[14], latlong::DirectionFromElevationAzimuthDeg(20.0, 180.0),
                                                    latlong::DirectionFromElevationAzimuthDeg(60.0, 0.0));
     Check(Near(v12, 1.1256362392620813, 1e-12), "type 12 value " + Str(v12));
     Check(Near(v15, 0.3570088299116401, 1e-12), "type 15 value " + Str(v15));
@@ -143,19 +143,19 @@ nlohmann::json SelfCheck(const std::vector<bench::CieSkyType>& types) {
   //    around h = 10 deg, where phi is still flat (exp(-0.7 / sin h) ~ 0). Measured here.
   {
     const auto& t1 = types[0];
-    const double horizon = bench::CieRelativeLuminance(t1, kPi / 2, 30.0 * kDeg, 1.0);
+    const double horizon = refsky::CieRelativeLuminance(t1, kPi / 2, 30.0 * kDeg, 1.0);
     Check(Near(horizon, 1.0 / (1.0 + 4.0 * std::exp(-0.7)), 1e-15), "type 1 horizon " + Str(horizon));
     Check(Near(horizon, 0.33485791741468324, 1e-12), "type 1 horizon value " + Str(horizon));
     double worst = 0.0, worst_h = 0.0;
     for (int i = 0; i <= 900; ++i) {
       const double h = i * 0.1 * kDeg;
-      const double cie = bench::CieRelativeLuminance(t1, kPi / 2 - h, 40.0 * kDeg, 0.7);
+      const double cie = refsky::CieRelativeLuminance(t1, kPi / 2 - h, 40.0 * kDeg, 0.7);
       const double moon_spencer = (1.0 + 2.0 * std::sin(h)) / 3.0;
       const double dev = cie / moon_spencer - 1.0;
       if (std::abs(dev) > std::abs(worst)) worst = dev, worst_h = i * 0.1;
-      Check(Near(bench::CieRelativeLuminance(t1, kPi / 2 - h, 10.0 * kDeg, 2.0), cie, 1e-14), "type 1 not azimuthally uniform");
+      Check(Near(refsky::CieRelativeLuminance(t1, kPi / 2 - h, 10.0 * kDeg, 2.0), cie, 1e-14), "type 1 not azimuthally uniform");
     }
-    const double at30 = bench::CieRelativeLuminance(t1, 60.0 * kDeg, 0.0, 60.0 * kDeg) / (2.0 / 3.0) - 1.0;
+    const double at30 = refsky::CieRelativeLuminance(t1, 60.0 * kDeg, 0.0, 60.0 * kDeg) / (2.0 / 3.0) - 1.0;
     Check(std::abs(at30) < 0.005, "type 1 vs Moon-Spencer at 30 deg: " + Str(at30));
     Check(worst < -0.19 && worst > -0.21 && worst_h > 8.0 && worst_h < 12.0,
           "type 1 vs Moon-Spencer worst " + Str(worst) + " at " + Str(worst_h) + " deg");
@@ -170,36 +170,8 @@ nlohmann::json SelfCheck(const std::vector<bench::CieSkyType>& types) {
 // ---------------------------------------------------------------------------------------
 // References and fits.
 
-// The sun as one pixel: the pixel centre nearest the sun (<= ~1 deg away at 256x128, so
-// inside the 3-deg sun cone that the fit and the error measure exclude) gets kSunPixel x Lz.
-// Why: fit::LoadReference treats the brightest value as a clipping plateau when more than
-// 4 pixels share it (to 1e-4) and then masks every pixel >= 0.98 x that value. Without a
-// sun in the image the CIE skies whose maximum is the zenith (types 1-4: the whole pole row
-// holds the zenith value) would lose the sky above ~70 deg elevation, and the uniform type 5
-// every pixel ("no valid sky pixel to fit"). A photograph has the sun disc as its peak.
-constexpr double kSunPixel = 1000.0;  // x Lz (a pixel-averaged sun disc is ~1e4-1e5 x Lz; any unique peak will do)
-
-void WriteCieReference(const std::string& path, const bench::CieSkyType& t, const latlong::Vec3d& sun) {
-  capture::LatLongFrame f;
-  f.radiance = ImageRGB(kWidth, kHeight);
-  double best_mu = -2.0;
-  int sun_x = 0, sun_y = 0;
-  for (int y = 0; y < kHeight; ++y) {
-    for (int x = 0; x < kWidth; ++x) {
-      const auto v = latlong::PixelDirection(x, y, kWidth, kHeight);
-      // Below the horizon the CIE sky is undefined: 0 (the fit masks latitude <= 0).
-      const double l = v[1] > 0.0 ? kZenithLuminance * bench::CieRelativeLuminance(t, v, sun) : 0.0;
-      for (int c = 0; c < 3; ++c) f.radiance.at(x, y, c) = static_cast<float>(l);  // grey: R = G = B = luminance
-      const double mu = v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2];
-      if (mu > best_mu) best_mu = mu, sun_x = x, sun_y = y;
-    }
-  }
-  if (std::acos(std::min(best_mu, 1.0)) > 2.0 * kDeg) throw Error(path + ": no pixel within 2 deg of the sun");
-  for (int c = 0; c < 3; ++c) f.radiance.at(sun_x, sun_y, c) = static_cast<float>(kSunPixel * kZenithLuminance);
-  f.sun_direction = sun;
-  capture::WriteLatLongFrame(path, f);
-}
-
+// References: refsky::WriteCieReference (the sun as one bright pixel, inside the 3-deg sun
+// cone that the fit and the error measure exclude).
 // Relative error (solid-angle weighted RMS of (fit - ref)/ref over the fitted pixels, 3
 // channels, the same weighting as fit::CompareToReference) split by region, plus each
 // region's share of the total squared error and the signed mean (bias).
@@ -287,7 +259,7 @@ std::string ElevKey(double e) {
 
 int Run(int argc, char** argv) {
   bool check_only = false, selection = false;
-  std::string out_dir, csv = bench::DefaultCieCsvPath();
+  std::string out_dir, csv = refsky::DefaultCieCsvPath();
   std::vector<double> type_list, elevations = {10.0, 30.0, 60.0};
   fit::FitOptions base;  // defaults; --loss / --max-iterations / --sun-cone only for investigations
   base.backend = render::Backend::kCpu;
@@ -323,7 +295,7 @@ int Run(int argc, char** argv) {
   const bool write_files = !selection || !out_dir.empty();
   if (out_dir.empty()) out_dir = std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
 
-  const std::vector<bench::CieSkyType> types = bench::LoadCieSkyTypes(csv);
+  const std::vector<refsky::CieSkyType> types = refsky::LoadCieSkyTypes(csv);
   const nlohmann::json check_notes = SelfCheck(types);
   if (g_check_failures > 0) {
     std::cerr << "[bench cie] " << g_check_failures << " self-check(s) of the CIE formula failed\n";
@@ -359,11 +331,11 @@ int Run(int argc, char** argv) {
   const int total = static_cast<int>(type_list.size() * elevations.size() * configs.size());
   int done = 0;
   for (double tv : type_list) {
-    const bench::CieSkyType& t = types[static_cast<size_t>(tv) - 1];
+    const refsky::CieSkyType& t = types[static_cast<size_t>(tv) - 1];
     for (double elev : elevations) {
       const auto sun = latlong::DirectionFromElevationAzimuthDeg(elev, kSunAzimuthDeg);
       const std::string path = (dir / ("cie" + std::to_string(t.type) + "_" + ElevKey(elev) + ".exr")).string();
-      WriteCieReference(path, t, sun);
+      refsky::WriteCieReference(path, t, sun, kWidth, kZenithLuminance);
       for (const Config& cfg : configs) {
         fit::FitOptions o = base;
         o.variant = cfg.variant;

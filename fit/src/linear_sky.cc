@@ -33,8 +33,8 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
 }
 
 constexpr double kIsotropicPhase = 1.0 / (4.0 * M_PI);
-constexpr double kFloorFraction = 1e-3;   // non-positive entries are held at this x their start
-constexpr double kActiveSetPenalty = 1e3; // weight of the hold, against data weights summing to 1
+constexpr double kFloorFraction = 1e-6;   // non-positive entries are held at this x their start
+constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
 constexpr int kActiveSetRounds = 6;
 
 }  // namespace
@@ -221,15 +221,35 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     }
     pixel_index += row.pixels.size();
   }
-  // Priors, linearised: sqrt(lambda) (x / x0 - 1).
-  const double lambda = std::max(o_.prior_weight, 1e-14);
+  // Priors on the log change u = ln(x / x0), as in the Ceres problem, linearised at the
+  // current solution xc: u ~ x / xc - 1 + ln(xc / x0). Without a current solution (the
+  // first, least-squares solves) the pull toward the start is left out (1e-14: it only
+  // keeps unobserved entries defined): linearised at x0 it would be quadratic in the
+  // ratio x / x0 and hold a sky 100x brighter than the preset near the preset's scale.
+  // The smoothness term, a second difference of relative changes, is scale-free.
+  auto current = [&](int j) { return linearize_at ? linearize_at->values[j] : initial_[j]; };
+  const double lambda = linearize_at ? std::max(o_.prior_weight, 1e-14) : 1e-14;
+  // Entries the solution being linearised held at their floor carry no prior (linearised
+  // at the floor, the log prior would push them up by ln(1 / floor) each step and the
+  // active set would oscillate); the active set itself starts empty in every solve, so an
+  // entry the data no longer want at zero is released.
+  const std::vector<char> was_held = linearize_at ? linearize_at->held : std::vector<char>(num_unknowns_, 0);
+  std::vector<char> held(num_unknowns_, 0);
   for (int j = 0; j < num_unknowns_; ++j) {
     if (j == lz_index_) continue;
-    triplets.emplace_back(j, j, lambda / (initial_[j] * initial_[j]));
-    rhs[j] += lambda / initial_[j];
+    if (was_held[j]) {  // only a regulariser, at the entry's current value
+      const double xc = current(j);
+      triplets.emplace_back(j, j, 1e-14 / (xc * xc));
+      rhs[j] += 1e-14 / xc;
+      continue;
+    }
+    const double xc = current(j), offset = std::log(xc / initial_[j]);
+    triplets.emplace_back(j, j, lambda / (xc * xc));
+    rhs[j] += lambda * (1.0 - offset) / xc;
   }
   if (o_.unknowns == LinearUnknowns::kFreeRows && o_.smoothness > 0.0) {
     const auto& grid = state_.preset.luts.grid;
+    const double sqrt_s = std::sqrt(o_.smoothness);
     for (int t = 0; t < state_.tables; ++t)
       for (int row = 1; row + 1 < grid.n_theta; ++row) {
         if (!o_.row_fitted[row - 1] || !o_.row_fitted[row] || !o_.row_fitted[row + 1]) continue;
@@ -238,9 +258,18 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
             const int ub = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
             const int stride = grid.n_gamma * 3;
             const int idx[3] = {ub - stride, ub, ub + stride};
-            const double coef[3] = {1.0 / initial_[idx[0]], -2.0 / initial_[idx[1]], 1.0 / initial_[idx[2]]};
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], o_.smoothness * coef[i] * coef[j]);
+            if (was_held[idx[0]] || was_held[idx[1]] || was_held[idx[2]]) continue;
+            const double second[3] = {1.0, -2.0, 1.0};
+            double coef[3], target = 0.0;
+            for (int i = 0; i < 3; ++i) {
+              const double xc = current(idx[i]);
+              coef[i] = sqrt_s * second[i] / xc;
+              target -= sqrt_s * second[i] * (std::log(xc / initial_[idx[i]]) - 1.0);
+            }
+            for (int i = 0; i < 3; ++i) {
+              rhs[idx[i]] += target * coef[i];
+              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], coef[i] * coef[j]);
+            }
           }
       }
   }
@@ -250,15 +279,15 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   LinearSkySolution sol;
   sol.g = g;
   Eigen::VectorXd x;
-  std::vector<char> held(num_unknowns_, 0);
   for (int round = 0; round < kActiveSetRounds; ++round) {
     Eigen::SparseMatrix<double> sys = normal;
     Eigen::VectorXd rb = rhs;
     for (int j = 0; j < num_unknowns_; ++j) {
       if (!held[j]) continue;
-      const double x0 = initial_[j], floor_value = kFloorFraction * x0;
-      sys.coeffRef(j, j) += kActiveSetPenalty / (x0 * x0);
-      rb[j] += kActiveSetPenalty * floor_value / (x0 * x0);
+      // A hold much stiffer than the entry's own data: penalty x its diagonal.
+      const double stiffness = kActiveSetPenalty * std::max(normal.coeff(j, j), 1e-300);
+      sys.coeffRef(j, j) += stiffness;
+      rb[j] += stiffness * kFloorFraction * initial_[j];
     }
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sys);
     if (ldlt.info() != Eigen::Success) throw Error("linear sky solve: the normal equations are not positive definite");

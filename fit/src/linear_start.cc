@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <numeric>
 
@@ -20,7 +22,8 @@ constexpr double kRefineHalfWidth = 0.02;   // the robust refinement's bracket a
 constexpr int kRefineSteps = 8;             // 0.04 -> ~1e-3 in g
 constexpr int kRefineShifts = 6;            // moves of the bracket when the minimum is on its edge
 constexpr int kMaxGaussNewton = 6;          // log-space steps at the final scale
-constexpr int kMaxFinalSteps = 3;           // on the final level
+constexpr int kMaxFinalSteps = 3;
+constexpr int kLogLeastSquaresSteps = 2;    // before the scale estimate           // on the final level
 constexpr double kSettledCost = 1e-5;       // relative cost change that ends them
 
 // IRLS weight rho'(z), z = (e / s)^2 (the residual form of robust_residual.h).
@@ -54,9 +57,14 @@ double GoldenSection(F&& f, double a, double b, int steps) {
 // Best g for the given weights and exposures: scan, then golden sections around the best.
 double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures, const std::vector<double>& weights,
                       double g_hint, int* solves) {
+  // The cost of g: the log error after one Gauss-Newton step from the relative-error
+  // solution. The relative error alone is asymmetric: a dark outlier (a building at 0.15x
+  // the sky) costs (1 / 0.15 - 1)^2 = 32 against ln(0.15)^2 = 3.6 in log units, and
+  // would pick g.
   auto cost = [&](double g) {
-    ++*solves;
-    return sky.Solve(g, exposures, weights).cost;
+    *solves += 2;
+    const LinearSkySolution first = sky.Solve(g, exposures, weights);
+    return sky.RobustLogCost(sky.Solve(g, exposures, weights, &first), exposures, RobustLoss::kNone, 1.0);
   };
   std::vector<double> nodes(std::begin(kScan), std::end(kScan));
   nodes.push_back(std::clamp(g_hint, 0.0, kGMax));
@@ -64,6 +72,12 @@ double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   std::vector<double> costs;
   for (double g : nodes) costs.push_back(cost(g));
+  if (std::getenv("SKYCAL_DEBUG_LINEAR")) {
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      const auto sol = sky.Solve(nodes[i], exposures, weights);
+      std::fprintf(stderr, "DEBUG scan g %.3f cost %.6g rel %.5f held %d\n", nodes[i], costs[i], sol.rel_rmse, sol.held_non_positive);
+    }
+  }
   const size_t best = static_cast<size_t>(std::min_element(costs.begin(), costs.end()) - costs.begin());
   const double lo = nodes[best > 0 ? best - 1 : 0], hi = nodes[std::min(best + 1, nodes.size() - 1)];
   const double g = GoldenSection(cost, lo, hi, kGoldenSteps);
@@ -114,13 +128,20 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   LinearSkySolution sol = sky->Solve(g, exposures, weights);
   ++rep.solves;
   update_exposures(*sky, sol);
+  // Least squares of the log error (Gauss-Newton steps, no robust weights): symmetric in
+  // over- and under-estimation, so dark outliers do not dominate the scale estimate.
+  for (int k = 0; k < kLogLeastSquaresSteps; ++k) {
+    sol = sky->Solve(g, exposures, weights, &sol);
+    ++rep.solves;
+    update_exposures(*sky, sol);
+  }
   rep.rel_rmse_least_squares = sol.rel_rmse;
 
   // 2. The loss scale from the least-squares residuals.
   std::vector<double> e = sky->LogErrors(sol, exposures);
   rep.residual_sigma = kMadToSigma * WeightedMedianAbs(e, sky->error_weights());
   rep.loss_scale = std::max(o.loss_scale, kCauchyTuning * rep.residual_sigma);
-  const double s = rep.loss_scale;
+  double s = rep.loss_scale;
 
   // 3. Gauss-Newton steps of the robust log objective, the scale annealed from 8 s to s,
   //    then at s until the cost settles.
@@ -133,7 +154,20 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     e = sky->LogErrors(sol, exposures);
   };
   if (o.loss != RobustLoss::kNone) {
-    for (double factor : {8.0, 4.0, 2.0}) gauss_newton_step(factor * s);
+    for (double factor : {8.0, 4.0, 2.0, 1.0}) {
+      gauss_newton_step(factor * s);
+      gauss_newton_step(factor * s);
+    }
+    // The scale once more, from the robust solution's residuals: contamination pulls the
+    // least-squares fit and inflates its MAD; the robust fit's residuals do not.
+    const double sigma = kMadToSigma * WeightedMedianAbs(e, sky->error_weights());
+    const double s2 = std::max(o.loss_scale, kCauchyTuning * sigma);
+    if (s2 < s) {
+      rep.residual_sigma = sigma;
+      for (double factor : {0.5, 0.25}) gauss_newton_step(std::max(s2, factor * s));
+      s = s2;
+    }
+    rep.loss_scale = s;
   }
   double cost = sky->RobustLogCost(sol, exposures, o.loss, s);
   auto settle = [&](int max_steps) {
@@ -141,6 +175,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
       gauss_newton_step(s);
       const double next = sky->RobustLogCost(sol, exposures, o.loss, s);
       const bool settled = std::abs(cost - next) <= kSettledCost * cost;
+      if (std::getenv("SKYCAL_DEBUG_LINEAR")) std::fprintf(stderr, "DEBUG GN cost %.8g -> %.8g rel %.5f held %d\n", cost, next, sol.rel_rmse, sol.held_non_positive);
       cost = next;
       if (settled) break;
     }

@@ -1,6 +1,6 @@
 // CIE S 011 / ISO 15469 standard general sky: table reader and luminance distribution.
 // Formula and symbols: see cie_sky.h.
-#include "cie_sky.h"
+#include "skycal/refsky/cie_sky.h"
 
 #include <cmath>
 #include <fstream>
@@ -9,7 +9,7 @@
 
 #include "skycal/core/error.h"
 
-namespace skycal::bench {
+namespace skycal::refsky {
 namespace {
 
 // Splits one CSV record (RFC 4180 subset: fields optionally in double quotes, "" inside
@@ -132,4 +132,4 @@ double CieRelativeLuminance(const CieSkyType& s, const std::array<double, 3>& v,
   return CieIndicatrix(s, chi) * CieGradation(s, v[1]) / (CieIndicatrix(s, sun_zenith) * CieGradation(s, 1.0));
 }
 
-}  // namespace skycal::bench
+}  // namespace skycal::refsky

@@ -1,5 +1,5 @@
 // The 15 CIE standard general skies (CIE S 011/E:2003 = ISO 15469:2004, "Spatial
-// distribution of daylight - CIE standard general sky"), used by bench_cie as references
+// distribution of daylight - CIE standard general sky"), used by the CIE benchmark and tests as references
 // independent of the game's sky model (DESIGN.md section 6).
 //
 // Relative luminance of a sky element (dimensionless, 1 at the zenith):
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace skycal::bench {
+namespace skycal::refsky {
 
 struct CieSkyType {
   int type = 0;                  // 1 .. 15
@@ -46,7 +46,7 @@ double CieIndicatrix(const CieSkyType& s, double chi_rad);
 // chi in [0, pi].
 double CieRelativeLuminance(const CieSkyType& s, double view_zenith_rad, double sun_zenith_rad, double chi_rad);
 // L/Lz from unit vectors in the lat-long frame (+Y up, core/latlong.h). Views below the
-// horizon (y < 0) are outside the model's domain: the caller decides (bench_cie writes 0).
+// horizon (y < 0) are outside the model's domain: the caller decides (the CIE benchmark and tests writes 0).
 double CieRelativeLuminance(const CieSkyType& s, const std::array<double, 3>& view, const std::array<double, 3>& sun);
 
-}  // namespace skycal::bench
+}  // namespace skycal::refsky
