@@ -19,7 +19,7 @@ CeilingResult ModelCeiling(const Reference& ref, const render::Preset& init, con
   out.width = level.width;
   LinearSkyOptions lo;
   lo.fit_overcast = state.preset.overcast_weight > 0.0;
-  lo.prior_weight = 1e-14;  // a ceiling: no pull toward the start
+  lo.damping = 1e-10;  // a ceiling: (almost) no regularisation
   for (LinearUnknowns u : {LinearUnknowns::kTiedRows, LinearUnknowns::kPerImageRow}) {
     lo.unknowns = u;
     const LinearSky sky(state, {&level}, {ref}, lo);

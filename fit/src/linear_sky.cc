@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
+#include <cstdlib>
 
 #include "robust_residual.h"
 #include "skycal/core/error.h"
@@ -35,7 +37,7 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
 constexpr double kIsotropicPhase = 1.0 / (4.0 * M_PI);
 constexpr double kFloorFraction = 1e-6;   // non-positive entries are held at this x their start
 constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
-constexpr int kActiveSetRounds = 6;
+constexpr int kActiveSetRounds = 20;
 
 }  // namespace
 
@@ -64,8 +66,13 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
     return std::exp(state.initial_log_lut[t * table_size + ((static_cast<size_t>(row) * grid.n_gamma + col) * 3 + ch)]);
   };
 
+  const int stride = std::max(1, o_.stride);
+  auto used = [&](int x, int y) { return x % stride == 0 && y % stride == 0; };
   double total_weight = 0.0;
-  for (const FitLevel* lv : levels) total_weight += lv->total_weight;
+  for (const FitLevel* lv : levels)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (used(x, y)) total_weight += lv->weight[static_cast<size_t>(y) * w + x];
   size_t sample = 0;
   for (size_t r = 0; r < refs.size(); ++r) {
     const FitLevel& lv = *levels[r];
@@ -74,6 +81,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
     const auto lr = m.lut_row(p.sun_dir.y, p);
     const double wr[2] = {1.0 - lr.frow, lr.frow};
     for (int y = 0; y < h; ++y) {
+      if (y % stride != 0) continue;
       Row row;
       row.ref = r;
       row.y = y;
@@ -82,7 +90,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
       row.overcast_shape = (1.0 + 2.0 * std::max(v0[1], 0.0)) / 3.0;
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;
-        if (lv.weight[i] <= 0.0) continue;
+        if (lv.weight[i] <= 0.0 || !used(x, y)) continue;
         const auto v = latlong::PixelDirection(x, y, w, h);
         const double d[3] = {v[0] - refs[r].sun_dir[0], v[1] - refs[r].sun_dir[1], v[2] - refs[r].sun_dir[2]};
         Pixel px;
@@ -93,7 +101,12 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
         px.phase_r = m.phase_rayleigh(px.mu);
         for (int c = 0; c < 3; ++c) px.ref[c] = lv.radiance[3 * i + c];
         row.pixels.push_back(px);
-        for (int c = 0; c < 3; ++c) error_weight_.push_back(lv.weight[i] / total_weight);
+        // Angle from |v - s|^2 = 2 (1 - cos), without acos' loss near 0.
+        const double angle_deg = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(2.0 * px.one_minus_mu))) * 180.0 / M_PI;
+        for (int c = 0; c < 3; ++c) {
+          error_weight_.push_back(lv.weight[i] / total_weight);
+          sun_angle_deg_.push_back(angle_deg);
+        }
         sample += 3;
       }
       if (row.pixels.empty()) continue;
@@ -134,12 +147,36 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
       rows_.push_back(std::move(row));
     }
   }
+  held_overcast_zenith_ = std::exp(state.log_overcast_zenith);
   if (o_.unknowns == LinearUnknowns::kFreeRows) {
     for (int t = 0; t < state.tables; ++t)
       for (int row = 0; row < grid.n_theta; ++row)
         for (int col = 0; col < grid.n_gamma; ++col)
           for (int c = 0; c < 3; ++c) initial_[((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c] = initial_lut(t, row, col, c);
   }
+  std::vector<double> exposures;
+  for (double le : state.log_exposure) exposures.push_back(std::exp(le));
+  start_scale_ = StartScale(exposures, MiePhases(state.g));
+}
+
+double LinearSky::StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const {
+  LinearSkySolution start;
+  start.values = initial_;
+  double num = 0.0, den = 0.0;
+  size_t pixel_index = 0;
+  for (const Row& row : rows_) {
+    for (size_t p = 0; p < row.pixels.size(); ++p) {
+      const Pixel& px = row.pixels[p];
+      for (int c = 0; c < 3; ++c) {
+        const double q = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], start) / px.ref[c];
+        const double w = error_weight_[row.first_sample + 3 * p + c];
+        num += w * q;
+        den += w * q * q;
+      }
+    }
+    pixel_index += row.pixels.size();
+  }
+  return den > 0.0 && num > 0.0 ? num / den : 1.0;
 }
 
 std::vector<double> LinearSky::MiePhases(double g) const {
@@ -159,7 +196,7 @@ double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m,
     const double phase = n.table == 0 ? px.phase_r : n.table == 1 ? phase_m : kIsotropicPhase;
     lut += n.weight * phase * s.values[n.unknown_ch0 + ch];
   }
-  const double lz = lz_index_ >= 0 ? s.values[lz_index_] : std::exp(state_.log_overcast_zenith);
+  const double lz = lz_index_ >= 0 ? s.values[lz_index_] : held_overcast_zenith_;
   return (1.0 - w_o) * lut + w_o * lz * row.overcast_shape;
 }
 
@@ -168,88 +205,92 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
                                    const LinearSkySolution* linearize_at) const {
   const double w_o = state_.preset.overcast_weight;
   const std::vector<double> phase_m = MiePhases(g);
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(num_unknowns_);
   // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
-  // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once.
+  // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once. Rows
+  // are split between threads, each with its own triplets and right-hand side.
   constexpr int kMax = 13;
-  size_t pixel_index = 0;
-  for (const Row& row : rows_) {
-    const int k = static_cast<int>(row.nodes.size());
-    const int kk = k + (lz_index_ >= 0 ? 1 : 0);
-    if (kk > kMax) throw Error("LinearSky: too many nodes in a row");
-    const double exposure = exposures[row.ref];
-    const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * std::exp(state_.log_overcast_zenith) * row.overcast_shape;
-    for (int c = 0; c < 3; ++c) {
-      double n[kMax][kMax] = {};
-      double b[kMax] = {};
-      double a[kMax];
-      for (size_t p = 0; p < row.pixels.size(); ++p) {
-        const Pixel& px = row.pixels[p];
-        const size_t smp = row.first_sample + 3 * p + c;
-        const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
-        const double s = px.sqrt_weight * std::sqrt(rw);
-        const double pm = phase_m[pixel_index + p];
-        // Relative error: a . x / R - 1. Log error linearised at M0:
-        // a . x / M0 - (1 - ln(k M0 / R)).
-        double norm = px.ref[c], target = s;
-        if (linearize_at) {
-          const double m0 = exposure * Model(row, px, c, pm, *linearize_at);
-          if (m0 > 0.0) {
-            norm = m0;
-            target = s * (1.0 - std::log(m0 / px.ref[c]));
+  struct Part {
+    std::vector<Eigen::Triplet<double>> triplets;
+    Eigen::VectorXd rhs;
+  };
+  auto accumulate = [&](size_t row_begin, size_t row_end, Part* part) {
+    part->rhs = Eigen::VectorXd::Zero(num_unknowns_);
+    for (size_t ri = row_begin; ri < row_end; ++ri) {
+      const Row& row = rows_[ri];
+      const size_t pixel_index = row.first_sample / 3;
+      const int k = static_cast<int>(row.nodes.size());
+      const int kk = k + (lz_index_ >= 0 ? 1 : 0);
+      const double exposure = exposures[row.ref];
+      const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * held_overcast_zenith_ * row.overcast_shape;
+      for (int c = 0; c < 3; ++c) {
+        double n[kMax][kMax] = {};
+        double b[kMax] = {};
+        double a[kMax];
+        for (size_t p = 0; p < row.pixels.size(); ++p) {
+          const Pixel& px = row.pixels[p];
+          const size_t smp = row.first_sample + 3 * p + c;
+          const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
+          const double s = px.sqrt_weight * std::sqrt(rw);
+          const double pm = phase_m[pixel_index + p];
+          // Relative error: a . x / R - 1. Log error linearised at M0:
+          // a . x / M0 - (1 - ln(k M0 / R)).
+          double norm = px.ref[c], target = s;
+          if (linearize_at) {
+            const double m0 = exposure * Model(row, px, c, pm, *linearize_at);
+            if (m0 > 0.0) {
+              norm = m0;
+              target = s * (1.0 - std::log(m0 / px.ref[c]));
+            }
+          }
+          const double scale = s * exposure / norm;
+          for (int j = 0; j < k; ++j) {
+            const auto& nd = row.nodes[j];
+            const double phase = nd.table == 0 ? px.phase_r : nd.table == 1 ? pm : kIsotropicPhase;
+            a[j] = scale * (1.0 - w_o) * nd.weight * phase;
+          }
+          if (lz_index_ >= 0) a[k] = scale * w_o * row.overcast_shape;
+          target -= scale * fixed_lz;
+          for (int i = 0; i < kk; ++i) {
+            b[i] += target * a[i];
+            for (int j = i; j < kk; ++j) n[i][j] += a[i] * a[j];
           }
         }
-        const double scale = s * exposure / norm;
-        for (int j = 0; j < k; ++j) {
-          const auto& nd = row.nodes[j];
-          const double phase = nd.table == 0 ? px.phase_r : nd.table == 1 ? pm : kIsotropicPhase;
-          a[j] = scale * (1.0 - w_o) * nd.weight * phase;
-        }
-        if (lz_index_ >= 0) a[k] = scale * w_o * row.overcast_shape;
-        target -= scale * fixed_lz;
+        auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
         for (int i = 0; i < kk; ++i) {
-          b[i] += target * a[i];
-          for (int j = i; j < kk; ++j) n[i][j] += a[i] * a[j];
+          part->rhs[global(i)] += b[i];
+          for (int j = 0; j < kk; ++j) part->triplets.emplace_back(global(i), global(j), i <= j ? n[i][j] : n[j][i]);
         }
-      }
-      auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
-      for (int i = 0; i < kk; ++i) {
-        rhs[global(i)] += b[i];
-        for (int j = 0; j < kk; ++j) triplets.emplace_back(global(i), global(j), i <= j ? n[i][j] : n[j][i]);
       }
     }
-    pixel_index += row.pixels.size();
+  };
+  Part parts[2];
+  const size_t half = rows_.size() / 2;
+  {
+    std::thread worker(accumulate, half, rows_.size(), &parts[1]);
+    accumulate(0, half, &parts[0]);
+    worker.join();
   }
-  // Priors on the log change u = ln(x / x0), as in the Ceres problem, linearised at the
-  // current solution xc: u ~ x / xc - 1 + ln(xc / x0). Without a current solution (the
-  // first, least-squares solves) the pull toward the start is left out (1e-14: it only
-  // keeps unobserved entries defined): linearised at x0 it would be quadratic in the
-  // ratio x / x0 and hold a sky 100x brighter than the preset near the preset's scale.
-  // The smoothness term, a second difference of relative changes, is scale-free.
-  auto current = [&](int j) { return linearize_at ? linearize_at->values[j] : initial_[j]; };
-  const double lambda = linearize_at ? std::max(o_.prior_weight, 1e-14) : 1e-14;
-  // Entries the solution being linearised held at their floor carry no prior (linearised
-  // at the floor, the log prior would push them up by ln(1 / floor) each step and the
-  // active set would oscillate); the active set itself starts empty in every solve, so an
-  // entry the data no longer want at zero is released.
-  const std::vector<char> was_held = linearize_at ? linearize_at->held : std::vector<char>(num_unknowns_, 0);
-  std::vector<char> held(num_unknowns_, 0);
+  std::vector<Eigen::Triplet<double>> triplets = std::move(parts[0].triplets);
+  triplets.insert(triplets.end(), parts[1].triplets.begin(), parts[1].triplets.end());
+  Eigen::VectorXd rhs = parts[0].rhs + parts[1].rhs;
+  // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
+  // (x / (k x0) - 1) toward the start's shape at lambda = 1e-14, k the start's
+  // least-squares scale on this data, so only entries no pixel sees feel it; the damping
+  // of the data's diagonal (LinearSkyOptions::damping) conditions the rest. Several
+  // references (free rows): the second difference of x / x0 along the sun zenith
+  // (scale-free) links the rows between references, and the pull at prior_weight
+  // separates the two rows around each sun, which the data see only blended; no damping
+  // (toward zero it would fight the smoothness in exactly those directions).
+  const double k_start = start_scale_;
+  const double lambda = o_.unknowns == LinearUnknowns::kFreeRows ? std::max(o_.prior_weight, 1e-14) : 1e-14;
   for (int j = 0; j < num_unknowns_; ++j) {
     if (j == lz_index_) continue;
-    if (was_held[j]) {  // only a regulariser, at the entry's current value
-      const double xc = current(j);
-      triplets.emplace_back(j, j, 1e-14 / (xc * xc));
-      rhs[j] += 1e-14 / xc;
-      continue;
-    }
-    const double xc = current(j), offset = std::log(xc / initial_[j]);
-    triplets.emplace_back(j, j, lambda / (xc * xc));
-    rhs[j] += lambda * (1.0 - offset) / xc;
+    const double centre = k_start * initial_[j];
+    triplets.emplace_back(j, j, lambda / (centre * centre));
+    rhs[j] += lambda / centre;
   }
   if (o_.unknowns == LinearUnknowns::kFreeRows && o_.smoothness > 0.0) {
     const auto& grid = state_.preset.luts.grid;
-    const double sqrt_s = std::sqrt(o_.smoothness);
     for (int t = 0; t < state_.tables; ++t)
       for (int row = 1; row + 1 < grid.n_theta; ++row) {
         if (!o_.row_fitted[row - 1] || !o_.row_fitted[row] || !o_.row_fitted[row + 1]) continue;
@@ -258,23 +299,20 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
             const int ub = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
             const int stride = grid.n_gamma * 3;
             const int idx[3] = {ub - stride, ub, ub + stride};
-            if (was_held[idx[0]] || was_held[idx[1]] || was_held[idx[2]]) continue;
-            const double second[3] = {1.0, -2.0, 1.0};
-            double coef[3], target = 0.0;
-            for (int i = 0; i < 3; ++i) {
-              const double xc = current(idx[i]);
-              coef[i] = sqrt_s * second[i] / xc;
-              target -= sqrt_s * second[i] * (std::log(xc / initial_[idx[i]]) - 1.0);
-            }
-            for (int i = 0; i < 3; ++i) {
-              rhs[idx[i]] += target * coef[i];
-              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], coef[i] * coef[j]);
-            }
+            const double coef[3] = {1.0 / initial_[idx[0]], -2.0 / initial_[idx[1]], 1.0 / initial_[idx[2]]};
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], o_.smoothness * coef[i] * coef[j]);
           }
       }
   }
+  std::vector<char> held(num_unknowns_, 0);
   Eigen::SparseMatrix<double> normal(num_unknowns_, num_unknowns_);
   normal.setFromTriplets(triplets.begin(), triplets.end());
+  {
+    const double mu = o_.unknowns == LinearUnknowns::kFreeRows ? 0.0 : o_.damping;
+    for (int j = 0; j < num_unknowns_; ++j) normal.coeffRef(j, j) *= 1.0 + mu;
+  }
+
 
   LinearSkySolution sol;
   sol.g = g;
@@ -289,13 +327,26 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
       sys.coeffRef(j, j) += stiffness;
       rb[j] += stiffness * kFloorFraction * initial_[j];
     }
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sys);
+    // Symmetric Jacobi scaling D N D (D = diag(N)^-1/2): LUT entries span orders of
+    // magnitude between tables and columns, and the unpivoted sparse LDLT loses digits on
+    // the unscaled matrix (measured: fits 10x off their ceiling at ridge 1e-14).
+    Eigen::VectorXd d(num_unknowns_);
+    for (int j = 0; j < num_unknowns_; ++j) d[j] = 1.0 / std::sqrt(std::max(sys.coeff(j, j), 1e-300));
+    const Eigen::SparseMatrix<double> scaled = d.asDiagonal() * sys * d.asDiagonal();
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(scaled);
     if (ldlt.info() != Eigen::Success) throw Error("linear sky solve: the normal equations are not positive definite");
-    x = ldlt.solve(rb);
+    x = d.asDiagonal() * ldlt.solve(d.asDiagonal() * rb);
+    // Hold entries that went below their floor; release held entries the objective
+    // wants to raise (gradient of 1/2 x'Nx - b'x negative there: the KKT condition of a
+    // lower bound fails), as in Lawson and Hanson's active-set NNLS.
     bool changed = false;
+    const Eigen::VectorXd gradient = normal * x - rhs;
     for (int j = 0; j < num_unknowns_; ++j) {
       if (!held[j] && !(x[j] > kFloorFraction * initial_[j])) {
         held[j] = 1;
+        changed = true;
+      } else if (held[j] && gradient[j] * initial_[j] < -1e-12 * std::abs(rhs[j] * initial_[j]) - 1e-300) {
+        held[j] = 0;
         changed = true;
       }
     }
@@ -310,7 +361,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);
   // Cost and relative error of the data terms.
   double cost = 0.0, sq = 0.0, wsum = 0.0;
-  pixel_index = 0;
+  size_t pixel_index = 0;
   for (const Row& row : rows_) {
     for (size_t p = 0; p < row.pixels.size(); ++p) {
       const Pixel& px = row.pixels[p];
@@ -354,10 +405,11 @@ double LinearSky::MaxRelativeDifference(const LinearSkySolution& s, const std::v
 }
 
 double LinearSky::RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
-                                double scale) const {
+                                const std::vector<double>& scales) const {
   const std::vector<double> e = LogErrors(s, exposures);
   double cost = 0.0;
   for (size_t i = 0; i < e.size(); ++i) {
+    const double scale = scales[i];
     double rho = 0.0, drho = 1.0;
     RobustRho(loss, (e[i] / scale) * (e[i] / scale), &rho, &drho);
     cost += 0.5 * error_weight_[i] * scale * scale * rho;

@@ -19,10 +19,10 @@
 //  - per image row (the ceiling tool only): one value per (table, level row, channel), no
 //    interpolation between LUT columns: what the model could do with an unlimited number
 //    of LUT columns (the LUT's resolution cost, seen against the LUT ceiling).
-// Priors of the Ceres problem in their linearised form, (x / x0 - 1) for log(x / x0):
-// the weak pull toward the initial preset and, with free rows, the second difference of
-// the change along the sun zenith. Entries the solve would make non-positive are held at
-// 1e-3 of their initial value (an active set; the log-space polish takes over from there).
+// Regularisation: a damping of the normal equations (see LinearSkyOptions::damping), a
+// 1e-14 pull toward the start's shape (only entries no pixel sees feel it) and, with free
+// rows, the second difference of the change along the sun zenith (FitOptions::smoothness). Entries the solve would make non-positive are held at 1e-6 of their
+// initial value (an active set, formed anew in every solve).
 #pragma once
 #include <array>
 #include <utility>
@@ -42,7 +42,19 @@ struct LinearSkyOptions {
   LinearUnknowns unknowns = LinearUnknowns::kTiedRows;
   std::vector<bool> row_fitted;  // free rows: which LUT rows are unknowns (others held)
   bool fit_overcast = false;     // L_z is an unknown (needs overcast_weight > 0)
-  double prior_weight = 1e-8;    // as FitOptions::prior_weight
+  // Use every stride-th pixel of every stride-th row of the level (1: all). A decimated
+  // level keeps the exact pixel values and directions: an area-averaged coarser level
+  // differs from the model at its node by the averaging, which biases g where g is weakly
+  // determined (measured: a sun 4 deg below the horizon, g 0.40 instead of 0.80 from a
+  // 128-wide average of a 256-wide reference; exact from every second pixel).
+  int stride = 1;
+  // Damping of the data's normal equations, N_jj (1 + damping) (Levenberg's damping
+  // toward zero, relative, so it is scale-free): shrinks the combinations a short image
+  // row cannot tell apart (two tables' phases nearly collinear along it) and costs a
+  // relative 1e-6 on the determined ones. Measured (fit_ceiling_test): 1e-4 held CIE
+  // skies at 0.05% against a 0.005% ceiling; 1e-6 and 1e-8 agree to 1e-5 everywhere.
+  double damping = 1e-6;         // tied and per-row unknowns only
+  double prior_weight = 1e-8;    // free rows: the pull toward the start (FitOptions::prior_weight)
   double smoothness = 1e-6;      // as FitOptions::smoothness (free rows)
 };
 
@@ -76,7 +88,9 @@ class LinearSky {
   // 1/2 sum w s^2 rho((e / s)^2) of the log errors: the robust cost of the Ceres problem's
   // sky rows (without priors), for comparing g values.
   double RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
-                       double scale) const;
+                       const std::vector<double>& scales) const;  // scale per sample
+  // Angle between each sample's view direction and the sun, degrees (LogErrors layout).
+  const std::vector<double>& sun_angles_deg() const { return sun_angle_deg_; }
   // Model values k M per pixel and channel (LogErrors layout), for the render check.
   std::vector<double> ModelValues(const LinearSkySolution& s, const std::vector<double>& exposures) const;
 
@@ -130,14 +144,20 @@ class LinearSky {
   // M / exposure at a pixel for channel ch, given the Mie phase there.
   double Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const;
   std::vector<double> MiePhases(double g) const;  // per pixel, rows in order
+  // Least-squares scale of the start (initial values) on the data, at the start's g and
+  // exposures: the centre of the prior is this scale times the start (see Solve).
+  double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
 
   const FitState& state_;
   LinearSkyOptions o_;
   std::vector<Row> rows_;
   std::vector<double> error_weight_;   // per sample
+  std::vector<double> sun_angle_deg_;  // per sample
   std::vector<double> initial_;        // x0 per unknown (prior reference and floor)
   int num_unknowns_ = 0;
   int lz_index_ = -1;
+  double held_overcast_zenith_ = 0.0;  // L_z when it is not an unknown, cd/m^2
+  double start_scale_ = 1.0;           // StartScale at the state's g and exposures
   int n_refs_ = 0;
 };
 

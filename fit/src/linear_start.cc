@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <numeric>
 
@@ -17,20 +15,25 @@ constexpr double kCauchyTuning = 2.385;     // 95% asymptotic efficiency (Hollan
 constexpr double kGMax = 0.98;              // upper end of the g search (the preset allows 0.999)
 // Scan nodes: denser toward 1, where the Mie lobe changes fastest with g.
 constexpr double kScan[] = {0.0, 0.2, 0.4, 0.55, 0.65, 0.72, 0.78, 0.83, 0.87, 0.9, 0.93, 0.96, kGMax};
-constexpr int kGoldenSteps = 14;            // bracket of ~0.1 -> ~1e-4 in g
+constexpr int kGoldenSteps = 10;            // bracket of ~0.1 -> ~1e-3 in g (refined on the robust level)
 constexpr double kRefineHalfWidth = 0.02;   // the robust refinement's bracket around the search's g
 constexpr int kRefineSteps = 8;             // 0.04 -> ~1e-3 in g
-constexpr int kRefineShifts = 6;            // moves of the bracket when the minimum is on its edge
+constexpr int kRefineShifts = 6;
+constexpr size_t kMaxOtherMinima = 2;       // scan minima re-ranked on the robust level            // moves of the bracket when the minimum is on its edge
 constexpr int kMaxGaussNewton = 6;          // log-space steps at the final scale
 constexpr int kMaxFinalSteps = 3;
-constexpr int kLogLeastSquaresSteps = 2;    // before the scale estimate           // on the final level
+constexpr int kLogLeastSquaresSteps = 2;    // before the scale estimate
+constexpr int kScaleRounds = 4;             // re-estimations of the scales           // on the final level
 constexpr double kSettledCost = 1e-5;       // relative cost change that ends them
 
-// IRLS weight rho'(z), z = (e / s)^2 (the residual form of robust_residual.h).
-std::vector<double> RobustWeights(RobustLoss loss, double scale, const std::vector<double>& e) {
+// IRLS weight rho'(z), z = (e / s)^2 (the residual form of robust_residual.h); the scale
+// per sample times `factor` (annealing).
+std::vector<double> RobustWeights(RobustLoss loss, const std::vector<double>& scales, double factor,
+                                  const std::vector<double>& e) {
   std::vector<double> w(e.size(), 1.0);
   if (loss == RobustLoss::kNone) return w;
   for (size_t i = 0; i < e.size(); ++i) {
+    const double scale = factor * scales[i];
     double rho = 0.0, drho = 1.0;
     RobustRho(loss, (e[i] / scale) * (e[i] / scale), &rho, &drho);
     w[i] = drho;
@@ -55,16 +58,27 @@ double GoldenSection(F&& f, double a, double b, int steps) {
 }
 
 // Best g for the given weights and exposures: scan, then golden sections around the best.
+enum class SearchCost { kLogAfterStep, kRelative };
+
+// `other_minima` (optional) receives the scan's other local minima, best first (at most
+// kMaxOtherMinima): where g is weakly determined (a sun below the horizon) the coarse
+// level's area averaging can rank them differently from the finer levels.
 double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures, const std::vector<double>& weights,
-                      double g_hint, int* solves) {
+                      double g_hint, int* solves, SearchCost measure = SearchCost::kLogAfterStep,
+                      int golden_steps = kGoldenSteps, std::vector<double>* other_minima = nullptr) {
   // The cost of g: the log error after one Gauss-Newton step from the relative-error
   // solution. The relative error alone is asymmetric: a dark outlier (a building at 0.15x
   // the sky) costs (1 / 0.15 - 1)^2 = 32 against ln(0.15)^2 = 3.6 in log units, and
   // would pick g.
   auto cost = [&](double g) {
+    if (measure == SearchCost::kRelative) {
+      ++*solves;
+      return sky.Solve(g, exposures, weights).cost;
+    }
     *solves += 2;
     const LinearSkySolution first = sky.Solve(g, exposures, weights);
-    return sky.RobustLogCost(sky.Solve(g, exposures, weights, &first), exposures, RobustLoss::kNone, 1.0);
+    return sky.RobustLogCost(sky.Solve(g, exposures, weights, &first), exposures, RobustLoss::kNone,
+                             std::vector<double>(sky.num_samples(), 1.0));
   };
   std::vector<double> nodes(std::begin(kScan), std::end(kScan));
   nodes.push_back(std::clamp(g_hint, 0.0, kGMax));
@@ -72,19 +86,55 @@ double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   std::vector<double> costs;
   for (double g : nodes) costs.push_back(cost(g));
-  if (std::getenv("SKYCAL_DEBUG_LINEAR")) {
-    for (size_t i = 0; i < nodes.size(); ++i) {
-      const auto sol = sky.Solve(nodes[i], exposures, weights);
-      std::fprintf(stderr, "DEBUG scan g %.3f cost %.6g rel %.5f held %d\n", nodes[i], costs[i], sol.rel_rmse, sol.held_non_positive);
-    }
-  }
   const size_t best = static_cast<size_t>(std::min_element(costs.begin(), costs.end()) - costs.begin());
+  if (other_minima) {
+    std::vector<std::pair<double, double>> minima;  // (cost, g)
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      const bool left = i == 0 || costs[i] < costs[i - 1], right = i + 1 == nodes.size() || costs[i] < costs[i + 1];
+      if (left && right && i != best) minima.emplace_back(costs[i], nodes[i]);
+    }
+    std::sort(minima.begin(), minima.end());
+    other_minima->clear();
+    for (size_t i = 0; i < minima.size() && i < kMaxOtherMinima; ++i) other_minima->push_back(minima[i].second);
+  }
   const double lo = nodes[best > 0 ? best - 1 : 0], hi = nodes[std::min(best + 1, nodes.size() - 1)];
-  const double g = GoldenSection(cost, lo, hi, kGoldenSteps);
+  const double g = GoldenSection(cost, lo, hi, golden_steps);
   return cost(g) <= costs[best] ? g : nodes[best];
 }
 
+// Global and per-ring scales from log residuals e; *sigma receives the global MAD-sigma.
+RingLossScales EstimateScales(const LinearSky& sky, const std::vector<double>& e, double floor, double* sigma) {
+  RingLossScales out;
+  *sigma = kMadToSigma * WeightedMedianAbs(e, sky.error_weights());
+  out.global = std::max(floor, kCauchyTuning * *sigma);
+  std::vector<double> ring_e[RingLossScales::kRings], ring_w[RingLossScales::kRings];
+  for (size_t i = 0; i < e.size(); ++i) {
+    int k = 0;
+    while (k + 1 < RingLossScales::kRings && sky.sun_angles_deg()[i] >= RingLossScales::kOuterEdgeDeg[k]) ++k;
+    ring_e[k].push_back(e[i]);
+    ring_w[k].push_back(sky.error_weights()[i]);
+  }
+  for (int k = 0; k < RingLossScales::kRings; ++k) {
+    const double ring_sigma = ring_e[k].empty() ? 0.0 : kMadToSigma * WeightedMedianAbs(ring_e[k], ring_w[k]);
+    out.ring[k] = std::max(out.global, kCauchyTuning * ring_sigma);
+  }
+  return out;
+}
+
+std::vector<double> PerSample(const LinearSky& sky, const RingLossScales& rings) {
+  std::vector<double> out(sky.num_samples());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = rings.At(sky.sun_angles_deg()[i]);
+  return out;
+}
+
 }  // namespace
+
+double RingLossScales::At(double sun_angle_deg) const {
+  for (int k = 0; k < kRings; ++k) {
+    if (sun_angle_deg < kOuterEdgeDeg[k]) return ring[k];
+  }
+  return ring[kRings - 1];
+}
 
 double WeightedMedianAbs(const std::vector<double>& values, const std::vector<double>& weights) {
   std::vector<size_t> order(values.size());
@@ -120,7 +170,9 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   //    search level; then the final level.
   const auto t0 = std::chrono::steady_clock::now();
   alternate_exposures(search, 3);
-  if (fit_g) g = SearchHaziness(search, exposures, weights, g, &rep.solves);
+  std::vector<double> other_minima;
+  if (fit_g) g = SearchHaziness(search, exposures, weights, g, &rep.solves, SearchCost::kLogAfterStep, kGoldenSteps,
+                                &other_minima);
   alternate_exposures(search, 2);
   const auto t1 = std::chrono::steady_clock::now();
   rep.search_time_s = std::chrono::duration<double>(t1 - t0).count();
@@ -137,16 +189,15 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   }
   rep.rel_rmse_least_squares = sol.rel_rmse;
 
-  // 2. The loss scale from the least-squares residuals.
+  // 2. The loss scales from the least-squares residuals.
   std::vector<double> e = sky->LogErrors(sol, exposures);
-  rep.residual_sigma = kMadToSigma * WeightedMedianAbs(e, sky->error_weights());
-  rep.loss_scale = std::max(o.loss_scale, kCauchyTuning * rep.residual_sigma);
-  double s = rep.loss_scale;
+  RingLossScales rings = EstimateScales(*sky, e, o.loss_scale, &rep.residual_sigma);
+  std::vector<double> scales = PerSample(*sky, rings);
 
-  // 3. Gauss-Newton steps of the robust log objective, the scale annealed from 8 s to s,
-  //    then at s until the cost settles.
-  auto gauss_newton_step = [&](double scale) {
-    weights = RobustWeights(o.loss, scale, e);
+  // 3. Gauss-Newton steps of the robust log objective, the scales annealed from 8x down,
+  //    then at 1x until the cost settles.
+  auto gauss_newton_step = [&](double factor) {
+    weights = RobustWeights(o.loss, scales, factor, e);
     sol = sky->Solve(g, exposures, weights, &sol);
     ++rep.solves;
     ++rep.gauss_newton_steps;
@@ -154,28 +205,32 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     e = sky->LogErrors(sol, exposures);
   };
   if (o.loss != RobustLoss::kNone) {
-    for (double factor : {8.0, 4.0, 2.0, 1.0}) {
-      gauss_newton_step(factor * s);
-      gauss_newton_step(factor * s);
-    }
-    // The scale once more, from the robust solution's residuals: contamination pulls the
-    // least-squares fit and inflates its MAD; the robust fit's residuals do not.
-    const double sigma = kMadToSigma * WeightedMedianAbs(e, sky->error_weights());
-    const double s2 = std::max(o.loss_scale, kCauchyTuning * sigma);
-    if (s2 < s) {
+    for (double factor : {8.0, 4.0, 2.0, 1.0, 1.0}) gauss_newton_step(factor);
+    // The scales again from the robust solution's residuals, until they stop shrinking:
+    // contamination pulls the least-squares fit and inflates its MADs; each robust fit
+    // sheds more of that pull.
+    for (int round = 0; round < kScaleRounds; ++round) {
+      double sigma = 0.0;
+      const RingLossScales again = EstimateScales(*sky, e, o.loss_scale, &sigma);
+      const std::vector<double> narrower = PerSample(*sky, again);
+      bool shrank = false;
+      for (size_t i = 0; i < scales.size(); ++i) shrank = shrank || narrower[i] < 0.95 * scales[i];
+      if (!shrank) break;
       rep.residual_sigma = sigma;
-      for (double factor : {0.5, 0.25}) gauss_newton_step(std::max(s2, factor * s));
-      s = s2;
+      for (size_t i = 0; i < scales.size(); ++i) scales[i] = std::min(scales[i], narrower[i]);
+      rings = again;
+      gauss_newton_step(1.0);
+      gauss_newton_step(1.0);
     }
-    rep.loss_scale = s;
   }
-  double cost = sky->RobustLogCost(sol, exposures, o.loss, s);
+  rep.loss_scale = rings.global;
+  rep.ring_scales = rings;
+  double cost = sky->RobustLogCost(sol, exposures, o.loss, scales);
   auto settle = [&](int max_steps) {
     for (int k = 0; k < max_steps; ++k) {
-      gauss_newton_step(s);
-      const double next = sky->RobustLogCost(sol, exposures, o.loss, s);
+      gauss_newton_step(1.0);
+      const double next = sky->RobustLogCost(sol, exposures, o.loss, scales);
       const bool settled = std::abs(cost - next) <= kSettledCost * cost;
-      if (std::getenv("SKYCAL_DEBUG_LINEAR")) std::fprintf(stderr, "DEBUG GN cost %.8g -> %.8g rel %.5f held %d\n", cost, next, sol.rel_rmse, sol.held_non_positive);
       cost = next;
       if (settled) break;
     }
@@ -186,17 +241,33 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     const LinearSkySolution at = sol;
     auto robust_cost = [&](double gg) {
       ++rep.solves;
-      return sky->RobustLogCost(sky->Solve(gg, exposures, weights, &at), exposures, o.loss, s);
+      return sky->RobustLogCost(sky->Solve(gg, exposures, weights, &at), exposures, o.loss, scales);
     };
     // The bracket follows the minimum when it lands on an edge (the search level's
     // area averaging can bias g where g is weakly determined, e.g. a sun below the horizon).
-    double g2 = g;
-    for (int shift = 0; shift < kRefineShifts; ++shift) {
-      const double lo = std::max(0.0, g2 - kRefineHalfWidth), hi = std::min(kGMax, g2 + kRefineHalfWidth);
-      const double next = GoldenSection(robust_cost, lo, hi, kRefineSteps);
-      const bool at_edge = (next - lo < 0.1 * kRefineHalfWidth && lo > 0.0) || (hi - next < 0.1 * kRefineHalfWidth && hi < kGMax);
-      g2 = next;
-      if (!at_edge) break;
+    auto refine = [&](double from) {
+      double gg = from;
+      for (int shift = 0; shift < kRefineShifts; ++shift) {
+        const double lo = std::max(0.0, gg - kRefineHalfWidth), hi = std::min(kGMax, gg + kRefineHalfWidth);
+        const double next = GoldenSection(robust_cost, lo, hi, kRefineSteps);
+        const bool at_edge =
+            (next - lo < 0.1 * kRefineHalfWidth && lo > 0.0) || (hi - next < 0.1 * kRefineHalfWidth && hi < kGMax);
+        gg = next;
+        if (!at_edge) break;
+      }
+      return gg;
+    };
+    double g2 = refine(g);
+    double best_cost = robust_cost(g2);
+    // The scan's other local minima, re-ranked at this level.
+    for (double candidate : other_minima) {
+      if (robust_cost(candidate) >= best_cost) continue;
+      const double refined = refine(candidate);
+      const double c = robust_cost(refined);
+      if (c < best_cost) {
+        best_cost = c;
+        g2 = refined;
+      }
     }
     if (std::abs(g2 - g) > 1e-6) {
       g = g2;
@@ -207,9 +278,15 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   // 5. The final level: Gauss-Newton steps at the final g (the robust level's solution
   //    is its start: same unknowns, finer pixels).
   if (&final != &robust) {
+    // The final level sees LUT columns the coarser one did not (nearer the horizon):
+    // a relative least-squares solve places them before the robust log steps.
     sky = &final;
+    scales = PerSample(*sky, rings);
+    weights.clear();
+    sol = sky->Solve(g, exposures, weights);
+    ++rep.solves;
     e = sky->LogErrors(sol, exposures);
-    cost = sky->RobustLogCost(sol, exposures, o.loss, s);
+    cost = sky->RobustLogCost(sol, exposures, o.loss, scales);
     settle(kMaxFinalSteps);
   }
   const auto t3 = std::chrono::steady_clock::now();
@@ -231,7 +308,8 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
 CeilingReport MinimiseOverHaziness(const LinearSky& sky, const std::vector<double>& exposures, double g_hint) {
   int solves = 0;
   CeilingReport c;
-  c.g = SearchHaziness(sky, exposures, {}, g_hint, &solves);
+  // The ceiling's own measure (rel_rmse): the relative least-squares cost, to ~1e-4 in g.
+  c.g = SearchHaziness(sky, exposures, {}, g_hint, &solves, SearchCost::kRelative, 14);
   const LinearSkySolution s = sky.Solve(c.g, exposures, {});
   c.rel_rmse = s.rel_rmse;
   c.held_non_positive = s.held_non_positive;

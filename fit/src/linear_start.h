@@ -32,9 +32,24 @@
 
 namespace skycal::fit {
 
+// The robust loss's scale per ring of angular distance from the sun: the global scale
+// (2.385 x the MAD-sigma of all residuals, at least FitOptions::loss_scale), widened in a
+// ring to 2.385 x that ring's own MAD-sigma. The model's misfit is coherent around the sun
+// (a whole ring off by 10-15% where one Mie lobe cannot form a CIE sky's aureole): a ring's
+// median sees that misfit and keeps its pixels in the fit, while clouds or a building,
+// which cover less than half of a ring, stay outliers within it.
+struct RingLossScales {
+  static constexpr int kRings = 7;
+  static constexpr double kOuterEdgeDeg[kRings] = {6.0, 10.0, 15.0, 25.0, 40.0, 70.0, 180.0};
+  double global = 0.05;
+  double ring[kRings] = {};     // natural-log units, >= global
+  double At(double sun_angle_deg) const;
+};
+
 struct LinearStartReport {
   double g = 0.0;
-  double loss_scale = 0.0;       // s, natural-log units
+  double loss_scale = 0.0;       // the global scale s, natural-log units
+  RingLossScales ring_scales;    // per ring around the sun (>= s)
   double residual_sigma = 0.0;   // 1.4826 MAD of the least-squares log residuals
   double rel_rmse_least_squares = 0.0;  // at the level it ran on
   double rel_rmse_robust = 0.0;

@@ -251,12 +251,13 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   if (o.linear_start) {
     const auto t_linear = Clock::now();
     const int linear_width = std::min(o.linear_width, widths.back());
-    // Three levels: the g search, the robust steps (twice the search width), the final
-    // Gauss-Newton steps (the finest pyramid width); fewer when the reference is small.
+    // Two levels: the robust steps (twice the search width) and the final Gauss-Newton
+    // steps (the finest pyramid width); the g search runs on every k-th pixel of the
+    // robust level (LinearSkyOptions::stride), so it is linear_width wide.
     const int robust_width = std::min(2 * linear_width, widths.back());
     std::vector<std::vector<FitLevel>> linear_levels;
     std::vector<std::vector<const FitLevel*>> level_ptrs;
-    for (int w : {linear_width, robust_width, widths.back()}) {
+    for (int w : {robust_width, widths.back()}) {
       if (!linear_levels.empty() && linear_levels.back()[0].width == w) continue;
       linear_levels.emplace_back();
       for (const Reference& ref : refs) linear_levels.back().push_back(BuildLevel(ref, w));
@@ -270,18 +271,17 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     lo.unknowns = tied ? LinearUnknowns::kTiedRows : LinearUnknowns::kFreeRows;
     lo.row_fitted = row_fitted;
     lo.fit_overcast = fit_overcast;
-    // One reference (tied rows): no pull toward the start. The tied rows already remove
-    // the exact degeneracy, every solved entry has data, and the 1e-8 log-space pull cost
-    // ~0.1% rel RMSE on clean skies the model fits to 1e-5 (it outweighs the data there,
-    // dragging entries the sky wants near zero back up). Several references: as the option.
-    lo.prior_weight = tied ? 0.0 : o.prior_weight;
     lo.smoothness = o.smoothness;
+    lo.prior_weight = o.prior_weight;
     std::vector<std::unique_ptr<LinearSky>> skies;
     for (const auto& ptrs : level_ptrs) skies.push_back(std::make_unique<LinearSky>(state, ptrs, refs, lo));
+    LinearSkyOptions search_options = lo;
+    search_options.stride = std::max(1, robust_width / linear_width);
+    const LinearSky search(state, level_ptrs.front(), refs, search_options);
     const LinearSky& sky = *skies.back();
-    const LinearSky& robust = *skies[std::min<size_t>(1, skies.size() - 1)];
+    const LinearSky& robust = *skies.front();
     const LinearStartReport rep =
-        RunLinearStart(*skies[0], robust, sky, &state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
+        RunLinearStart(search, robust, sky, &state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
     polish_loss_scale = rep.loss_scale;
     held_at_floor = rep.held;
     if (!held_at_floor.empty()) {
@@ -290,7 +290,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                                            "need there): held at 1e-3 of their start, not polished in log space"}});
     }
     const double linear_time = Seconds(t_linear, Clock::now());
-    result.linear_start = {{"search_width", linear_width},
+    result.linear_start = {{"search_width", robust_width / search_options.stride},
                            {"robust_width", robust_width},
                            {"width", final_ptrs[0]->width},
                            {"unknowns", sky.num_unknowns()},
