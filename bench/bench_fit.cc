@@ -1,121 +1,259 @@
-// Benchmark of `skycal fit` (after loading): median wall time of a single-reference
-// 512x256 fit per backend and model variant, the straightforward baseline (numeric
-// Jacobians, full resolution, one pyramid level) measured in the same run at its error,
-// and a 24-reference day fit. Writes bench/results/fit.json (or argv[1]).
+// Benchmark of `skycal fit` where users start: the bundled default preset, default
+// options, references the preset was not built from (CIE general skies, other
+// atmospheres' bakes), 512x256. Per reference: fit time (median of repeats after a
+// warm-up), the linear start's stages, the error against the model's ceiling
+// (fit/include/skycal/fit/ceiling.h). In the same run, on a subset: the old path
+// (coarse-to-fine Ceres, no linear start), the numeric-Jacobian baseline, the whole
+// process (`skycal fit` as a user runs it), and a 24-reference day. Each skip decision's
+// measured saving: the Ceres polish (--polish forces it) and the coarse levels (the old
+// path).
+//
+// Writes bench/results/fit.json and fit.md (or into argv[1], a directory).
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include "bench_util.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
+#include "skycal/fit/ceiling.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
-#include "../tests/synthetic_sky.h"
+#include "skycal/refsky/reference_skies.h"
 
 using namespace skycal;
 
 namespace {
 
-struct Run {
-  bench::Timing timing;
-  fit::FitResult last;
+constexpr int kWidth = 512;
+constexpr int kRepeats = 3;
+
+render::Preset DefaultStart() {
+  return render::LoadPreset(std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json");
+}
+
+struct Case {
+  std::string name, path;
 };
 
-Run TimeFit(const std::vector<fit::Reference>& refs, const render::Preset& start, const fit::FitOptions& o,
-            render::SkyRenderer& renderer, int runs) {
+std::vector<Case> WriteReferences(const std::filesystem::path& dir) {
+  std::vector<Case> cases;
+  const auto types = refsky::LoadCieSkyTypes(refsky::DefaultCieCsvPath());
+  for (int t : {1, 3, 7, 12, 15}) {
+    for (double el : {10.0, 30.0, 60.0}) {
+      Case c{"CIE " + std::to_string(t) + " sun " + std::to_string(int(el)), (dir / ("cie" + std::to_string(t) + "_" + std::to_string(int(el)) + ".exr")).string()};
+      refsky::WriteCieReference(c.path, types[t - 1], latlong::DirectionFromElevationAzimuthDeg(el, 20.0), kWidth);
+      cases.push_back(c);
+    }
+  }
+  for (const auto& v : refsky::StandardAtmosphereVariants()) {
+    const render::Preset truth = refsky::BakeVariant(v);
+    for (double el : {2.0, 30.0, 70.0}) {
+      Case c{v.name + " sun " + std::to_string(int(el)), (dir / (v.name + std::to_string(int(el)) + ".exr")).string()};
+      refsky::WriteModelReference(c.path, truth, latlong::DirectionFromElevationAzimuthDeg(el, -50.0), kWidth);
+      cases.push_back(c);
+    }
+  }
+  return cases;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+struct Run {
+  fit::FitResult result;
+  bench::Timing timing;
+};
+
+Run TimeFit(const std::vector<fit::Reference>& refs, const fit::FitOptions& o, render::SkyRenderer& renderer, int runs,
+            int warmup = 1) {
   Run r;
-  r.timing = bench::Measure([&] { r.last = fit::FitSky(refs, start, o, renderer); }, 1, runs);
+  r.timing = bench::Measure([&] { r.result = fit::FitSky(refs, DefaultStart(), o, renderer); }, warmup, runs);
   return r;
 }
 
-nlohmann::json Describe(const Run& r) {
-  double worst = 0.0;
-  for (const auto& ref : r.last.references) worst = std::max(worst, ref.errors.rel_rmse);
-  return {{"timing", r.timing.ToJson()}, {"iterations", r.last.iterations}, {"rel_rmse_max", worst},
-          {"haziness_g", r.last.preset.haziness_g}};
+// Wall time of the binary, as a user runs it (load, fit, render, write outputs).
+double ProcessSeconds(const std::string& reference, const std::filesystem::path& out) {
+  std::filesystem::remove_all(out);
+  const std::string cmd = std::string(SKYCAL_BINARY) + " fit --quiet --reference '" + reference + "' --out '" +
+                          out.string() + "' > /dev/null 2>&1";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int rc = std::system(cmd.c_str());
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (rc != 0) throw Error("bench_fit: `" + cmd + "` failed");
+  return s;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string out = argc > 1 ? argv[1] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/fit.json";
-  const auto dir = std::filesystem::temp_directory_path() / "skycal-bench-fit";
+  const std::filesystem::path out_dir = argc > 1 ? argv[1] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
+  const auto dir = std::filesystem::temp_directory_path() / ("skycal-bench-fit-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  nlohmann::json result = {{"benchmark", "fit after loading; synthetic references from the bundled preset, "
-                                         "start = smooth +-20% LUT perturbation and g + 0.06 (truth g = 0.76)"},
-                           {"machine", bench::MachineInfo()}};
   auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  fit::FitOptions defaults;
+  defaults.verbose = false;
+  nlohmann::json result = {{"benchmark", "fit from the bundled default preset, default options (ffxv-iso, Cauchy, linear "
+                                         "start, vulkan render check), 512x256 references the preset was not built from"},
+                           {"machine", bench::MachineInfo()}};
 
-  // Single reference, 512x256, sun 30 deg.
-  nlohmann::json single = nlohmann::json::object();
-  for (auto variant : {render::ModelVariant::kFfxv, render::ModelVariant::kFfxvIso}) {
-    const render::Preset truth = synthetic::TruthPreset(variant);
-    const std::string path = (dir / (std::string("single_") + render::ToString(variant) + ".exr")).string();
-    synthetic::WriteSyntheticReference(path, truth, 30.0, 25.0, 512);
-    const render::Preset start = synthetic::PerturbedStart(truth, 3);
-    for (auto backend : {render::Backend::kVulkan, render::Backend::kCpu}) {
-      fit::FitOptions o;
-      o.variant = variant;
-      o.backend = backend;
-      o.verbose = false;
-      const std::vector<fit::Reference> refs = {fit::LoadReference(path, o)};
-      render::SkyRenderer& renderer = backend == render::Backend::kVulkan ? *vulkan : *cpu;
-      const Run run = TimeFit(refs, start, o, renderer, 7);
-      const std::string key = std::string(render::ToString(variant)) + "/" + render::ToString(backend);
-      single[key] = Describe(run);
-      std::cerr << "[bench fit] single " << key << ": median " << run.timing.median_ms << " ms, rel_rmse "
-                << run.last.references[0].errors.rel_rmse << "\n";
-    }
+  // 1. Every reference: the default fit, its stages and its ceiling.
+  const std::vector<Case> cases = WriteReferences(dir);
+  nlohmann::json per_ref = nlohmann::json::array();
+  std::vector<double> times, ratios, search, robust, final_s, check;
+  for (const Case& c : cases) {
+    const fit::Reference ref = fit::LoadReference(c.path, defaults);
+    const Run run = TimeFit({ref}, defaults, *vulkan, kRepeats);
+    const fit::CeilingResult ceiling = fit::ModelCeiling(ref, DefaultStart(), defaults);
+    const auto& ls = run.result.linear_start;
+    const double err = run.result.references[0].errors.rel_rmse;
+    times.push_back(run.timing.median_ms);
+    ratios.push_back(err / std::max(ceiling.lut_rel_rmse, 1e-9));
+    search.push_back(1e3 * ls.value("search_time_s", 0.0));
+    robust.push_back(1e3 * ls.value("robust_time_s", 0.0));
+    final_s.push_back(1e3 * ls.value("final_time_s", 0.0));
+    check.push_back(1e3 * ls["render_check"].value("time_s", 0.0));
+    per_ref.push_back({{"reference", c.name},
+                       {"timing", run.timing.ToJson()},
+                       {"rel_rmse", err},
+                       {"ceiling_lut", ceiling.lut_rel_rmse},
+                       {"ceiling_per_row", ceiling.per_row_rel_rmse},
+                       {"within_1.2x_ceiling_plus_0.1pct", err <= 1.2 * ceiling.lut_rel_rmse + 1e-3},
+                       {"haziness_g", run.result.preset.haziness_g},
+                       {"linear_start", ls}});
+    std::cerr << "[bench fit] " << c.name << ": " << run.timing.median_ms << " ms, rel " << 100 * err << "%, ceiling "
+              << 100 * ceiling.lut_rel_rmse << "%\n";
   }
-  result["single_512x256"] = single;
+  result["single_512x256"] = per_ref;
+  result["summary"] = {{"fit_time_median_ms", Median(times)},
+                       {"fit_time_max_ms", *std::max_element(times.begin(), times.end())},
+                       {"stage_median_ms", {{"g_search", Median(search)}, {"robust_steps", Median(robust)},
+                                            {"final_level_steps", Median(final_s)}, {"render_check", Median(check)}}},
+                       {"fit_over_ceiling_median", Median(ratios)},
+                       {"references", cases.size()}};
 
-  // Baseline: numeric (central-difference) Jacobians, one level at full resolution, CPU
-  // model; against the default (analytic, pyramid) on the same reference, same run.
-  {
-    const render::Preset truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
-    const std::string path = (dir / "single_ffxv-iso.exr").string();
-    const render::Preset start = synthetic::PerturbedStart(truth, 3);
-    fit::FitOptions fast;
-    fast.variant = render::ModelVariant::kFfxvIso;
-    fast.backend = render::Backend::kCpu;
-    fast.verbose = false;
-    fit::FitOptions base = fast;
-    base.numeric_derivatives = true;
-    base.pyramid_widths = {512};
-    base.max_iterations_per_level = 200;
-    const std::vector<fit::Reference> refs = {fit::LoadReference(path, fast)};
-    const Run f = TimeFit(refs, start, fast, *cpu, 5);
-    const Run b = TimeFit(refs, start, base, *cpu, 3);
-    result["baseline_comparison"] = {
-        {"reference", "ffxv-iso 512x256, cpu backend for both"},
-        {"skycal", Describe(f)},
-        {"baseline_numeric_full_resolution", Describe(b)},
-        {"speedup", b.timing.median_ms / f.timing.median_ms}};
-    std::cerr << "[bench fit] baseline " << b.timing.median_ms << " ms vs " << f.timing.median_ms << " ms: "
-              << b.timing.median_ms / f.timing.median_ms << "x\n";
+  // 2. A subset: old path, numeric baseline, forced polish, whole process.
+  nlohmann::json compare = nlohmann::json::array();
+  for (size_t k : {size_t{1}, size_t{10}, size_t{16}}) {
+    const Case& c = cases[k];
+    const fit::Reference ref = fit::LoadReference(c.path, defaults);
+    fit::FitOptions old_path = defaults, polish = defaults, numeric = defaults;
+    old_path.linear_start = false;
+    polish.polish = true;
+    numeric.linear_start = false;
+    numeric.numeric_derivatives = true;
+    numeric.backend = render::Backend::kCpu;
+    numeric.pyramid_widths = {kWidth};
+    numeric.max_iterations_per_level = 200;
+    fit::FitOptions default_cpu = defaults;
+    default_cpu.backend = render::Backend::kCpu;
+    const Run d = TimeFit({ref}, defaults, *vulkan, kRepeats);
+    const Run dc = TimeFit({ref}, default_cpu, *cpu, kRepeats);
+    const Run p = TimeFit({ref}, polish, *vulkan, 1);
+    const Run old = TimeFit({ref}, old_path, *vulkan, 1);
+    const Run num = TimeFit({ref}, numeric, *cpu, 1);
+    std::vector<double> process;
+    for (int i = 0; i < kRepeats; ++i) process.push_back(ProcessSeconds(c.path, dir / "process_out"));
+    auto describe = [](const Run& r) {
+      return nlohmann::json{{"median_ms", r.timing.median_ms},
+                            {"rel_rmse", r.result.references[0].errors.rel_rmse},
+                            {"ceres_iterations", r.result.iterations}};
+    };
+    compare.push_back({{"reference", c.name},
+                       {"default_vulkan", describe(d)},
+                       {"default_cpu", describe(dc)},
+                       {"with_ceres_polish", describe(p)},
+                       {"old_coarse_to_fine_ceres", describe(old)},
+                       {"numeric_jacobian_baseline", describe(num)},
+                       {"speedup_vs_numeric_baseline", num.timing.median_ms / dc.timing.median_ms},
+                       {"speedup_vs_old_path", old.timing.median_ms / d.timing.median_ms},
+                       {"polish_skip_saves_ms", p.timing.median_ms - d.timing.median_ms},
+                       {"whole_process_median_s", Median(process)}});
+    std::cerr << "[bench fit] " << c.name << ": default " << d.timing.median_ms << " ms, polish " << p.timing.median_ms
+              << " ms, old " << old.timing.median_ms << " ms, numeric " << num.timing.median_ms << " ms, process "
+              << Median(process) << " s\n";
   }
+  result["comparisons"] = compare;
 
-  // A day: 24 references at 256x128, sun from -4 to 80 deg elevation, one fit.
+  // 3. A day: 24 references of the hazy atmosphere, sun -4 .. 80 deg, 256x128, one fit.
   {
-    const render::Preset truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
-    fit::FitOptions o;
-    o.variant = render::ModelVariant::kFfxvIso;
-    o.backend = render::Backend::kVulkan;
-    o.verbose = false;
+    const render::Preset truth = refsky::BakeVariant(refsky::StandardAtmosphereVariants()[1]);
     std::vector<fit::Reference> refs;
     for (int i = 0; i < 24; ++i) {
-      const double elevation = -4.0 + 84.0 * i / 23.0;
       const std::string path = (dir / ("day_" + std::to_string(i) + ".exr")).string();
-      synthetic::WriteSyntheticReference(path, truth, elevation, -100.0 + 9.0 * i, 256);
-      refs.push_back(fit::LoadReference(path, o));
+      refsky::WriteModelReference(path, truth, latlong::DirectionFromElevationAzimuthDeg(-4.0 + 84.0 * i / 23.0, -100.0 + 9.0 * i), 256);
+      refs.push_back(fit::LoadReference(path, defaults));
     }
-    const Run d = TimeFit(refs, synthetic::PerturbedStart(truth, 4), o, *vulkan, 3);
-    result["day_24_references_256x128_vulkan"] = Describe(d);
-    std::cerr << "[bench fit] day: median " << d.timing.median_ms << " ms\n";
+    const Run day = TimeFit(refs, defaults, *vulkan, 1, 0);
+    fit::FitOptions old_path = defaults;
+    old_path.linear_start = false;
+    const Run old_day = TimeFit(refs, old_path, *vulkan, 1, 0);
+    double worst = 0.0;
+    for (const auto& r : day.result.references) worst = std::max(worst, r.errors.rel_rmse);
+    double old_worst = 0.0;
+    for (const auto& r : old_day.result.references) old_worst = std::max(old_worst, r.errors.rel_rmse);
+    result["day_24_references_256x128"] = {{"timing", day.timing.ToJson()},
+                                          {"rel_rmse_max", worst},
+                                          {"haziness_g", day.result.preset.haziness_g},
+                                          {"truth_haziness_g", refsky::StandardAtmosphereVariants()[1].haziness_g},
+                                          {"levels", day.result.levels},
+                                          {"linear_start_time_s", day.result.linear_start.value("time_s", 0.0)},
+                                          {"old_path", {{"timing", old_day.timing.ToJson()}, {"rel_rmse_max", old_worst},
+                                                        {"haziness_g", old_day.result.preset.haziness_g}}}};
+    std::cerr << "[bench fit] day: " << day.timing.median_ms << " ms, worst rel " << 100 * worst << "%\n";
   }
-  result["targets"] = {{"single_512x256_median_ms_max", 500.0}};
-  WriteJsonFileAtomically(out, result);
-  std::cout << result.dump(2) << std::endl;
+  result["targets"] = {{"single_512x256_fit_median_ms_max", 300.0}, {"single_512x256_process_median_s_max", 0.6},
+                       {"speedup_vs_numeric_baseline_min", 15.0}, {"day_24_median_ms_max", 3000.0}};
+  std::filesystem::create_directories(out_dir);
+  WriteJsonFileAtomically((out_dir / "fit.json").string(), result);
+
+  // The readable summary.
+  std::ostringstream md;
+  md << std::fixed << std::setprecision(3);
+  md << "# Fit benchmark (bench/bench_fit.cc)\n\nFrom the bundled default preset, default options, 512x256 references "
+        "the preset was not built from. Machine: " << bench::MachineInfo()["hardware_threads"] << " hardware threads, "
+     << result["machine"]["date_utc"].get<std::string>() << ".\n\n"
+     << "| reference | fit ms (median of " << kRepeats << ") | rel RMSE % | LUT ceiling % | g |\n|---|---|---|---|---|\n";
+  for (const auto& r : per_ref) {
+    md << "| " << r["reference"].get<std::string>() << " | " << r["timing"]["median_ms"].get<double>() << " | "
+       << 100 * r["rel_rmse"].get<double>() << " | " << 100 * r["ceiling_lut"].get<double>() << " | "
+       << r["haziness_g"].get<double>() << " |\n";
+  }
+  md << "\nMedian fit time " << Median(times) << " ms; stages (median ms): g search " << Median(search)
+     << ", robust steps " << Median(robust) << ", final level " << Median(final_s) << ", render check " << Median(check)
+     << ".\n\n| reference | default (vulkan) ms | default (cpu) ms | + Ceres polish ms | old coarse-to-fine ms | "
+        "numeric baseline ms | vs numeric | process s |\n|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : compare) {
+    md << "| " << c["reference"].get<std::string>() << " | " << c["default_vulkan"]["median_ms"].get<double>() << " ("
+       << 100 * c["default_vulkan"]["rel_rmse"].get<double>() << "%) | " << c["default_cpu"]["median_ms"].get<double>()
+       << " | " << c["with_ceres_polish"]["median_ms"].get<double>() << " ("
+       << 100 * c["with_ceres_polish"]["rel_rmse"].get<double>() << "%) | "
+       << c["old_coarse_to_fine_ceres"]["median_ms"].get<double>() << " ("
+       << 100 * c["old_coarse_to_fine_ceres"]["rel_rmse"].get<double>() << "%) | "
+       << c["numeric_jacobian_baseline"]["median_ms"].get<double>() << " ("
+       << 100 * c["numeric_jacobian_baseline"]["rel_rmse"].get<double>() << "%) | "
+       << c["speedup_vs_numeric_baseline"].get<double>() << "x | " << c["whole_process_median_s"].get<double>() << " |\n";
+  }
+  const auto& day = result["day_24_references_256x128"];
+  md << "\nDay (24 references of the hazy atmosphere, 256x128, one run): " << day["timing"]["median_ms"].get<double>()
+     << " ms (linear start " << 1e3 * day["linear_start_time_s"].get<double>() << " ms, the rest the joint Ceres polish), "
+     << "worst rel RMSE " << 100 * day["rel_rmse_max"].get<double>() << "%, g " << day["haziness_g"].get<double>()
+     << " (truth " << day["truth_haziness_g"].get<double>() << "); the old coarse-to-fine path: "
+     << day["old_path"]["timing"]["median_ms"].get<double>() << " ms, worst " << 100 * day["old_path"]["rel_rmse_max"].get<double>()
+     << "%.\n";
+  WriteFileAtomically((out_dir / "fit.md").string(), md.str());
+  std::cout << md.str();
   std::filesystem::remove_all(dir);
   return 0;
 }

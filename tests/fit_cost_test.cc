@@ -15,6 +15,27 @@
 namespace skycal::fit {
 namespace {
 
+// A cost whose Jacobian for one parameter block is 1% too large: proves the gradient
+// check can fail (Ceres' own gradient_checker_test pairs a good and a bad term the same way).
+class WrongJacobian final : public ceres::CostFunction {
+ public:
+  WrongJacobian(const ceres::CostFunction* good, int block) : good_(good), block_(block) {
+    set_num_residuals(good->num_residuals());
+    *mutable_parameter_block_sizes() = good->parameter_block_sizes();
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    if (!good_->Evaluate(parameters, residuals, jacobians)) return false;
+    if (jacobians && jacobians[block_]) {
+      for (int i = 0; i < num_residuals(); ++i) jacobians[block_][i] *= 1.01;
+    }
+    return true;
+  }
+
+ private:
+  const ceres::CostFunction* good_;
+  int block_;
+};
+
 void CheckRow(render::ModelVariant variant, RobustLoss loss, double overcast_weight, int channel, double elevation_row_deg,
               double loss_scale = 0.05, double log_ref_base = std::log(500.0)) {
   render::Preset p = testing::RandomPreset(77, variant);
@@ -53,6 +74,13 @@ void CheckRow(render::ModelVariant variant, RobustLoss loss, double overcast_wei
   ceres::GradientChecker::ProbeResults results;
   EXPECT_TRUE(checker.Probe(params.data(), 1e-6, &results)) << results.error_log;
   EXPECT_LT(results.maximum_relative_error, 1e-6);
+  // Control: the same check must fail on a Jacobian 1% off in one block (the g column,
+  // whose derivative comes from the Jet instantiation of the shared source).
+  WrongJacobian wrong(&cost, static_cast<int>(index.size()));
+  ceres::GradientChecker wrong_checker(&wrong, no_manifolds, nd);
+  ceres::GradientChecker::ProbeResults wrong_results;
+  EXPECT_FALSE(wrong_checker.Probe(params.data(), 1e-6, &wrong_results));
+  EXPECT_GT(wrong_results.maximum_relative_error, 1e-3);
 }
 
 TEST(FitCost, JacobiansMatchNumericDifferences) {

@@ -102,8 +102,9 @@ double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures
   return cost(g) <= costs[best] ? g : nodes[best];
 }
 
-// Global and per-ring scales from log residuals e; *sigma receives the global MAD-sigma.
-RingLossScales EstimateScales(const LinearSky& sky, const std::vector<double>& e, double floor, double* sigma) {
+}  // namespace
+
+RingLossScales EstimateRingScales(const LinearSky& sky, const std::vector<double>& e, double floor, double* sigma) {
   RingLossScales out;
   *sigma = kMadToSigma * WeightedMedianAbs(e, sky.error_weights());
   out.global = std::max(floor, kCauchyTuning * *sigma);
@@ -120,6 +121,8 @@ RingLossScales EstimateScales(const LinearSky& sky, const std::vector<double>& e
   }
   return out;
 }
+
+namespace {
 
 std::vector<double> PerSample(const LinearSky& sky, const RingLossScales& rings) {
   std::vector<double> out(sky.num_samples());
@@ -191,7 +194,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
 
   // 2. The loss scales from the least-squares residuals.
   std::vector<double> e = sky->LogErrors(sol, exposures);
-  RingLossScales rings = EstimateScales(*sky, e, o.loss_scale, &rep.residual_sigma);
+  RingLossScales rings = EstimateRingScales(*sky, e, o.loss_scale, &rep.residual_sigma);
   std::vector<double> scales = PerSample(*sky, rings);
 
   // 3. Gauss-Newton steps of the robust log objective, the scales annealed from 8x down,
@@ -211,7 +214,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     // sheds more of that pull.
     for (int round = 0; round < kScaleRounds; ++round) {
       double sigma = 0.0;
-      const RingLossScales again = EstimateScales(*sky, e, o.loss_scale, &sigma);
+      const RingLossScales again = EstimateRingScales(*sky, e, o.loss_scale, &sigma);
       const std::vector<double> narrower = PerSample(*sky, again);
       bool shrank = false;
       for (size_t i = 0; i < scales.size(); ++i) shrank = shrank || narrower[i] < 0.95 * scales[i];

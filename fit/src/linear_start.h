@@ -65,6 +65,10 @@ struct LinearStartReport {
   LinearSkySolution solution;    // at the final level
 };
 
+// Global and per-ring scales from log residuals e (LinearSky::LogErrors layout), the global
+// one at least `floor`; *sigma receives the global MAD-sigma.
+RingLossScales EstimateRingScales(const LinearSky& sky, const std::vector<double>& e, double floor, double* sigma);
+
 // Weighted median of |values| (weights > 0).
 double WeightedMedianAbs(const std::vector<double>& values, const std::vector<double>& weights);
 

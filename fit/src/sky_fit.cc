@@ -7,10 +7,12 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <set>
 
 #include "fit_state.h"
-#include "linear_start.h"
+#include "fit_finish.h"
+#include "linear_stage.h"
 #include "probe_terms.h"
 #include "pyramid.h"
 #include "sky_row_cost.h"
@@ -24,9 +26,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
-// The linear start's render check (see FitSky): the backends' parity bound (2e-5,
-// tests/render_parity_test.cc) plus the LUT's float storage.
-constexpr double kRenderCheckThreshold = 5e-5;
 
 // sqrt(lambda) * (u - u0): pulls a LUT entry toward its initial value (gauge for
 // combinations the data cannot separate, e.g. the two LUT rows around one sun angle).
@@ -152,6 +151,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   if (refs.empty()) throw Error("fit: no reference given");
+  // The start must be a valid preset (names the field or table on a NaN, a negative
+  // entry or an out-of-range parameter); zero LUT entries start at a floor (FitState).
+  render::ValidatePreset(init, "initial preset '" + init.name + "'");
   const auto t_start = Clock::now();
   FitResult result;
   result.backend_description = renderer.Describe();
@@ -241,115 +243,15 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   std::set<std::pair<int, int>> last_observed_columns;  // at the finest level
   std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
   const bool use_gpu = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
-  // The linear start (fit/src/linear_start.h): the LUT, g, L_z and the exposures at the
-  // least-squares / annealed-robust optimum of the linear structure; the Ceres solve is
-  // then a polish at the finest level under the loss scale the residuals asked for.
-  double polish_loss_scale = 0.0;
-  std::vector<double*> held_at_floor;
-  double render_check_difference = 0.0;
-  std::set<std::pair<int, int>> linear_observed_columns;
+  // The linear start (fit/src/linear_stage.h): the LUT, g, L_z and the exposures at the
+  // robust optimum of the linear structure; the Ceres levels then run only where needed.
+  LinearStageOutcome linear;
   if (o.linear_start) {
-    const auto t_linear = Clock::now();
-    const int linear_width = std::min(o.linear_width, widths.back());
-    // Two levels: the robust steps (twice the search width) and the final Gauss-Newton
-    // steps (the finest pyramid width); the g search runs on every k-th pixel of the
-    // robust level (LinearSkyOptions::stride), so it is linear_width wide.
-    const int robust_width = std::min(2 * linear_width, widths.back());
-    std::vector<std::vector<FitLevel>> linear_levels;
-    std::vector<std::vector<const FitLevel*>> level_ptrs;
-    for (int w : {robust_width, widths.back()}) {
-      if (!linear_levels.empty() && linear_levels.back()[0].width == w) continue;
-      linear_levels.emplace_back();
-      for (const Reference& ref : refs) linear_levels.back().push_back(BuildLevel(ref, w));
-    }
-    for (const auto& lvs : linear_levels) {
-      level_ptrs.emplace_back();
-      for (const FitLevel& lv : lvs) level_ptrs.back().push_back(&lv);
-    }
-    const std::vector<const FitLevel*>& final_ptrs = level_ptrs.back();
-    LinearSkyOptions lo;
-    lo.unknowns = tied ? LinearUnknowns::kTiedRows : LinearUnknowns::kFreeRows;
-    lo.row_fitted = row_fitted;
-    lo.fit_overcast = fit_overcast;
-    lo.smoothness = o.smoothness;
-    lo.prior_weight = o.prior_weight;
-    std::vector<std::unique_ptr<LinearSky>> skies;
-    for (const auto& ptrs : level_ptrs) skies.push_back(std::make_unique<LinearSky>(state, ptrs, refs, lo));
-    LinearSkyOptions search_options = lo;
-    search_options.stride = std::max(1, robust_width / linear_width);
-    const LinearSky search(state, level_ptrs.front(), refs, search_options);
-    const LinearSky& sky = *skies.back();
-    const LinearSky& robust = *skies.front();
-    const LinearStartReport rep =
-        RunLinearStart(search, robust, sky, &state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
-    polish_loss_scale = rep.loss_scale;
-    held_at_floor = rep.held;
-    if (!held_at_floor.empty()) {
-      result.skipped.push_back({{"block", std::to_string(held_at_floor.size()) + " LUT parameters"},
-                                {"reason", "the linear least-squares solve wants them <= 0 (a table the sky does not "
-                                           "need there): held at 1e-3 of their start, not polished in log space"}});
-    }
-    const double linear_time = Seconds(t_linear, Clock::now());
-    result.linear_start = {{"search_width", robust_width / search_options.stride},
-                           {"robust_width", robust_width},
-                           {"width", final_ptrs[0]->width},
-                           {"unknowns", sky.num_unknowns()},
-                           {"samples", sky.num_samples()},
-                           {"solves", rep.solves},
-                           {"gauss_newton_steps", rep.gauss_newton_steps},
-                           {"search_time_s", rep.search_time_s},
-                           {"robust_time_s", rep.robust_time_s},
-                           {"final_time_s", rep.final_time_s},
-                           {"haziness_g", rep.g},
-                           {"rel_rmse_least_squares", rep.rel_rmse_least_squares},
-                           {"rel_rmse_robust", rep.rel_rmse_robust},
-                           {"residual_sigma_log", rep.residual_sigma},
-                           {"loss_scale", rep.loss_scale},
-                           {"loss_scale_floor", o.loss_scale},
-                           {"held_non_positive", rep.held_non_positive},
-                           {"time_s", linear_time}};
-    if (o.verbose) {
-      std::cerr << "[fit] linear start at " << linear_width << " wide: g " << rep.g << ", rel RMSE "
-                << rep.rel_rmse_least_squares << " (least squares) -> " << rep.rel_rmse_robust << " (robust, scale "
-                << rep.loss_scale << "), " << rep.solves << " solves, " << linear_time << " s" << std::endl;
-    }
-    // The render check: the selected backend draws the linear solution at the final level,
-    // and must reproduce the linear structure's values (threshold: the backends' parity
-    // bound, tests/render_parity_test.cc, 2e-5, plus float LUT storage: 5e-5).
-    {
-      const auto t_check = Clock::now();
-      const render::Preset candidate = state.ToPreset();
-      std::vector<ImageRGB> images;
-      for (size_t r = 0; r < refs.size(); ++r) {
-        render::RenderRequest req;
-        req.sun_dir = refs[r].sun_dir;
-        req.width = final_ptrs[r]->width;
-        req.height = final_ptrs[r]->height;
-        req.sun_disc = false;
-        req.ground = render::GroundMode::kZero;
-        images.push_back(renderer.Render(candidate, req));
-      }
-      render_check_difference = sky.MaxRelativeDifference(rep.solution, rep.exposures, images);
-      result.linear_start["render_check"] = {{"backend", renderer.Describe()},
-                                             {"max_relative_difference", render_check_difference},
-                                             {"threshold", kRenderCheckThreshold},
-                                             {"time_s", Seconds(t_check, Clock::now())}};
-    }
-    linear_observed_columns.clear();
-    for (const auto& tc : sky.ObservedColumns()) linear_observed_columns.insert(tc);
-    const bool render_agrees = render_check_difference <= kRenderCheckThreshold;
-    const bool polish = o.polish || probed_count > 0 || !render_agrees;
-    if (!polish) {
-      result.skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
-                                {"reason", "the linear start converged on the robust log objective itself and the " +
-                                               std::string(render::ToString(o.backend)) +
-                                               " render reproduces its values (render_check): nothing left to polish"}});
+    linear = RunLinearStage(refs, o, tied, row_fitted, fit_overcast, probed_count > 0, widths.back(), renderer, &state,
+                            &result);
+    if (!linear.polish) {
       widths.clear();
-    } else if (!render_agrees) {
-      result.warnings.push_back("the render check failed (max relative difference " +
-                                std::to_string(render_check_difference) + "): the Ceres polish runs through the backend");
-    }
-    if (widths.size() > 1) {
+    } else if (widths.size() > 1) {
       std::string skipped_widths;
       for (size_t i = 0; i + 1 < widths.size(); ++i) skipped_widths += (i ? ", " : "") + std::to_string(widths[i]);
       result.skipped.push_back({{"block", "coarse pyramid levels (" + skipped_widths + " wide)"},
@@ -371,8 +273,8 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     bool rendered_valid = false;
     // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
     // above the finest) so a far start is not trapped by down-weighted pixels.
-    const double level_loss_scale = polish_loss_scale > 0.0
-                                        ? polish_loss_scale
+    const double level_loss_scale = linear.ran
+                                        ? linear.loss_scale
                                         : o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
 
     ceres::Problem::Options popts;
@@ -406,8 +308,19 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
             const size_t i = static_cast<size_t>(y) * lw + x;
             if (lv.weight[i] <= 0.0) continue;
             const auto v = latlong::PixelDirection(x, y, lw, lh);
+            // After the linear start each pixel keeps the loss scale of its ring around the
+            // sun (fit/src/linear_start.h: RingLossScales).
+            double pixel_scale = 0.0;
+            const RingLossScales* rings = linear.ring_scales_per_reference.size() == refs.size()
+                                              ? &linear.ring_scales_per_reference[r]
+                                              : (linear.ring_scales ? &*linear.ring_scales : nullptr);
+            if (rings) {
+              const double d[3] = {v[0] - refs[r].sun_dir[0], v[1] - refs[r].sun_dir[1], v[2] - refs[r].sun_dir[2]};
+              const double chord = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+              pixel_scale = rings->At(2.0 * std::asin(std::min(1.0, 0.5 * chord)) * 180.0 / M_PI);
+            }
             setup.pixels.push_back({x, std::log(static_cast<double>(lv.radiance[3 * i + ch])),
-                                    std::sqrt(lv.weight[i] / total_weight), v});
+                                    std::sqrt(lv.weight[i] / total_weight), v, pixel_scale});
           }
           if (setup.pixels.empty()) continue;
           residual_count += static_cast<long long>(setup.pixels.size());
@@ -523,7 +436,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       }
     }
     last_observed_columns = observed_columns;
-    for (double* p : held_at_floor) {
+    for (double* p : linear.held) {
       if (problem.HasParameterBlock(p)) problem.SetParameterBlockConstant(p);
     }
     if (problem.HasParameterBlock(&state.g)) {
@@ -648,29 +561,10 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                              {"time_s", Seconds(t_level, Clock::now())}});
   }
 
-  if (widths.empty()) last_observed_columns = linear_observed_columns;  // no Ceres level ran
+  if (widths.empty()) last_observed_columns = linear.observed_columns;  // no Ceres level ran
   state.ApplyTiedRows();
   // Columns no pixel reached: the change (log) of the nearest observed column, per row.
-  int extrapolated = 0;
-  for (int t = 0; t < state.tables; ++t) {
-    for (int col = 0; col < grid.n_gamma; ++col) {
-      if (last_observed_columns.count({t, col})) continue;
-      int nearest = -1;
-      for (int d = 1; d < grid.n_gamma && nearest < 0; ++d) {
-        if (col + d < grid.n_gamma && last_observed_columns.count({t, col + d})) nearest = col + d;
-        else if (col - d >= 0 && last_observed_columns.count({t, col - d})) nearest = col - d;
-      }
-      if (nearest < 0) continue;
-      for (int row = 0; row < grid.n_theta; ++row) {
-        if (!row_fitted[row]) continue;
-        for (int ch = 0; ch < 3; ++ch) {
-          const size_t k = state.Index(t, row, col, ch), kn = state.Index(t, row, nearest, ch);
-          state.log_lut[k] = initial_log_lut[k] + (state.log_lut[kn] - initial_log_lut[kn]);
-        }
-      }
-      ++extrapolated;
-    }
-  }
+  const int extrapolated = ExtrapolateUnobservedColumns(last_observed_columns, row_fitted, &state);
   if (extrapolated > 0) {
     result.skipped.push_back({{"block", "LUT columns without observations"},
                               {"reason", std::to_string(extrapolated) +
@@ -678,28 +572,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                                              "does not sample, e.g. within ~0.1 deg of the horizon): given the change of "
                                              "the nearest observed column"}});
   }
-  // Move the LUT scale gauge onto the exposures: the mean log change of the fitted texels
-  // goes to the exposure, so the LUT stays at the initial preset's absolute level.
+  // Move the LUT scale gauge onto the exposures (fit/src/fit_finish.h).
   if (!o.absolute) {
-    double shift = 0.0;
-    long long n = 0;
-    for (int t = 0; t < state.tables; ++t)
-      for (int row = 0; row < grid.n_theta; ++row)
-        if (row_fitted[row])
-          for (int col = 0; col < grid.n_gamma; ++col)
-            for (int ch = 0; ch < 3; ++ch) {
-              const size_t k = state.Index(t, row, col, ch);
-              shift += state.log_lut[k] - initial_log_lut[k];
-              ++n;
-            }
-    shift /= std::max<long long>(n, 1);
-    for (int t = 0; t < state.tables; ++t)
-      for (int row = 0; row < grid.n_theta; ++row)
-        if (row_fitted[row])
-          for (size_t k = state.Index(t, row, 0, 0); k < state.Index(t, row, 0, 0) + grid.n_gamma * 3; ++k)
-            state.log_lut[k] -= shift;
-    if (fit_overcast) state.log_overcast_zenith -= shift;
-    for (double& e : state.log_exposure) e += shift;
+    const double shift = MoveScaleGaugeToExposures(row_fitted, fit_overcast, &state);
     // The probe sees exposure * (sky + sun): the sun's model units move with the LUT.
     for (size_t r = 0; r < refs.size(); ++r) {
       for (int c = 0; c < 3; ++c) {

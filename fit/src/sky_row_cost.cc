@@ -145,7 +145,7 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
         use_rendered ? static_cast<double>(s_.rendered->at(px.x, s_.level_row, s_.channel)) : m.sky_radiance(view, p).x;
     if (!(model_value > 0.0)) return false;
     const double e = log_k + std::log(model_value) - px.log_ref;
-    const RobustResidual rr = MakeRobustResidual(s_.loss, s_.loss_scale, px.sqrt_weight, e);
+    const RobustResidual rr = MakeRobustResidual(s_.loss, px.loss_scale > 0.0 ? px.loss_scale : s_.loss_scale, px.sqrt_weight, e);
     residuals[i] = rr.r;
     if (!jacobians) continue;
     const double dr_de = rr.dr_de;

@@ -39,6 +39,7 @@ struct RowPixel {
   double log_ref;             // log of the reference channel value
   double sqrt_weight;         // sqrt(solid angle / total fitted solid angle)
   std::array<double, 3> view; // unit view direction
+  double loss_scale = 0.0;    // robust loss scale of this pixel (0: the block's loss_scale)
 };
 
 struct RowCostSetup {

@@ -1,0 +1,57 @@
+#include "fit_finish.h"
+
+#include <algorithm>
+
+namespace skycal::fit {
+
+int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, const std::vector<bool>& row_fitted,
+                                 FitState* state) {
+  const auto& grid = state->preset.luts.grid;
+  int extrapolated = 0;
+  for (int t = 0; t < state->tables; ++t) {
+    for (int col = 0; col < grid.n_gamma; ++col) {
+      if (observed.count({t, col})) continue;
+      int nearest = -1;
+      for (int d = 1; d < grid.n_gamma && nearest < 0; ++d) {
+        if (col + d < grid.n_gamma && observed.count({t, col + d})) nearest = col + d;
+        else if (col - d >= 0 && observed.count({t, col - d})) nearest = col - d;
+      }
+      if (nearest < 0) continue;
+      for (int row = 0; row < grid.n_theta; ++row) {
+        if (!row_fitted[row]) continue;
+        for (int ch = 0; ch < 3; ++ch) {
+          const size_t k = state->Index(t, row, col, ch), kn = state->Index(t, row, nearest, ch);
+          state->log_lut[k] = state->initial_log_lut[k] + (state->log_lut[kn] - state->initial_log_lut[kn]);
+        }
+      }
+      ++extrapolated;
+    }
+  }
+  return extrapolated;
+}
+
+double MoveScaleGaugeToExposures(const std::vector<bool>& row_fitted, bool fit_overcast, FitState* state) {
+  const auto& grid = state->preset.luts.grid;
+  std::vector<double> changes;
+  for (int t = 0; t < state->tables; ++t)
+    for (int row = 0; row < grid.n_theta; ++row)
+      if (row_fitted[row])
+        for (int col = 0; col < grid.n_gamma; ++col)
+          for (int ch = 0; ch < 3; ++ch) {
+            const size_t k = state->Index(t, row, col, ch);
+            changes.push_back(state->log_lut[k] - state->initial_log_lut[k]);
+          }
+  if (changes.empty()) return 0.0;
+  std::nth_element(changes.begin(), changes.begin() + changes.size() / 2, changes.end());
+  const double shift = changes[changes.size() / 2];
+  for (int t = 0; t < state->tables; ++t)
+    for (int row = 0; row < grid.n_theta; ++row)
+      if (row_fitted[row])
+        for (size_t k = state->Index(t, row, 0, 0); k < state->Index(t, row, 0, 0) + grid.n_gamma * 3; ++k)
+          state->log_lut[k] -= shift;
+  if (fit_overcast) state->log_overcast_zenith -= shift;
+  for (double& e : state->log_exposure) e += shift;
+  return shift;
+}
+
+}  // namespace skycal::fit

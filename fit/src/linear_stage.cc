@@ -1,0 +1,288 @@
+#include "linear_stage.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+#include <thread>
+#include <chrono>
+#include <iostream>
+#include <memory>
+
+#include "linear_sky.h"
+#include "pyramid.h"
+#include "skycal/core/error.h"
+
+namespace skycal::fit {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+// The render check's threshold: the backends' parity bound (2e-5,
+// tests/render_parity_test.cc) plus the LUT's float storage.
+constexpr double kRenderCheckThreshold = 5e-5;
+// The g search decimates the robust level only when that leaves at least this many samples
+// (pixels x channels): 3,000 is ~1/16 of a clear 256x128 sky's.
+constexpr int kMinDecimatedSamples = 3000;
+
+nlohmann::json RingScalesToJson(const RingLossScales& r) {
+  nlohmann::json out = nlohmann::json::array();
+  double inner = 0.0;
+  for (int k = 0; k < RingLossScales::kRings; ++k) {
+    out.push_back({{"from_deg", inner}, {"to_deg", RingLossScales::kOuterEdgeDeg[k]}, {"scale", r.ring[k]}});
+    inner = RingLossScales::kOuterEdgeDeg[k];
+  }
+  return out;
+}
+
+}  // namespace
+
+namespace {
+
+// Serialises a renderer shared by the day's worker threads (the Vulkan renderer keeps one
+// queue and command buffer).
+class LockedRenderer final : public render::SkyRenderer {
+ public:
+  explicit LockedRenderer(render::SkyRenderer* inner) : inner_(inner) {}
+  ImageRGB Render(const render::Preset& preset, const render::RenderRequest& request) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return inner_->Render(preset, request);
+  }
+  std::string Describe() const override { return inner_->Describe(); }
+
+ private:
+  render::SkyRenderer* inner_;
+  std::mutex mutex_;
+};
+
+// LUT row coordinate of a sun direction (fractional), as lut_row of the shared source.
+double SunRowPosition(const render::LutGrid& grid, const std::array<double, 3>& sun) {
+  const double one_minus_cos_max = 1.0 - std::cos(grid.theta_max_deg * M_PI / 180.0);
+  return std::clamp((1.0 - sun[1]) / one_minus_cos_max, 0.0, 1.0) * (grid.n_theta - 1);
+}
+
+LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const FitOptions& o,
+                                     const std::vector<bool>& row_fitted, bool fit_overcast, int finest_width,
+                                     render::SkyRenderer& renderer, FitState* state, FitResult* result) {
+  const auto t0 = Clock::now();
+  const auto& grid = state->preset.luts.grid;
+  const size_t n = refs.size();
+  std::vector<FitState> singles(n);
+  std::vector<LinearStageOutcome> outcomes(n);
+  std::vector<FitResult> reports(n);
+  std::vector<std::string> errors(n);
+  LockedRenderer locked(&renderer);
+  FitOptions single_options = o;
+  single_options.verbose = false;
+  single_options.polish = true;  // the day's polish runs anyway: skip the per-reference render checks' decision
+  auto run = [&](size_t r) {
+    try {
+      FitState& st = singles[r];
+      st = FitState::FromPreset(state->preset, state->preset.variant, 1);
+      st.initial_log_lut = state->initial_log_lut;
+      st.log_lut = state->initial_log_lut;
+      const double pos = SunRowPosition(grid, refs[r].sun_dir);
+      const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
+      st.tied_rows = {r0, r0 + 1};
+      std::vector<bool> rows(grid.n_theta, false);
+      rows[r0] = rows[r0 + 1] = true;
+      outcomes[r] = RunLinearStage({refs[r]}, single_options, true, rows, fit_overcast, false, finest_width, locked,
+                                   &st, &reports[r]);
+    } catch (const std::exception& e) {
+      errors[r] = refs[r].name + ": " + e.what();
+    }
+  };
+  // Two workers; the renderer is used by one at a time (its render check).
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t r = next++; r < n; r = next++) run(r);
+  };
+  {
+    std::thread second(worker);
+    worker();
+    second.join();
+  }
+  for (const std::string& e : errors) {
+    if (!e.empty()) throw Error("fit: linear start of " + e);
+  }
+  // Combine: log change per (table, column, channel) at each reference's row position.
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t r = 0; r < n; ++r) order.emplace_back(SunRowPosition(grid, refs[r].sun_dir), r);
+  std::sort(order.begin(), order.end());
+  std::vector<double> gs;
+  for (int t = 0; t < state->tables; ++t)
+    for (int col = 0; col < grid.n_gamma; ++col)
+      for (int ch = 0; ch < 3; ++ch) {
+        const size_t d = state->DeltaIndex(t, col, ch);
+        for (int row = 0; row < grid.n_theta; ++row) {
+          if (!row_fitted[row]) continue;
+          double change = 0.0;
+          if (row <= order.front().first) {
+            change = singles[order.front().second].log_delta[d];
+          } else if (row >= order.back().first) {
+            change = singles[order.back().second].log_delta[d];
+          } else {
+            size_t k = 0;
+            while (k + 1 < order.size() && order[k + 1].first < row) ++k;
+            const double a = order[k].first, b = order[k + 1].first;
+            const double w = b > a ? (row - a) / (b - a) : 0.0;
+            change = (1.0 - w) * singles[order[k].second].log_delta[d] + w * singles[order[k + 1].second].log_delta[d];
+          }
+          const size_t i = state->Index(t, row, col, ch);
+          state->log_lut[i] = state->initial_log_lut[i] + change;
+        }
+      }
+  LinearStageOutcome out;
+  out.ran = true;
+  out.polish = true;
+  for (size_t r = 0; r < n; ++r) {
+    gs.push_back(singles[r].g);
+    out.ring_scales_per_reference.push_back(outcomes[r].ring_scales.value_or(RingLossScales{}));
+    out.loss_scale = std::max(out.loss_scale, outcomes[r].loss_scale);
+    for (const auto& tc : outcomes[r].observed_columns) out.observed_columns.insert(tc);
+  }
+  std::nth_element(gs.begin(), gs.begin() + gs.size() / 2, gs.end());
+  if (o.fit_haziness) state->g = gs[gs.size() / 2];
+  if (fit_overcast) {
+    double sum = 0.0;
+    for (const FitState& st : singles) sum += st.log_overcast_zenith;
+    state->log_overcast_zenith = sum / static_cast<double>(n);
+  }
+  nlohmann::json per_ref = nlohmann::json::array();
+  for (size_t r = 0; r < n; ++r) {
+    per_ref.push_back({{"reference", refs[r].name}, {"report", reports[r].linear_start}});
+  }
+  result->linear_start = {{"mode", "per reference, combined along the LUT rows; the Ceres polish solves the day jointly"},
+                          {"haziness_g", state->g},
+                          {"loss_scale", out.loss_scale},
+                          {"references", per_ref},
+                          {"time_s", Seconds(t0, Clock::now())}};
+  if (o.verbose) {
+    std::cerr << "[fit] linear start of " << n << " references: median g " << state->g << ", "
+              << Seconds(t0, Clock::now()) << " s" << std::endl;
+  }
+  return out;
+}
+
+}  // namespace
+
+LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitOptions& o, bool tied,
+                                  const std::vector<bool>& row_fitted, bool fit_overcast, bool probed,
+                                  int finest_width, render::SkyRenderer& renderer, FitState* state,
+                                  FitResult* result) {
+  if (refs.size() > 1) {
+    return RunLinearStageDay(refs, o, row_fitted, fit_overcast, finest_width, renderer, state, result);
+  }
+  LinearStageOutcome out;
+  const auto t_linear = Clock::now();
+  const int linear_width = std::min(o.linear_width, finest_width);
+  // Two levels: the robust steps (twice the search width) and the final Gauss-Newton
+  // steps (the finest pyramid width); the g search runs on every k-th pixel of the
+  // robust level (LinearSkyOptions::stride), so it is linear_width wide.
+  const int robust_width = std::min(2 * linear_width, finest_width);
+  std::vector<std::vector<FitLevel>> linear_levels;
+  std::vector<std::vector<const FitLevel*>> level_ptrs;
+  for (int w : {robust_width, finest_width}) {
+    if (!linear_levels.empty() && linear_levels.back()[0].width == w) continue;
+    linear_levels.emplace_back();
+    for (const Reference& ref : refs) linear_levels.back().push_back(BuildLevel(ref, w));
+  }
+  for (const auto& lvs : linear_levels) {
+    level_ptrs.emplace_back();
+    for (const FitLevel& lv : lvs) level_ptrs.back().push_back(&lv);
+  }
+  const std::vector<const FitLevel*>& final_ptrs = level_ptrs.back();
+  LinearSkyOptions lo;
+  lo.unknowns = tied ? LinearUnknowns::kTiedRows : LinearUnknowns::kFreeRows;
+  lo.row_fitted = row_fitted;
+  lo.fit_overcast = fit_overcast;
+  lo.smoothness = o.smoothness;
+  lo.prior_weight = o.prior_weight;
+  std::vector<std::unique_ptr<LinearSky>> skies;
+  for (const auto& ptrs : level_ptrs) skies.push_back(std::make_unique<LinearSky>(*state, ptrs, refs, lo));
+  LinearSkyOptions search_options = lo;
+  search_options.stride = std::max(1, robust_width / linear_width);
+  // A sparse reference (a mask leaving a few rows) keeps every pixel for the search: the
+  // decimation could drop whole rows, or all of them.
+  if (skies.front()->num_samples() < static_cast<size_t>(kMinDecimatedSamples) * search_options.stride * search_options.stride) {
+    search_options.stride = 1;
+  }
+  const LinearSky search(*state, level_ptrs.front(), refs, search_options);
+  const LinearSky& sky = *skies.back();
+  const LinearSky& robust = *skies.front();
+  const LinearStartReport rep =
+      RunLinearStart(search, robust, sky, state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
+  out.ran = true;
+  out.loss_scale = rep.loss_scale;
+  out.ring_scales = rep.ring_scales;
+  out.held = rep.held;
+  if (!out.held.empty()) {
+    result->skipped.push_back({{"block", std::to_string(out.held.size()) + " LUT parameters"},
+                              {"reason", "the linear least-squares solve wants them <= 0 (a table the sky does not "
+                                         "need there): held at 1e-6 of their start, not polished in log space"}});
+  }
+  const double linear_time = Seconds(t_linear, Clock::now());
+  result->linear_start = {{"search_width", robust_width / search_options.stride},
+                         {"robust_width", robust_width},
+                         {"width", final_ptrs[0]->width},
+                         {"unknowns", sky.num_unknowns()},
+                         {"samples", sky.num_samples()},
+                         {"solves", rep.solves},
+                         {"gauss_newton_steps", rep.gauss_newton_steps},
+                         {"search_time_s", rep.search_time_s},
+                         {"robust_time_s", rep.robust_time_s},
+                         {"final_time_s", rep.final_time_s},
+                         {"haziness_g", rep.g},
+                         {"rel_rmse_least_squares", rep.rel_rmse_least_squares},
+                         {"rel_rmse_robust", rep.rel_rmse_robust},
+                         {"residual_sigma_log", rep.residual_sigma},
+                         {"loss_scale", rep.loss_scale},
+                         {"loss_scale_floor", o.loss_scale},
+                         {"loss_scale_by_sun_distance", RingScalesToJson(rep.ring_scales)},
+                         {"held_non_positive", rep.held_non_positive},
+                         {"time_s", linear_time}};
+  if (o.verbose) {
+    std::cerr << "[fit] linear start at " << linear_width << " wide: g " << rep.g << ", rel RMSE "
+              << rep.rel_rmse_least_squares << " (least squares) -> " << rep.rel_rmse_robust << " (robust, scale "
+              << rep.loss_scale << "), " << rep.solves << " solves, " << linear_time << " s" << std::endl;
+  }
+  // The render check: the selected backend draws the linear solution at the final level,
+  // and must reproduce the linear structure's values (threshold: the backends' parity
+  // bound, tests/render_parity_test.cc, 2e-5, plus float LUT storage: 5e-5).
+  {
+    const auto t_check = Clock::now();
+    const render::Preset candidate = state->ToPreset();
+    std::vector<ImageRGB> images;
+    for (size_t r = 0; r < refs.size(); ++r) {
+      render::RenderRequest req;
+      req.sun_dir = refs[r].sun_dir;
+      req.width = final_ptrs[r]->width;
+      req.height = final_ptrs[r]->height;
+      req.sun_disc = false;
+      req.ground = render::GroundMode::kZero;
+      images.push_back(renderer.Render(candidate, req));
+    }
+    out.render_difference = sky.MaxRelativeDifference(rep.solution, rep.exposures, images);
+    result->linear_start["render_check"] = {{"backend", renderer.Describe()},
+                                           {"max_relative_difference", out.render_difference},
+                                           {"threshold", kRenderCheckThreshold},
+                                           {"time_s", Seconds(t_check, Clock::now())}};
+  }
+  for (const auto& tc : sky.ObservedColumns()) out.observed_columns.insert(tc);
+  out.render_agrees = out.render_difference <= kRenderCheckThreshold;
+  out.polish = o.polish || probed || !out.render_agrees;
+  if (!out.polish) {
+    result->skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
+                              {"reason", "the linear start converged on the robust log objective itself and the " +
+                                             std::string(render::ToString(o.backend)) +
+                                             " render reproduces its values (render_check): nothing left to polish"}});
+  } else if (!out.render_agrees) {
+    result->warnings.push_back("the render check failed (max relative difference " +
+                               std::to_string(out.render_difference) + "): the Ceres polish runs through the backend");
+  }
+  return out;
+}
+
+}  // namespace skycal::fit

@@ -1,0 +1,42 @@
+// The fit's linear stage inside FitSky: builds the levels, runs the linear start
+// (linear_start.h), checks that the selected backend renders what it predicts, and decides
+// whether the Ceres polish still has work (probe samples, --polish, a failed render check).
+// Writes its report into FitResult::linear_start and its decisions into `skipped`.
+#pragma once
+#include <optional>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "fit_state.h"
+#include "linear_start.h"
+#include "skycal/fit/sky_fit.h"
+
+namespace skycal::fit {
+
+struct LinearStageOutcome {
+  bool ran = false;
+  double loss_scale = 0.0;                     // the global robust scale (log units)
+  std::optional<RingLossScales> ring_scales;   // per ring around the sun, for the polish
+  std::vector<RingLossScales> ring_scales_per_reference;  // several references: each one's
+  std::vector<double*> held;                   // state parameters held at their floor
+  std::set<std::pair<int, int>> observed_columns;  // (table, LUT column) some pixel reads
+  double render_difference = 0.0;              // the render check's max relative difference
+  bool render_agrees = false;
+  bool polish = true;                          // the Ceres polish still runs
+};
+
+// One reference: the linear start on the tied rows, the render check, the polish decision.
+// Several references (a day): the linear start of each reference on its own (tied rows,
+// its own g and loss scales; two threads), combined into the day's start: every fitted
+// LUT row takes the log change of the references around its sun angle, interpolated
+// along the row coordinate, g the median of theirs. The joint free-row solve is then the
+// Ceres polish (always run for a day): the linear structure's free-row solve with unknown
+// exposures and the log-space smoothness prior is not linear (measured: 4-6% off and
+// 10-30 s on 24 references before this split).
+LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitOptions& o, bool tied,
+                                  const std::vector<bool>& row_fitted, bool fit_overcast, bool probed,
+                                  int finest_width, render::SkyRenderer& renderer, FitState* state,
+                                  FitResult* result);
+
+}  // namespace skycal::fit
