@@ -7,6 +7,7 @@
 
 #include "bake_verb.h"
 #include "capture_verb.h"
+#include "ceiling_verb.h"
 #include "export_verb.h"
 #include "fit_verb.h"
 #include "import_verb.h"
@@ -28,6 +29,7 @@ const std::vector<Verb>& Verbs() {
   static const std::vector<Verb> verbs = {
       {"render", "render a sky preset to a lat-long EXR (+ PNG preview)", &skycal::cli::RunRender},
       {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
+      {"ceiling", "the model's best possible fit of a reference sky (rel RMSE), LUT and per image row", &skycal::cli::RunCeiling},
       {"capture", "exposure brackets (fisheye or rig) to a calibrated lat-long reference frame", &skycal::cli::RunCapture},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},

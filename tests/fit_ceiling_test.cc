@@ -164,5 +164,47 @@ TEST(FitCeiling, CloudBlobsAndABuildingDoNotPull) {
   EXPECT_LE(vs_clean, 1.2 * ceiling + 0.01);
 }
 
+// The random-start stress study's CI subset (the full study: bench/bench_fit_stress.cc,
+// bench/results/fit_stress.md): starts far from any sky (each LUT table x 10^U(-1, 1),
+// g ~ U(0, 0.95)) on references whose exposure is off by 10^U(-3, 3); every fit must end
+// finite and within 1.2 x its ceiling + 0.1%.
+TEST(FitCeiling, RandomStartsReachTheCeiling) {
+  testing::ScratchDir dir("ceiling-random");
+  auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
+  const auto types = refsky::LoadCieSkyTypes(refsky::DefaultCieCsvPath());
+  std::vector<std::pair<std::string, std::string>> skies;  // name, path
+  refsky::WriteCieReference(dir / "cie12.exr", types[11], latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0), kWidth);
+  skies.emplace_back("CIE 12 sun 30", dir / "cie12.exr");
+  refsky::WriteCieReference(dir / "cie1.exr", types[0], latlong::DirectionFromElevationAzimuthDeg(45.0, 90.0), kWidth);
+  skies.emplace_back("CIE 1 sun 45", dir / "cie1.exr");
+  refsky::WriteModelReference(dir / "hazy.exr", refsky::BakeVariant(refsky::StandardAtmosphereVariants()[1]),
+                              latlong::DirectionFromElevationAzimuthDeg(10.0, -40.0), kWidth);
+  skies.emplace_back("hazy sun 10", dir / "hazy.exr");
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const fit::FitOptions o = Defaults();
+  for (const auto& [name, path] : skies) {
+    const fit::Reference clean = fit::LoadReference(path, o);
+    const double ceiling = fit::ModelCeiling(clean, DefaultStart(), o).lut_rel_rmse;
+    for (int k = 0; k < 4; ++k) {
+      render::Preset start = DefaultStart();
+      for (auto* table : {&start.luts.rayleigh, &start.luts.mie, &start.luts.isotropic}) {
+        const double scale = std::pow(10.0, -1.0 + 2.0 * u(rng));
+        for (float& v : *table) v = static_cast<float>(v * scale);
+      }
+      start.haziness_g = 0.95 * u(rng);
+      const double exposure = std::pow(10.0, -3.0 + 6.0 * u(rng));
+      fit::Reference ref = clean;
+      for (float& v : ref.radiance.pixels) v = static_cast<float>(v * exposure);
+      const fit::FitResult r = fit::FitSky({ref}, start, o, *vulkan);
+      const double err = r.references[0].errors.rel_rmse;
+      SCOPED_TRACE(name + " start g " + std::to_string(start.haziness_g) + " exposure " + std::to_string(exposure));
+      ASSERT_TRUE(std::isfinite(err));
+      for (float v : r.preset.luts.mie) ASSERT_TRUE(std::isfinite(v));
+      EXPECT_LE(err, 1.2 * ceiling + 1e-3);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace skycal

@@ -35,7 +35,10 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
 }
 
 constexpr double kIsotropicPhase = 1.0 / (4.0 * M_PI);
-constexpr double kFloorFraction = 1e-6;   // non-positive entries are held at this x their start
+// Non-positive entries are held at this fraction of their start rescaled to the data
+// (start_scale_ x initial): relative to the data, so a reference 1000x darker than the
+// preset is not held at a floor that is large for it.
+constexpr double kFloorFraction = 1e-6;
 constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
 constexpr int kActiveSetRounds = 20;
 
@@ -178,6 +181,8 @@ double LinearSky::StartScale(const std::vector<double>& exposures, const std::ve
   }
   return den > 0.0 && num > 0.0 ? num / den : 1.0;
 }
+
+double LinearSky::Floor(int j) const { return kFloorFraction * start_scale_ * initial_[j]; }
 
 std::vector<double> LinearSky::MiePhases(double g) const {
   NoLut none;
@@ -325,7 +330,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
       // A hold much stiffer than the entry's own data: penalty x its diagonal.
       const double stiffness = kActiveSetPenalty * std::max(normal.coeff(j, j), 1e-300);
       sys.coeffRef(j, j) += stiffness;
-      rb[j] += stiffness * kFloorFraction * initial_[j];
+      rb[j] += stiffness * Floor(j);
     }
     // Symmetric Jacobi scaling D N D (D = diag(N)^-1/2): LUT entries span orders of
     // magnitude between tables and columns, and the unpivoted sparse LDLT loses digits on
@@ -342,7 +347,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     bool changed = false;
     const Eigen::VectorXd gradient = normal * x - rhs;
     for (int j = 0; j < num_unknowns_; ++j) {
-      if (!held[j] && !(x[j] > kFloorFraction * initial_[j])) {
+      if (!held[j] && !(x[j] > Floor(j))) {
         held[j] = 1;
         changed = true;
       } else if (held[j] && gradient[j] * initial_[j] < -1e-12 * std::abs(rhs[j] * initial_[j]) - 1e-300) {
@@ -355,7 +360,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   sol.held = held;
   sol.values.resize(num_unknowns_);
   for (int j = 0; j < num_unknowns_; ++j) {
-    sol.values[j] = std::max(x[j], kFloorFraction * initial_[j]);
+    sol.values[j] = std::max(x[j], Floor(j));
     sol.held_non_positive += held[j];
   }
   sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);

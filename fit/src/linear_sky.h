@@ -144,6 +144,7 @@ class LinearSky {
   // M / exposure at a pixel for channel ch, given the Mie phase there.
   double Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const;
   std::vector<double> MiePhases(double g) const;  // per pixel, rows in order
+  double Floor(int j) const;                      // value non-positive entries are held at
   // Least-squares scale of the start (initial values) on the data, at the start's g and
   // exposures: the centre of the prior is this scale times the start (see Solve).
   double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
