@@ -27,6 +27,18 @@ fit::FitOptions Quiet() {
   return o;
 }
 
+// The default preset drawn at Quiet()'s sun (zero ground), width x width/2.
+capture::LatLongFrame DefaultRender(int width) {
+  render::RenderRequest req;
+  req.sun_dir = *Quiet().sun_dir;
+  req.width = width;
+  req.height = width / 2;
+  req.ground = render::GroundMode::kZero;
+  capture::LatLongFrame f;
+  f.radiance = render::CreateRenderer(render::Backend::kCpu)->Render(DefaultStart(), req);
+  return f;
+}
+
 void ExpectFinite(const render::Preset& p) {
   for (const auto* t : {&p.luts.rayleigh, &p.luts.mie, &p.luts.isotropic})
     for (float v : *t) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);
@@ -58,13 +70,7 @@ TEST(FitDegenerate, ValidPixelsInOneRowGiveAFiniteFit) {
   // the row.
   testing::ScratchDir dir("fit-one-row");
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
-  render::RenderRequest req;
-  req.sun_dir = *Quiet().sun_dir;
-  req.width = 256;
-  req.height = 128;
-  req.ground = render::GroundMode::kZero;
-  capture::LatLongFrame f;
-  f.radiance = cpu->Render(DefaultStart(), req);
+  capture::LatLongFrame f = DefaultRender(256);
   const int keep = 128 / 2 - 1 - static_cast<int>(std::lround(20.0 / 180.0 * 127.0));
   for (int y = 0; y < 128; ++y)
     for (int x = 0; x < 256; ++x)
@@ -82,13 +88,7 @@ TEST(FitDegenerate, ValidPixelsInOneRowGiveAFiniteFit) {
 TEST(FitDegenerate, StartPresetWithNanIsRefusedNamingTheTable) {
   testing::ScratchDir dir("fit-nan-start");
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
-  render::RenderRequest req;
-  req.sun_dir = *Quiet().sun_dir;
-  req.width = 128;
-  req.height = 64;
-  capture::LatLongFrame f;
-  f.radiance = cpu->Render(DefaultStart(), req);
-  capture::WriteLatLongFrame(dir / "ref.exr", f);
+  capture::WriteLatLongFrame(dir / "ref.exr", DefaultRender(128));
   const fit::Reference ref = fit::LoadReference(dir / "ref.exr", Quiet());
   render::Preset nan_start = DefaultStart();
   nan_start.luts.mie[100] = std::numeric_limits<float>::quiet_NaN();

@@ -48,8 +48,9 @@ struct LinearSkyOptions {
   // determined (measured: a sun 4 deg below the horizon, g 0.40 instead of 0.80 from a
   // 128-wide average of a 256-wide reference; exact from every second pixel).
   int stride = 1;
-  // Damping of the data's normal equations, N_jj (1 + damping) (Levenberg's damping
-  // toward zero, relative, so it is scale-free): shrinks the combinations a short image
+  int threads = 2;               // for the normal equations' accumulation (1 or 2)
+  // Damping of the data's normal equations, N_jj (1 + damping), toward the start's shape
+  // rescaled to the data (k x0; Levenberg's damping, relative, so it is scale-free): holds the combinations a short image
   // row cannot tell apart (two tables' phases nearly collinear along it) and costs a
   // relative 1e-6 on the determined ones. Measured (fit_ceiling_test): 1e-4 held CIE
   // skies at 0.05% against a 0.005% ceiling; 1e-6 and 1e-8 agree to 1e-5 everywhere.
@@ -111,6 +112,10 @@ class LinearSky {
   // log parameter chasing zero only slows Levenberg-Marquardt down).
   std::vector<double*> HeldParameters(const LinearSkySolution& s, FitState* state) const;
 
+  // Free rows: the state's LUT (and L_z) as a solution to linearise at (g = state.g).
+  LinearSkySolution FromState(const FitState& state) const;
+  // The reference a sample (LogErrors layout) belongs to.
+  size_t SampleReference(size_t sample) const;
   // (table, LUT column) pairs some fitted pixel reads (-1 column: per-image-row unknowns).
   std::vector<std::pair<int, int>> ObservedColumns() const;
   // Largest relative difference between the solution's model values and `images` (one

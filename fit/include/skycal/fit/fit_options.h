@@ -35,6 +35,7 @@ struct FitOptions {
   // Run the Ceres polish through the backend after the linear start even when nothing
   // needs it (it always runs with probe samples, or when the render check fails).
   bool polish = false;
+  int linear_threads = 2;           // threads of the linear solves (a day's references run two at a time with 1 each)
   // Coarse-to-fine widths of the area-averaged pyramid, last = full fit resolution (pixels).
   // Empty: automatic (64, 128, ... up to the reference width, at most 512).
   std::vector<int> pyramid_widths;
