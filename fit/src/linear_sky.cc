@@ -207,7 +207,7 @@ double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m,
 
 LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposures,
                                    const std::vector<double>& robust_weights,
-                                   const LinearSkySolution* linearize_at) const {
+                                   const LinearSkySolution* linearize_at, bool with_cost) const {
   const double w_o = state_.preset.overcast_weight;
   const std::vector<double> phase_m = MiePhases(g);
   // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
@@ -402,6 +402,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     sol.held_non_positive += held[j];
   }
   sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);
+  if (!with_cost) return sol;
   // Cost and relative error of the data terms.
   double cost = 0.0, sq = 0.0, wsum = 0.0;
   size_t pixel_index = 0;

@@ -84,8 +84,10 @@ class LinearSky {
   // solution's model values M0: ln(k M0 / R) + (M - M0) / M0 (the same linear unknowns,
   // rows scaled by 1 / M0 instead of 1 / R). Repeated, it converges to the log-space
   // optimum the Ceres polish would reach.
+  // with_cost: fill `cost` and `rel_rmse` (one more pass over the samples; the
+  // Gauss-Newton steps and the g search do without).
   LinearSkySolution Solve(double g, const std::vector<double>& exposures, const std::vector<double>& robust_weights,
-                          const LinearSkySolution* linearize_at = nullptr) const;
+                          const LinearSkySolution* linearize_at = nullptr, bool with_cost = true) const;
   // 1/2 sum w s^2 rho((e / s)^2) of the log errors: the robust cost of the Ceres problem's
   // sky rows (without priors), for comparing g values.
   double RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,

@@ -14,17 +14,28 @@ constexpr double kMadToSigma = 1.4826;      // MAD -> standard deviation for Gau
 constexpr double kCauchyTuning = 2.385;     // 95% asymptotic efficiency (Holland & Welsch 1977)
 constexpr double kGMax = 0.98;              // upper end of the g search (the preset allows 0.999)
 // Scan nodes: denser toward 1, where the Mie lobe changes fastest with g.
-constexpr double kScan[] = {0.0, 0.2, 0.4, 0.55, 0.65, 0.72, 0.78, 0.83, 0.87, 0.9, 0.93, 0.96, kGMax};
-constexpr int kGoldenSteps = 10;            // bracket of ~0.1 -> ~1e-3 in g (refined on the robust level)
+constexpr double kScan[] = {0.0, 0.3, 0.5, 0.65, 0.75, 0.82, 0.88, 0.93, kGMax};
+constexpr int kGoldenSteps = 8;             // scan bracket (~0.06-0.3) -> ~0.003-0.015 in g (refined on the robust level)
 constexpr double kRefineHalfWidth = 0.02;   // the robust refinement's bracket around the search's g
-constexpr int kRefineSteps = 8;             // 0.04 -> ~1e-3 in g
-constexpr int kRefineShifts = 6;
-constexpr size_t kMaxOtherMinima = 2;       // scan minima re-ranked on the robust level            // moves of the bracket when the minimum is on its edge
-constexpr int kMaxGaussNewton = 6;          // log-space steps at the final scale
-constexpr int kMaxFinalSteps = 3;
+constexpr int kRefineSteps = 6;             // 0.04 -> ~2e-3 in g
+constexpr int kRefineShifts = 6;            // moves of the bracket when the minimum is on its edge
+constexpr size_t kMaxOtherMinima = 2;       // scan minima re-ranked on the robust level
+constexpr int kMaxGaussNewton = 4;          // log-space steps at the final scale
+constexpr int kMaxFinalSteps = 2;           // on the final level
 constexpr int kLogLeastSquaresSteps = 2;    // before the scale estimate
-constexpr int kScaleRounds = 4;             // re-estimations of the scales           // on the final level
-constexpr double kSettledCost = 1e-5;       // relative cost change that ends them
+constexpr int kScaleRounds = 4;             // re-estimations of the scales
+constexpr double kSettledCost = 1e-4;       // relative cost change that ends them
+
+// rel RMSE from log errors (rel = e^e - 1), solid-angle weighted.
+double RelativeRmse(const LinearSky& sky, const std::vector<double>& e) {
+  double sq = 0.0, w = 0.0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    const double rel = std::expm1(e[i]);
+    sq += sky.error_weights()[i] * rel * rel;
+    w += sky.error_weights()[i];
+  }
+  return w > 0.0 ? std::sqrt(sq / w) : 0.0;
+}
 
 // IRLS weight rho'(z), z = (e / s)^2 (the residual form of robust_residual.h); the scale
 // per sample times `factor` (annealing).
@@ -76,8 +87,8 @@ double SearchHaziness(const LinearSky& sky, const std::vector<double>& exposures
       return sky.Solve(g, exposures, weights).cost;
     }
     *solves += 2;
-    const LinearSkySolution first = sky.Solve(g, exposures, weights);
-    return sky.RobustLogCost(sky.Solve(g, exposures, weights, &first), exposures, RobustLoss::kNone,
+    const LinearSkySolution first = sky.Solve(g, exposures, weights, nullptr, false);
+    return sky.RobustLogCost(sky.Solve(g, exposures, weights, &first, false), exposures, RobustLoss::kNone,
                              std::vector<double>(sky.num_samples(), 1.0));
   };
   std::vector<double> nodes(std::begin(kScan), std::end(kScan));
@@ -165,7 +176,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   };
   auto alternate_exposures = [&](const LinearSky& level, int rounds) {
     for (int k = 0; k < rounds && fit_exposures; ++k) {
-      update_exposures(level, level.Solve(g, exposures, weights));
+      update_exposures(level, level.Solve(g, exposures, weights, nullptr, false));
       ++rep.solves;
     }
   };
@@ -180,17 +191,17 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   const auto t1 = std::chrono::steady_clock::now();
   rep.search_time_s = std::chrono::duration<double>(t1 - t0).count();
   const LinearSky* sky = &robust;
-  LinearSkySolution sol = sky->Solve(g, exposures, weights);
+  LinearSkySolution sol = sky->Solve(g, exposures, weights, nullptr, false);
   ++rep.solves;
   update_exposures(*sky, sol);
   // Least squares of the log error (Gauss-Newton steps, no robust weights): symmetric in
   // over- and under-estimation, so dark outliers do not dominate the scale estimate.
   for (int k = 0; k < kLogLeastSquaresSteps; ++k) {
-    sol = sky->Solve(g, exposures, weights, &sol);
+    sol = sky->Solve(g, exposures, weights, &sol, false);
     ++rep.solves;
     update_exposures(*sky, sol);
   }
-  rep.rel_rmse_least_squares = sol.rel_rmse;
+  rep.rel_rmse_least_squares = RelativeRmse(*sky, sky->LogErrors(sol, exposures));
 
   // 2. The loss scales from the least-squares residuals.
   std::vector<double> e = sky->LogErrors(sol, exposures);
@@ -201,7 +212,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   //    then at 1x until the cost settles.
   auto gauss_newton_step = [&](double factor) {
     weights = RobustWeights(o.loss, scales, factor, e);
-    sol = sky->Solve(g, exposures, weights, &sol);
+    sol = sky->Solve(g, exposures, weights, &sol, false);
     ++rep.solves;
     ++rep.gauss_newton_steps;
     update_exposures(*sky, sol);
@@ -244,7 +255,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     const LinearSkySolution at = sol;
     auto robust_cost = [&](double gg) {
       ++rep.solves;
-      return sky->RobustLogCost(sky->Solve(gg, exposures, weights, &at), exposures, o.loss, scales);
+      return sky->RobustLogCost(sky->Solve(gg, exposures, weights, &at, false), exposures, o.loss, scales);
     };
     // The bracket follows the minimum when it lands on an edge (the search level's
     // area averaging can bias g where g is weakly determined, e.g. a sun below the horizon).
@@ -286,7 +297,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     sky = &final;
     scales = PerSample(*sky, rings);
     weights.clear();
-    sol = sky->Solve(g, exposures, weights);
+    sol = sky->Solve(g, exposures, weights, nullptr, false);
     ++rep.solves;
     e = sky->LogErrors(sol, exposures);
     cost = sky->RobustLogCost(sol, exposures, o.loss, scales);
@@ -296,7 +307,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   rep.robust_cost = cost;
   rep.robust_time_s = std::chrono::duration<double>(t2 - t1).count();
   rep.final_time_s = std::chrono::duration<double>(t3 - t2).count();
-  rep.rel_rmse_robust = sol.rel_rmse;
+  rep.rel_rmse_robust = RelativeRmse(*sky, e);
   sky->Apply(sol, state);
   state->g = g;
   for (size_t r = 0; r < exposures.size(); ++r) state->log_exposure[r] = std::log(exposures[r]);
