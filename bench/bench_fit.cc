@@ -247,7 +247,7 @@ int main(int argc, char** argv) {
   }
   const auto& day = result["day_24_references_256x128"];
   md << "\nDay (24 references of the hazy atmosphere, 256x128, one run): " << day["timing"]["median_ms"].get<double>()
-     << " ms (linear start " << 1e3 * day["linear_start_time_s"].get<double>() << " ms, the rest the joint Ceres polish), "
+     << " ms (linear stage " << 1e3 * day["linear_start_time_s"].get<double>() << " ms: the per-reference starts and the day's joint Gauss-Newton steps; the rest the final renders), "
      << "worst rel RMSE " << 100 * day["rel_rmse_max"].get<double>() << "%, g " << day["haziness_g"].get<double>()
      << " (truth " << day["truth_haziness_g"].get<double>() << "); the old coarse-to-fine path: "
      << day["old_path"]["timing"]["median_ms"].get<double>() << " ms, worst " << 100 * day["old_path"]["rel_rmse_max"].get<double>()

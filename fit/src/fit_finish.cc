@@ -3,6 +3,9 @@
 #include <algorithm>
 
 namespace skycal::fit {
+namespace {
+constexpr double kHeldLogChange = -9.2;  // ln(1e-4): below it an entry sits at (or near) its floor
+}  // namespace
 
 int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, const std::vector<bool>& row_fitted,
                                  FitState* state) {
@@ -39,7 +42,10 @@ double MoveScaleGaugeToExposures(const std::vector<bool>& row_fitted, bool fit_o
         for (int col = 0; col < grid.n_gamma; ++col)
           for (int ch = 0; ch < 3; ++ch) {
             const size_t k = state->Index(t, row, col, ch);
-            changes.push_back(state->log_lut[k] - state->initial_log_lut[k]);
+            const double change = state->log_lut[k] - state->initial_log_lut[k];
+            // Entries held at the linear start's floor (1e-6 of the start, a table the sky
+            // does not need) say nothing about the level: left out.
+            if (change > kHeldLogChange) changes.push_back(change);
           }
   if (changes.empty()) return 0.0;
   std::nth_element(changes.begin(), changes.begin() + changes.size() / 2, changes.end());

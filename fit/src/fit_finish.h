@@ -16,8 +16,8 @@ int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, 
 
 // Exposure x LUT scale is one degree of freedom (the gauge). Moves the median log change
 // of the fitted LUT entries onto the exposures, so the LUT keeps the initial preset's
-// absolute level; the median, not the mean, so entries held near zero (a table the sky
-// does not need) do not set the level. L_z moves with the LUT when fitted. Returns the
+// absolute level; the median, not the mean, of the entries not held near zero (a table
+// the sky does not need, log change below ln 1e-4): those do not set the level. L_z moves with the LUT when fitted. Returns the
 // shift (natural log); the caller moves anything else in model units (the probe's sun).
 double MoveScaleGaugeToExposures(const std::vector<bool>& row_fitted, bool fit_overcast, FitState* state);
 
