@@ -16,6 +16,7 @@
 #include "probe_terms.h"
 #include "pyramid.h"
 #include "sky_row_cost.h"
+#include "sky_terms.h"
 #include "sun_from_probe.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -26,29 +27,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
-
-// sqrt(lambda) * (u - u0): pulls a LUT entry toward its initial value (gauge for
-// combinations the data cannot separate, e.g. the two LUT rows around one sun angle).
-struct PriorResidual {
-  double sqrt_lambda, u0;
-  template <typename T>
-  bool operator()(const T* u, T* r) const {
-    r[0] = T(sqrt_lambda) * (u[0] - T(u0));
-    return true;
-  }
-};
-
-// sqrt(lambda) * second difference of the change u - u0 along the sun-zenith axis (log
-// space): the change from the initial preset must be smooth, not the LUT itself, so a
-// physically shaped start (twilight falls by decades within a few rows) is not flattened.
-struct SecondDifferenceOfChange {
-  double sqrt_lambda, a0, b0, c0;
-  template <typename T>
-  bool operator()(const T* a, const T* b, const T* c, T* r) const {
-    r[0] = T(sqrt_lambda) * ((a[0] - T(a0)) - T(2.0) * (b[0] - T(b0)) + (c[0] - T(c0)));
-    return true;
-  }
-};
 
 // Renders the model at the current point for every reference, once per new evaluation
 // point, before Ceres evaluates the residual blocks (the Vulkan backend's objective).
@@ -96,14 +74,6 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
   std::vector<ImageRGB>* images_;
   bool* valid_;
   int renders_ = 0;
-};
-
-// Wraps a row cost for central-difference Jacobians (the benchmark's baseline).
-struct NumericRow {
-  const SkyRowCost* cost;
-  bool operator()(double const* const* parameters, double* residuals) const {
-    return cost->EvaluateCpu(parameters, residuals);
-  }
 };
 
 class ProgressPrinter final : public ceres::IterationCallback {
@@ -158,7 +128,6 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   FitResult result;
   result.backend_description = renderer.Describe();
   FitState state = FitState::FromPreset(init, o.variant, static_cast<int>(refs.size()));
-  const std::vector<double>& initial_log_lut = state.initial_log_lut;
   // One reference sees only a blend of the two rows around its sun angle: tie them.
   const bool tied = refs.size() == 1;
   const render::LutGrid& grid = state.preset.luts.grid;
@@ -285,67 +254,25 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       popts.evaluation_callback = callback.get();
     }
     ceres::Problem problem(popts);
-    std::set<double*> texel_blocks;  // LUT parameters reached by data
-    std::vector<std::unique_ptr<SkyRowCost>> numeric_owners;
     long long residual_count = 0;
 
-    for (size_t r = 0; r < refs.size(); ++r) {
-      const FitLevel& lv = levels[r];
-      for (int y = 0; y < lh; ++y) {
-        for (int ch = 0; ch < 3; ++ch) {
-          RowCostSetup setup;
-          setup.state = &state;
-          setup.tied_rows = tied;
-          setup.initial_log_lut = &initial_log_lut;
-          setup.sun_dir = refs[r].sun_dir;
-          setup.channel = ch;
-          setup.level_row = y;
-          setup.loss = o.loss;
-          setup.loss_scale = level_loss_scale;
-          setup.rendered = use_gpu ? &rendered[r] : nullptr;
-          setup.rendered_valid = &rendered_valid;
-          for (int x = 0; x < lw; ++x) {
-            const size_t i = static_cast<size_t>(y) * lw + x;
-            if (lv.weight[i] <= 0.0) continue;
-            const auto v = latlong::PixelDirection(x, y, lw, lh);
-            // After the linear start each pixel keeps the loss scale of its ring around the
-            // sun (fit/src/linear_start.h: RingLossScales).
-            double pixel_scale = 0.0;
-            const RingLossScales* rings = linear.ring_scales_per_reference.size() == refs.size()
-                                              ? &linear.ring_scales_per_reference[r]
-                                              : (linear.ring_scales ? &*linear.ring_scales : nullptr);
-            if (rings) {
-              const double d[3] = {v[0] - refs[r].sun_dir[0], v[1] - refs[r].sun_dir[1], v[2] - refs[r].sun_dir[2]};
-              const double chord = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-              pixel_scale = rings->At(2.0 * std::asin(std::min(1.0, 0.5 * chord)) * 180.0 / M_PI);
-            }
-            setup.pixels.push_back({x, std::log(static_cast<double>(lv.radiance[3 * i + ch])),
-                                    std::sqrt(lv.weight[i] / total_weight), v, pixel_scale});
-          }
-          if (setup.pixels.empty()) continue;
-          residual_count += static_cast<long long>(setup.pixels.size());
-          std::vector<size_t> index;
-          auto cost = std::make_unique<SkyRowCost>(std::move(setup), &index);
-          std::vector<double*> blocks;
-          for (size_t k : index) blocks.push_back(tied ? &state.log_delta[k] : &state.log_lut[k]);
-          blocks.push_back(&state.g);
-          blocks.push_back(&state.log_overcast_zenith);
-          blocks.push_back(&state.log_exposure[r]);
-          ceres::CostFunction* fn = nullptr;
-          if (o.numeric_derivatives) {
-            auto* numeric = new ceres::DynamicNumericDiffCostFunction<NumericRow, ceres::CENTRAL>(new NumericRow{cost.get()});
-            for (size_t k = 0; k < blocks.size(); ++k) numeric->AddParameterBlock(1);
-            numeric->SetNumResiduals(cost->num_residuals());
-            numeric_owners.push_back(std::move(cost));
-            fn = numeric;
-          } else {
-            fn = cost.release();
-          }
-          problem.AddResidualBlock(fn, nullptr, blocks);
-          for (size_t k = 0; k < index.size(); ++k) texel_blocks.insert(blocks[k]);
-        }
-      }
-    }
+    SkyRowTerms rows;
+    rows.refs = &refs;
+    rows.levels = &levels;
+    rows.total_weight = total_weight;
+    rows.tied = tied;
+    rows.loss = o.loss;
+    rows.loss_scale = level_loss_scale;
+    rows.numeric_derivatives = o.numeric_derivatives;
+    rows.rendered = use_gpu ? &rendered : nullptr;
+    rows.rendered_valid = &rendered_valid;
+    rows.ring_scales = linear.ring_scales_per_reference.size() == refs.size()
+                           ? linear.ring_scales_per_reference
+                           : std::vector<RingLossScales>(refs.size(), linear.ring_scales.value_or(RingLossScales{}));
+    rows.use_ring_scales = linear.ran;
+    const AddedSkyRows added = AddSkyRowTerms(rows, &state, &problem);
+    const std::set<double*>& texel_blocks = added.texel_blocks;
+    residual_count += added.residuals;
     // Regularisation. Only LUT parameters some pixel reaches are in the problem; columns
     // no pixel reaches (the lowest, horizon-hugging ones at coarse sizes) are filled in
     // after the solve from their nearest observed column (see ExtrapolateColumns): as
@@ -409,32 +336,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
       }
     }
 
-    for (const auto& [t, col] : observed_columns) {
-      for (int ch = 0; ch < 3; ++ch) {
-        if (tied) {
-          double* d = &state.log_delta[state.DeltaIndex(t, col, ch)];
-          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
-                                       new PriorResidual{std::sqrt(o.prior_weight), 0.0}),
-                                   nullptr, d);
-          continue;
-        }
-        for (int row = 0; row < grid.n_theta; ++row) {
-          if (!row_fitted[row]) continue;
-          double* u = &state.log_lut[state.Index(t, row, col, ch)];
-          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(
-                                       new PriorResidual{std::sqrt(o.prior_weight), initial_log_lut[u - state.log_lut.data()]}),
-                                   nullptr, u);
-          if (row >= 1 && row + 1 < grid.n_theta && row_fitted[row - 1] && row_fitted[row + 1] && o.smoothness > 0.0) {
-            const ptrdiff_t stride = static_cast<ptrdiff_t>(grid.n_gamma) * 3;
-            const size_t k = static_cast<size_t>(u - state.log_lut.data());
-            problem.AddResidualBlock(new ceres::AutoDiffCostFunction<SecondDifferenceOfChange, 1, 1, 1, 1>(
-                                         new SecondDifferenceOfChange{std::sqrt(o.smoothness), initial_log_lut[k - stride],
-                                                                      initial_log_lut[k], initial_log_lut[k + stride]}),
-                                     nullptr, u - stride, u, u + stride);
-          }
-        }
-      }
-    }
+    AddLutPriorTerms(observed_columns, row_fitted, tied, o.prior_weight, o.smoothness, &state, &problem);
     last_observed_columns = observed_columns;
     for (double* p : linear.held) {
       if (problem.HasParameterBlock(p)) problem.SetParameterBlockConstant(p);
