@@ -359,18 +359,7 @@ LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitO
   // bound, tests/render_parity_test.cc, 2e-5, plus float LUT storage: 5e-5).
   {
     const auto t_check = Clock::now();
-    const render::Preset candidate = state->ToPreset();
-    std::vector<ImageRGB> images;
-    for (size_t r = 0; r < refs.size(); ++r) {
-      render::RenderRequest req;
-      req.sun_dir = refs[r].sun_dir;
-      req.width = final_ptrs[r]->width;
-      req.height = final_ptrs[r]->height;
-      req.sun_disc = false;
-      req.ground = render::GroundMode::kZero;
-      images.push_back(renderer.Render(candidate, req));
-    }
-    out.render_difference = sky.MaxRelativeDifference(rep.solution, rep.exposures, images);
+    out.render_difference = RenderCheck(sky, rep.solution, rep.exposures, refs, final_ptrs, *state, renderer);
     result->linear_start["render_check"] = {{"backend", renderer.Describe()},
                                            {"max_relative_difference", out.render_difference},
                                            {"threshold", kRenderCheckThreshold},
