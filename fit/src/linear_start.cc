@@ -226,13 +226,14 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     for (int round = 0; round < kScaleRounds; ++round) {
       double sigma = 0.0;
       const RingLossScales again = EstimateRingScales(*sky, e, o.loss_scale, &sigma);
-      const std::vector<double> narrower = PerSample(*sky, again);
-      bool shrank = false;
-      for (size_t i = 0; i < scales.size(); ++i) shrank = shrank || narrower[i] < 0.95 * scales[i];
+      bool shrank = again.global < 0.95 * rings.global;
+      for (int k = 0; k < RingLossScales::kRings; ++k) shrank = shrank || again.ring[k] < 0.95 * rings.ring[k];
       if (!shrank) break;
       rep.residual_sigma = sigma;
-      for (size_t i = 0; i < scales.size(); ++i) scales[i] = std::min(scales[i], narrower[i]);
-      rings = again;
+      // Ring-wise the smaller scale: a scale only ever narrows.
+      rings.global = std::min(rings.global, again.global);
+      for (int k = 0; k < RingLossScales::kRings; ++k) rings.ring[k] = std::min(rings.ring[k], again.ring[k]);
+      scales = PerSample(*sky, rings);
       gauss_newton_step(1.0);
       gauss_newton_step(1.0);
     }

@@ -1,27 +1,30 @@
 // The fit's start: variable projection over the model's linear structure (linear_sky.h),
-// then a robust reweighting whose loss scale comes from the residuals themselves.
+// then a robust reweighting whose loss scales come from the residuals themselves.
 //
-// 1. Haziness g: a scan over [0, 0.98] and a golden-section refinement of the best
-//    bracket; each g costs one sparse linear least-squares solve of the LUT (and L_z).
-//    With several references the exposures are alternated with the LUT solve.
-// 2. Robust scale: from the least-squares residuals e (log units), sigma = 1.4826 x the
-//    weighted median of |e| (the MAD, consistent for Gaussian errors, unaffected by up to
-//    half the pixels being outliers), and the loss scale
-//        s = max(FitOptions::loss_scale, 2.385 sigma)
-//    (2.385: the Cauchy loss's 95%-efficiency tuning constant, Holland & Welsch 1977). A
-//    clean sky's residuals are the model's own misfit, so the scale grows with it and the
-//    loss never calls a whole region (the sun's surroundings) an outlier; a sky with a
-//    few per cent of clouds or buildings keeps the median small and those pixels lose
+// 1. Haziness g, on the search level (every k-th pixel of the robust level): a scan over
+//    [0, 0.98] and golden sections in the best bracket; each g scored by the log error
+//    after one Gauss-Newton step from the relative-error solve (two sparse linear solves
+//    of the LUT and L_z). With several references the exposures are alternated.
+// 2. Least squares of the log error on the robust level (Gauss-Newton steps, no weights),
+//    then the loss scales (RingLossScales): sigma = 1.4826 x the weighted median of |e|
+//    (the MAD, consistent for Gaussian errors, unaffected by up to half the pixels being
+//    outliers), s = max(FitOptions::loss_scale, 2.385 sigma) globally and per ring around
+//    the sun (2.385: the Cauchy loss's 95%-efficiency tuning constant, Holland & Welsch
+//    1977). A clean sky's residuals are the model's own misfit, so the scale grows with it
+//    where it lives and the loss never calls a whole region (the sun's surroundings) an
+//    outlier; clouds or buildings over a minority of a ring keep its median small and lose
 //    their pull.
 // 3. Graduated non-convexity in log space: Gauss-Newton steps of the robust log objective
 //    (each a weighted linear solve linearised at the current model, LinearSky::Solve),
-//    the weights rho'((e/s)^2) with the scale annealed 8s, 4s, 2s, then s until the cost
-//    settles, starting from the least-squares solution, which has not given up any region.
-// 4. g refined under the robust log cost (golden sections in a narrow bracket), and the
-//    steps of 3 repeated at the new g.
+//    weights rho'((e/s)^2) with the scales annealed 8x, 4x, 2x, 1x; the scales re-estimated
+//    from the robust fit until they stop shrinking; then steps until the cost settles.
+// 4. g refined under the robust log cost (golden sections in a narrow bracket that follows
+//    a minimum on its edge; the scan's other local minima re-ranked), steps of 3 repeated.
+// 5. On the final level: a relative least-squares solve (it places the LUT columns only
+//    the finer pixels see), then Gauss-Newton steps at the final scales.
 // The result is the optimum of the same objective as the Ceres sky rows (sky_row_cost.h),
-// up to the priors' linearisation: the Ceres polish is then needed only for what the
-// linear structure does not hold (the probe's sun and ground, see sky_fit.cc).
+// up to the regularisation: the Ceres polish is then needed only for what the linear
+// structure does not hold (the probe's sun and ground, see linear_stage.h).
 #pragma once
 #include <string>
 #include <vector>
