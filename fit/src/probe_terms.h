@@ -37,6 +37,8 @@
 #include <ceres/ceres.h>
 
 #include <array>
+#include <functional>
+#include <memory>
 #include <atomic>
 #include <memory>
 #include <set>
@@ -95,5 +97,28 @@ double SunShare(const ProbeIrradianceParts& parts, const ProbeFrame& frame, cons
 // RMS(R - P) / RMS(R) and RMS log(P / R) over samples and channels for illuminance `sun`.
 void ProbeFitErrors(const ProbeIrradianceParts& parts, const ProbeFrame& frame, const std::array<double, 3>& sun,
                     double log_exposure, double* residual, double* log_rmse);
+
+// Builds one probed reference's residual block (MakeProbeCost with the level's weights)
+// and fills its parameter blocks.
+using ProbeBlockMaker =
+    std::function<std::unique_ptr<ProbeCost>(const ProbeFrame&, size_t, std::vector<double*>*)>;
+
+struct ProbeTermCounts {
+  long long residuals = 0;
+};
+
+// The probe's term of a level's problem: per probed reference its block, the sun decided
+// at the current point (visible: a parameter >= 0, started at the linear solution the
+// first time; occluded: held at 0).
+ProbeTermCounts AddProbeTerms(const ProbeBlockMaker& make_block, const std::vector<bool>& probed, bool first_level,
+                              double sun_visible_threshold, std::vector<ProbeFrame>* frames,
+                              std::vector<std::vector<double*>>* probe_blocks, FitState* state, ceres::Problem* problem);
+
+// After the finest level: the sun and the ground albedo refitted on the final sky (a small
+// problem of these blocks only), then each sun's visibility checked. Returns the solve's
+// iterations (0 when nothing was free).
+int RefitProbesOnFinalSky(const ProbeBlockMaker& make_block, const std::vector<bool>& probed, bool fit_ground,
+                          double sun_visible_threshold, std::vector<ProbeFrame>* frames,
+                          std::vector<std::vector<double*>>* probe_blocks, FitState* state);
 
 }  // namespace skycal::fit

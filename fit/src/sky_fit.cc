@@ -303,29 +303,11 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                  &state.ground_albedo};
       return cost;
     };
-    for (size_t r = 0; r < refs.size(); ++r) {
-      if (!probed[r]) continue;
-      ProbeFrame& f = frames[r];
-      std::vector<double*>& blocks = probe_blocks[r];
-      // The LUT is held for the probe at this level's starting values: see "what the probe
-      // steers" in fit/src/probe_terms.h.
-      auto cost = MakeProbeBlock(f, r, &blocks);
-      if (f.sun_observable) {
-        const LinearSun lin = SolveLinearSun(cost->Parts(blocks.data()), f, state.log_exposure[r]);
-        const bool was_visible = li > 0 && f.visible;
-        f.visible = lin.fraction >= o.sun_visible_threshold;
-        f.fraction = lin.fraction;
-        if (f.visible && !was_visible) state.sun_rgb[r] = lin.illuminance;
-        if (!f.visible) state.sun_rgb[r] = {0.0, 0.0, 0.0};
-      }
-      if (li == 0) probe_residuals += 3LL * cost->num_samples();
-      residual_count += 3LL * cost->num_samples();
-      problem.AddResidualBlock(cost.release(), nullptr, blocks);
-      if (f.sun_observable && f.visible) {
-        for (int c = 0; c < 3; ++c) problem.SetParameterLowerBound(state.sun_rgb[r].data(), c, 0.0);
-      } else {
-        problem.SetParameterBlockConstant(state.sun_rgb[r].data());
-      }
+    {
+      const ProbeTermCounts counts = AddProbeTerms(MakeProbeBlock, probed, li == 0, o.sun_visible_threshold, &frames,
+                                                   &probe_blocks, &state, &problem);
+      if (li == 0) probe_residuals += counts.residuals;
+      residual_count += counts.residuals;
     }
     if (problem.HasParameterBlock(&state.ground_albedo)) {
       if (fit_ground) {
@@ -389,65 +371,8 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
     }
     int probe_final_iterations = 0;
     if (finest && probed_count > 0) {
-      // The probe on the final sky: the solve above held the LUT at this level's start, so
-      // the sun and the ground albedo are refitted once with the final LUT, g and exposure
-      // (a small problem: these blocks only), then the decisions are checked.
-      ceres::Problem::Options polish_options;
-      polish_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
-      ceres::Problem polish(polish_options);
-      std::vector<ProbeCost*> final_costs(refs.size(), nullptr);
-      bool any_free = fit_ground;
-      for (size_t r = 0; r < refs.size(); ++r) {
-        if (!probed[r]) continue;
-        auto cost = MakeProbeBlock(frames[r], r, &probe_blocks[r]);
-        final_costs[r] = cost.get();
-        polish.AddResidualBlock(cost.release(), nullptr, probe_blocks[r]);
-        for (double* b : {&state.g, &state.log_overcast_zenith, &state.log_exposure[r]}) polish.SetParameterBlockConstant(b);
-        if (frames[r].sun_observable && frames[r].visible) {
-          for (int c = 0; c < 3; ++c) polish.SetParameterLowerBound(state.sun_rgb[r].data(), c, 0.0);
-          any_free = true;
-        } else {
-          polish.SetParameterBlockConstant(state.sun_rgb[r].data());
-        }
-      }
-      if (fit_ground) {
-        polish.SetParameterLowerBound(&state.ground_albedo, 0, 0.0);
-        polish.SetParameterUpperBound(&state.ground_albedo, 0, 1.0);
-      } else {
-        polish.SetParameterBlockConstant(&state.ground_albedo);
-      }
-      ceres::Solver::Options po;
-      po.max_num_iterations = 50;
-      po.linear_solver_type = ceres::DENSE_QR;
-      po.logging_type = ceres::SILENT;
-      if (any_free) {  // else nothing to refit (every sun occluded or unobservable, ground held)
-        ceres::Solver::Summary polish_summary;
-        ceres::Solve(po, &polish, &polish_summary);
-        probe_final_iterations = static_cast<int>(polish_summary.iterations.size()) - 1;
-      }
-      for (size_t r = 0; r < refs.size(); ++r) {
-        if (!final_costs[r]) continue;
-        ProbeFrame& f = frames[r];
-        const ProbeIrradianceParts parts = final_costs[r]->Parts(probe_blocks[r].data());
-        ProbeFitErrors(parts, f, state.sun_rgb[r], state.log_exposure[r], &f.residual, &f.log_rmse);
-        if (!f.sun_observable) continue;
-        if (f.visible) {
-          f.fitted_sun = state.sun_rgb[r];
-          f.fraction = SunShare(parts, f, state.sun_rgb[r], state.log_exposure[r]);
-          if (f.fraction < o.sun_visible_threshold) {
-            f.visible = false;
-            f.note = "the jointly fitted sun explains only " + std::to_string(f.fraction) +
-                     " of the brightest sun-facing samples: occluded";
-            state.sun_rgb[r] = {0.0, 0.0, 0.0};
-          }
-        } else {
-          const LinearSun lin = SolveLinearSun(parts, f, state.log_exposure[r]);
-          f.fitted_sun = lin.illuminance;
-          f.fraction = lin.fraction;
-          f.note = "the probe sits at the ambient level (the sun's share of its brightest sun-facing samples is " +
-                   std::to_string(lin.fraction) + "): sun occluded, held at 0";
-        }
-      }
+      probe_final_iterations =
+          RefitProbesOnFinalSky(MakeProbeBlock, probed, fit_ground, o.sun_visible_threshold, &frames, &probe_blocks, &state);
     }
     result.iterations += static_cast<int>(summary.iterations.size()) - 1;
     result.termination = ceres::TerminationTypeToString(summary.termination_type);
