@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cmath>
-#include <mutex>
-#include <thread>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 #include "linear_sky.h"
 #include "pyramid.h"
@@ -40,10 +40,6 @@ nlohmann::json RingScalesToJson(const RingLossScales& r) {
   }
   return out;
 }
-
-}  // namespace
-
-namespace {
 
 // Serialises a renderer shared by the day's worker threads (the Vulkan renderer keeps one
 // queue and command buffer).
