@@ -471,7 +471,10 @@ double LinearSky::MaxRelativeDifference(const LinearSkySolution& s, const std::v
 
 double LinearSky::RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
                                 const std::vector<double>& scales) const {
-  const std::vector<double> e = LogErrors(s, exposures);
+  return RobustCostOf(LogErrors(s, exposures), loss, scales);
+}
+
+double LinearSky::RobustCostOf(const std::vector<double>& e, RobustLoss loss, const std::vector<double>& scales) const {
   double cost = 0.0;
   for (size_t i = 0; i < e.size(); ++i) {
     const double scale = scales[i];

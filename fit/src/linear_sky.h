@@ -92,6 +92,8 @@ class LinearSky {
   // sky rows (without priors), for comparing g values.
   double RobustLogCost(const LinearSkySolution& s, const std::vector<double>& exposures, RobustLoss loss,
                        const std::vector<double>& scales) const;  // scale per sample
+  // The same from log errors already computed (LogErrors), without another pass.
+  double RobustCostOf(const std::vector<double>& e, RobustLoss loss, const std::vector<double>& scales) const;
   // Angle between each sample's view direction and the sun, degrees (LogErrors layout).
   const std::vector<double>& sun_angles_deg() const { return sun_angle_deg_; }
   // Model values k M per pixel and channel (LogErrors layout), for the render check.

@@ -41,6 +41,29 @@ nlohmann::json RingScalesToJson(const RingLossScales& r) {
   return out;
 }
 
+nlohmann::json RenderCheckJson(const render::SkyRenderer& renderer, double difference, double seconds) {
+  return {{"backend", renderer.Describe()},
+          {"max_relative_difference", difference},
+          {"threshold", kRenderCheckThreshold},
+          {"time_s", seconds}};
+}
+
+// Whether the Ceres polish still runs after the linear stage, and why (in `skipped`, or a
+// warning when the render check failed). `converged` says what made the polish needless.
+void DecidePolish(const FitOptions& o, bool probed, const std::string& converged, LinearStageOutcome* out,
+                  FitResult* result) {
+  out->render_agrees = out->render_difference <= kRenderCheckThreshold;
+  out->polish = o.polish || probed || !out->render_agrees;
+  if (!out->polish) {
+    result->skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
+                               {"reason", converged + " and the " + std::string(render::ToString(o.backend)) +
+                                              " render reproduces its values (render_check)"}});
+  } else if (!out->render_agrees) {
+    result->warnings.push_back("the render check failed (max relative difference " +
+                               std::to_string(out->render_difference) + "): the Ceres polish runs through the backend");
+  }
+}
+
 // Serialises a renderer shared by the day's worker threads (the Vulkan renderer keeps one
 // queue and command buffer).
 class LockedRenderer final : public render::SkyRenderer {
@@ -227,8 +250,7 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   const double joint_time = Seconds(t_joint, Clock::now());
   const auto t_check = Clock::now();
   out.render_difference = RenderCheck(day, sol, exposures, refs, level_ptrs, *state, renderer);
-  out.render_agrees = out.render_difference <= kRenderCheckThreshold;
-  out.polish = o.polish || probed || !out.render_agrees;
+  const double check_time = Seconds(t_check, Clock::now());
   out.observed_columns.clear();
   for (const auto& tc : day.ObservedColumns()) out.observed_columns.insert(tc);
 
@@ -245,21 +267,10 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
                           {"joint_samples", day.num_samples()},
                           {"joint_robust_cost_per_step", costs},
                           {"joint_time_s", joint_time},
-                          {"render_check", {{"backend", renderer.Describe()},
-                                            {"max_relative_difference", out.render_difference},
-                                            {"threshold", kRenderCheckThreshold},
-                                            {"time_s", Seconds(t_check, Clock::now())}}},
+                          {"render_check", RenderCheckJson(renderer, out.render_difference, check_time)},
                           {"references", per_ref},
                           {"time_s", Seconds(t0, Clock::now())}};
-  if (!out.polish) {
-    result->skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
-                               {"reason", "the day's joint Gauss-Newton steps minimised the robust log objective and the " +
-                                              std::string(render::ToString(o.backend)) +
-                                              " render reproduces their values (render_check)"}});
-  } else if (!out.render_agrees) {
-    result->warnings.push_back("the render check failed (max relative difference " +
-                               std::to_string(out.render_difference) + "): the Ceres polish runs through the backend");
-  }
+  DecidePolish(o, probed, "the day's joint Gauss-Newton steps minimised the robust log objective", &out, result);
   if (o.verbose) {
     std::cerr << "[fit] linear start of " << n << " references: median g " << state->g << ", "
               << Seconds(t0, Clock::now()) << " s" << std::endl;
@@ -356,23 +367,10 @@ LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitO
   {
     const auto t_check = Clock::now();
     out.render_difference = RenderCheck(sky, rep.solution, rep.exposures, refs, final_ptrs, *state, renderer);
-    result->linear_start["render_check"] = {{"backend", renderer.Describe()},
-                                           {"max_relative_difference", out.render_difference},
-                                           {"threshold", kRenderCheckThreshold},
-                                           {"time_s", Seconds(t_check, Clock::now())}};
+    result->linear_start["render_check"] = RenderCheckJson(renderer, out.render_difference, Seconds(t_check, Clock::now()));
   }
   for (const auto& tc : sky.ObservedColumns()) out.observed_columns.insert(tc);
-  out.render_agrees = out.render_difference <= kRenderCheckThreshold;
-  out.polish = o.polish || probed || !out.render_agrees;
-  if (!out.polish) {
-    result->skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
-                              {"reason", "the linear start converged on the robust log objective itself and the " +
-                                             std::string(render::ToString(o.backend)) +
-                                             " render reproduces its values (render_check): nothing left to polish"}});
-  } else if (!out.render_agrees) {
-    result->warnings.push_back("the render check failed (max relative difference " +
-                               std::to_string(out.render_difference) + "): the Ceres polish runs through the backend");
-  }
+  DecidePolish(o, probed, "the linear start converged on the robust log objective itself", &out, result);
   return out;
 }
 

@@ -240,11 +240,11 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   }
   rep.loss_scale = rings.global;
   rep.ring_scales = rings;
-  double cost = sky->RobustLogCost(sol, exposures, o.loss, scales);
+  double cost = sky->RobustCostOf(e, o.loss, scales);  // e: the current solution's log errors
   auto settle = [&](int max_steps) {
     for (int k = 0; k < max_steps; ++k) {
       gauss_newton_step(1.0);
-      const double next = sky->RobustLogCost(sol, exposures, o.loss, scales);
+      const double next = sky->RobustCostOf(e, o.loss, scales);
       const bool settled = std::abs(cost - next) <= kSettledCost * cost;
       cost = next;
       if (settled) break;
@@ -301,7 +301,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     sol = sky->Solve(g, exposures, weights, nullptr, false);
     ++rep.solves;
     e = sky->LogErrors(sol, exposures);
-    cost = sky->RobustLogCost(sol, exposures, o.loss, scales);
+    cost = sky->RobustCostOf(e, o.loss, scales);
     settle(kMaxFinalSteps);
   }
   const auto t3 = std::chrono::steady_clock::now();
