@@ -31,8 +31,8 @@
 // 0.1: the sky's tens of thousands of pixels measure those directly, the ball's bins
 // through integrals that carry the ball's own systematic errors (albedo known to a few
 // percent, sheen, flare, a non-uniform ground). bench/results/probe_weight.md: with the
-// mismatched ground above, g moves by 0.0006 at 0.1 (sky error vs truth 0.233% against
-// 0.232% without a probe), by 0.006 at 1 and by 0.072 at 10 (sky error 1.05%).
+// mismatched ground above (with the linear start), g and the sky error (0.233% vs truth)
+// do not move at 0.1; g moves by 0.007 at 1 and by 0.085 at 10 (sky error 1.19%).
 #pragma once
 #include <ceres/ceres.h>
 
