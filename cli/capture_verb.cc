@@ -115,6 +115,16 @@ bool CaptureOptions::IsValid(std::string* why) const {
 nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  // Inputs first (the rig names its cameras' images): --out must replace none of them.
+  std::vector<NamedPath> inputs;
+  for (const auto& p : o.brackets) inputs.push_back({"--brackets", p});
+  std::vector<capture::RigCamera> rig_cameras;
+  if (!o.rig_path.empty()) {
+    inputs.push_back({"--rig", o.rig_path});
+    rig_cameras = capture::ReadRigFile(o.rig_path);
+    for (const auto& cam : rig_cameras) inputs.push_back({"--rig " + o.rig_path + " camera '" + cam.name + "' image", cam.image});
+  }
+  RefuseOutputsOverInputs({{"--out", o.out}}, inputs);
   { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
   // The sun by SPA first: a bad time or place is refused before any heavy work.
   std::optional<capture::SpaResult> spa;
@@ -161,7 +171,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
     Log("capture", "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
                        " pixels no exposure measured well)");
   } else {
-    cameras = capture::ReadRigFile(o.rig_path);
+    cameras = rig_cameras;
     for (const auto& cam : cameras) {
       ExrRGB exr = ReadExrRGB(cam.image);
       measured.push_back(PlaneAsImage(std::vector<float>(static_cast<size_t>(exr.image.width) * exr.image.height, 1.0f),

@@ -210,7 +210,11 @@ bool ExportOptions::IsValid(std::string* why) const {
 nlohmann::json RunExportImpl(const ExportOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
-  StagedDirectory out(o.out_dir, "--out", "manifest.json");
+  std::vector<NamedPath> inputs;
+  for (const std::string& p : o.presets) {
+    for (const NamedPath& f : PresetInputs("--preset", p)) inputs.push_back(f);
+  }
+  StagedDirectory out(o.out_dir, "--out", "export", inputs);
   std::vector<render::Preset> presets;
   std::map<std::string, std::string> names;  // name -> path, to refuse collisions
   for (const std::string& path : o.presets) {

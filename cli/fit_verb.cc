@@ -145,9 +145,18 @@ namespace {
 nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
-  StagedDirectory out(o.out_dir, "--out", "fit.json");  // fails early on an unusable --out
-  std::filesystem::create_directories(out.staging() / "fit");
   const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
+  std::vector<NamedPath> read = PresetInputs("--init", init_path);
+  for (const std::string& r : o.references) read.push_back({"--reference", r});
+  if (!o.fit.mask_path.empty()) read.push_back({"--mask", o.fit.mask_path});
+  for (const std::string& spec : po.probes) read.push_back({"--probe", spec.substr(spec.find('=') + 1)});
+  for (const std::string& r : o.references) {  // the probe samples found beside a reference
+    fs::path p(r);
+    p.replace_extension(".probe.json");
+    read.push_back({"--reference " + r + "'s probe samples", p.string()});
+  }
+  StagedDirectory out(o.out_dir, "--out", "fit", read);  // fails early on an unusable --out
+  std::filesystem::create_directories(out.staging() / "fit");
   render::Preset init = render::LoadPreset(init_path);
   std::vector<fit::Reference> refs;
   std::set<std::string> names;

@@ -213,10 +213,7 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(o.out_path, ec) && fs::equivalent(o.in_path, o.out_path, ec)) {
-    throw Error("--out " + o.out_path + ": is the input file; inputs are never modified");
-  }
+  RefuseOutputsOverInputs({{"--out", o.out_path}}, {{"--in", o.in_path}});
   { AtomicOutput probe(o.out_path); }  // fail on an unwritable output before reading
 
   ExrRGB src = ReadExrRGB(o.in_path);

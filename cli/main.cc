@@ -15,6 +15,7 @@
 #include "probe_predict_verb.h"
 #include "render_verb.h"
 #include "sun_verb.h"
+#include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/version.h"
 
 namespace {
@@ -51,6 +52,9 @@ void PrintUsage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before any thread starts (lavapipe and Ceres start theirs): SIGINT/SIGTERM/SIGHUP remove
+  // the run's temporaries and exit 128 + signal; SIGPIPE becomes a write error.
+  skycal::InstallInterruptCleanup();
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
     PrintUsage();
     return argc < 2 ? 2 : 0;

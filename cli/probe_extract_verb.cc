@@ -5,6 +5,7 @@
 
 #include "args.h"
 #include "skycal/capture/rig.h"
+#include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
@@ -68,6 +69,8 @@ bool ProbeExtractOptions::IsValid(std::string* why) const {
 nlohmann::json RunProbeExtractImpl(const ProbeExtractOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  RefuseOutputsOverInputs({{"--out", o.out}}, {{"--image", o.image}});
+  { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
   const ExrRGB exr = ReadExrRGB(o.image);
   const auto rotation = capture::RotationFromYawPitchRollDeg(o.camera_ypr_deg[0], o.camera_ypr_deg[1], o.camera_ypr_deg[2]);
   capture::ProbeOptions po;

@@ -81,11 +81,15 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   const auto t0 = Clock::now();
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  const std::string preset_path = o.preset_path.empty() ? DefaultPresetPath() : o.preset_path;
+  std::vector<NamedPath> outputs{{"--out", o.out_exr}};
+  if (!o.out_png.empty()) outputs.push_back({"--png", o.out_png});
+  RefuseOutputsOverInputs(outputs, PresetInputs("--preset", preset_path));
+  RefuseOutputsOverInputs({outputs.back()}, {outputs.front()});
   // Fail on unwritable outputs before spending time rendering.
   { AtomicOutput probe(o.out_exr); }
   if (!o.out_png.empty()) { AtomicOutput probe(o.out_png); }
 
-  const std::string preset_path = o.preset_path.empty() ? DefaultPresetPath() : o.preset_path;
   const render::Preset preset = render::LoadPreset(preset_path);
   const auto sun = o.SunDirection();
   const double elevation = latlong::ElevationDeg(sun), azimuth = latlong::AzimuthDeg(sun);

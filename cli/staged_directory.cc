@@ -2,29 +2,83 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <set>
+
 #include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+
+#include <nlohmann/json.hpp>
 
 namespace skycal::cli {
 namespace fs = std::filesystem;
+namespace {
 
-StagedDirectory::StagedDirectory(const std::string& dir, const std::string& option, const std::string& marker_file)
-    : final_(fs::absolute(dir)) {
-  std::error_code ec;
-  if (dir.empty()) throw Error(option + ": expected a directory path");
-  if (!fs::is_directory(final_.parent_path(), ec)) {
-    throw Error(option + " " + dir + ": parent directory '" + final_.parent_path().string() + "' does not exist");
+// Files (not directories) below `dir`, as generic relative paths, sorted.
+std::vector<std::string> FilesBelow(const fs::path& dir) {
+  std::vector<std::string> files;
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    if (!it->is_directory()) files.push_back(fs::relative(it->path(), dir).generic_string());
   }
-  if (fs::exists(final_, ec)) {
-    if (!fs::is_directory(final_, ec)) throw Error(option + " " + dir + ": exists and is not a directory");
-    if (!fs::is_empty(final_, ec) && !fs::exists(final_ / marker_file, ec)) {
-      throw Error(option + " " + dir + ": directory exists and holds files that are not a previous skycal output (no " +
-                  marker_file + "); refusing to overwrite");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Throws unless `dir` is empty or this verb's own earlier output holding nothing else.
+void RequireReplaceable(const fs::path& dir, const std::string& shown, const std::string& verb) {
+  std::error_code ec;
+  if (fs::is_empty(dir, ec)) return;
+  const std::string how = "; choose another directory, or delete it yourself if it is yours to delete";
+  if (!fs::exists(dir / kOutputMarker, ec)) {
+    throw Error(shown + ": directory exists and is not an earlier `skycal " + verb + "` output (no " + kOutputMarker +
+                "): refusing to replace it" + how);
+  }
+  nlohmann::json marker;
+  try {
+    marker = ReadJsonFile((dir / kOutputMarker).string());
+  } catch (const Error& e) {
+    throw Error(shown + ": its " + kOutputMarker + " cannot be read (" + e.what() + "): refusing to replace it" + how);
+  }
+  if (!marker.is_object() || marker.value("verb", "") != verb || !marker.contains("files") || !marker["files"].is_array()) {
+    throw Error(shown + ": " + kOutputMarker + " does not record a `skycal " + verb + "` output: refusing to replace it" + how);
+  }
+  std::set<std::string> listed{kOutputMarker};
+  for (const auto& f : marker["files"]) {
+    if (f.is_string()) listed.insert(f.get<std::string>());
+  }
+  for (const std::string& f : FilesBelow(dir)) {
+    if (!listed.count(f)) {
+      throw Error(shown + ": holds '" + f + "', which the earlier `skycal " + verb +
+                  "` run did not write: refusing to replace the directory and lose it" + how);
     }
   }
+}
+
+}  // namespace
+
+StagedDirectory::StagedDirectory(const std::string& dir, const std::string& option, const std::string& verb,
+                                 const std::vector<NamedPath>& inputs)
+    : option_(option), verb_(verb) {
+  if (dir.empty()) throw Error(option + ": expected a directory path");
+  final_ = fs::absolute(dir).lexically_normal();
+  if (final_.filename().empty()) final_ = final_.parent_path();  // "out/" -> "out"
+  const std::string shown = option + " " + dir;
+  std::error_code ec;
+  if (!fs::is_directory(final_.parent_path(), ec)) {
+    throw Error(shown + ": parent directory '" + final_.parent_path().string() + "' does not exist");
+  }
+  RefuseInputsInsideDirectory({option, dir}, inputs);
+  if (fs::exists(fs::symlink_status(final_, ec))) {
+    if (fs::is_symlink(fs::symlink_status(final_, ec))) throw Error(shown + ": is a symbolic link: refusing to replace it");
+    if (!fs::is_directory(final_, ec)) throw Error(shown + ": exists and is not a directory");
+    RequireReplaceable(final_, shown, verb);
+  }
+  RemoveStaleTemporaries(final_.parent_path().string());
   staging_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  guard_ = std::make_unique<TemporaryGuard>(staging_.string());
   fs::remove_all(staging_, ec);
   if (!fs::create_directories(staging_, ec)) {
-    throw Error(option + " " + dir + ": cannot create a staging directory beside it (" + ec.message() + ")");
+    throw Error(shown + ": cannot create a staging directory beside it (" + ec.message() + ")");
   }
 }
 
@@ -34,11 +88,30 @@ StagedDirectory::~StagedDirectory() {
 }
 
 void StagedDirectory::Commit() {
+  WriteJsonFileAtomically((staging_ / kOutputMarker).string(),
+                          {{"verb", verb_}, {"files", FilesBelow(staging_)},
+                           {"note", "written by skycal: a later `skycal " + verb_ +
+                                        " --out` may replace this directory only while it holds just these files"}});
+  const fs::path old = final_.parent_path() / ("." + final_.filename().string() + ".old-" + std::to_string(::getpid()));
   std::error_code ec;
-  if (fs::exists(final_, ec)) fs::remove_all(final_, ec);
-  fs::rename(staging_, final_, ec);
-  if (ec) throw Error(final_.string() + ": could not move the finished output into place (" + ec.message() + ")");
-  committed_ = true;
+  {
+    // The watcher waits for this block: the destination is never left missing.
+    InterruptCleanupCriticalSection whole;
+    TemporaryGuard old_guard(old.string());
+    const bool replacing = fs::exists(final_, ec);
+    if (replacing) {
+      fs::rename(final_, old, ec);
+      if (ec) throw Error(final_.string() + ": could not move the earlier output aside (" + ec.message() + ")");
+    }
+    fs::rename(staging_, final_, ec);
+    if (ec) {
+      std::error_code back;
+      if (replacing) fs::rename(old, final_, back);
+      throw Error(final_.string() + ": could not move the finished output into place (" + ec.message() + ")");
+    }
+    committed_ = true;
+    if (replacing) fs::remove_all(old, ec);
+  }
 }
 
 }  // namespace skycal::cli

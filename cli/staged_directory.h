@@ -1,17 +1,32 @@
 // An output directory written atomically: everything goes into a hidden sibling staging
-// directory, renamed into place by Commit(); on failure (destructor without Commit) the
-// staging directory is removed and the destination is untouched.
+// directory, renamed into place by Commit(); on failure (destructor without Commit) or
+// interruption (interrupt_cleanup.h) the staging directory is removed and the destination
+// is untouched.
+//
+// Replacing an existing directory is allowed only when it is recognisably this verb's own
+// earlier output and holds nothing else: Commit() writes a marker, `.skycal-output.json`,
+// listing the verb and every file it wrote; a later run replaces the directory only if
+// the marker names the same verb and every file in the directory is listed there. A
+// directory that any input lives in is never replaced.
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <string>
+#include <vector>
+
+#include "skycal/core/file_safety.h"
+#include "skycal/core/interrupt_cleanup.h"
 
 namespace skycal::cli {
 
+inline constexpr const char* kOutputMarker = ".skycal-output.json";
+
 class StagedDirectory {
  public:
-  // `option` names the flag for messages (e.g. "--out"). An existing destination must be
-  // empty or hold `marker_file` (a previous output of the same verb), else refused.
-  StagedDirectory(const std::string& dir, const std::string& option, const std::string& marker_file);
+  // `option` names the flag for messages (e.g. "--out"); `verb` is written to the marker.
+  // Throws skycal::Error, before anything is written, when `dir` cannot be replaced.
+  StagedDirectory(const std::string& dir, const std::string& option, const std::string& verb,
+                  const std::vector<NamedPath>& inputs);
   ~StagedDirectory();
   StagedDirectory(const StagedDirectory&) = delete;
   StagedDirectory& operator=(const StagedDirectory&) = delete;
@@ -22,7 +37,9 @@ class StagedDirectory {
 
  private:
   std::filesystem::path final_, staging_;
+  std::string option_, verb_;
   bool committed_ = false;
+  std::unique_ptr<TemporaryGuard> guard_;
 };
 
 }  // namespace skycal::cli

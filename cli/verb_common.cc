@@ -1,9 +1,11 @@
 #include "verb_common.h"
 
+#include <cerrno>
 #include <cstring>
 #include <iostream>
 
 #include "skycal/core/error.h"
+#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 
@@ -15,7 +17,14 @@ int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::js
     nlohmann::json summary = body();
     summary["ok"] = true;
     summary["verb"] = verb;
-    if (json) std::cout << summary.dump(2) << std::endl;
+    if (json) {
+      std::cout << summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << std::endl;
+      if (!std::cout) {  // a full disk, a closed stdout or a pipe nobody reads (SIGPIPE is ignored)
+        std::cerr << "skycal " << verb << ": error: the run finished (its files are written) but the JSON summary "
+                  << "could not be written to standard output (" << std::strerror(errno) << ")" << std::endl;
+        return 1;
+      }
+    }
     return 0;
   } catch (const Error& e) {
     error = e.what();
@@ -23,8 +32,21 @@ int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::js
     error = std::string("internal error: ") + e.what();
   }
   std::cerr << "skycal " << verb << ": error: " << error << std::endl;
-  if (json) std::cout << nlohmann::json{{"ok", false}, {"verb", verb}, {"error", error}}.dump(2) << std::endl;
+  if (json) {
+    std::cout << nlohmann::json{{"ok", false}, {"verb", verb}, {"error", error}}.dump(
+                     2, ' ', false, nlohmann::json::error_handler_t::replace)
+              << std::endl;
+  }
   return 1;
+}
+
+std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json) {
+  std::vector<NamedPath> inputs;
+  const auto files = render::PresetFiles(preset_json);
+  for (size_t i = 0; i < files.size(); ++i) {
+    inputs.push_back({i == 0 ? option : option + " " + preset_json + "'s LUT", files[i]});
+  }
+  return inputs;
 }
 
 bool WantsHelp(int argc, char** argv) {

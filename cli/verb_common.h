@@ -3,8 +3,11 @@
 #pragma once
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "skycal/core/file_safety.h"
 
 namespace skycal::cli {
 
@@ -15,6 +18,9 @@ void Log(const std::string& verb, const std::string& message);
 // JSON on stdout when `json` is set, maps skycal::Error and other exceptions to a message
 // on stderr and exit code 1. With --json a failure also prints {"ok": false, "error": ...}.
 int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::json()>& body);
+
+// A preset as inputs for file_safety.h: its JSON (role `option`) and every LUT EXR it names.
+std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json);
 
 bool WantsHelp(int argc, char** argv);
 bool WantsJson(int argc, char** argv);

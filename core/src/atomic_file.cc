@@ -35,6 +35,8 @@ AtomicOutput::AtomicOutput(std::string final_path) : final_path_(std::move(final
   temp_path_ = (dir / ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) +
                        "-" + std::to_string(counter++)))
                    .string();
+  RemoveStaleTemporaries(dir.string());
+  guard_ = std::make_unique<TemporaryGuard>(temp_path_);
 }
 
 AtomicOutput::~AtomicOutput() {

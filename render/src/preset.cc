@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 
+#include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
@@ -250,25 +252,53 @@ Preset LoadPreset(const std::string& path) {
   return p;
 }
 
-void SavePreset(const Preset& preset, const std::string& json_path, const json* extra) {
-  ValidatePreset(preset, json_path);
+std::vector<std::string> PresetOutputFiles(const std::string& json_path, ModelVariant variant) {
   const fs::path jp(json_path);
   const std::string stem = jp.stem().string();
-  const fs::path dir = jp.parent_path();
+  std::vector<std::string> files;
+  const int tables = variant == ModelVariant::kFfxvIso ? 3 : 2;
+  for (int t = 0; t < tables; ++t) files.push_back((jp.parent_path() / (stem + "." + kLutNames[t] + ".exr")).string());
+  files.push_back((jp.parent_path() / (stem + ".sun_transmittance.exr")).string());
+  files.push_back(json_path);  // last: a preset whose JSON exists has all its LUTs
+  return files;
+}
+
+std::vector<std::string> PresetFiles(const std::string& json_path) {
+  std::vector<std::string> files{json_path};
+  try {
+    const json j = ReadJsonFile(json_path);
+    if (!j.is_object() || !j.contains("luts") || !j["luts"].is_object()) return files;
+    const fs::path dir = fs::path(json_path).parent_path();
+    for (const char* key : {kLutNames[0], kLutNames[1], kLutNames[2], "sun_transmittance"}) {
+      const auto it = j["luts"].find(key);
+      if (it != j["luts"].end() && it->is_string()) files.push_back((dir / it->get<std::string>()).string());
+    }
+  } catch (const Error&) {
+    // Unreadable: LoadPreset reports it with the field; the JSON's own path is still guarded.
+  }
+  return files;
+}
+
+void SavePreset(const Preset& preset, const std::string& json_path, const json* extra) {
+  ValidatePreset(preset, json_path);
+  const std::vector<std::string> files = PresetOutputFiles(json_path, preset.variant);
+  const std::string stem = fs::path(json_path).stem().string();
   const LutGrid& g = preset.luts.grid;
+  // Every file goes to its temporary first; the renames happen together at the end, so an
+  // error or interruption leaves the earlier preset (if any) whole, never a mix.
+  std::vector<std::unique_ptr<AtomicOutput>> outs;
+  for (const std::string& f : files) outs.push_back(std::make_unique<AtomicOutput>(f));
   const int tables = preset.variant == ModelVariant::kFfxvIso ? 3 : 2;
   for (int t = 0; t < tables; ++t) {
-    WriteLutImage((dir / (stem + "." + kLutNames[t] + ".exr")).string(), LutTable(preset.luts, t), g.n_gamma, g.n_theta,
-                  kLutNames[t], g);
+    WriteLutImage(outs[t]->temp_path(), LutTable(preset.luts, t), g.n_gamma, g.n_theta, kLutNames[t], g);
   }
-  WriteLutImage((dir / (stem + ".sun_transmittance.exr")).string(), preset.luts.sun_transmittance, 1, g.n_theta,
-                "sun_transmittance", g);
-  // The JSON goes last: a preset whose JSON exists has all its LUTs.
+  WriteLutImage(outs[tables]->temp_path(), preset.luts.sun_transmittance, 1, g.n_theta, "sun_transmittance", g);
   json j = PresetToJson(preset, stem);
   if (extra) {
     for (auto it = extra->begin(); it != extra->end(); ++it) j[it.key()] = it.value();
   }
-  WriteJsonFileAtomically(json_path, j);
+  WriteJsonFileAtomically(outs.back()->temp_path(), j);
+  for (auto& out : outs) out->Commit();
 }
 
 double LutRowSunZenithRad(const LutGrid& g, int row) {

@@ -75,6 +75,12 @@ void ValidatePreset(const Preset& preset, const std::string& origin);
 nlohmann::json PresetToJson(const Preset& preset, const std::string& lut_stem);
 // Reads a preset JSON and its LUT EXRs (paths relative to the JSON's directory).
 Preset LoadPreset(const std::string& path);
+// The files a preset consists of: its JSON and the LUT EXRs it names (as far as the JSON
+// can be read; an unreadable JSON gives just its own path). Verbs list them as inputs so
+// that no output replaces a preset's LUT (file_safety.h).
+std::vector<std::string> PresetFiles(const std::string& json_path);
+// The files SavePreset(json_path) writes for a preset of `variant`.
+std::vector<std::string> PresetOutputFiles(const std::string& json_path, ModelVariant variant);
 // Writes `<dir>/<stem>.json` and `<dir>/<stem>.<lut>.exr`, each atomically. `extra`
 // (optional) adds top-level keys to the JSON, e.g. the fit's provenance.
 void SavePreset(const Preset& preset, const std::string& json_path, const nlohmann::json* extra = nullptr);
