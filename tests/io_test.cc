@@ -10,6 +10,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/json_schema.h"
 #include "skycal/render/preset.h"
 #include "test_presets.h"
 #include "test_util.h"
@@ -151,6 +152,33 @@ TEST(PresetIo, BadPresetsNameTheField) {
   ExpectPresetError([](auto& j) { j["luts"]["mie"] = "missing.exr"; }, "missing.exr");
   ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 12; }, "expected 32 x 12");
   ExpectPresetError([](auto& j) { j.erase("luts"); }, "luts");
+  // Strict: a misspelt or unknown key is an error naming the nearest valid name, a missing
+  // parameter is an error (not its default), a later format_version is refused.
+  ExpectPresetError(
+      [](auto& j) {
+        j["parameters"]["haziness"] = j["parameters"]["haziness_g"];
+        j["parameters"].erase("haziness_g");
+      },
+      "field 'parameters.haziness': unknown key (did you mean 'haziness_g'?");
+  ExpectPresetError([](auto& j) { j["parameters"].erase("ground_albedo"); }, "field 'parameters.ground_albedo' is missing");
+  ExpectPresetError([](auto& j) { j["sun_angle"] = 3; }, "field 'sun_angle': unknown key");
+  ExpectPresetError([](auto& j) { j["parameters"]["haziness_g"]["vaule"] = 0.5; }, "did you mean 'value'?");
+  ExpectPresetError([](auto& j) { j["luts"]["raleigh"] = "x.exr"; }, "did you mean 'rayleigh'?");
+  ExpectPresetError([](auto& j) { j["format_version"] = 2; }, "newer skycal");
+  ExpectPresetError([](auto& j) { j.erase("format_version"); }, "field 'format_version' is missing");
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 1e300; }, "expected an integer in [2, ");
+  ExpectPresetError([](auto& j) { j["parameters"]["sun_illuminance"]["value"] = 1e300; }, "1e+300 is out of range");
+}
+
+TEST(JsonSchema, NearestNameFindsTyposNotStrangers) {
+  const std::vector<std::string> names = {"haziness_g", "sun_illuminance", "ground_albedo", "center", "cameras"};
+  EXPECT_EQ(NearestName("hazines_g", names), "haziness_g");    // a dropped letter
+  EXPECT_EQ(NearestName("haizness_g", names), "haziness_g");   // a swapped pair
+  EXPECT_EQ(NearestName("haziness", names), "haziness_g");     // a prefix
+  EXPECT_EQ(NearestName("centre", names), "center");           // British spelling
+  EXPECT_EQ(NearestName("groundalbedo", names), "ground_albedo");
+  EXPECT_EQ(NearestName("exposure", names), "");                // nothing near: no guess
+  EXPECT_EQ(NearestName(std::string(5000, 'a'), names), "");    // bounded work on hostile keys
 }
 
 TEST(PresetIo, NanTexelAndCorruptJsonAreRejected) {

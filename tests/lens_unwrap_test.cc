@@ -385,7 +385,7 @@ TEST(Rig, ErrorsNameTheField) {
       {RigJson(R"({"model": "equisolid", "fov_deg": 180, "center": [2999.5, 999.5], "radius_px": 1000})"),
        "cameras[1].lens.center", "inside"},
       {RigJson(R"({"model": "equisolid", "fov_deg": 180, "centre": [999.5, 999.5], "radius_px": 1000})"),
-       "cameras[1].lens.centre", "unknown key"},
+       "cameras[1].lens.centre", "unknown key (did you mean 'center'?"},
       {RigJson(kKbLens, R"([[1, 0, 0], [0, 1, 0], [0, 0.5, 1]])"), "cameras[1].rotation", "not a rotation matrix"},
       {RigJson(kKbLens, R"([[-1, 0, 0], [0, 1, 0], [0, 0, 1]])"), "cameras[1].rotation", "reflection"},
       {RigJson(kKbLens, R"([[1, 0, 0], [0, 1, 0]])"), "cameras[1].rotation", "3x3"},
@@ -398,9 +398,13 @@ TEST(Rig, ErrorsNameTheField) {
       {RigJson(R"({"model": "latlong"})", R"({"yaw_deg": 0, "pitch_deg": 0})", "[2000, 2000]"), "cameras[1].image_size", "2:1"},
       {RigJson(kKbLens, R"({"yaw_deg": 0, "pitch_deg": 0})", "[2000, 2000]", R"(, "exposure": 2)"), "cameras[1].exposure",
        "unknown key"},
-      {R"({"cameras": []})", "cameras", "non-empty"},
-      {R"({"format": "skycal-preset", "cameras": []})", "format", "skycal-rig"},
-      {R"({"cameras": [{"image_size": [10, 10]}]})", "cameras[0].image", "missing"},
+      {R"({"format_version": 1, "cameras": []})", "cameras", "non-empty"},
+      {R"({"format": "skycal-preset", "format_version": 1, "cameras": []})", "format", "skycal-rig"},
+      {R"({"format_version": 1, "cameras": [{"image_size": [10, 10]}]})", "cameras[0].image", "missing"},
+      {R"({"cameras": [{"image_size": [10, 10]}]})", "format_version", "is missing: expected 1"},
+      {R"({"format_version": 2, "cameras": []})", "format_version", "newer skycal"},
+      {R"({"format_version": "1", "cameras": []})", "format_version", "integer"},
+      {R"({"format_version": 1, "camera": []})", "camera", "did you mean 'cameras'?"},
   };
   for (const auto& c : cases) {
     const std::string msg = ParseError(c.text);

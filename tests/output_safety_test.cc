@@ -84,7 +84,7 @@ TEST(OutputSafety, NoVerbWritesOverItsInput) {
                 "LUT", preset);
   EXPECT_FALSE(fs::exists(dir.path() / "x.exr"));
   // capture: the rig's camera image.
-  testing::WriteText(dir / "rig.json", R"({"cameras": [{"name": "up", "image": "sky.exr", "image_size": [64, 32],
+  testing::WriteText(dir / "rig.json", R"({"format_version": 1, "cameras": [{"name": "up", "image": "sky.exr", "image_size": [64, 32],
       "lens": {"model": "latlong"}, "rotation": {"yaw_deg": 0, "pitch_deg": 0}}]})");
   ExpectRefused("capture --rig " + (dir / "rig.json") + " --size 64x32 --out " + sky, same, {sky, dir / "rig.json"});
   // fit and export: a directory output that an input lives in is never replaced.

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 
@@ -234,6 +235,41 @@ TEST(ProbeFit, RequireProbeWithoutSamplesFailsAndWritesNothing) {
   EXPECT_EQ(r4.rc, 1);
   EXPECT_NE(r4.err.find("--probe-weight"), std::string::npos) << r4.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+// Probe sample files are read strictly and checked before the fit: a misspelt key, a
+// missing format_version, a sample of 1e308 (which surfaced as a raw Ceres "invalid value")
+// and a non-unit normal are refused naming the file and the field.
+TEST(ProbeFit, SampleFilesAreCheckedBeforeTheFit) {
+  testing::ScratchDir dir("probe-strict");
+  const render::Preset truth = render::LoadPreset(kPreset);
+  synthetic::WriteSyntheticReference(dir / "ref.exr", truth, 30.0, 0.0, 64);
+  WriteSyntheticProbe(dir / "good.json", truth, latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0), {1e5, 1e5, 1e5},
+                      0.18, 0.0, 1);
+  struct Case {
+    std::function<void(nlohmann::json&)> edit;
+    std::string needle;
+  };
+  const std::vector<Case> cases = {
+      {[](auto& d) { d["sample"] = d["samples"]; d.erase("samples"); }, "field 'sample': unknown key (did you mean 'samples'?"},
+      {[](auto& d) { d.erase("format_version"); }, "field 'format_version' is missing"},
+      {[](auto& d) { d["samples"][3]["radiance"] = {1e308, 1.0, 1.0}; }, "field 'samples[3].radiance'"},
+      {[](auto& d) { d["samples"][0]["radiance"] = {-1.0, 1.0, 1.0}; }, "field 'samples[0].radiance'"},
+      {[](auto& d) { d["samples"][1]["normal"] = {0.0, 2.0, 0.0}; }, "field 'samples[1].normal': expected a unit vector"},
+      {[](auto& d) { d["samples"][1]["radiance_rgb"] = {1.0, 1.0, 1.0}; }, "did you mean 'radiance'?"},
+      {[](auto& d) { d["albedo"] = 1e300; }, "1e+300"},
+  };
+  for (const Case& c : cases) {
+    auto doc = ReadJsonFile(dir / "good.json");
+    c.edit(doc);
+    WriteJsonFileAtomically(dir / "bad.json", doc);
+    const Result r = Skycal("fit --reference " + dir / "ref.exr" + " --probe ref=" + dir / "bad.json" + " --out " +
+                            dir / "out" + kFitArgs);
+    EXPECT_EQ(r.rc, 1) << c.needle;
+    EXPECT_NE(r.err.find("bad.json"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(c.needle), std::string::npos) << "expected '" << c.needle << "' in: " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  }
 }
 
 // A photograph of a ball: background 0.5, ball radiance a + b max(0, n.s) per channel.

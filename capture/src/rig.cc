@@ -12,6 +12,7 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/json_schema.h"
 
 namespace skycal::capture {
 namespace {
@@ -35,15 +36,9 @@ Mat3 Mul(const Mat3& a, const Mat3& b) {
 
 std::string Field(const std::string& source, const std::string& field) { return source + ": field '" + field + "'"; }
 
-void CheckKeys(const nlohmann::json& obj, const std::set<std::string>& allowed, const std::string& source,
+void CheckKeys(const nlohmann::json& obj, const std::vector<std::string>& allowed, const std::string& source,
                const std::string& prefix) {
-  for (auto it = obj.begin(); it != obj.end(); ++it) {
-    if (!allowed.count(it.key())) {
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      throw Error(Field(source, prefix + it.key()) + ": unknown key (expected one of " + list + ")");
-    }
-  }
+  RequireKnownKeys(obj, allowed, source, prefix);
 }
 
 double Number(const nlohmann::json& j, const std::string& source, const std::string& field) {
@@ -145,10 +140,7 @@ std::vector<RigCamera> ParseRig(const nlohmann::json& j, const std::string& sour
   if (j.contains("format") && (!j.at("format").is_string() || j.at("format").get<std::string>() != kFormat)) {
     throw Error(Field(source, "format") + ": expected \"" + kFormat + "\" (is this a skycal rig description?)");
   }
-  if (j.contains("format_version") &&
-      (!j.at("format_version").is_number_integer() || j.at("format_version").get<int>() != kFormatVersion)) {
-    throw Error(Field(source, "format_version") + ": expected " + std::to_string(kFormatVersion));
-  }
+  RequireFormatVersion(j, kFormatVersion, source, "add \"format_version\": 1 after checking the file against this version's rig format");
   const auto& jc = Required(j, "cameras", source, "");
   if (!jc.is_array() || jc.empty()) throw Error(Field(source, "cameras") + ": expected a non-empty array of cameras");
   std::vector<RigCamera> cameras;

@@ -7,7 +7,9 @@
 #include <cmath>
 
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/json_schema.h"
 #include "skycal/render/preset.h"  // SunTransmittance
 
 namespace skycal::fit {
@@ -17,27 +19,41 @@ ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& 
   if (!doc.is_object() || doc.value("format", std::string()) != "skycal-probe-samples") {
     fail("not a probe samples file (expected \"format\": \"skycal-probe-samples\")");
   }
-  if (doc.value("format_version", 0) != 1) fail("unsupported format_version (expected 1)");
+  RequireFormatVersion(doc, 1, origin, "extract it again with skycal probe-extract");
+  RequireKnownKeys(doc, {"format", "format_version", "image", "sha256", "circle", "circle_source", "camera_rotation", "albedo",
+                         "clip_level", "max_luminance", "max_luminance_clipped", "pixels", "samples"},
+                   origin, "");
   ProbeSamples p;
   p.path = origin;
   try {
     p.albedo = doc.at("albedo").get<double>();
     if (doc.contains("max_luminance") && doc["max_luminance"].is_number()) p.max_luminance = doc["max_luminance"].get<double>();
     p.max_luminance_clipped = doc.value("max_luminance_clipped", false);
+    if (!doc.at("samples").is_array()) fail("field 'samples': expected an array");
+    size_t i = 0;
     for (const auto& s : doc.at("samples")) {
+      const std::string field = "samples[" + std::to_string(i++) + "]";
+      RequireKnownKeys(s, {"normal", "radiance", "pixels"}, origin, field + ".");
       capture::ProbeSample ps;
       ps.normal = s.at("normal").get<std::array<double, 3>>();
       ps.radiance = s.at("radiance").get<std::array<double, 3>>();
       ps.pixels = s.value("pixels", 1);
+      const double n = std::sqrt(ps.normal[0] * ps.normal[0] + ps.normal[1] * ps.normal[1] + ps.normal[2] * ps.normal[2]);
+      if (!(std::abs(n - 1.0) < 1e-3)) fail("field '" + field + ".normal': expected a unit vector, its length is " + FormatNumber(n));
       for (int c = 0; c < 3; ++c) {
-        if (!std::isfinite(ps.normal[c]) || !std::isfinite(ps.radiance[c])) fail("non-finite sample");
+        // Radiance bounds: >= 0 and below 1e12 cd/m^2 (the sun's disc is ~1.6e9): a larger
+        // value is corrupt and would overflow the fit's squared residuals.
+        if (!(ps.radiance[c] >= 0.0 && ps.radiance[c] < 1e12)) {
+          fail("field '" + field + ".radiance': expected values in [0, 1e12) cd/m^2, got " + FormatNumber(ps.radiance[c]));
+        }
       }
+      if (ps.pixels < 1) fail("field '" + field + ".pixels': expected a positive count");
       p.samples.push_back(ps);
     }
   } catch (const nlohmann::json::exception& e) {
     fail(std::string("malformed samples: ") + e.what());
   }
-  if (!(p.albedo > 0.0 && p.albedo <= 1.0)) fail("albedo must be in (0, 1]");
+  if (!(p.albedo > 0.0 && p.albedo <= 1.0)) fail("field 'albedo': expected a value in (0, 1], got " + FormatNumber(p.albedo));
   if (p.samples.empty()) fail("no samples");
   return p;
 }

@@ -4,12 +4,15 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/json_schema.h"
 #include "skycal/core/version.h"
 
 namespace skycal::render {
@@ -85,8 +88,8 @@ void ValidatePreset(const Preset& preset_in, const std::string& origin) {
     const double* v = s.field(preset);
     for (int c = 0; c < s.components; ++c) {
       if (!std::isfinite(v[c]) || v[c] < s.min || v[c] > s.max) {
-        throw Error(Field(origin, s.name) + " = " + std::to_string(v[c]) + " is out of range (expected a finite value in [" +
-                    std::to_string(s.min) + ", " + std::to_string(s.max) + "] " + s.unit + ")");
+        throw Error(Field(origin, s.name) + " = " + FormatNumber(v[c]) + " is out of range (expected a finite value in [" +
+                    FormatNumber(s.min) + ", " + FormatNumber(s.max) + "] " + s.unit + ")");
       }
     }
   }
@@ -111,7 +114,7 @@ void ValidatePreset(const Preset& preset_in, const std::string& origin) {
         const size_t texel = i / 3;
         throw Error(Field(origin, std::string("luts.") + kLutNames[t]) + ": texel (row " +
                     std::to_string(texel / g.n_gamma) + ", column " + std::to_string(texel % g.n_gamma) +
-                    ") = " + std::to_string(table[i]) + " (expected finite and >= 0)");
+                    ") = " + FormatNumber(table[i]) + " (expected finite and >= 0)");
       }
     }
   }
@@ -120,7 +123,7 @@ void ValidatePreset(const Preset& preset_in, const std::string& origin) {
   }
   for (float t : preset.luts.sun_transmittance) {
     if (!std::isfinite(t) || t < 0.0f || t > 1.0f) {
-      throw Error(Field(origin, "luts.sun_transmittance") + ": expected values in [0, 1], got " + std::to_string(t));
+      throw Error(Field(origin, "luts.sun_transmittance") + ": expected values in [0, 1], got " + FormatNumber(t));
     }
   }
 }
@@ -194,9 +197,10 @@ Preset LoadPreset(const std::string& path) {
   if (!j.is_object() || j.value("format", "") != kFormat) {
     throw Error(Field(path, "format") + ": expected \"" + kFormat + "\" (is this a skycal preset?)");
   }
-  if (j.value("format_version", 0) != kFormatVersion) {
-    throw Error(Field(path, "format_version") + ": expected " + std::to_string(kFormatVersion));
-  }
+  RequireKnownKeys(j, {"format", "format_version", "tool_version", "name", "model", "time_of_day_h", "parameters", "luts",
+                       "provenance"},
+                   path, "");
+  RequireFormatVersion(j, kFormatVersion, path, "bake or fit it again with this skycal");
   Preset p;
   p.name = j.value("name", fs::path(path).stem().string());
   const json& model = Require(j, "model", path, "");
@@ -209,13 +213,20 @@ Preset LoadPreset(const std::string& path) {
     }
   }
   const json& params = Require(j, "parameters", path, "");
+  std::vector<std::string> names;
+  for (const ParamSpec& s : PresetParameterSpecs()) names.push_back(s.name);
+  RequireKnownKeys(params, names, path, "parameters.");
   for (const ParamSpec& s : PresetParameterSpecs()) {
     const std::string field = std::string("parameters.") + s.name + ".value";
     double* out = s.field(p);
-    if (!params.contains(s.name)) {  // absent parameters take their default
-      for (int c = 0; c < s.components; ++c) out[c] = s.default_value;
-      continue;
+    if (!params.contains(s.name)) {  // a silent default would hide a typo or a truncated file
+      std::ostringstream def;
+      def << s.default_value;
+      throw Error(Field(path, std::string("parameters.") + s.name) + " is missing (a preset lists every parameter; " +
+                  s.description + ", " + s.unit + ", default " + def.str() + ")");
     }
+    RequireKnownKeys(params.at(s.name), {"value", "unit", "min", "max", "default", "description"}, path,
+                     std::string("parameters.") + s.name + ".");
     const json& v = Require(params.at(s.name), "value", path, std::string("parameters.") + s.name + ".");
     if (s.components == 1) {
       out[0] = RequireNumber(v, path, field);
@@ -227,15 +238,21 @@ Preset LoadPreset(const std::string& path) {
     }
   }
   const json& luts = Require(j, "luts", path, "");
+  RequireKnownKeys(luts, {"grid", kLutNames[0], kLutNames[1], kLutNames[2], "sun_transmittance"}, path, "luts.");
   const json& grid = Require(luts, "grid", path, "luts.");
+  RequireKnownKeys(grid, {"n_theta", "n_gamma", "theta_max_deg", "row_mapping", "column_mapping", "unit"}, path, "luts.grid.");
+  auto count = [&](const char* key, int max) {
+    const std::string field = std::string("luts.grid.") + key;
+    const double v = RequireNumber(Require(grid, key, path, "luts.grid."), path, field);
+    if (!(v >= 2 && v <= max && v == std::floor(v))) {
+      throw Error(Field(path, field) + ": expected an integer in [2, " + std::to_string(max) + "], got " + grid.at(key).dump());
+    }
+    return static_cast<int>(v);
+  };
   LutGrid g;
-  g.n_theta = static_cast<int>(RequireNumber(Require(grid, "n_theta", path, "luts.grid."), path, "luts.grid.n_theta"));
-  g.n_gamma = static_cast<int>(RequireNumber(Require(grid, "n_gamma", path, "luts.grid."), path, "luts.grid.n_gamma"));
+  g.n_theta = count("n_theta", kMaxLutRows);
+  g.n_gamma = count("n_gamma", kMaxLutColumns);
   g.theta_max_deg = RequireNumber(Require(grid, "theta_max_deg", path, "luts.grid."), path, "luts.grid.theta_max_deg");
-  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > kMaxLutRows || g.n_gamma > kMaxLutColumns) {
-    throw Error(Field(path, "luts.grid") + ": expected 2.." + std::to_string(kMaxLutRows) + " rows and 2.." +
-                std::to_string(kMaxLutColumns) + " columns");
-  }
   p.luts.Resize(g);
   const fs::path dir = fs::path(path).parent_path();
   auto lut_path = [&](const char* key) {

@@ -3,7 +3,8 @@
 //
 // Rig description file (JSON; relative image paths are relative to the file's folder):
 //   {
-//     "format": "skycal-rig", "format_version": 1,        (optional; checked when present)
+//     "format": "skycal-rig",                            (optional; checked when present)
+//     "format_version": 1,                               (required: a later format is refused, not guessed)
 //     "cameras": [
 //       {
 //         "name": "east",                                  (optional, used in messages)
