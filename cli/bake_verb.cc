@@ -1,5 +1,6 @@
 #include "bake_verb.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -40,6 +41,16 @@ nlohmann::json RunBakeImpl(const BakeOptions& o) {
   p.sun_illuminance_lux = o.atmosphere.sun_illuminance_lux;
   p.luts.Resize(o.grid);
   render::BakeSingleScattering(o.atmosphere, p.luts);
+  // Within the bounds a LUT can still come out black (e.g. a thick atmosphere seen from its
+  // floor); a black table would let a later fit "succeed" at a large error: refuse it here.
+  for (const auto& [name, table] : {std::pair<const char*, const std::vector<float>*>{"rayleigh", &p.luts.rayleigh},
+                                    {"mie", &p.luts.mie}}) {
+    if (*std::max_element(table->begin(), table->end()) <= 0.0f) {
+      throw Error(std::string("bake: the ") + name +
+                  " LUT came out entirely zero: the atmosphere is opaque for single scattering at these coefficients "
+                  "(lower the scattering or extinction)");
+    }
+  }
   const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const nlohmann::json provenance = {
       {"provenance",

@@ -83,9 +83,16 @@ void WriteFitReport(const std::string& png_path, const std::vector<fit::Referenc
     color::PreviewOptions po;
     color::PreviewReport auto_report;
     color::ToDisplay8(sky_only, po, &auto_report);
-    po.exposure_ev = auto_report.exposure_ev;
-    const cv::Mat a = ToMat(color::ToDisplay8(ref.radiance, po, nullptr), w, h);
-    const cv::Mat b = ToMat(color::ToDisplay8(fitted, po, nullptr), w, h);
+    // The exposure is applied here, in double, rather than through po.exposure_ev: a
+    // reference in a camera's raw units can need more than the preview's +-64 stops.
+    const double gain = std::exp2(auto_report.exposure_ev);
+    auto exposed = [gain](ImageRGB img) {
+      for (float& v : img.pixels) v = static_cast<float>(v * gain);
+      return img;
+    };
+    po.exposure_ev = 0.0;
+    const cv::Mat a = ToMat(color::ToDisplay8(exposed(ref.radiance), po, nullptr), w, h);
+    const cv::Mat b = ToMat(color::ToDisplay8(exposed(fitted), po, nullptr), w, h);
     cv::Mat err(h, w, CV_8UC3);
     for (int i = 0; i < w * h; ++i) {
       if (ref.pixel_class[i] != fit::PixelClass::kSky) {

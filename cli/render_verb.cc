@@ -57,6 +57,11 @@ bool RenderOptions::IsValid(std::string* why) const {
     *why = "--size: " + *why;
     return false;
   }
+  if (width != 2 * height) {  // the project's lat-long convention; fit and import read 2:1 only
+    *why = "--size " + std::to_string(width) + "x" + std::to_string(height) +
+           ": expected a 2:1 lat-long (width = 2 x height), as fit and import read";
+    return false;
+  }
   if (out_exr.empty() || !EndsWith(out_exr, ".exr")) {
     *why = "--out: expected an output path ending in .exr";
     return false;

@@ -23,9 +23,9 @@ constexpr const char* kHelp = R"(skycal sun: the sun's position for a place and 
                          Julian-calendar dates, as in the SPA; years -2000..6000)
   --lat DEG              observer latitude, degrees in [-90, 90], north positive
   --lon DEG              observer longitude, degrees in [-180, 180], east positive
-  --elevation-m M        observer elevation above sea level in metres (default 0)
-  --pressure MBAR        annual mean local pressure, millibars in [0, 5000] (default 1013.25)
-  --temperature C        annual mean local temperature, Celsius (default 15)
+  --elevation-m M        observer elevation above sea level in metres, [-11000, 100000] (default 0)
+  --pressure MBAR        annual mean local pressure, millibars in [0, 1200] (default 1013.25)
+  --temperature C        annual mean local temperature, Celsius in [-100, 100] (default 15)
   --delta-t S            TT - UT1 in seconds (default 67; about 69 in the 2020s)
   --north-longitude DEG  lat-long longitude of geographic north in the frame (camera heading;
                          default 0: north is +Z, east is -X). Compass azimuth A maps to
@@ -72,16 +72,19 @@ bool SunOptions::IsValid(std::string* why) const {
     *why = "--lon " + Num(*longitude_deg) + ": expected degrees in [-180, 180] (east positive)";
     return false;
   }
-  if (!(elevation_m >= -6500000.0)) {
-    *why = "--elevation-m " + Num(elevation_m) + ": expected metres above sea level, >= -6500000";
+  // Physical bounds for a camera under a sky (stricter than NREL SPA's own validity
+  // ranges, which the library keeps as a backstop): the deepest ocean floor to the Karman
+  // line; sea-level pressures up to the record high with margin; surface air temperatures.
+  if (!(elevation_m >= -11000.0 && elevation_m <= 100000.0)) {
+    *why = "--elevation-m " + Num(elevation_m) + ": expected metres above sea level in [-11000, 100000]";
     return false;
   }
-  if (!(pressure_mbar >= 0.0 && pressure_mbar <= 5000.0)) {
-    *why = "--pressure " + Num(pressure_mbar) + ": expected millibars in [0, 5000]";
+  if (!(pressure_mbar >= 0.0 && pressure_mbar <= 1200.0)) {
+    *why = "--pressure " + Num(pressure_mbar) + ": expected millibars in [0, 1200] (sea level ~1013)";
     return false;
   }
-  if (!(temperature_c > -273.0 && temperature_c <= 6000.0)) {
-    *why = "--temperature " + Num(temperature_c) + ": expected degrees Celsius in (-273, 6000]";
+  if (!(temperature_c >= -100.0 && temperature_c <= 100.0)) {
+    *why = "--temperature " + Num(temperature_c) + ": expected air temperature in degrees Celsius, [-100, 100]";
     return false;
   }
   if (!(std::abs(delta_t_s) <= 8000.0)) {

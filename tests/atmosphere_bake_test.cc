@@ -260,28 +260,16 @@ TEST(AtmosphereBake, SlantedSunTransmittanceMatchesBruteForce) {
 // (c) Plausibility of the default (Earth) bake through the model.
 class DefaultBake : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    const auto t0 = std::chrono::steady_clock::now();
-    luts_ = new SkyLuts(Bake(AtmosphereOptions{}));
-    seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
+  // (Its time is not asserted: speed lives in benchmarks, and a timed test fails on a
+  // loaded machine.)
+  static void SetUpTestSuite() { luts_ = new SkyLuts(Bake(AtmosphereOptions{})); }
   static void TearDownTestSuite() {
     delete luts_;
     luts_ = nullptr;
   }
   static SkyLuts* luts_;
-  static double seconds_;
 };
 SkyLuts* DefaultBake::luts_ = nullptr;
-double DefaultBake::seconds_ = 0.0;
-
-TEST_F(DefaultBake, IsFastEnough) {
-  RecordProperty("bake_seconds", std::to_string(seconds_));
-  std::cout << "default 37x32 bake: " << seconds_ << " s\n";
-#ifdef NDEBUG
-  EXPECT_LT(seconds_, 2.0);
-#endif
-}
 
 // Sun 60 deg high, g = 0.8. Clear-sky zenith luminance is typically 2000-8000 cd/m^2;
 // single scattering alone gives less (~1300 cd/m^2 here: multiple scattering is missing).

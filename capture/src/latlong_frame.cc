@@ -34,6 +34,16 @@ LatLongFrame ReadLatLongFrame(const std::string& path) {
     const auto& v = it->second;
     frame.sun_direction = latlong::Normalized({v[0], v[1], v[2]}, (path + ": attribute 'sunDirection'").c_str());
     exr.attributes.v3fs.erase(it);
+  } else {
+    // Present with another type: an error naming the type, never "no sun direction".
+    std::string type;
+    if (exr.attributes.strings.count(kSunAttribute)) type = "string \"" + exr.attributes.strings.at(kSunAttribute) + "\"";
+    if (exr.attributes.floats.count(kSunAttribute)) type = "float";
+    if (exr.attributes.other_types.count(kSunAttribute)) type = exr.attributes.other_types.at(kSunAttribute);
+    if (!type.empty()) {
+      throw Error(path + ": attribute 'sunDirection' is a " + type +
+                  ": expected a v3f (x, y, z) toward the sun in the lat-long's frame (y up)");
+    }
   }
   if (!exr.attributes.envmap_latlong) {
     exr.attributes.strings["skycalWarning"] = "no envmap=latlong attribute; assumed the lat-long convention";

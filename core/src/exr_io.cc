@@ -6,6 +6,8 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfMultiPartInputFile.h>
+#include <ImfPartType.h>
 #include <ImfOutputFile.h>
 #include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
@@ -15,6 +17,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <utility>
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
@@ -23,6 +26,32 @@ namespace skycal {
 namespace {
 
 const char* const kChannels[3] = {"R", "G", "B"};
+
+// What the readers accept before touching pixels: one flat (scanline or tiled) part whose
+// data window is within the size limit. A multi-part file would silently mean part 0 and a
+// deep file would be flattened in a way skycal does not choose, so both are refused with
+// what the file holds. Returns the data window's width and height.
+std::pair<int, int> CheckReadableLayout(const std::string& path) {
+  Imf::MultiPartInputFile parts(path.c_str());
+  if (parts.parts() > 1) {
+    std::string names;
+    for (int i = 0; i < parts.parts(); ++i) {
+      const Imf::Header& h = parts.header(i);
+      names += (i ? ", " : "") + (h.hasName() ? "'" + h.name() + "'" : "#" + std::to_string(i));
+    }
+    throw Error(path + ": a multi-part EXR with " + std::to_string(parts.parts()) + " parts (" + names +
+                "): skycal reads single-part images; save the part you mean as its own file (e.g. exrmultipart -separate)");
+  }
+  const Imf::Header& h = parts.header(0);
+  if (h.hasType() && Imf::isDeepData(h.type())) {
+    throw Error(path + ": a deep EXR (" + h.type() + "): skycal reads flat images; flatten it first");
+  }
+  const Imath::Box2i dw = h.dataWindow();
+  const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1, hh = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+  if (w <= 0 || hh <= 0) throw Error(path + ": empty data window");
+  CheckImageSize(w, hh, path);
+  return {static_cast<int>(w), static_cast<int>(hh)};
+}
 
 void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
   for (const auto& [name, value] : a.strings) header.insert(name, Imf::StringAttribute(value));
@@ -46,6 +75,8 @@ ExrAttributes CollectAttributes(const Imf::Header& header) {
       a.floats[name] = f->value();
     } else if (const auto* v = dynamic_cast<const Imf::V3fAttribute*>(&attr)) {
       a.v3fs[name] = {v->value().x, v->value().y, v->value().z};
+    } else {
+      a.other_types[name] = attr.typeName();
     }
   }
   a.envmap_latlong = Imf::hasEnvmap(header) && Imf::envmap(header) == Imf::ENVMAP_LATLONG;
@@ -115,9 +146,9 @@ std::vector<float> ReadExrChannel(const std::string& path, const std::string& ch
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
   try {
+    const auto [w, h] = CheckReadableLayout(path);
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
     if (!file.header().channels().findChannel(channel)) throw Error(path + ": channel '" + channel + "' missing");
     std::vector<float> v(static_cast<size_t>(w) * h);
     Imf::FrameBuffer fb;
@@ -143,11 +174,10 @@ ExrRGB ReadExrRGB(const std::string& path) {
   }
   ExrRGB result;
   try {
+    const auto [w, h] = CheckReadableLayout(path);
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
     const Imath::Box2i dw = header.dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
-    if (w <= 0 || h <= 0) throw Error(path + ": empty data window");
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
       result.channels.push_back(it.name());
     }
@@ -178,6 +208,17 @@ ExrRGB ReadExrRGB(const std::string& path) {
     throw Error(path + ": not a readable OpenEXR image (" + e.what() + ")");
   }
   return result;
+}
+
+void CheckImageSize(long long width, long long height, const std::string& what) {
+  if (width < 1 || height < 1) {
+    throw Error(what + ": " + std::to_string(width) + " x " + std::to_string(height) + " pixels: expected a positive size");
+  }
+  if (width > kMaxImageWidth || height > kMaxImageHeight || width * height > kMaxImagePixels) {
+    throw Error(what + ": " + std::to_string(width) + " x " + std::to_string(height) +
+                " pixels is larger than skycal's limit of " + std::to_string(kMaxImageWidth) + " x " +
+                std::to_string(kMaxImageHeight) + " (a 32K lat-long); downsample it first");
+  }
 }
 
 }  // namespace skycal

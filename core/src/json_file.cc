@@ -17,7 +17,9 @@ nlohmann::json ReadJsonFile(const std::string& path) {
 }
 
 void WriteJsonFileAtomically(const std::string& path, const nlohmann::json& value) {
-  WriteFileAtomically(path, value.dump(2) + "\n");
+  // Strings that are not UTF-8 (a file name in another encoding) are written with U+FFFD
+  // in place of the bad bytes rather than failing after the work is done.
+  WriteFileAtomically(path, value.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 }  // namespace skycal

@@ -4,7 +4,7 @@
 
 namespace skycal::fit {
 namespace {
-constexpr double kHeldLogChange = -9.2;  // ln(1e-4): below it an entry sits at (or near) its floor
+constexpr double kHeldLogChange = -9.2;  // ln(1e-4): this far below the data's level an entry sits at its floor
 }  // namespace
 
 int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, const std::vector<bool>& row_fitted,
@@ -35,18 +35,28 @@ int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, 
 
 double MoveScaleGaugeToExposures(const std::vector<bool>& row_fitted, bool fit_overcast, FitState* state) {
   const auto& grid = state->preset.luts.grid;
-  std::vector<double> changes;
+  std::vector<double> all;
   for (int t = 0; t < state->tables; ++t)
     for (int row = 0; row < grid.n_theta; ++row)
       if (row_fitted[row])
         for (int col = 0; col < grid.n_gamma; ++col)
           for (int ch = 0; ch < 3; ++ch) {
             const size_t k = state->Index(t, row, col, ch);
-            const double change = state->log_lut[k] - state->initial_log_lut[k];
-            // Entries held at the linear start's floor (1e-6 of the start, a table the sky
-            // does not need) say nothing about the level: left out.
-            if (change > kHeldLogChange) changes.push_back(change);
+            all.push_back(state->log_lut[k] - state->initial_log_lut[k]);
           }
+  if (all.empty()) return 0.0;
+  // Entries held at the linear start's floor (1e-6 of the start rescaled to the data: a
+  // table the sky does not need) say nothing about the level: left out. "Held" is relative
+  // to the data's level (the 90th percentile of the changes), not to the initial preset:
+  // a reference in a camera's raw units (1e-30 cd/m^2 per count, say) changes every entry
+  // by far more than the floor's 1e-4 margin.
+  std::vector<double> sorted = all;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 9 / 10, sorted.end());
+  const double held_below = sorted[sorted.size() * 9 / 10] + kHeldLogChange;
+  std::vector<double> changes;
+  for (double c : all) {
+    if (c > held_below) changes.push_back(c);
+  }
   if (changes.empty()) return 0.0;
   std::nth_element(changes.begin(), changes.begin() + changes.size() / 2, changes.end());
   const double shift = changes[changes.size() / 2];

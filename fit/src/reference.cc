@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sun_detect.h"
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/sha256.h"
@@ -47,6 +49,14 @@ double FindClipLevel(const ImageRGB& img) {
 
 }  // namespace
 
+// A pixel value the fit can use: finite, positive, a normal float (denormals below
+// FLT_MIN ~1.2e-38 carry a few bits of precision at most) and below 1e37, which leaves the
+// model's products (exposure x LUT x phase) room before float overflow. Any scale in
+// between is fine: the exposure is fitted (FitOptions::absolute aside).
+namespace {
+bool UsableValue(float v) { return v >= std::numeric_limits<float>::min() && v <= 1e37f; }
+}  // namespace
+
 Reference LoadReference(const std::string& path, const FitOptions& o) {
   Reference r;
   r.path = path;
@@ -57,7 +67,12 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
   if (auto it = frame.extra.strings.find("skycalWarning"); it != frame.extra.strings.end()) {
     r.warnings.push_back(path + ": " + it->second);
   }
-  if (auto it = frame.extra.floats.find("skycalTimeOfDay"); it != frame.extra.floats.end()) r.time_of_day_h = it->second;
+  if (auto it = frame.extra.floats.find("skycalTimeOfDay"); it != frame.extra.floats.end()) {
+    if (!(it->second >= 0.0f && it->second < 24.0f)) {  // the file's fault, not a --time the user never gave
+      throw Error(path + ": attribute 'skycalTimeOfDay' = " + FormatNumber(it->second) + ": expected hours in [0, 24)");
+    }
+    r.time_of_day_h = it->second;
+  }
   const int w = r.radiance.width, h = r.radiance.height;
 
   if (o.sun_dir) {
@@ -104,8 +119,7 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
       const auto v = latlong::PixelDirection(x, y, w, h);
       if (lat <= 0.0) {
         c = PixelClass::kBelowHorizon;
-      } else if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2])) || !(p[0] > 0.0f) ||
-                 !(p[1] > 0.0f) || !(p[2] > 0.0f)) {
+      } else if (!UsableValue(p[0]) || !UsableValue(p[1]) || !UsableValue(p[2])) {
         c = PixelClass::kInvalid;
       } else if (v[0] * r.sun_dir[0] + v[1] * r.sun_dir[1] + v[2] * r.sun_dir[2] >= cos_cone) {
         c = PixelClass::kSunCone;
@@ -128,7 +142,8 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
   if (r.counts.sky == 0) {
     throw Error(path + ": no valid sky pixel to fit (below horizon " + std::to_string(r.counts.below_horizon) +
                 ", invalid " + std::to_string(r.counts.invalid) + ", sun cone " + std::to_string(r.counts.sun_cone) +
-                ", clipped " + std::to_string(r.counts.clipped) + ", user-masked " + std::to_string(r.counts.user_masked) + ")");
+                ", clipped " + std::to_string(r.counts.clipped) + ", user-masked " + std::to_string(r.counts.user_masked) +
+                "; invalid means NaN, infinite, <= 0, or outside [1.2e-38, 1e37] in the file's units)");
   }
   return r;
 }

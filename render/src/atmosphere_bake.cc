@@ -335,9 +335,17 @@ bool AtmosphereOptions::IsValid(std::string* why) const {
   };
   auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
   auto finite_pos = [](double v) { return std::isfinite(v) && v > 0.0; };
-  if (!finite_pos(planet_radius_m)) return fail("planet_radius_m", planet_radius_m, "finite and > 0, m");
-  if (!std::isfinite(atmosphere_top_m) || !(atmosphere_top_m > planet_radius_m)) {
-    return fail("atmosphere_top_m", atmosphere_top_m, "finite and > planet_radius_m = " + Num(planet_radius_m) + ", m");
+  // Physical bounds (atmosphere_bake.h): generous around Earth, tight enough that the
+  // bake means something. Above an optical depth of 50 along the vertical, single
+  // scattering leaves every LUT at zero (e^-50 ~ 2e-22): the preset would be black.
+  if (!(planet_radius_m >= 1e3 && planet_radius_m <= 1e8)) {
+    return fail("planet_radius_m", planet_radius_m, "[1e3, 1e8] m (Earth: 6.36e6)");
+  }
+  if (!std::isfinite(atmosphere_top_m) || !(atmosphere_top_m > planet_radius_m) ||
+      !(atmosphere_top_m - planet_radius_m <= 1e6)) {
+    return fail("atmosphere_top_m", atmosphere_top_m,
+                "in (planet_radius_m, planet_radius_m + 1e6] = (" + Num(planet_radius_m) + ", " +
+                    Num(planet_radius_m + 1e6) + "] m (Earth: radius + 6e4)");
   }
   if (!finite_nonneg(observer_altitude_m) || !(observer_altitude_m < atmosphere_top_m - planet_radius_m)) {
     return fail("observer_altitude_m", observer_altitude_m,
@@ -349,21 +357,49 @@ bool AtmosphereOptions::IsValid(std::string* why) const {
                   "finite and >= 0, 1/m");
     }
   }
-  if (!finite_pos(rayleigh_scale_height_m)) return fail("rayleigh_scale_height_m", rayleigh_scale_height_m, "finite and > 0, m");
+  if (!(rayleigh_scale_height_m >= 1.0 && rayleigh_scale_height_m <= 1e6)) {
+    return fail("rayleigh_scale_height_m", rayleigh_scale_height_m, "[1, 1e6] m (Earth: 8000)");
+  }
   if (!finite_nonneg(mie_scattering_per_m)) return fail("mie_scattering_per_m", mie_scattering_per_m, "finite and >= 0, 1/m");
   if (!std::isfinite(mie_extinction_per_m) || !(mie_extinction_per_m >= mie_scattering_per_m)) {
     return fail("mie_extinction_per_m", mie_extinction_per_m,
                 "finite and >= mie_scattering_per_m = " + Num(mie_scattering_per_m) + " (absorption >= 0), 1/m");
   }
-  if (!finite_pos(mie_scale_height_m)) return fail("mie_scale_height_m", mie_scale_height_m, "finite and > 0, m");
+  if (!(mie_scale_height_m >= 1.0 && mie_scale_height_m <= 1e6)) {
+    return fail("mie_scale_height_m", mie_scale_height_m, "[1, 1e6] m (Earth: 1200)");
+  }
   for (int c = 0; c < 3; ++c) {
     if (!finite_nonneg(ozone_absorption_per_m[c])) {
       return fail("ozone_absorption_per_m[" + std::to_string(c) + "]", ozone_absorption_per_m[c], "finite and >= 0, 1/m");
     }
   }
-  if (!std::isfinite(ozone_center_altitude_m)) return fail("ozone_center_altitude_m", ozone_center_altitude_m, "finite, m");
-  if (!finite_pos(ozone_width_m)) return fail("ozone_width_m", ozone_width_m, "finite and > 0, m");
-  if (!finite_pos(sun_illuminance_lux)) return fail("sun_illuminance_lux", sun_illuminance_lux, "finite and > 0, lux");
+  if (!(ozone_center_altitude_m >= 0.0 && ozone_center_altitude_m <= atmosphere_top_m - planet_radius_m)) {
+    return fail("ozone_center_altitude_m", ozone_center_altitude_m,
+                "[0, atmosphere thickness = " + Num(atmosphere_top_m - planet_radius_m) + "] m (Earth: 25000)");
+  }
+  if (!(ozone_width_m >= 1.0 && ozone_width_m <= 1e6)) return fail("ozone_width_m", ozone_width_m, "[1, 1e6] m (Earth: 15000)");
+  if (!(sun_illuminance_lux > 0.0 && sun_illuminance_lux <= 2e5)) {
+    return fail("sun_illuminance_lux", sun_illuminance_lux, "(0, 2e5] lux, the preset's bounds (Earth: 1.28e5)");
+  }
+  constexpr double kMaxVerticalDepth = 50.0;
+  for (int c = 0; c < 3; ++c) {
+    if (rayleigh_scattering_per_m[c] * rayleigh_scale_height_m > kMaxVerticalDepth) {
+      return fail("rayleigh_scattering_per_m[" + std::to_string(c) + "]", rayleigh_scattering_per_m[c],
+                  "a vertical optical depth (x rayleigh_scale_height_m) <= 50, i.e. <= " +
+                      Num(kMaxVerticalDepth / rayleigh_scale_height_m) + " 1/m (Earth: ~1e-5)");
+    }
+    if (ozone_absorption_per_m[c] * ozone_width_m > kMaxVerticalDepth) {
+      return fail("ozone_absorption_per_m[" + std::to_string(c) + "]", ozone_absorption_per_m[c],
+                  "a vertical optical depth (x ozone_width_m) <= 50, i.e. <= " + Num(kMaxVerticalDepth / ozone_width_m) +
+                      " 1/m (Earth: ~2e-6)");
+    }
+  }
+  if (mie_extinction_per_m * mie_scale_height_m > kMaxVerticalDepth) {
+    return fail(mie_scattering_per_m * mie_scale_height_m > kMaxVerticalDepth ? "mie_scattering_per_m" : "mie_extinction_per_m",
+                mie_scattering_per_m * mie_scale_height_m > kMaxVerticalDepth ? mie_scattering_per_m : mie_extinction_per_m,
+                "a vertical optical depth (x mie_scale_height_m) <= 50, i.e. <= " + Num(kMaxVerticalDepth / mie_scale_height_m) +
+                    " 1/m (Earth: ~4e-6)");
+  }
   constexpr int kMaxSteps = 100000;
   if (view_steps < 1 || view_steps > kMaxSteps) return fail("view_steps", view_steps, "1 .. 100000");
   if (sun_steps < 1 || sun_steps > kMaxSteps) return fail("sun_steps", sun_steps, "1 .. 100000");

@@ -29,6 +29,10 @@ const char* VkResultName(VkResult r) {
 }
 
 void CheckVk(VkResult result, const char* what) {
+  if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY) {
+    throw Error(std::string("Vulkan: ") + what + " failed: " + VkResultName(result) +
+                " (the image does not fit in the device's memory: try a smaller --size, or --backend cpu)");
+  }
   if (result != VK_SUCCESS) throw Error(std::string("Vulkan: ") + what + " failed: " + VkResultName(result));
 }
 

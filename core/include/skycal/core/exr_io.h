@@ -15,6 +15,9 @@ struct ExrAttributes {
   std::map<std::string, float> floats;
   std::map<std::string, std::array<float, 3>> v3fs;
   bool envmap_latlong = false;  // the standard `envmap` attribute, value ENVMAP_LATLONG
+  // Attributes of other types (read only): name -> OpenEXR type name, so that a reader can
+  // say "attribute 'sunDirection' is a v3d" rather than "missing". Not written.
+  std::map<std::string, std::string> other_types;
 };
 
 enum class ExrPixelType { kFloat, kHalf };

@@ -2,9 +2,19 @@
 // linear in the project's working space (scene-linear Rec.709 primaries).
 #pragma once
 #include <cstddef>
+#include <string>
 #include <vector>
 
 namespace skycal {
+
+// The largest image skycal reads or writes: 32768 x 16384 (a 32K lat-long), 2^29 pixels,
+// 6 GiB as float RGB. Checked against a file's header before anything is allocated, and
+// against --size options before any work.
+inline constexpr long long kMaxImageWidth = 32768, kMaxImageHeight = 16384;
+inline constexpr long long kMaxImagePixels = kMaxImageWidth * kMaxImageHeight;
+
+// Throws skycal::Error "<what>: W x H is larger than skycal's limit ..." (or non-positive).
+void CheckImageSize(long long width, long long height, const std::string& what);
 
 struct ImageRGB {
   int width = 0;

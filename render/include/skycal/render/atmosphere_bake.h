@@ -61,7 +61,12 @@ struct AtmosphereOptions {
   int azimuth_samples = 16;  // relative sun azimuths averaged per LUT node (midpoints over [0, pi])
 
   // Returns false and explains in *why (option name, value, expectation) unless every field
-  // is finite and physically meaningful.
+  // is finite and within its physical bounds:
+  //   planet_radius_m [1e3, 1e8]; atmosphere thickness (top - radius) (0, 1e6] m;
+  //   scale heights and ozone width [1, 1e6] m; ozone centre within the atmosphere;
+  //   sun_illuminance_lux (0, 2e5] (the preset's bounds);
+  //   coefficients >= 0 with a vertical optical depth (coefficient x scale height, or x ozone
+  //   width) <= 50 per term: beyond it single scattering leaves every LUT at zero.
   bool IsValid(std::string* why) const;
 };
 
