@@ -7,6 +7,7 @@
 #include "skycal/capture/rig.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/sha256.h"
@@ -50,7 +51,7 @@ bool ProbeExtractOptions::IsValid(std::string* why) const {
     return false;
   }
   if (!(albedo > 0.0 && albedo <= 1.0)) {
-    *why = "--albedo " + std::to_string(albedo) + ": expected a value in (0, 1]";
+    *why = "--albedo " + FormatNumber(albedo) + ": expected a value in (0, 1]";
     return false;
   }
   if (!(clip_level > 0.0)) {

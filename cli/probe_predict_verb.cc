@@ -9,6 +9,7 @@
 #include "sun_choice.h"
 #include "render_verb.h"
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/render/irradiance.h"
 #include "verb_common.h"
@@ -44,7 +45,7 @@ nlohmann::json Rgb(const render::Rgb& v) { return {v[0], v[1], v[2]}; }
 bool ProbePredictOptions::IsValid(std::string* why) const {
   if (!ValidSunChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir, why)) return false;
   if (!(albedo >= 0.0 && albedo <= 1.0)) {
-    *why = "--albedo " + std::to_string(albedo) + ": expected a value in [0, 1]";
+    *why = "--albedo " + FormatNumber(albedo) + ": expected a value in [0, 1]";
     return false;
   }
   if (normals < 0 || normals > 100000) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 
 namespace skycal::cli {
@@ -22,11 +23,11 @@ bool ValidSunChoice(const std::optional<double>& el, const std::optional<double>
     return false;
   }
   if (el && !(*el >= -90.0 && *el <= 90.0)) {
-    *why = "--sun-elevation " + std::to_string(*el) + ": expected degrees in [-90, 90]";
+    *why = "--sun-elevation " + FormatNumber(*el) + ": expected degrees in [-90, 90]";
     return false;
   }
   if (az && !(std::abs(*az) <= 360.0)) {
-    *why = "--sun-azimuth " + std::to_string(*az) + ": expected degrees in [-360, 360]";
+    *why = "--sun-azimuth " + FormatNumber(*az) + ": expected degrees in [-360, 360]";
     return false;
   }
   if (dir) {

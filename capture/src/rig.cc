@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/json_schema.h"
 
@@ -364,7 +365,7 @@ bool IsRotation(const std::array<double, 9>& r, std::string* why) {
     return false;
   }
   if (det < 0) {
-    if (why) *why = "not a rotation matrix: determinant " + std::to_string(det) + " (a reflection; expected +1)";
+    if (why) *why = "not a rotation matrix: determinant " + FormatNumber(det) + " (a reflection; expected +1)";
     return false;
   }
   return true;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 
 namespace skycal::capture {
@@ -39,7 +40,7 @@ std::optional<SunDetection> DetectSun(const ImageRGB& img, std::string* why, dou
   d.peak_luminance = peak;
   d.contrast = peak / median;
   if (d.contrast < min_contrast) {
-    *why = "brightest pixel is only " + std::to_string(d.contrast) + "x the median sky luminance (need " +
+    *why = "brightest pixel is only " + FormatNumber(d.contrast) + "x the median sky luminance (need " +
            std::to_string(min_contrast) + "x for a distinct sun)";
     return std::nullopt;
   }
