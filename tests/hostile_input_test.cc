@@ -7,6 +7,8 @@
 #include <ImfMultiPartOutputFile.h>
 #include <ImfOutputPart.h>
 #include <ImfPartType.h>
+#include <ImfDeepFrameBuffer.h>
+#include <ImfDeepScanLineOutputFile.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 
@@ -98,6 +100,32 @@ TEST(HostileInput, AMultiPartExrIsRefusedListingItsParts) {
   }
   ExpectRefused("probe-extract --image " + (dir / "parts.exr") + " --out " + (dir / "s.json"),
                 {"parts.exr", "multi-part", "'beauty'", "'sky'"}, dir);
+}
+
+TEST(HostileInput, ADeepExrIsRefused) {
+  ScratchDir dir("hostile-deep");
+  const int w = 8, h = 4;
+  Imf::Header header(w, h);
+  header.setType(Imf::DEEPSCANLINE);
+  header.compression() = Imf::ZIPS_COMPRESSION;
+  for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  std::vector<unsigned int> counts(w * h, 1);
+  std::vector<float> values(w * h, 1.0f);
+  std::vector<float*> pointers(w * h);
+  for (int i = 0; i < w * h; ++i) pointers[i] = &values[i];
+  {
+    Imf::DeepScanLineOutputFile file((dir / "deep.exr").c_str(), header);
+    Imf::DeepFrameBuffer fb;
+    fb.insertSampleCountSlice(Imf::Slice(Imf::UINT, reinterpret_cast<char*>(counts.data()), sizeof(unsigned int),
+                                         sizeof(unsigned int) * w));
+    for (const char* c : {"R", "G", "B"}) {
+      fb.insert(c, Imf::DeepSlice(Imf::FLOAT, reinterpret_cast<char*>(pointers.data()), sizeof(float*), sizeof(float*) * w,
+                                  sizeof(float)));
+    }
+    file.setFrameBuffer(fb);
+    file.writePixels(h);
+  }
+  ExpectRefused("probe-extract --image " + (dir / "deep.exr") + " --out " + (dir / "s.json"), {"deep.exr", "deep EXR"}, dir);
 }
 
 // Values the camera's units make extreme are still a sky: the exposure is free, so the fit
