@@ -5,27 +5,12 @@
 #include <cmath>
 #include <iostream>
 
-#include "args.h"
+#include "command_line.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
-namespace {
-
-constexpr const char* kHelp = R"(skycal bake: a sky preset from a single-scattering Earth atmosphere
-
-  skycal bake --out PRESET.json [--name NAME] [--haziness G] [--model ffxv|ffxv-iso]
-              [--n-theta N] [--n-gamma N] [--mie-scattering PER_M] [--rayleigh-scale-height M]
-              [--mie-scale-height M] [--observer-altitude M] [--json]
-
-Defaults: Bruneton 2017 / Hillaire 2020 Earth (see render/include/skycal/render/atmosphere_bake.h),
-sun 128000 lux, LUT grid 37 x 32. The bundled preset datasets/presets/default_clear.json is
-`skycal bake --out datasets/presets/default_clear.json`.
-)";
-
-}  // namespace
-
 nlohmann::json RunBakeImpl(const BakeOptions& o) {
   std::string why;
   if (!o.atmosphere.IsValid(&why)) throw Error(why);
@@ -73,41 +58,48 @@ nlohmann::json RunBakeImpl(const BakeOptions& o) {
   return {{"out", o.out_json}, {"time_s", bake_s}, {"grid", {o.grid.n_theta, o.grid.n_gamma}}};
 }
 
-int RunBake(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
+BakeOptions ParseBakeArgs(int argc, char** argv) {
+  VerbCommandLine cl("bake", "skycal bake: a sky preset from a single-scattering Earth atmosphere",
+                     "  skycal bake --out PRESET.json [--name NAME] [--haziness G] [--model ffxv|ffxv-iso]\n"
+                     "              [--n-theta N] [--n-gamma N] [--mie-scattering PER_M] [--rayleigh-scale-height M]\n"
+                     "              [--mie-scale-height M] [--observer-altitude M] [--json]",
+                     "Defaults: Bruneton 2017 / Hillaire 2020 Earth (see render/include/skycal/render/atmosphere_bake.h),\n"
+                     "sun 128000 lux, LUT grid 37 x 32. The bundled preset datasets/presets/default_clear.json is\n"
+                     "`skycal bake --out datasets/presets/default_clear.json`.");
+  BakeOptions o;
+  std::optional<std::string> model;
+  std::optional<double> mie_scattering;
+  bool json = false;
+  cl.Text("--out", &o.out_json, "PRESET.json", "preset JSON to write (required); the LUT EXRs go beside it");
+  cl.Text("--name", &o.name, "NAME", "the preset's name (default default_clear)");
+  cl.Number("--haziness", &o.haziness_g, "G", "Cornette-Shanks g written into the preset, in [0, 0.999] (default 0.8)")
+      ->check(NumberIn(0.0, 0.999, "expected g in [0, 0.999]"));
+  cl.Text("--model", &model, "NAME", "model variant written into the preset: ffxv (default) or ffxv-iso");
+  cl.Integer("--n-theta", &o.grid.n_theta, 2, 1024, "expected an integer in [2, 1024]", "N",
+             "LUT rows (sun zenith), integer in [2, 1024] (default 37)");
+  cl.Integer("--n-gamma", &o.grid.n_gamma, 2, 1024, "expected an integer in [2, 1024]", "N",
+             "LUT columns (view elevation), integer in [2, 1024] (default 32)");
+  cl.Number("--mie-scattering", &mie_scattering, "PER_M",
+            "Mie scattering coefficient at sea level, 1/m (default 3.996e-6); the extinction\n"
+            "follows at 4.440/3.996 of it (Hillaire's single-scattering albedo 0.9)");
+  cl.Number("--rayleigh-scale-height", &o.atmosphere.rayleigh_scale_height_m, "M",
+            "Rayleigh density scale height in metres (default 8000)");
+  cl.Number("--mie-scale-height", &o.atmosphere.mie_scale_height_m, "M",
+            "Mie density scale height in metres (default 1200)");
+  cl.Number("--observer-altitude", &o.atmosphere.observer_altitude_m, "M",
+            "observer altitude above the planet surface in metres (default 200)");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (model) o.variant = render::ParseModelVariant(*model, "--model");
+  if (mie_scattering) {
+    o.atmosphere.mie_scattering_per_m = *mie_scattering;
+    o.atmosphere.mie_extinction_per_m = *mie_scattering * (4.440 / 3.996);  // keep Hillaire's albedo 0.9
   }
-  return RunVerb("bake", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv,
-           {"out", "name", "haziness", "model", "n-theta", "n-gamma", "mie-scattering", "rayleigh-scale-height",
-            "mie-scale-height", "observer-altitude"},
-           {"json"});
-    BakeOptions o;
-    o.out_json = a.Value("out").value_or("");
-    if (auto v = a.Value("name")) o.name = *v;
-    if (auto v = a.Number("haziness")) {
-      if (!(*v >= 0.0 && *v <= 0.999)) throw Error("--haziness: expected g in [0, 0.999]");
-      o.haziness_g = *v;
-    }
-    if (auto v = a.Value("model")) o.variant = render::ParseModelVariant(*v, "--model");
-    auto count = [&](const char* name, int* out) {
-      if (auto v = a.Number(name)) {
-        if (*v != std::floor(*v) || *v < 2 || *v > 1024) throw Error(std::string("--") + name + ": expected an integer in [2, 1024]");
-        *out = static_cast<int>(*v);
-      }
-    };
-    count("n-theta", &o.grid.n_theta);
-    count("n-gamma", &o.grid.n_gamma);
-    if (auto v = a.Number("mie-scattering")) {
-      o.atmosphere.mie_scattering_per_m = *v;
-      o.atmosphere.mie_extinction_per_m = *v * (4.440 / 3.996);  // keep Hillaire's albedo 0.9
-    }
-    if (auto v = a.Number("rayleigh-scale-height")) o.atmosphere.rayleigh_scale_height_m = *v;
-    if (auto v = a.Number("mie-scale-height")) o.atmosphere.mie_scale_height_m = *v;
-    if (auto v = a.Number("observer-altitude")) o.atmosphere.observer_altitude_m = *v;
-    return RunBakeImpl(o);
-  });
+  return o;
+}
+
+int RunBake(int argc, char** argv) {
+  return RunVerb("bake", WantsJson(argc, argv), [&]() { return RunBakeImpl(ParseBakeArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

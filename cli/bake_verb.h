@@ -20,6 +20,9 @@ struct BakeOptions {
 };
 
 nlohmann::json RunBakeImpl(const BakeOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+BakeOptions ParseBakeArgs(int argc, char** argv);
 int RunBake(int argc, char** argv);
 
 }  // namespace skycal::cli

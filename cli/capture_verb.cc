@@ -5,7 +5,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "render_verb.h"
 #include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/rig.h"
@@ -24,48 +25,8 @@
 namespace skycal::cli {
 namespace {
 
-constexpr const char* kHelp = R"(skycal capture: exposure brackets to a calibrated lat-long reference frame
-
-  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|robertson|linear|srgb]
-                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]
-                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]
-                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json
-                 [--input-colorspace NAME] [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]
-                 [--size WxH] --out FRAME.exr [--json]
-
-  --brackets IMG...       8/16-bit images of one camera, one per exposure (repeat the flag or list them)
-  --exposure-times T,...  seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from
-                          EXIF put frames of a time-lapse on one scale)
-  --response NAME         camera response: debevec (default, recovered), robertson, linear, srgb
-  --lens NAME             lens model of the single camera (default equisolid); --lens-fov-deg (180),
-                          --lens-center (image centre), --lens-radius (half the shorter side), --kb-k,
-                          --vignetting (gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius)
-  --camera-rotation Y,P,R the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,
-                          degrees (default 0,90,0: looking straight up)
-  --rig RIG.json          several cameras (format: capture/include/skycal/capture/rig.h; each camera's
-                          image is an HDR EXR, e.g. merged by an earlier capture of that camera with
-                          --lens latlong... or any linear EXR); replaces --brackets and the lens flags
-  --input-colorspace CS   OCIO colour space of the camera data (default lin_rec709; $OCIO or
-                          config/skycal.ocio), converted to lin_rec709
-  --time ISO8601 --lat --lon   capture time (with UTC offset) and place: the sun by NREL SPA
-  --north-longitude DEG   lat-long longitude that points to geographic north (default 0)
-  --size WxH              output lat-long (default 2048x1024)
-  --out FRAME.exr         reference frame: R, G, B radiance + mask.valid, mask.belowHorizon and (with a
-                          sun) mask.cloud (probability) channels,
-                          sunDirection, time, place, exposure scale, sources, lens
-Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.
-)";
-
 using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
-
-std::vector<double> ParseList(const std::string& text, const std::string& option) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(ParseNumber(item, option));
-  return v;
-}
 
 // The bracket-merge flags of a pixel as a 0/1 "measured well" image, RGB-replicated, so the
 // same unwrap carries it into the lat-long.
@@ -306,75 +267,99 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
           {"sources", sources}};
 }
 
+CaptureOptions ParseCaptureArgs(int argc, char** argv) {
+  VerbCommandLine cl(
+      "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
+      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|robertson|linear|srgb]\n"
+      "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
+      "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
+      "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
+      "                 [--input-colorspace NAME] [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]\n"
+      "                 [--size WxH] --out FRAME.exr [--json]",
+      "Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.");
+  CaptureOptions o;
+  std::optional<std::string> exposure_times, response, lens, lens_center, kb_k, vignetting, rotation, size;
+  std::optional<double> lens_fov, lens_radius;
+  bool json = false;
+  cl.List("--brackets", &o.brackets, "IMG",
+          "8/16-bit images of one camera, one per exposure (repeat the flag or list them)");
+  cl.Text("--exposure-times", &exposure_times, "T,...",
+          "seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from\n"
+          "EXIF put frames of a time-lapse on one scale)");
+  cl.Text("--response", &response, "NAME", "camera response: debevec (default, recovered), robertson, linear, srgb");
+  cl.Text("--lens", &lens, "NAME",
+          "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
+          "stereographic or kannala-brandt");
+  cl.Number("--lens-fov-deg", &lens_fov, "F", "lens field of view in degrees (default 180)");
+  cl.Text("--lens-center", &lens_center, "X,Y", "lens centre in pixels (default: the image centre)");
+  cl.Number("--lens-radius", &lens_radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
+  cl.Text("--kb-k", &kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
+  cl.Text("--vignetting", &vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
+  cl.Text("--camera-rotation", &rotation, "Y,P,R",
+          "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
+          "degrees (default 0,90,0: looking straight up)");
+  cl.Text("--rig", &o.rig_path, "RIG.json",
+          "several cameras (format: capture/include/skycal/capture/rig.h; each camera's\n"
+          "image is an HDR EXR, e.g. merged by an earlier capture of that camera with\n"
+          "--lens latlong... or any linear EXR); replaces --brackets and the lens flags");
+  cl.Text("--input-colorspace", &o.input_colorspace, "CS",
+          "OCIO colour space of the camera data (default lin_rec709; $OCIO or\n"
+          "config/skycal.ocio), converted to lin_rec709");
+  cl.Text("--time", &o.time_iso, "ISO8601", "capture time with its UTC offset; with --lat and --lon: the sun by NREL SPA");
+  cl.Number("--lat", &o.latitude_deg, "DEG", "capture latitude, degrees, north positive");
+  cl.Number("--lon", &o.longitude_deg, "DEG", "capture longitude, degrees, east positive");
+  cl.Number("--north-longitude", &o.north_longitude_deg, "DEG", "lat-long longitude that points to geographic north (default 0)");
+  cl.Text("--size", &size, "WxH", "output lat-long in pixels (default 2048x1024)");
+  cl.Text("--out", &o.out, "FRAME.exr",
+          "reference frame (required): R, G, B radiance + mask.valid, mask.belowHorizon and (with a\n"
+          "sun) mask.cloud (probability) channels,\n"
+          "sunDirection, time, place, exposure scale, sources, lens");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (exposure_times) o.exposure_times_s = ParseNumberList(*exposure_times, "--exposure-times");
+  if (response) o.merge.response = capture::ParseResponseModel(*response, "--response");
+  if (lens) {
+    auto m = capture::LensModelFromName(*lens);
+    if (!m) throw Error("--lens: unknown model '" + *lens + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
+    o.lens.model = *m;
+  }
+  if (lens_fov) o.lens.fov_deg = *lens_fov;
+  if (lens_center) {
+    const auto v = ParseNumberList(*lens_center, "--lens-center");
+    if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
+    o.lens.center_x = v[0];
+    o.lens.center_y = v[1];
+    o.lens_center_given = true;
+  }
+  if (lens_radius) {
+    o.lens.radius_px = *lens_radius;
+    o.lens_radius_given = true;
+  }
+  if (kb_k) {
+    const auto v = ParseNumberList(*kb_k, "--kb-k");
+    if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
+    for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
+  }
+  if (vignetting) {
+    const auto v = ParseNumberList(*vignetting, "--vignetting");
+    if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
+    for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
+  }
+  if (rotation) {
+    const auto v = ParseNumberList(*rotation, "--camera-rotation");
+    if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
+    o.camera_ypr_deg = {v[0], v[1], v[2]};
+  }
+  if (size) {
+    const auto wh = ParseSize(*size, "--size");
+    o.width = wh[0];
+    o.height = wh[1];
+  }
+  return o;
+}
+
 int RunCapture(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  // --brackets takes every following argument up to the next option.
-  std::vector<std::string> brackets;
-  std::vector<char*> rest;
-  for (int i = 0; i < argc; ++i) {
-    if (std::string(argv[i]) == "--brackets") {
-      while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) brackets.push_back(argv[++i]);
-    } else {
-      rest.push_back(argv[i]);
-    }
-  }
-  return RunVerb("capture", WantsJson(argc, argv), [&]() {
-    Args a(static_cast<int>(rest.size()), rest.data(),
-           {"exposure-times", "response", "lens", "lens-fov-deg", "lens-center", "lens-radius", "kb-k", "vignetting",
-            "camera-rotation", "rig", "input-colorspace", "time", "lat", "lon", "north-longitude", "size", "out"},
-           {"json"});
-    CaptureOptions o;
-    o.brackets = brackets;
-    if (auto t = a.Value("exposure-times")) o.exposure_times_s = ParseList(*t, "exposure-times");
-    if (auto r = a.Value("response")) o.merge.response = capture::ParseResponseModel(*r, "--response");
-    if (auto l = a.Value("lens")) {
-      auto m = capture::LensModelFromName(*l);
-      if (!m) throw Error("--lens: unknown model '" + *l + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
-      o.lens.model = *m;
-    }
-    if (auto f = a.Number("lens-fov-deg")) o.lens.fov_deg = *f;
-    if (auto c = a.Value("lens-center")) {
-      const auto v = ParseList(*c, "lens-center");
-      if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
-      o.lens.center_x = v[0];
-      o.lens.center_y = v[1];
-      o.lens_center_given = true;
-    }
-    if (auto r = a.Number("lens-radius")) {
-      o.lens.radius_px = *r;
-      o.lens_radius_given = true;
-    }
-    if (auto k = a.Value("kb-k")) {
-      const auto v = ParseList(*k, "kb-k");
-      if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
-      for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
-    }
-    if (auto g = a.Value("vignetting")) {
-      const auto v = ParseList(*g, "vignetting");
-      if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
-      for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
-    }
-    if (auto r = a.Value("camera-rotation")) {
-      const auto v = ParseList(*r, "camera-rotation");
-      if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
-      o.camera_ypr_deg = {v[0], v[1], v[2]};
-    }
-    o.rig_path = a.Value("rig").value_or("");
-    if (auto cs = a.Value("input-colorspace")) o.input_colorspace = *cs;
-    o.time_iso = a.Value("time").value_or("");
-    o.latitude_deg = a.Number("lat");
-    o.longitude_deg = a.Number("lon");
-    if (auto n = a.Number("north-longitude")) o.north_longitude_deg = *n;
-    if (auto s = a.Size("size")) {
-      o.width = (*s)[0];
-      o.height = (*s)[1];
-    }
-    o.out = a.Value("out").value_or("");
-    return RunCaptureImpl(o);
-  });
+  return RunVerb("capture", WantsJson(argc, argv), [&]() { return RunCaptureImpl(ParseCaptureArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -33,6 +33,9 @@ struct CaptureOptions {
 };
 
 nlohmann::json RunCaptureImpl(const CaptureOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+CaptureOptions ParseCaptureArgs(int argc, char** argv);
 int RunCapture(int argc, char** argv);
 
 }  // namespace skycal::cli

@@ -2,7 +2,7 @@
 
 #include <iostream>
 
-#include "args.h"
+#include "command_line.h"
 #include "skycal/core/error.h"
 #include "skycal/fit/ceiling.h"
 #include "skycal/fit/reference.h"
@@ -12,22 +12,6 @@
 
 namespace skycal::cli {
 namespace {
-
-constexpr const char* kHelp = R"(skycal ceiling: the model's best possible fit of a reference (rel RMSE)
-
-  skycal ceiling --reference R.exr [--init PRESET.json] [--model ffxv|ffxv-iso]
-                 [--sun-cone DEG] [--mask MASK.exr] [--json]
-
-  --reference R.exr   lat-long reference frame (its sunDirection attribute gives the sun)
-  --init PRESET.json  LUT grid and overcast weight (default: the bundled default_clear preset)
-  --model NAME        ffxv-iso (default, as fit) or ffxv
-  --sun-cone DEG      pixels within this angle of the sun are left out (default 3, as fit)
-  --mask MASK.exr     user mask, as fit (R < 0.5 excludes a pixel)
-  --json              print the result as JSON on stdout
-
-Prints the LUT ceiling (tied rows, the fit's grid: rel RMSE and its g) and the per-row
-ceiling (one value per table, image row and channel), at the fit's finest level (<= 512 wide).
-)";
 
 }  // namespace
 
@@ -49,24 +33,31 @@ nlohmann::json RunCeilingImpl(const CeilingVerbOptions& o) {
           {"time_s", c.time_s}};
 }
 
+CeilingVerbOptions ParseCeilingArgs(int argc, char** argv) {
+  VerbCommandLine cl("ceiling", "skycal ceiling: the model's best possible fit of a reference (rel RMSE)",
+                     "  skycal ceiling --reference R.exr [--init PRESET.json] [--model ffxv|ffxv-iso]\n"
+                     "                 [--sun-cone DEG] [--mask MASK.exr] [--json]",
+                     "Prints the LUT ceiling (tied rows, the fit's grid: rel RMSE and its g) and the per-row\n"
+                     "ceiling (one value per table, image row and channel), at the fit's finest level (<= 512 wide).");
+  CeilingVerbOptions o;
+  std::optional<std::string> model;
+  bool json = false;
+  cl.Text("--reference", &o.reference, "R.exr", "lat-long reference frame (its sunDirection attribute gives the sun)");
+  cl.Text("--init", &o.init_preset, "PRESET.json", "LUT grid and overcast weight (default: the bundled default_clear preset)");
+  cl.Text("--model", &model, "NAME", "ffxv-iso (default, as fit) or ffxv");
+  cl.Number("--sun-cone", &o.fit.sun_cone_deg, "DEG", "pixels within this angle of the sun are left out (default 3, as fit)");
+  cl.Text("--mask", &o.fit.mask_path, "MASK.exr", "user mask, as fit (R < 0.5 excludes a pixel)");
+  cl.Flag("--json", &json, "print the result as JSON on stdout");
+  cl.Parse(argc, argv);
+  if (model) o.fit.variant = render::ParseModelVariant(*model, "--model");
+  o.fit.verbose = false;
+  std::string why;
+  if (!o.fit.IsValid(&why)) throw Error(why);
+  return o;
+}
+
 int RunCeiling(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  return RunVerb("ceiling", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv, {"reference", "init", "model", "sun-cone", "mask"}, {"json"});
-    CeilingVerbOptions o;
-    o.reference = a.Value("reference").value_or("");
-    o.init_preset = a.Value("init").value_or("");
-    if (auto m = a.Value("model")) o.fit.variant = render::ParseModelVariant(*m, "--model");
-    if (auto v = a.Number("sun-cone")) o.fit.sun_cone_deg = *v;
-    o.fit.mask_path = a.Value("mask").value_or("");
-    o.fit.verbose = false;
-    std::string why;
-    if (!o.fit.IsValid(&why)) throw Error(why);
-    return RunCeilingImpl(o);
-  });
+  return RunVerb("ceiling", WantsJson(argc, argv), [&]() { return RunCeilingImpl(ParseCeilingArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

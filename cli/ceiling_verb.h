@@ -18,6 +18,9 @@ struct CeilingVerbOptions {
 };
 
 nlohmann::json RunCeilingImpl(const CeilingVerbOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+CeilingVerbOptions ParseCeilingArgs(int argc, char** argv);
 int RunCeiling(int argc, char** argv);
 
 }  // namespace skycal::cli

@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "args.h"
+#include "command_line.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -27,37 +27,6 @@
 namespace skycal::cli {
 namespace fs = std::filesystem;
 namespace {
-
-constexpr const char* kHelp = R"(skycal export: game tables from calibrated presets
-
-  skycal export --preset P.json [--preset P2.json ...] --out GAME_DIR [--headroom H]
-                [--backend vulkan|cpu] [--fog-sigma-deg S] [--json]
-
-Writes GAME_DIR/manifest.json, GAME_DIR/<preset>/{rayleigh,mie[,isotropic],sun_transmittance}.exr
-(half float, multiplied by one pre-exposure scale for all presets, recorded in the manifest and
-in each EXR's `preExposure` attribute: the game divides by it, or folds it into its exposure),
-and, when the presets carry a time of day (fit --time, or the reference's skycalTimeOfDay),
-GAME_DIR/keyframes.csv and keyframes.json: one row per key sorted by time, one column per
-parameter. --headroom H: the largest scaled LUT value is at most H x 65504 (default 0.25, two
-stops for the game's own multipliers).
-
-Sun-dependent outputs, for each preset whose provenance names its sun direction (fit writes
-provenance.final_errors[i].sun_direction; the first reference's is used):
-  - keyframe columns sun_elevation_deg, sun_illuminance_r/g/b (lux at normal incidence at the
-    ground: sun_illuminance x sun_tint_rgb x SunTransmittance(sun zenith)) and
-    sun_illuminance_lux (its Rec.709 luminance); empty (CSV) / null (JSON) for keys without one;
-  - the sky WITHOUT the sun disc (lit ground) rendered at 256x128 with --backend (default
-    vulkan; cpu: double reference), projected to SH-9 radiance coefficients (9 per channel,
-    basis and order of render/irradiance.h, cd/m^2, NOT pre-exposed) in the manifest and
-    GAME_DIR/<preset>/sh9.json; the game adds the sun as its key light;
-  - fog: fog_color_rgb, the solid-angle-weighted mean radiance of the upper hemisphere of that
-    sky (cd/m^2), and GAME_DIR/<preset>/fog.exr, 64x32 half float, pre-exposed like the LUTs:
-    the 256x128 sky blurred with a Gaussian of --fog-sigma-deg S degrees (default 15, at most
-    30; cv::GaussianBlur in pixel space, wrapping in longitude and continuing across the poles),
-    then bilinearly resampled at the 64x32 pixel directions.
-Presets without a sun direction keep their time-independent outputs (LUTs, parameter columns);
-what was left out is listed with its reason in the manifest's "skipped".
-)";
 
 constexpr int kShWidth = 256, kShHeight = 128;
 constexpr int kFogWidth = 64, kFogHeight = 32;
@@ -449,21 +418,52 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
   return summary;
 }
 
+ExportOptions ParseExportArgs(int argc, char** argv) {
+  VerbCommandLine cl(
+      "export",
+      "skycal export: game tables from calibrated presets\n\n"
+      "Writes GAME_DIR/manifest.json, GAME_DIR/<preset>/{rayleigh,mie[,isotropic],sun_transmittance}.exr\n"
+      "(half float, multiplied by one pre-exposure scale for all presets, recorded in the manifest and\n"
+      "in each EXR's `preExposure` attribute: the game divides by it, or folds it into its exposure),\n"
+      "and, when the presets carry a time of day (fit --time, or the reference's skycalTimeOfDay),\n"
+      "GAME_DIR/keyframes.csv and keyframes.json: one row per key sorted by time, one column per\n"
+      "parameter.",
+      "  skycal export --preset P.json [--preset P2.json ...] --out GAME_DIR [--headroom H]\n"
+      "                [--backend vulkan|cpu] [--fog-sigma-deg S] [--json]",
+      "Sun-dependent outputs, for each preset whose provenance names its sun direction (fit writes\n"
+      "provenance.final_errors[i].sun_direction; the first reference's is used):\n"
+      "  - keyframe columns sun_elevation_deg, sun_illuminance_r/g/b (lux at normal incidence at the\n"
+      "    ground: sun_illuminance x sun_tint_rgb x SunTransmittance(sun zenith)) and\n"
+      "    sun_illuminance_lux (its Rec.709 luminance); empty (CSV) / null (JSON) for keys without one;\n"
+      "  - the sky WITHOUT the sun disc (lit ground) rendered at 256x128 with --backend (default\n"
+      "    vulkan; cpu: double reference), projected to SH-9 radiance coefficients (9 per channel,\n"
+      "    basis and order of render/irradiance.h, cd/m^2, NOT pre-exposed) in the manifest and\n"
+      "    GAME_DIR/<preset>/sh9.json; the game adds the sun as its key light;\n"
+      "  - fog: fog_color_rgb, the solid-angle-weighted mean radiance of the upper hemisphere of that\n"
+      "    sky (cd/m^2), and GAME_DIR/<preset>/fog.exr, 64x32 half float, pre-exposed like the LUTs:\n"
+      "    the 256x128 sky blurred with a Gaussian of --fog-sigma-deg S degrees (default 15, at most\n"
+      "    30; cv::GaussianBlur in pixel space, wrapping in longitude and continuing across the poles),\n"
+      "    then bilinearly resampled at the 64x32 pixel directions.\n"
+      "Presets without a sun direction keep their time-independent outputs (LUTs, parameter columns);\n"
+      "what was left out is listed with its reason in the manifest's \"skipped\".");
+  ExportOptions o;
+  std::optional<std::string> backend;
+  bool json = false;
+  cl.Repeatable("--preset", &o.presets, "P.json", "calibrated preset JSON (repeat for several; required)");
+  cl.Text("--out", &o.out_dir, "GAME_DIR", "output directory, written atomically (required)");
+  cl.Number("--headroom", &o.headroom, "H",
+            "the largest scaled LUT value is at most H x 65504 (default 0.25, two\n"
+            "stops for the game's own multipliers)");
+  cl.Text("--backend", &backend, "NAME", "renders the sky for SH-9 and fog: vulkan (default) or cpu (double reference)");
+  cl.Number("--fog-sigma-deg", &o.fog_sigma_deg, "S", "Gaussian blur of the fog lat-long, degrees in (0, 30] (default 15)");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (backend) o.backend = render::ParseBackend(*backend, "--backend");
+  return o;
+}
+
 int RunExport(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  return RunVerb("export", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv, {"preset", "out", "headroom", "backend", "fog-sigma-deg"}, {"json"});
-    ExportOptions o;
-    o.presets = a.Values("preset");
-    o.out_dir = a.Value("out").value_or("");
-    if (auto h = a.Number("headroom")) o.headroom = *h;
-    if (auto b = a.Value("backend")) o.backend = render::ParseBackend(*b, "--backend");
-    if (auto f = a.Number("fog-sigma-deg")) o.fog_sigma_deg = *f;
-    return RunExportImpl(o);
-  });
+  return RunVerb("export", WantsJson(argc, argv), [&]() { return RunExportImpl(ParseExportArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -26,6 +26,9 @@ struct ExportOptions {
 };
 
 nlohmann::json RunExportImpl(const ExportOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+ExportOptions ParseExportArgs(int argc, char** argv);
 int RunExport(int argc, char** argv);
 
 }  // namespace skycal::cli

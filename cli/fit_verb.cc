@@ -10,7 +10,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "fit_report.h"
 #include "staged_directory.h"
 #include "render_verb.h"
@@ -27,57 +28,6 @@
 namespace skycal::cli {
 namespace fs = std::filesystem;
 namespace {
-
-constexpr const char* kHelp = R"(skycal fit: fit the sky model to HDR reference skies
-
-  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]
-             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]
-             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]
-
-  --reference F.exr     lat-long EXR (project convention); repeat for a day of references
-  --model NAME          ffxv-iso (default: + isotropic LUT) or ffxv (the talk's two terms)
-  --backend NAME        vulkan (default: the objective renders through the compute shaders) or cpu
-  --sun-dir X,Y,Z       sun direction for every reference (else the EXR's sunDirection
-  --sun-elevation DEG   attribute, else detected in the image, with a warning)
-  --sun-azimuth DEG
-  --mask MASK.exr       user mask, same size as the references: R < 0.5 excludes a pixel
-  --init PRESET.json    starting preset (default: the bundled default_clear preset)
-  --absolute            references are calibrated (cd/m^2): the exposure is not fitted
-  --sun-cone DEG        mask this cone around the sun (default 3)
-  --loss NAME           cauchy (default), huber or none: robust loss on log residuals
-  --loss-scale S        floor of the robust loss scale, natural-log units (default 0.05, ~5%);
-                        the fit widens it to 2.385 x the MAD-sigma of its least-squares residuals
-  --no-linear-start     skip the linear start (variable projection over g): coarse-to-fine
-                        Ceres from the initial preset (the slower path of earlier versions)
-  --linear-width W      level width of the linear start's g search (default 128)
-  --polish              always polish the linear start with Ceres through the backend
-                        (it runs anyway with probe samples or a failed render check)
-  --pyramid W1,W2,...   coarse-to-fine level widths (default 64,128,... up to min(width, 512))
-  --max-iterations N    per pyramid level (default 50)
-  --smoothness L        second-difference prior on the LUT change along sun zenith (default 1e-6)
-  --prior-weight L      pull toward the initial LUT (default 1e-8)
-  --time HOURS          time of day of the reference(s), recorded for `skycal export`
-  --no-haziness         hold g at its initial value
-  --numeric-derivatives central-difference Jacobians (the benchmark's baseline)
-  --quiet               no per-iteration progress
-  --probe STEM=S.json   probe samples (skycal probe-extract) for the reference named STEM
-                        (repeatable; default: <reference without .exr>.probe.json when present):
-                        the ball's samples join the fit as residuals; the sun's RGB illuminance
-                        (per reference) and the ground albedo become fitted parameters
-  --require-probe       error unless every reference has probe samples
-  --probe-weight L      the probe residuals of a reference weigh L times its sky pixels (default 0.1)
-  --probe-quadrature W  lat-long width of the sky irradiance quadrature (default 128)
-  --no-ground-albedo    hold the ground albedo at the initial preset's value
-  --out DIR             output directory: preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json
-  --json                print fit.json on stdout
-)";
-
-// The probe options live here (not in FitVerbOptions, fit_verb.h) : RunFitImpl(o) uses the
-// defaults (auto-discovery of <reference stem>.probe.json, not required).
-struct FitProbeOptions {
-  std::vector<std::string> probes;  // --probe REF_STEM=SAMPLES.json
-  bool require_probe = false;       // every reference must have probe samples
-};
 
 // Probe samples per reference name: --probe STEM=FILE, else <reference stem>.probe.json beside it.
 std::vector<std::optional<fit::ProbeSamples>> ProbesFor(const FitProbeOptions& o, const std::vector<fit::Reference>& refs) {
@@ -313,77 +263,98 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
 }
 }  // namespace
 
-int RunFit(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
+FitCommandLine ParseFitArgs(int argc, char** argv) {
+  VerbCommandLine cl("fit", "skycal fit: fit the sky model to HDR reference skies",
+                     "  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]\n"
+                     "             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]\n"
+                     "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]");
+  FitCommandLine c;
+  FitVerbOptions& o = c.options;
+  fit::FitOptions& f = o.fit;
+  std::optional<std::string> model, backend, sun_dir, loss, pyramid;
+  std::optional<double> el, az;
+  bool no_haziness = false, no_ground_albedo = false, no_linear_start = false, quiet = false, json = false;
+  cl.Repeatable("--reference", &o.references, "F.exr", "lat-long EXR (project convention); repeat for a day of references");
+  cl.Text("--model", &model, "NAME", "ffxv-iso (default: + isotropic LUT) or ffxv (the talk's two terms)");
+  cl.Text("--backend", &backend, "NAME", "vulkan (default: the objective renders through the compute shaders) or cpu");
+  cl.Text("--sun-dir", &sun_dir, "X,Y,Z",
+          "sun direction for every reference (else the EXR's sunDirection\n"
+          "attribute, else detected in the image, with a warning)");
+  cl.Number("--sun-elevation", &el, "DEG", "alternative to --sun-dir, with --sun-azimuth: degrees in [-90, 90]");
+  cl.Number("--sun-azimuth", &az, "DEG", "lat-long longitude of the sun, degrees (0 -> +Z, 90 -> +X)");
+  cl.Text("--mask", &f.mask_path, "MASK.exr", "user mask, same size as the references: R < 0.5 excludes a pixel");
+  cl.Text("--init", &o.init_preset, "PRESET.json", "starting preset (default: the bundled default_clear preset)");
+  cl.Flag("--absolute", &f.absolute, "references are calibrated (cd/m^2): the exposure is not fitted");
+  cl.Number("--sun-cone", &f.sun_cone_deg, "DEG", "mask this cone around the sun (default 3)");
+  cl.Number("--clip-fraction", &f.clip_fraction, "F",
+            "with a clipping plateau in a reference, pixels >= F x the clip level are masked (default 0.98)");
+  cl.Text("--loss", &loss, "NAME", "cauchy (default), huber or none: robust loss on log residuals");
+  cl.Number("--loss-scale", &f.loss_scale, "S",
+            "floor of the robust loss scale, natural-log units (default 0.05, ~5%);\n"
+            "the fit widens it to 2.385 x the MAD-sigma of its least-squares residuals");
+  cl.Flag("--no-linear-start", &no_linear_start,
+          "skip the linear start (variable projection over g): coarse-to-fine\n"
+          "Ceres from the initial preset (the slower path of earlier versions)");
+  cl.Integer("--linear-width", &f.linear_width, -1e9, 1e9, "expected an integer width", "W",
+             "level width of the linear start's g search (default 128)");
+  cl.Flag("--polish", &f.polish,
+          "always polish the linear start with Ceres through the backend\n"
+          "(it runs anyway with probe samples or a failed render check)");
+  cl.Text("--pyramid", &pyramid, "W1,W2,...", "coarse-to-fine level widths (default 64,128,... up to min(width, 512))");
+  cl.Integer("--max-iterations", &f.max_iterations_per_level, -1e9, 1e9, "expected an integer", "N",
+             "per pyramid level (default 50)");
+  cl.Number("--smoothness", &f.smoothness, "L", "second-difference prior on the LUT change along sun zenith (default 1e-6)");
+  cl.Number("--prior-weight", &f.prior_weight, "L", "pull toward the initial LUT (default 1e-8)");
+  cl.Number("--time", &f.time_of_day_h, "HOURS", "time of day of the reference(s), recorded for `skycal export`");
+  cl.Flag("--no-haziness", &no_haziness, "hold g at its initial value");
+  cl.Flag("--numeric-derivatives", &f.numeric_derivatives, "central-difference Jacobians (the benchmark's baseline)");
+  cl.Flag("--quiet", &quiet, "no per-iteration progress");
+  cl.Repeatable("--probe", &c.probes.probes, "STEM=S.json",
+                "probe samples (skycal probe-extract) for the reference named STEM\n"
+                "(repeatable; default: <reference without .exr>.probe.json when present):\n"
+                "the ball's samples join the fit as residuals; the sun's RGB illuminance\n"
+                "(per reference) and the ground albedo become fitted parameters");
+  cl.Flag("--require-probe", &c.probes.require_probe, "error unless every reference has probe samples");
+  cl.Number("--probe-weight", &f.probe_weight, "L",
+            "the probe residuals of a reference weigh L times its sky pixels (default 0.1)");
+  cl.Integer("--probe-quadrature", &f.probe_quadrature_width, -1e9, 1e9, "expected an integer width", "W",
+             "lat-long width of the sky irradiance quadrature (default 128)");
+  cl.Flag("--no-ground-albedo", &no_ground_albedo, "hold the ground albedo at the initial preset's value");
+  cl.Text("--out", &o.out_dir, "DIR",
+          "output directory (required): preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json");
+  cl.Flag("--json", &json, "print fit.json on stdout");
+  cl.Parse(argc, argv);
+
+  if (model) f.variant = render::ParseModelVariant(*model, "--model");
+  if (backend) f.backend = render::ParseBackend(*backend, "--backend");
+  if (sun_dir && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
+  if (el.has_value() != az.has_value()) throw Error("--sun-elevation and --sun-azimuth go together");
+  if (el && (*el < -90.0 || *el > 90.0)) throw Error("--sun-elevation: expected degrees in [-90, 90]");
+  if (el) f.sun_dir = latlong::DirectionFromElevationAzimuthDeg(*el, *az);
+  if (sun_dir) f.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
+  if (loss) {
+    if (*loss == "cauchy") f.loss = fit::RobustLoss::kCauchy;
+    else if (*loss == "huber") f.loss = fit::RobustLoss::kHuber;
+    else if (*loss == "none") f.loss = fit::RobustLoss::kNone;
+    else throw Error("--loss: unknown loss '" + *loss + "' (expected cauchy, huber or none)");
   }
+  if (pyramid) {
+    for (double w : ParseNumberList(*pyramid, "--pyramid")) {
+      if (w != std::floor(w) || std::abs(w) > 1e9) throw Error("--pyramid: expected integer widths");
+      f.pyramid_widths.push_back(static_cast<int>(w));
+    }
+  }
+  f.fit_haziness = !no_haziness;
+  f.fit_ground_albedo = !no_ground_albedo;
+  f.linear_start = !no_linear_start;
+  f.verbose = !quiet;
+  return c;
+}
+
+int RunFit(int argc, char** argv) {
   return RunVerb("fit", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv,
-           {"reference", "model", "backend", "sun-dir", "sun-elevation", "sun-azimuth", "mask", "init", "out", "sun-cone",
-            "loss", "loss-scale", "pyramid", "max-iterations", "smoothness", "prior-weight", "time", "clip-fraction", "probe",
-            "probe-weight", "probe-quadrature", "linear-width"},
-           {"json", "require-probe", "absolute", "no-haziness", "numeric-derivatives", "quiet", "no-ground-albedo",
-            "no-linear-start", "polish"});
-    FitVerbOptions o;
-    o.references = a.Values("reference");
-    FitProbeOptions po;
-    po.probes = a.Values("probe");
-    po.require_probe = a.Has("require-probe");
-    o.init_preset = a.Value("init").value_or("");
-    o.out_dir = a.Value("out").value_or("");
-    fit::FitOptions& f = o.fit;
-    if (auto m = a.Value("model")) f.variant = render::ParseModelVariant(*m, "--model");
-    if (auto b = a.Value("backend")) f.backend = render::ParseBackend(*b, "--backend");
-    const auto el = a.Number("sun-elevation"), az = a.Number("sun-azimuth");
-    if (a.Has("sun-dir") && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
-    if (el.has_value() != az.has_value()) throw Error("--sun-elevation and --sun-azimuth go together");
-    if (el && (*el < -90.0 || *el > 90.0)) throw Error("--sun-elevation: expected degrees in [-90, 90]");
-    if (el) f.sun_dir = latlong::DirectionFromElevationAzimuthDeg(*el, *az);
-    if (auto d = a.Vec3("sun-dir")) f.sun_dir = *d;
-    f.mask_path = a.Value("mask").value_or("");
-    f.absolute = a.Has("absolute");
-    if (auto v = a.Number("sun-cone")) f.sun_cone_deg = *v;
-    if (auto v = a.Number("clip-fraction")) f.clip_fraction = *v;
-    if (auto l = a.Value("loss")) {
-      if (*l == "cauchy") f.loss = fit::RobustLoss::kCauchy;
-      else if (*l == "huber") f.loss = fit::RobustLoss::kHuber;
-      else if (*l == "none") f.loss = fit::RobustLoss::kNone;
-      else throw Error("--loss: unknown loss '" + *l + "' (expected cauchy, huber or none)");
-    }
-    if (auto v = a.Number("loss-scale")) f.loss_scale = *v;
-    if (auto p = a.Value("pyramid")) {
-      std::stringstream ss(*p);
-      std::string item;
-      while (std::getline(ss, item, ',')) {
-        const double w = ParseNumber(item, "pyramid");
-        if (w != std::floor(w)) throw Error("--pyramid: expected integer widths");
-        f.pyramid_widths.push_back(static_cast<int>(w));
-      }
-    }
-    if (auto v = a.Number("max-iterations")) {
-      if (*v != std::floor(*v)) throw Error("--max-iterations: expected an integer");
-      f.max_iterations_per_level = static_cast<int>(*v);
-    }
-    if (auto v = a.Number("smoothness")) f.smoothness = *v;
-    if (auto v = a.Number("prior-weight")) f.prior_weight = *v;
-    if (auto v = a.Number("time")) f.time_of_day_h = *v;
-    f.fit_haziness = !a.Has("no-haziness");
-    if (auto v = a.Number("probe-weight")) f.probe_weight = *v;
-    if (auto v = a.Number("probe-quadrature")) {
-      if (*v != std::floor(*v)) throw Error("--probe-quadrature: expected an integer width");
-      f.probe_quadrature_width = static_cast<int>(*v);
-    }
-    f.fit_ground_albedo = !a.Has("no-ground-albedo");
-    f.numeric_derivatives = a.Has("numeric-derivatives");
-    f.linear_start = !a.Has("no-linear-start");
-    f.polish = a.Has("polish");
-    if (auto v = a.Number("linear-width")) {
-      if (*v != std::floor(*v)) throw Error("--linear-width: expected an integer width");
-      f.linear_width = static_cast<int>(*v);
-    }
-    f.verbose = !a.Has("quiet");
-    return RunFitWithProbes(o, po);
+    const FitCommandLine c = ParseFitArgs(argc, argv);
+    return RunFitWithProbes(c.options, c.probes);
   });
 }
 

@@ -18,7 +18,24 @@ struct FitVerbOptions {
   bool IsValid(std::string* why) const;
 };
 
+// The probe options of the command line (not in FitVerbOptions: RunFitImpl(o) uses the
+// defaults, auto-discovery of <reference stem>.probe.json, not required).
+struct FitProbeOptions {
+  std::vector<std::string> probes;  // --probe REF_STEM=SAMPLES.json
+  bool require_probe = false;       // every reference must have probe samples
+};
+
+// Everything `skycal fit` takes on its command line.
+struct FitCommandLine {
+  FitVerbOptions options;
+  FitProbeOptions probes;
+};
+
 nlohmann::json RunFitImpl(const FitVerbOptions& options);
+
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+FitCommandLine ParseFitArgs(int argc, char** argv);
 int RunFit(int argc, char** argv);
 
 }  // namespace skycal::cli

@@ -9,7 +9,8 @@
 #include <numbers>
 #include <vector>
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sun_detect.h"
 #include "skycal/core/atomic_file.h"
@@ -42,27 +43,6 @@ namespace skycal::cli {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-
-constexpr const char* kHelp = R"(skycal import: convert a published equirectangular HDR sky to a reference frame
-
-  skycal import --in SRC.exr --out FRAME.exr [--sun-dir X,Y,Z | --detect-sun]
-                [--source-convention blender|exr] [--half] [--json]
-
-  --in SRC.exr                RGB(A) OpenEXR, half or float, any compression (DWAB included)
-  --out FRAME.exr             output frame: the project's lat-long (OpenEXR envmap LatLong,
-                              +Y up, longitude 0 -> +Z, 90 deg -> +X), same size as the source
-  --source-convention NAME    blender (default: Blender / Poly Haven equirectangular, Z up,
-                              texel centres at (i + 0.5) / W) or exr (already this project's
-                              convention: nodes at i / (W - 1))
-  --sun-dir X,Y,Z             sun direction in the OUTPUT frame (+Y up), written as sunDirection
-  --detect-sun                find the sun in the converted frame (capture::DetectSun); refuses
-                              (exit 1, nothing written) when there is no distinct sun
-  --min-sun-contrast C        --detect-sun's peak / median luminance threshold (default 20)
-  --half                      write half floats (default float)
-  --json                      print a JSON summary on stdout (the log goes to stderr)
-Pixels are resampled bilinearly (wrapping in longitude). Negative, NaN and Inf source pixels
-(e.g. DWAB ringing) are kept as they are (the fit masks them) and counted in the summary.
-)";
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -306,24 +286,38 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
           {"warnings", warnings}};
 }
 
+ImportOptions ParseImportArgs(int argc, char** argv) {
+  VerbCommandLine cl("import", "skycal import: convert a published equirectangular HDR sky to a reference frame",
+                     "  skycal import --in SRC.exr --out FRAME.exr [--sun-dir X,Y,Z | --detect-sun]\n"
+                     "                [--source-convention blender|exr] [--half] [--json]",
+                     "Pixels are resampled bilinearly (wrapping in longitude). Negative, NaN and Inf source pixels\n"
+                     "(e.g. DWAB ringing) are kept as they are (the fit masks them) and counted in the summary.");
+  ImportOptions o;
+  std::optional<std::string> sun_dir, convention;
+  bool json = false;
+  cl.Text("--in", &o.in_path, "SRC.exr", "RGB(A) OpenEXR, half or float, any compression (DWAB included; required)");
+  cl.Text("--out", &o.out_path, "FRAME.exr",
+          "output frame: the project's lat-long (OpenEXR envmap LatLong,\n"
+          "+Y up, longitude 0 -> +Z, 90 deg -> +X), same size as the source (required)");
+  cl.Text("--source-convention", &convention, "NAME",
+          "blender (default: Blender / Poly Haven equirectangular, Z up,\n"
+          "texel centres at (i + 0.5) / W) or exr (already this project's\n"
+          "convention: nodes at i / (W - 1))");
+  cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "sun direction in the OUTPUT frame (+Y up), written as sunDirection");
+  cl.Flag("--detect-sun", &o.detect_sun,
+          "find the sun in the converted frame (capture::DetectSun); refuses\n"
+          "(exit 1, nothing written) when there is no distinct sun");
+  cl.Number("--min-sun-contrast", &o.min_sun_contrast, "C", "--detect-sun's peak / median luminance threshold (default 20)");
+  cl.Flag("--half", &o.half, "write half floats (default float)");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (sun_dir) o.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
+  if (convention) o.convention = ParseSourceConvention(*convention, "--source-convention");
+  return o;
+}
+
 int RunImport(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  return RunVerb("import", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv, {"in", "out", "sun-dir", "source-convention", "min-sun-contrast"},
-           {"detect-sun", "half", "json"});
-    ImportOptions o;
-    o.in_path = a.Value("in").value_or("");
-    o.out_path = a.Value("out").value_or("");
-    o.sun_dir = a.Vec3("sun-dir");
-    o.detect_sun = a.Has("detect-sun");
-    if (auto c = a.Value("source-convention")) o.convention = ParseSourceConvention(*c, "--source-convention");
-    if (auto c = a.Number("min-sun-contrast")) o.min_sun_contrast = *c;
-    o.half = a.Has("half");
-    return RunImportImpl(o);
-  });
+  return RunVerb("import", WantsJson(argc, argv), [&]() { return RunImportImpl(ParseImportArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -40,6 +40,9 @@ struct ImportOptions {
 // (and writes nothing) on a bad input, an unwritable output, or --detect-sun without a
 // distinct sun.
 nlohmann::json RunImportImpl(const ImportOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+ImportOptions ParseImportArgs(int argc, char** argv);
 int RunImport(int argc, char** argv);
 
 // Blender world direction (Z up) -> project direction (+Y up): (x, y, z) -> (y, z, x).

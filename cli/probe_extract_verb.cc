@@ -3,7 +3,8 @@
 #include <cmath>
 #include <iostream>
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "skycal/capture/rig.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
@@ -15,25 +16,6 @@
 
 namespace skycal::cli {
 namespace {
-
-constexpr const char* kHelp = R"(skycal probe-extract: measure the gray diffuse ball in a linear photograph
-
-  skycal probe-extract --image IMG.exr [--circle CX,CY,R] [--camera-rotation YAW,PITCH,ROLL]
-                       [--albedo A] [--clip-level V] --out SAMPLES.json [--json]
-
-  --image IMG.exr          linear EXR (scene-referred, same units as the reference skies)
-  --circle CX,CY,R         the ball's centre and radius in pixels (pixel centres at integer
-                           coordinates); default: detected (Hough circle + edge refinement)
-  --camera-rotation Y,P,R  the camera's yaw (azimuth), pitch (elevation), roll in degrees
-                           (capture/rig.h convention; default 0,0,0: looking along +Z, level)
-  --albedo A               the ball's Lambertian albedo in (0, 1] (default 0.18)
-  --clip-level V           pixels with any channel >= V are saturated and rejected (default: none)
-  --out SAMPLES.json       samples file for `skycal fit --probe STEM=SAMPLES.json` (atomic)
-  --json                   print the summary on stdout (the log goes to stderr)
-The ball is modelled orthographically (capture/probe.h); samples are bins of about equal
-solid angle with their world normal (+Y up), mean radiance and pixel count. Exit 1 and
-nothing written when the ball lies outside the image, is fully clipped or is not found.
-)";
 
 }  // namespace
 
@@ -117,22 +99,39 @@ nlohmann::json RunProbeExtractImpl(const ProbeExtractOptions& o) {
   return summary;
 }
 
-int RunProbeExtract(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
+ProbeExtractOptions ParseProbeExtractArgs(int argc, char** argv) {
+  VerbCommandLine cl("probe-extract", "skycal probe-extract: measure the gray diffuse ball in a linear photograph",
+                     "  skycal probe-extract --image IMG.exr [--circle CX,CY,R] [--camera-rotation YAW,PITCH,ROLL]\n"
+                     "                       [--albedo A] [--clip-level V] --out SAMPLES.json [--json]",
+                     "The ball is modelled orthographically (capture/probe.h); samples are bins of about equal\n"
+                     "solid angle with their world normal (+Y up), mean radiance and pixel count. Exit 1 and\n"
+                     "nothing written when the ball lies outside the image, is fully clipped or is not found.");
+  ProbeExtractOptions o;
+  std::optional<std::string> circle, rotation;
+  bool json = false;
+  cl.Text("--image", &o.image, "IMG.exr", "linear EXR (scene-referred, same units as the reference skies; required)");
+  cl.Text("--circle", &circle, "CX,CY,R",
+          "the ball's centre and radius in pixels (pixel centres at integer\n"
+          "coordinates); default: detected (Hough circle + edge refinement)");
+  cl.Text("--camera-rotation", &rotation, "Y,P,R",
+          "the camera's yaw (azimuth), pitch (elevation), roll in degrees\n"
+          "(capture/rig.h convention; default 0,0,0: looking along +Z, level)");
+  cl.Number("--albedo", &o.albedo, "A", "the ball's Lambertian albedo in (0, 1] (default 0.18)");
+  cl.Number("--clip-level", &o.clip_level, "V", "pixels with any channel >= V are saturated and rejected (default: none)");
+  cl.Text("--out", &o.out, "SAMPLES.json", "samples file for `skycal fit --probe STEM=SAMPLES.json` (atomic; required)");
+  cl.Flag("--json", &json, "print the summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (circle) {
+    const auto c = ParseVec3(*circle, "--circle");
+    o.circle = capture::BallCircle{c[0], c[1], c[2]};
   }
-  return RunVerb("probe-extract", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv, {"image", "circle", "camera-rotation", "albedo", "clip-level", "out"}, {"json"});
-    ProbeExtractOptions o;
-    o.image = a.Value("image").value_or("");
-    o.out = a.Value("out").value_or("");
-    if (auto c = a.Vec3("circle")) o.circle = capture::BallCircle{(*c)[0], (*c)[1], (*c)[2]};
-    if (auto r = a.Vec3("camera-rotation")) o.camera_ypr_deg = *r;
-    if (auto v = a.Number("albedo")) o.albedo = *v;
-    if (auto v = a.Number("clip-level")) o.clip_level = *v;
-    return RunProbeExtractImpl(o);
-  });
+  if (rotation) o.camera_ypr_deg = ParseVec3(*rotation, "--camera-rotation");
+  return o;
+}
+
+int RunProbeExtract(int argc, char** argv) {
+  return RunVerb("probe-extract", WantsJson(argc, argv),
+                 [&]() { return RunProbeExtractImpl(ParseProbeExtractArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -28,6 +28,9 @@ struct ProbeExtractOptions {
 // pixel counts). Throws skycal::Error (nothing written) when the ball lies outside the
 // image, is fully clipped or none is found.
 nlohmann::json RunProbeExtractImpl(const ProbeExtractOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+ProbeExtractOptions ParseProbeExtractArgs(int argc, char** argv);
 int RunProbeExtract(int argc, char** argv);
 
 }  // namespace skycal::cli

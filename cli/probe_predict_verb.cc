@@ -5,7 +5,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "sun_choice.h"
 #include "render_verb.h"
 #include "skycal/core/error.h"
@@ -16,27 +17,6 @@
 
 namespace skycal::cli {
 namespace {
-
-constexpr const char* kHelp = R"(skycal probe-predict: predict the gray diffuse probe (irradiance on a ball) from a preset
-
-  skycal probe-predict [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)
-                       [--albedo A] [--normals N] [--backend vulkan|cpu] [--json]
-
-  --preset P.json        sky preset (default: the bundled datasets/presets/default_clear.json)
-  --sun-elevation DEG    sun elevation above the horizon, degrees in [-90, 90]
-  --sun-azimuth DEG      sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)
-  --sun-dir X,Y,Z        alternative: vector toward the sun (+Y up), normalised
-  --albedo A             the ball's Lambertian albedo in [0, 1] (default 0.18, a gray card)
-  --normals N            Fibonacci-sphere normals besides the up normal (default 64)
-  --sky-width W          width of the sky render, even, >= 4 (default 512; height W/2)
-  --backend NAME         vulkan (default; the game's compute shaders) or cpu (double reference)
-  --ground lit|zero      below the horizon: albedo-lit constant ground (default) or black
-  --vulkan-validation    enable VK_LAYER_KHRONOS_validation
-  --json                 print a JSON summary on stdout (the log goes to stderr)
-The sky is rendered without the sun disc (a sub-pixel disc would alias) and the sun adds
-E_sun max(0, n.s) analytically. Irradiance in lux per channel, ball radiance albedo/pi * E
-in cd/m^2, SH-9 radiance coefficients (Ramamoorthi & Hanrahan 2001), scene-linear Rec.709.
-)";
 
 nlohmann::json Rgb(const render::Rgb& v) { return {v[0], v[1], v[2]}; }
 
@@ -123,39 +103,41 @@ nlohmann::json RunProbePredictImpl(const ProbePredictOptions& o) {
           {"time_ms", {{"predict", ms(t_predict, t_done)}, {"total", ms(t0, Clock::now())}}}};
 }
 
+ProbePredictOptions ParseProbePredictArgs(int argc, char** argv) {
+  VerbCommandLine cl("probe-predict",
+                     "skycal probe-predict: predict the gray diffuse probe (irradiance on a ball) from a preset",
+                     "  skycal probe-predict [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)\n"
+                     "                       [--albedo A] [--normals N] [--backend vulkan|cpu] [--json]",
+                     "The sky is rendered without the sun disc (a sub-pixel disc would alias) and the sun adds\n"
+                     "E_sun max(0, n.s) analytically. Irradiance in lux per channel, ball radiance albedo/pi * E\n"
+                     "in cd/m^2, SH-9 radiance coefficients (Ramamoorthi & Hanrahan 2001), scene-linear Rec.709.");
+  ProbePredictOptions o;
+  std::optional<std::string> sun_dir, backend, ground;
+  bool json = false;
+  cl.Text("--preset", &o.preset_path, "P.json", "sky preset (default: the bundled datasets/presets/default_clear.json)");
+  cl.Number("--sun-elevation", &o.sun_elevation_deg, "DEG", "sun elevation above the horizon, degrees in [-90, 90]");
+  cl.Number("--sun-azimuth", &o.sun_azimuth_deg, "DEG", "sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)");
+  cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "alternative: vector toward the sun (+Y up), normalised");
+  cl.Number("--albedo", &o.albedo, "A", "the ball's Lambertian albedo in [0, 1] (default 0.18, a gray card)");
+  // Integers here; IsValid holds the ranges ([0, 100000] normals, even width >= 4).
+  cl.Integer("--normals", &o.normals, -1e9, 1e9, "expected an integer", "N",
+             "Fibonacci-sphere normals besides the up normal (default 64)");
+  cl.Integer("--sky-width", &o.width, -1e9, 1e9, "expected an integer", "W",
+             "width of the sky render, even, >= 4 (default 512; height W/2)");
+  cl.Text("--backend", &backend, "NAME", "vulkan (default; the game's compute shaders) or cpu (double reference)");
+  cl.Text("--ground", &ground, "lit|zero", "below the horizon: albedo-lit constant ground (default) or black");
+  cl.Flag("--vulkan-validation", &o.vulkan_validation, "enable VK_LAYER_KHRONOS_validation");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (sun_dir) o.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
+  if (backend) o.backend = render::ParseBackend(*backend, "--backend");
+  if (ground) o.ground = ParseGroundMode(*ground, "--ground");
+  return o;
+}
+
 int RunProbePredict(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  const bool json = WantsJson(argc, argv);
-  return RunVerb("probe-predict", json, [&]() {
-    Args a(argc, argv,
-           {"preset", "sun-elevation", "sun-azimuth", "sun-dir", "albedo", "normals", "sky-width", "backend", "ground"},
-           {"vulkan-validation", "json"});
-    ProbePredictOptions o;
-    o.preset_path = a.Value("preset").value_or("");
-    o.sun_elevation_deg = a.Number("sun-elevation");
-    o.sun_azimuth_deg = a.Number("sun-azimuth");
-    o.sun_dir = a.Vec3("sun-dir");
-    if (auto v = a.Number("albedo")) o.albedo = *v;
-    auto count = [&](const char* name, int* out) {
-      if (auto v = a.Number(name)) {
-        if (*v != std::floor(*v) || std::abs(*v) > 1e9) throw Error(std::string("--") + name + ": expected an integer");
-        *out = static_cast<int>(*v);
-      }
-    };
-    count("normals", &o.normals);
-    count("sky-width", &o.width);
-    if (auto b = a.Value("backend")) o.backend = render::ParseBackend(*b, "--backend");
-    if (auto g = a.Value("ground")) {
-      if (*g == "lit") o.ground = render::GroundMode::kLit;
-      else if (*g == "zero") o.ground = render::GroundMode::kZero;
-      else throw Error("--ground: unknown mode '" + *g + "' (expected lit or zero)");
-    }
-    o.vulkan_validation = a.Has("vulkan-validation");
-    return RunProbePredictImpl(o);
-  });
+  return RunVerb("probe-predict", WantsJson(argc, argv),
+                 [&]() { return RunProbePredictImpl(ParseProbePredictArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

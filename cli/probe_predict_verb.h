@@ -30,6 +30,9 @@ struct ProbePredictOptions {
 
 // Renders, integrates and returns the JSON summary. Throws skycal::Error.
 nlohmann::json RunProbePredictImpl(const ProbePredictOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+ProbePredictOptions ParseProbePredictArgs(int argc, char** argv);
 int RunProbePredict(int argc, char** argv);
 
 }  // namespace skycal::cli

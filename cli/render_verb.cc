@@ -7,7 +7,8 @@
 
 #include "skycal/core/atomic_file.h"
 
-#include "args.h"
+#include "command_line.h"
+#include "option_values.h"
 #include "sun_choice.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/color/preview.h"
@@ -17,28 +18,6 @@
 
 namespace skycal::cli {
 namespace {
-
-constexpr const char* kHelp = R"(skycal render: render a sky preset to a lat-long EXR
-
-  skycal render [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)
-                [--size WxH] [--backend vulkan|cpu] --out OUT.exr [--png OUT.png] [--json]
-
-  --preset P.json        sky preset (default: the bundled datasets/presets/default_clear.json)
-  --sun-elevation DEG    sun elevation above the horizon, degrees in [-90, 90]
-  --sun-azimuth DEG      sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)
-  --sun-dir X,Y,Z        alternative: vector toward the sun (+Y up), normalised
-  --size WxH             image size in pixels (default 1024x512; lat-long wants W = 2H)
-  --backend NAME         vulkan (default; the game's compute shaders) or cpu (double reference)
-  --ground lit|zero      below the horizon: albedo-lit constant ground (default) or black
-  --no-sun-disc          leave the sun disc out
-  --half                 write half floats (default float)
-  --out OUT.exr          output lat-long EXR (envmap=latlong, sunDirection attributes)
-  --png OUT.png          preview PNG through the OCIO view transform ($OCIO or config/skycal.ocio)
-  --exposure EV          preview exposure in stops (default: automatic, log-average -> 0.18)
-  --vulkan-validation    enable VK_LAYER_KHRONOS_validation
-  --json                 print a JSON summary on stdout (the log goes to stderr)
-Output units: cd/m^2 per channel, scene-linear Rec.709.
-)";
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -167,39 +146,49 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
           {"warnings", warnings}};
 }
 
-int RunRender(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
+render::GroundMode ParseGroundMode(const std::string& text, const std::string& option) {
+  if (text == "lit") return render::GroundMode::kLit;
+  if (text == "zero") return render::GroundMode::kZero;
+  throw Error(option + ": unknown mode '" + text + "' (expected lit or zero)");
+}
+
+RenderOptions ParseRenderArgs(int argc, char** argv) {
+  VerbCommandLine cl("render", "skycal render: render a sky preset to a lat-long EXR",
+                     "  skycal render [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)\n"
+                     "                [--size WxH] [--backend vulkan|cpu] --out OUT.exr [--png OUT.png] [--json]",
+                     "Output units: cd/m^2 per channel, scene-linear Rec.709.");
+  RenderOptions o;
+  std::optional<std::string> sun_dir, size, backend, ground;
+  bool no_sun_disc = false, json = false;
+  cl.Text("--preset", &o.preset_path, "P.json", "sky preset (default: the bundled datasets/presets/default_clear.json)");
+  cl.Number("--sun-elevation", &o.sun_elevation_deg, "DEG", "sun elevation above the horizon, degrees in [-90, 90]");
+  cl.Number("--sun-azimuth", &o.sun_azimuth_deg, "DEG", "sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)");
+  cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "alternative: vector toward the sun (+Y up), normalised");
+  cl.Text("--size", &size, "WxH", "image size in pixels (default 1024x512; lat-long wants W = 2H)");
+  cl.Text("--backend", &backend, "NAME", "vulkan (default; the game's compute shaders) or cpu (double reference)");
+  cl.Text("--ground", &ground, "lit|zero", "below the horizon: albedo-lit constant ground (default) or black");
+  cl.Flag("--no-sun-disc", &no_sun_disc, "leave the sun disc out");
+  cl.Flag("--half", &o.half, "write half floats (default float)");
+  cl.Text("--out", &o.out_exr, "OUT.exr", "output lat-long EXR (envmap=latlong, sunDirection attributes; required)");
+  cl.Text("--png", &o.out_png, "OUT.png", "preview PNG through the OCIO view transform ($OCIO or config/skycal.ocio)");
+  cl.Number("--exposure", &o.png_exposure_ev, "EV", "preview exposure in stops (default: automatic, log-average -> 0.18)");
+  cl.Flag("--vulkan-validation", &o.vulkan_validation, "enable VK_LAYER_KHRONOS_validation");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  if (sun_dir) o.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
+  if (size) {
+    const auto wh = ParseSize(*size, "--size");
+    o.width = wh[0];
+    o.height = wh[1];
   }
-  const bool json = WantsJson(argc, argv);
-  return RunVerb("render", json, [&]() {
-    Args a(argc, argv,
-           {"preset", "sun-elevation", "sun-azimuth", "sun-dir", "size", "backend", "ground", "out", "png", "exposure"},
-           {"no-sun-disc", "half", "vulkan-validation", "json"});
-    RenderOptions o;
-    o.preset_path = a.Value("preset").value_or("");
-    o.sun_elevation_deg = a.Number("sun-elevation");
-    o.sun_azimuth_deg = a.Number("sun-azimuth");
-    o.sun_dir = a.Vec3("sun-dir");
-    if (auto s = a.Size("size")) {
-      o.width = (*s)[0];
-      o.height = (*s)[1];
-    }
-    if (auto b = a.Value("backend")) o.backend = render::ParseBackend(*b, "--backend");
-    if (auto g = a.Value("ground")) {
-      if (*g == "lit") o.ground = render::GroundMode::kLit;
-      else if (*g == "zero") o.ground = render::GroundMode::kZero;
-      else throw Error("--ground: unknown mode '" + *g + "' (expected lit or zero)");
-    }
-    o.sun_disc = !a.Has("no-sun-disc");
-    o.half = a.Has("half");
-    o.out_exr = a.Value("out").value_or("");
-    o.out_png = a.Value("png").value_or("");
-    if (auto e = a.Number("exposure")) o.png_exposure_ev = *e;
-    o.vulkan_validation = a.Has("vulkan-validation");
-    return RunRenderImpl(o);
-  });
+  if (backend) o.backend = render::ParseBackend(*backend, "--backend");
+  if (ground) o.ground = ParseGroundMode(*ground, "--ground");
+  o.sun_disc = !no_sun_disc;
+  return o;
+}
+
+int RunRender(int argc, char** argv) {
+  return RunVerb("render", WantsJson(argc, argv), [&]() { return RunRenderImpl(ParseRenderArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -33,7 +33,13 @@ struct RenderOptions {
 
 // Renders and writes the outputs; returns the JSON summary. Throws skycal::Error.
 nlohmann::json RunRenderImpl(const RenderOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+RenderOptions ParseRenderArgs(int argc, char** argv);
 int RunRender(int argc, char** argv);
+
+// "lit" or "zero" (--ground of render and probe-predict); throws naming `option`.
+render::GroundMode ParseGroundMode(const std::string& text, const std::string& option);
 
 std::string DefaultPresetPath();  // datasets/presets/default_clear.json of this checkout
 

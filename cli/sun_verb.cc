@@ -5,36 +5,12 @@
 #include <limits>
 #include <sstream>
 
-#include "args.h"
+#include "command_line.h"
 #include "skycal/core/error.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
 namespace {
-
-constexpr const char* kHelp = R"(skycal sun: the sun's position for a place and time (NREL SPA, Reda & Andreas 2004)
-
-  skycal sun --time ISO8601 --lat DEG --lon DEG [--elevation-m M] [--pressure MBAR]
-             [--temperature C] [--delta-t S] [--north-longitude DEG] [--json]
-
-  --time ISO8601         local date and time with its UTC offset, or UTC with Z:
-                         2003-10-17T12:30:30-07:00, 2024-06-21T12:00:00Z, ...+05:30
-                         (a time without an offset is refused; dates before 1582-10-15 are
-                         Julian-calendar dates, as in the SPA; years -2000..6000)
-  --lat DEG              observer latitude, degrees in [-90, 90], north positive
-  --lon DEG              observer longitude, degrees in [-180, 180], east positive
-  --elevation-m M        observer elevation above sea level in metres, [-11000, 100000] (default 0)
-  --pressure MBAR        annual mean local pressure, millibars in [0, 1200] (default 1013.25)
-  --temperature C        annual mean local temperature, Celsius in [-100, 100] (default 15)
-  --delta-t S            TT - UT1 in seconds (default 67; about 69 in the 2020s)
-  --north-longitude DEG  lat-long longitude of geographic north in the frame (camera heading;
-                         default 0: north is +Z, east is -X). Compass azimuth A maps to
-                         lat-long longitude = north - A (the unmirrored sky seen from inside)
-  --json                 print a JSON summary on stdout (the log goes to stderr)
-
-Zenith and elevation are topocentric and include atmospheric refraction; azimuth is from
-north, eastward, in [0, 360). Uncertainty +/-0.0003 deg (the algorithm's, for exact inputs).
-)";
 
 std::string Num(double v, int precision = 10) {
   std::ostringstream ss;
@@ -152,24 +128,36 @@ nlohmann::json RunSunImpl(const SunOptions& o) {
           {"algorithm", "NREL SPA (Reda & Andreas 2004, NREL/TP-560-34302)"}};
 }
 
+SunOptions ParseSunArgs(int argc, char** argv) {
+  VerbCommandLine cl("sun", "skycal sun: the sun's position for a place and time (NREL SPA, Reda & Andreas 2004)",
+                     "  skycal sun --time ISO8601 --lat DEG --lon DEG [--elevation-m M] [--pressure MBAR]\n"
+                     "             [--temperature C] [--delta-t S] [--north-longitude DEG] [--json]",
+                     "Zenith and elevation are topocentric and include atmospheric refraction; azimuth is from\n"
+                     "north, eastward, in [0, 360). Uncertainty +/-0.0003 deg (the algorithm's, for exact inputs).");
+  SunOptions o;
+  bool json = false;
+  cl.Text("--time", &o.time, "ISO8601",
+          "local date and time with its UTC offset, or UTC with Z (required):\n"
+          "2003-10-17T12:30:30-07:00, 2024-06-21T12:00:00Z, ...+05:30\n"
+          "(a time without an offset is refused; dates before 1582-10-15 are\n"
+          "Julian-calendar dates, as in the SPA; years -2000..6000)");
+  cl.Number("--lat", &o.latitude_deg, "DEG", "observer latitude, degrees in [-90, 90], north positive (required)");
+  cl.Number("--lon", &o.longitude_deg, "DEG", "observer longitude, degrees in [-180, 180], east positive (required)");
+  cl.Number("--elevation-m", &o.elevation_m, "M", "observer elevation above sea level in metres, [-11000, 100000] (default 0)");
+  cl.Number("--pressure", &o.pressure_mbar, "MBAR", "annual mean local pressure, millibars in [0, 1200] (default 1013.25)");
+  cl.Number("--temperature", &o.temperature_c, "C", "annual mean local temperature, Celsius in [-100, 100] (default 15)");
+  cl.Number("--delta-t", &o.delta_t_s, "S", "TT - UT1 in seconds (default 67; about 69 in the 2020s)");
+  cl.Number("--north-longitude", &o.north_longitude_deg, "DEG",
+            "lat-long longitude of geographic north in the frame (camera heading;\n"
+            "default 0: north is +Z, east is -X). Compass azimuth A maps to\n"
+            "lat-long longitude = north - A (the unmirrored sky seen from inside)");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  return o;
+}
+
 int RunSun(int argc, char** argv) {
-  if (WantsHelp(argc, argv)) {
-    std::cout << kHelp;
-    return 0;
-  }
-  return RunVerb("sun", WantsJson(argc, argv), [&]() {
-    Args a(argc, argv, {"time", "lat", "lon", "elevation-m", "pressure", "temperature", "delta-t", "north-longitude"}, {"json"});
-    SunOptions o;
-    o.time = a.Value("time").value_or("");
-    o.latitude_deg = a.Number("lat");
-    o.longitude_deg = a.Number("lon");
-    if (auto v = a.Number("elevation-m")) o.elevation_m = *v;
-    if (auto v = a.Number("pressure")) o.pressure_mbar = *v;
-    if (auto v = a.Number("temperature")) o.temperature_c = *v;
-    if (auto v = a.Number("delta-t")) o.delta_t_s = *v;
-    if (auto v = a.Number("north-longitude")) o.north_longitude_deg = *v;
-    return RunSunImpl(o);
-  });
+  return RunVerb("sun", WantsJson(argc, argv), [&]() { return RunSunImpl(ParseSunArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

@@ -27,6 +27,9 @@ struct SunOptions {
 
 // Computes the position; returns the JSON summary. Throws skycal::Error on invalid options.
 nlohmann::json RunSunImpl(const SunOptions& options);
+// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
+// --help, skycal::Error naming the option on a bad command line.
+SunOptions ParseSunArgs(int argc, char** argv);
 int RunSun(int argc, char** argv);
 
 }  // namespace skycal::cli

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <iostream>
 
+#include "command_line.h"
 #include "skycal/core/error.h"
 #include "skycal/render/preset.h"
 
@@ -26,6 +27,9 @@ int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::js
       }
     }
     return 0;
+  } catch (const HelpRequested& help) {
+    std::cout << help.help();
+    return 0;
   } catch (const Error& e) {
     error = e.what();
   } catch (const std::exception& e) {
@@ -47,13 +51,6 @@ std::vector<NamedPath> PresetInputs(const std::string& option, const std::string
     inputs.push_back({i == 0 ? option : option + " " + preset_json + "'s LUT", files[i]});
   }
   return inputs;
-}
-
-bool WantsHelp(int argc, char** argv) {
-  for (int i = 0; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) return true;
-  }
-  return false;
 }
 
 bool WantsJson(int argc, char** argv) {

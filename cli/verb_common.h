@@ -17,12 +17,13 @@ void Log(const std::string& verb, const std::string& message);
 // Runs `body` (which parses and executes, returning the summary), prints the summary as
 // JSON on stdout when `json` is set, maps skycal::Error and other exceptions to a message
 // on stderr and exit code 1. With --json a failure also prints {"ok": false, "error": ...}.
+// A HelpRequested from parsing (command_line.h) prints the help on stdout: exit 0.
 int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::json()>& body);
 
 // A preset as inputs for file_safety.h: its JSON (role `option`) and every LUT EXR it names.
 std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json);
 
-bool WantsHelp(int argc, char** argv);
+// --json among the arguments: known before parsing, so that a parse error is reported as JSON too.
 bool WantsJson(int argc, char** argv);
 
 }  // namespace skycal::cli

@@ -8,7 +8,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git ca-certificates
   libceres-dev libeigen3-dev libopencv-dev libopenexr-dev libopencolorio-dev opencolorio-tools
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc glslang-tools spirv-tools
-  nlohmann-json3-dev libgtest-dev
+  nlohmann-json3-dev libgtest-dev libcli11-dev nettle-dev
   libexiv2-dev
 )
 

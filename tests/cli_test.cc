@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -114,6 +115,100 @@ TEST(Cli, BadInputIsRefusedClearlyAndLeavesNothing) {
   ExpectFailure("render" + sun + out + " --png " + (dir / "missing-dir/o.png"), "does not exist", dir);
   // Inputs are never modified.
   EXPECT_EQ(Slurp(dir / "corrupt.json"), "{ not json");
+}
+
+// Option syntax (CLI11, cli/command_line.h): --x=v and --x v, negative values, and the
+// mistakes a hand-typed command line makes, each refused with the option named.
+TEST(Cli, OptionSyntaxAndStrictness) {
+  ScratchDir dir("cli-syntax");
+  // --x=v and --x v mix; a negative value after either form is a value, not an option.
+  Result r = Skycal("render --sun-elevation=30 --sun-azimuth -20 --size=64x32 --backend=cpu --out=" + (dir / "eq.exr") +
+                    " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_NEAR(j["sun_elevation_deg"].get<double>(), 30.0, 1e-9);
+  EXPECT_NEAR(j["sun_azimuth_deg"].get<double>(), -20.0, 1e-9);
+  EXPECT_EQ(j["size"], nlohmann::json::array({64, 32}));
+  r = Skycal("sun --time=2003-10-17T12:30:30-07:00 --lat=-33.9 --lon -18.4 --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["latitude_deg"].get<double>(), -33.9, 1e-12);
+  std::filesystem::remove(dir / "eq.exr");
+
+  const std::string sun = " --sun-elevation 10 --sun-azimuth 0", out = " --out " + (dir / "o.exr");
+  // A non-repeatable option (value or flag) given twice names the option.
+  ExpectFailure("sun --time 2003-10-17T12:30:30Z --lat 40 --lon 0 --time 2003-10-17T13:30:30Z", "--time: given 2 times",
+                dir);
+  ExpectFailure("render" + sun + " --half --half" + out, "--half: given 2 times", dir);
+  ExpectFailure("render" + sun + out + " --out=" + (dir / "p.exr"), "--out: given 2 times", dir);
+  // A missing value is reported as such, at the end of the line or as --x=.
+  ExpectFailure("render" + sun + " --out", "--out: expected a value", dir);
+  ExpectFailure("render" + sun + " --out=", "--out: expected a value", dir);
+  ExpectFailure("sun --time 2003-10-17T12:30:30Z --lat 40 --lon", "--lon: expected a value", dir);
+  // Numbers are finite and whole: nan, inf and trailing junk are refused by the parser.
+  ExpectFailure("render --sun-elevation nan --sun-azimuth 0" + out, "--sun-elevation: expected a finite number, got 'nan'",
+                dir);
+  ExpectFailure("render --sun-elevation 10 --sun-azimuth inf" + out, "--sun-azimuth: expected a finite number", dir);
+  ExpectFailure("render" + sun + " --exposure=-INF" + out, "--exposure: expected a finite number", dir);
+  ExpectFailure("probe-predict --sun-elevation 10deg --sun-azimuth 0", "--sun-elevation: expected a finite number", dir);
+  ExpectFailure("bake --haziness 1.5 --out " + (dir / "p.json"), "--haziness: expected g in [0, 0.999]", dir);
+  ExpectFailure("bake --n-theta 3.5 --out " + (dir / "p.json"), "--n-theta: expected an integer in [2, 1024]", dir);
+  // Unknown options (either form), stray words, flags given a value.
+  ExpectFailure("render" + sun + " --frobnicate=3" + out, "unknown option '--frobnicate'", dir);
+  ExpectFailure("render" + sun + " stray" + out, "unexpected argument 'stray'", dir);
+  ExpectFailure("render" + sun + " --half=1" + out, "--half: takes no value", dir);
+  // Repeatable options take one value per occurrence.
+  ExpectFailure("fit --reference a.exr b.exr --out " + (dir / "fit"), "unexpected argument 'b.exr'", dir);
+  // A parse error with --json is a JSON failure too.
+  r = Skycal("render --json" + sun + " --out");
+  EXPECT_EQ(r.rc, 1);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["ok"].get<bool>());
+  EXPECT_EQ(j["error"], "--out: expected a value");
+}
+
+// --help is generated from the registered options: every verb lists each of its options
+// (all of them, so an option added without help text or dropped from the parser shows here).
+TEST(Cli, HelpListsEveryRegisteredOption) {
+  const std::map<std::string, std::vector<std::string>> options = {
+      {"render", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--size", "--backend", "--ground",
+                  "--no-sun-disc", "--half", "--out", "--png", "--exposure", "--vulkan-validation", "--json"}},
+      {"bake", {"--out", "--name", "--haziness", "--model", "--n-theta", "--n-gamma", "--mie-scattering",
+                "--rayleigh-scale-height", "--mie-scale-height", "--observer-altitude", "--json"}},
+      {"ceiling", {"--reference", "--init", "--model", "--sun-cone", "--mask", "--json"}},
+      {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-fov-deg", "--lens-center",
+                   "--lens-radius", "--kb-k", "--vignetting", "--camera-rotation", "--rig", "--input-colorspace",
+                   "--time", "--lat", "--lon", "--north-longitude", "--size", "--out", "--json"}},
+      {"export", {"--preset", "--out", "--headroom", "--backend", "--fog-sigma-deg", "--json"}},
+      {"fit", {"--reference", "--model", "--backend", "--sun-dir", "--sun-elevation", "--sun-azimuth", "--mask",
+               "--init", "--absolute", "--sun-cone", "--clip-fraction", "--loss", "--loss-scale", "--no-linear-start",
+               "--linear-width", "--polish", "--pyramid", "--max-iterations", "--smoothness", "--prior-weight", "--time",
+               "--no-haziness", "--numeric-derivatives", "--quiet", "--probe", "--require-probe", "--probe-weight",
+               "--probe-quadrature", "--no-ground-albedo", "--out", "--json"}},
+      {"import", {"--in", "--out", "--source-convention", "--sun-dir", "--detect-sun", "--min-sun-contrast", "--half",
+                  "--json"}},
+      {"probe-extract", {"--image", "--circle", "--camera-rotation", "--albedo", "--clip-level", "--out", "--json"}},
+      {"probe-predict", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--albedo", "--normals",
+                         "--sky-width", "--backend", "--ground", "--vulkan-validation", "--json"}},
+      {"sun", {"--time", "--lat", "--lon", "--elevation-m", "--pressure", "--temperature", "--delta-t",
+               "--north-longitude", "--json"}},
+  };
+  for (const auto& [verb, names] : options) {
+    const Result r = Skycal(verb + " --help");
+    EXPECT_EQ(r.rc, 0) << verb;
+    EXPECT_EQ(r.out.rfind("skycal " + verb + ": ", 0), 0u) << verb << " help starts with its description:\n" << r.out;
+    EXPECT_NE(r.out.find("  skycal " + verb + " "), std::string::npos) << verb << ": usage synopsis missing";
+    for (const std::string& name : names) {
+      // Listed as an option line: "  --name" starting a line, followed by its metavar or help.
+      bool listed = false;
+      for (size_t at = r.out.find("\n  " + name); at != std::string::npos && !listed; at = r.out.find("\n  " + name, at + 1)) {
+        const char next = at + 3 + name.size() < r.out.size() ? r.out[at + 3 + name.size()] : '\0';
+        listed = next == ' ' || next == '\n';
+      }
+      EXPECT_TRUE(listed) << verb << " --help does not list " << name << ":\n" << r.out;
+    }
+    // Help wins wherever it appears, even after a bad option; -h is the same.
+    EXPECT_EQ(Skycal(verb + " --frobnicate -h").out, r.out) << verb;
+  }
 }
 
 TEST(Cli, NoVulkanDeviceGivesAClearMessage) {

@@ -11,6 +11,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/json_schema.h"
+#include "skycal/core/sha256.h"
 #include "skycal/render/preset.h"
 #include "test_presets.h"
 #include "test_util.h"
@@ -227,6 +228,24 @@ TEST(ExrIo, ExtraPlanesRoundTrip) {
   EXPECT_THROW(ReadExrChannel(dir / "p.exr", "mask.cloud", &w, &h), Error);
   EXPECT_THROW(WriteExrRGBWithPlanes(dir / "q.exr", img, {{"R", mask.values}}, {}), Error);
   EXPECT_EQ(dir.CountEntries(), 1);
+}
+
+// FIPS 180-2 appendix B test vectors (one block, empty, two blocks, a million 'a'), and a
+// file hashed the same as its bytes.
+TEST(Sha256, FipsVectorsAndFiles) {
+  EXPECT_EQ(Sha256Hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256Hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(Sha256Hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(Sha256Hex(std::string(1000000, 'a')), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  ScratchDir dir("sha256");
+  const std::string bytes("binary\0bytes\xff", 14);
+  {
+    std::ofstream f(dir / "b.bin", std::ios::binary);
+    f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  EXPECT_EQ(Sha256OfFile(dir / "b.bin"), Sha256Hex(bytes));
+  EXPECT_THROW(Sha256OfFile(dir / "missing.bin"), Error);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// SHA-256 (FIPS 180-4) of a file's bytes, as lowercase hex: the content hash recorded in
-// provenance so a preset names exactly which references it was fitted to.
+// SHA-256 (FIPS 180-4; computed by nettle) of bytes or a file, as 64 lowercase hex digits:
+// the content hash recorded in provenance so a preset names exactly which references it was
+// fitted to.
 #pragma once
 #include <string>
 
