@@ -164,7 +164,7 @@ RenderOptions ParseRenderArgs(int argc, char** argv) {
   cl.Number("--sun-elevation", &o.sun_elevation_deg, "DEG", "sun elevation above the horizon, degrees in [-90, 90]");
   cl.Number("--sun-azimuth", &o.sun_azimuth_deg, "DEG", "sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)");
   cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "alternative: vector toward the sun (+Y up), normalised");
-  cl.Text("--size", &size, "WxH", "image size in pixels (default 1024x512; lat-long wants W = 2H)");
+  cl.Text("--size", &size, "WxH", "image size in pixels, a 2:1 lat-long (W = 2H), at most 32768x16384 (default 1024x512)");
   cl.Text("--backend", &backend, "NAME", "vulkan (default; the game's compute shaders) or cpu (double reference)");
   cl.Text("--ground", &ground, "lit|zero", "below the horizon: albedo-lit constant ground (default) or black");
   cl.Flag("--no-sun-disc", &no_sun_disc, "leave the sun disc out");
