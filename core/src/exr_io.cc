@@ -52,6 +52,31 @@ ExrAttributes CollectAttributes(const Imf::Header& header) {
   return a;
 }
 
+// Holds OpenEXR's own header checks to the readers' limits (exr_io.h), once per process,
+// so a header's claims are refused before OpenEXR allocates its line-offset table or tile
+// buffers from them.
+void LimitOpenExrAllocations() {
+  static const bool once = [] {
+    Imf::Header::setMaxImageSize(kMaxExrSide, kMaxExrSide);
+    Imf::Header::setMaxTileSize(kMaxExrTileSide, kMaxExrTileSide);
+    return true;
+  }();
+  (void)once;
+}
+
+// The data window's width and height; throws skycal::Error naming the file and the size
+// when it is empty or beyond the limits, before the caller allocates anything for it.
+void CheckedSize(const std::string& path, const Imath::Box2i& dw, int* w, int* h) {
+  const long long wl = static_cast<long long>(dw.max.x) - dw.min.x + 1, hl = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+  if (wl <= 0 || hl <= 0) throw Error(path + ": empty data window");
+  if (wl > kMaxExrSide || hl > kMaxExrSide || wl * hl > kMaxExrPixels) {
+    throw Error(path + ": image is " + std::to_string(wl) + "x" + std::to_string(hl) + " pixels, more than skycal reads (" +
+                std::to_string(kMaxExrPixels) + " pixels, at most " + std::to_string(kMaxExrSide) + " a side)");
+  }
+  *w = static_cast<int>(wl);
+  *h = static_cast<int>(hl);
+}
+
 }  // namespace
 
 ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
@@ -114,10 +139,12 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
 std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  LimitOpenExrAllocations();
   try {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i dw = file.header().dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    int w = 0, h = 0;
+    CheckedSize(path, dw, &w, &h);
     if (!file.header().channels().findChannel(channel)) throw Error(path + ": channel '" + channel + "' missing");
     std::vector<float> v(static_cast<size_t>(w) * h);
     Imf::FrameBuffer fb;
@@ -142,12 +169,13 @@ ExrRGB ReadExrRGB(const std::string& path) {
     throw Error(path + ": no such file (expected an OpenEXR image)");
   }
   ExrRGB result;
+  LimitOpenExrAllocations();
   try {
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
     const Imath::Box2i dw = header.dataWindow();
-    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
-    if (w <= 0 || h <= 0) throw Error(path + ": empty data window");
+    int w = 0, h = 0;
+    CheckedSize(path, dw, &w, &h);
     for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
       result.channels.push_back(it.name());
     }
