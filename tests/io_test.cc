@@ -141,6 +141,27 @@ TEST(ExrIo, HeaderClaimingAHugeImageIsRefusedBeforeAllocating) {
   EXPECT_EQ(ReadExrRGB(dir / "strip.exr").image.width, kMaxExrSide);
 }
 
+TEST(ExrIo, AttributeClaimingMoreBytesThanTheFileIsRefused) {
+  // An attribute of a type OpenEXR does not know, claiming 1.6 GB: OpenEXR would allocate
+  // that before finding the file too short (fuzz/exr_frame_fuzzer).
+  ScratchDir dir("attrexr");
+  WriteExrRGB(dir / "small.exr", Gradient(8, 4), {});
+  std::ifstream in(dir / "small.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const char claim[] = {'j', 'u', 'n', 'k', 0, 'b', 'l', 'o', 'b', 0, 0x00, 0x00, 0x68, 0x61};  // 0x61680000 bytes
+  bytes.insert(8, claim, sizeof(claim));
+  std::ofstream(dir / "claim.exr", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  try {
+    ReadExrRGB(dir / "claim.exr");
+    FAIL() << "a header attribute longer than the file was read";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("claim.exr"), std::string::npos) << m;
+    EXPECT_NE(m.find("attribute 'junk' claims 1634205696 bytes"), std::string::npos) << m;
+  }
+  EXPECT_EQ(ReadExrRGB(dir / "small.exr").image.width, 8);  // an intact header passes
+}
+
 TEST(ExrIo, UnwritableOutputLeavesNothing) {
   ScratchDir dir("unwritable");
   EXPECT_THROW(WriteExrRGB(dir / "no/such/dir/x.exr", Gradient(8, 4), {}), Error);
