@@ -224,6 +224,9 @@ TEST(PresetIo, BadPresetsNameTheField) {
   ExpectPresetError([](auto& j) { j["luts"]["mie"] = "missing.exr"; }, "missing.exr");
   ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 12; }, "expected 32 x 12");
   ExpectPresetError([](auto& j) { j.erase("luts"); }, "luts");
+  // Grid sizes outside int's range: rejected before the (otherwise undefined) conversion.
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 1e300; }, "luts.grid");
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_gamma"] = -1e300; }, "luts.grid");
 }
 
 TEST(PresetIo, NanTexelAndCorruptJsonAreRejected) {

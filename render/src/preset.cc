@@ -227,13 +227,17 @@ Preset LoadPreset(const std::string& path) {
   const json& luts = Require(j, "luts", path, "");
   const json& grid = Require(luts, "grid", path, "luts.");
   LutGrid g;
-  g.n_theta = static_cast<int>(RequireNumber(Require(grid, "n_theta", path, "luts.grid."), path, "luts.grid.n_theta"));
-  g.n_gamma = static_cast<int>(RequireNumber(Require(grid, "n_gamma", path, "luts.grid."), path, "luts.grid.n_gamma"));
+  // The sizes are range-checked as doubles, before the cast: converting a double outside
+  // int's range is undefined (UBSan, fuzz/preset_fuzzer: "n_theta": 1e300).
+  const double n_theta = RequireNumber(Require(grid, "n_theta", path, "luts.grid."), path, "luts.grid.n_theta");
+  const double n_gamma = RequireNumber(Require(grid, "n_gamma", path, "luts.grid."), path, "luts.grid.n_gamma");
   g.theta_max_deg = RequireNumber(Require(grid, "theta_max_deg", path, "luts.grid."), path, "luts.grid.theta_max_deg");
-  if (g.n_theta < 2 || g.n_gamma < 2 || g.n_theta > kMaxLutRows || g.n_gamma > kMaxLutColumns) {
+  if (!(n_theta >= 2 && n_gamma >= 2 && n_theta < kMaxLutRows + 1 && n_gamma < kMaxLutColumns + 1)) {
     throw Error(Field(path, "luts.grid") + ": expected 2.." + std::to_string(kMaxLutRows) + " rows and 2.." +
                 std::to_string(kMaxLutColumns) + " columns");
   }
+  g.n_theta = static_cast<int>(n_theta);
+  g.n_gamma = static_cast<int>(n_gamma);
   p.luts.Resize(g);
   const fs::path dir = fs::path(path).parent_path();
   auto lut_path = [&](const char* key) {
