@@ -59,6 +59,23 @@ ExrAttributes CollectAttributes(const Imf::Header& header) {
 // up to 2 GiB (fuzz/exr_frame_fuzzer: 1.6 GB, 38 s per file under ASan). This walks the
 // header(s) first and refuses an attribute that claims more bytes than the file has left.
 // Anything else odd (bad magic, unterminated names) is left to OpenEXR's own message.
+// A chlist value: entries (name, 0, 16 bytes of type and sampling) up to an empty name,
+// all within `size` bytes.
+bool ChannelListFits(std::ifstream& f, int32_t size) {
+  long long used = 0;
+  for (;;) {
+    long long name_length = 0;
+    char c = 0;
+    while (used + name_length < size && f.get(c) && c != 0) ++name_length;
+    if (!f || c != 0 || used + name_length >= size) return false;
+    used += name_length + 1;
+    if (name_length == 0) return used == size;
+    if (used + 16 > size) return false;
+    f.seekg(16, std::ios::cur);
+    used += 16;
+  }
+}
+
 void CheckAttributeSizes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   f.seekg(0, std::ios::end);
@@ -89,7 +106,23 @@ void CheckAttributeSizes(const std::string& path) {
         throw Error(path + ": damaged OpenEXR header: attribute '" + name + "' claims " + std::to_string(size) +
                     " bytes, the file has " + std::to_string(left) + " left");
       }
-      f.seekg(size, std::ios::cur);
+      const std::streampos value_start = f.tellg();
+      // OpenEXR parses these two types by their own contents, not the declared size, and
+      // reads on past it when they disagree (fuzz/exr_frame_fuzzer: a chlist running past
+      // its 51 bytes led OpenEXR to a 2 GB allocation), so their contents must fit it.
+      if (type == "chlist" && !ChannelListFits(f, size)) {
+        throw Error(path + ": damaged OpenEXR header: channel list '" + name + "' overruns its " + std::to_string(size) + " bytes");
+      }
+      if (type == "preview") {
+        unsigned char wh[8];
+        const bool ok = size >= 8 && f.read(reinterpret_cast<char*>(wh), 8);
+        const auto le = [&](int at) { return static_cast<uint32_t>(wh[at] | wh[at + 1] << 8 | wh[at + 2] << 16) | static_cast<uint32_t>(wh[at + 3]) << 24; };
+        if (!ok || 8 + 4ull * le(0) * le(4) != static_cast<unsigned long long>(size)) {
+          throw Error(path + ": damaged OpenEXR header: preview '" + name + "' does not match its " + std::to_string(size) + " bytes");
+        }
+      }
+      f.clear();
+      f.seekg(value_start + static_cast<std::streamoff>(size));
       ++attributes;
     }
     if (!f || !multipart || attributes == 0) return;
