@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "command_line.h"
+#include "export_sun.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -32,42 +33,6 @@ constexpr int kShWidth = 256, kShHeight = 128;
 constexpr int kFogWidth = 64, kFogHeight = 32;
 
 double Rec709Luminance(const render::Rgb& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
-
-struct SunSource {
-  bool known = false;
-  render::Dir3 dir{};
-  std::string source, reason;
-};
-
-// The sun direction the preset was fitted at, from its provenance (fit_verb.cc).
-SunSource SunFromProvenance(const std::string& path) {
-  SunSource s;
-  const nlohmann::json j = ReadJsonFile(path);
-  if (!j.contains("provenance")) {
-    s.reason = "no provenance in " + path + " (not written by skycal fit): sun direction unknown";
-    return s;
-  }
-  const nlohmann::json& pv = j["provenance"];
-  if (!pv.is_object() || !pv.contains("final_errors") || !pv["final_errors"].is_array() || pv["final_errors"].empty()) {
-    s.reason = "provenance in " + path + " has no final_errors: sun direction unknown";
-    return s;
-  }
-  const nlohmann::json& d = pv["final_errors"][0].value("sun_direction", nlohmann::json());
-  if (!d.is_array() || d.size() != 3 || !d[0].is_number() || !d[1].is_number() || !d[2].is_number()) {
-    s.reason = "provenance.final_errors[0].sun_direction in " + path + " is missing or not 3 numbers";
-    return s;
-  }
-  try {
-    s.dir = latlong::Normalized({d[0].get<double>(), d[1].get<double>(), d[2].get<double>()}, "sun direction");
-  } catch (const Error& e) {
-    s.reason = path + ": provenance.final_errors[0].sun_direction: " + e.what();
-    return s;
-  }
-  s.known = true;
-  s.source = "provenance.final_errors[0].sun_direction";
-  if (pv["final_errors"].size() > 1) s.source += " (first of " + std::to_string(pv["final_errors"].size()) + " references)";
-  return s;
-}
 
 // Solid-angle-weighted mean radiance of the upper hemisphere (pixel direction y > 0).
 render::Rgb UpperHemisphereMean(const ImageRGB& sky) {

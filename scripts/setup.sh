@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs skycal's build dependencies (Debian 12, as root; apt only when something is
 # missing, so re-running is fast), then configures and builds into build/ (Release).
+# --deps-only: install, do not build (scripts/sanitize.sh and scripts/fuzz.sh build elsewhere).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -10,6 +11,9 @@ PACKAGES=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc glslang-tools spirv-tools
   nlohmann-json3-dev libgtest-dev libcli11-dev nettle-dev
   libexiv2-dev
+  # scripts/fuzz.sh: clang and its runtimes (libFuzzer, ASan, UBSan; not pulled in by
+  # clang under --no-install-recommends).
+  clang libclang-rt-14-dev
 )
 
 missing=()
@@ -26,5 +30,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}"
 fi
 
+[ "${1:-}" = "--deps-only" ] && exit 0
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build

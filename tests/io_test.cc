@@ -91,6 +91,80 @@ TEST(ExrIo, BadFilesGiveClearErrors) {
   EXPECT_THROW(capture::ReadLatLongFrame(dir / "square.exr"), Error);
 }
 
+// A valid 8x4 file whose header is patched to claim a width x height data window, with a
+// zeroed line-offset table long enough for OpenEXR to open it: a few KB that claim
+// gigabytes (fuzz/exr_frame_fuzzer found the readers allocating what such a header says).
+std::string FileClaimingSize(const ScratchDir& dir, int width, int height) {
+  WriteExrRGB(dir / "small.exr", Gradient(8, 4), {});
+  std::ifstream in(dir / "small.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string key("dataWindow\0box2i\0", 17);
+  const size_t at = bytes.find(key);
+  EXPECT_NE(at, std::string::npos);
+  const int32_t box[4] = {0, 0, width - 1, height - 1};
+  bytes.replace(at + key.size() + 4, sizeof(box), reinterpret_cast<const char*>(box), sizeof(box));
+  bytes.append(8 * (static_cast<size_t>(height) / 16 + 1), '\0');  // ZIP: 16 lines per offset
+  const std::string path = dir / (std::to_string(width) + "x" + std::to_string(height) + ".exr");
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return path;
+}
+
+TEST(ExrIo, HeaderClaimingAHugeImageIsRefusedBeforeAllocating) {
+  ScratchDir dir("hugeexr");
+  // Sides within OpenEXR's 32768 but taller than skycal's 16384 (20000 x 20000 = 400
+  // Mpixels, 4.8 GB of RGB floats): our check (image.h).
+  const std::string many = FileClaimingSize(dir, 20000, 20000);
+  for (int reader = 0; reader < 2; ++reader) {
+    try {
+      if (reader == 0) {
+        ReadExrRGB(many);
+      } else {
+        int w = 0, h = 0;
+        ReadExrChannel(many, "R", &w, &h);
+      }
+      FAIL() << "a 20000x20000 header was read";
+    } catch (const Error& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(many), std::string::npos) << m;
+      EXPECT_NE(m.find("20000 x 20000 pixels is larger than skycal's limit"), std::string::npos) << m;
+    }
+  }
+  // A side beyond 32768: OpenEXR's own header check (set by the readers) refuses it before
+  // it allocates its line-offset table.
+  const std::string wide = FileClaimingSize(dir, 1 << 20, 64);
+  try {
+    ReadExrRGB(wide);
+    FAIL() << "a 1048576-wide header was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(wide), std::string::npos) << e.what();
+  }
+  // The widest accepted image still reads (the limit is not off by one): 32768 x 2.
+  ImageRGB strip(kMaxExrSide, 2);
+  WriteExrRGB(dir / "strip.exr", strip, {});
+  EXPECT_EQ(ReadExrRGB(dir / "strip.exr").image.width, kMaxExrSide);
+}
+
+TEST(ExrIo, AttributeClaimingMoreBytesThanTheFileIsRefused) {
+  // An attribute of a type OpenEXR does not know, claiming 1.6 GB: OpenEXR would allocate
+  // that before finding the file too short (fuzz/exr_frame_fuzzer).
+  ScratchDir dir("attrexr");
+  WriteExrRGB(dir / "small.exr", Gradient(8, 4), {});
+  std::ifstream in(dir / "small.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const char claim[] = {'j', 'u', 'n', 'k', 0, 'b', 'l', 'o', 'b', 0, 0x00, 0x00, 0x68, 0x61};  // 0x61680000 bytes
+  bytes.insert(8, claim, sizeof(claim));
+  std::ofstream(dir / "claim.exr", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  try {
+    ReadExrRGB(dir / "claim.exr");
+    FAIL() << "a header attribute longer than the file was read";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("claim.exr"), std::string::npos) << m;
+    EXPECT_NE(m.find("attribute 'junk' claims 1634205696 bytes"), std::string::npos) << m;
+  }
+  EXPECT_EQ(ReadExrRGB(dir / "small.exr").image.width, 8);  // an intact header passes
+}
+
 TEST(ExrIo, UnwritableOutputLeavesNothing) {
   ScratchDir dir("unwritable");
   EXPECT_THROW(WriteExrRGB(dir / "no/such/dir/x.exr", Gradient(8, 4), {}), Error);
@@ -169,6 +243,9 @@ TEST(PresetIo, BadPresetsNameTheField) {
   ExpectPresetError([](auto& j) { j.erase("format_version"); }, "field 'format_version' is missing");
   ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 1e300; }, "expected an integer in [2, ");
   ExpectPresetError([](auto& j) { j["parameters"]["sun_illuminance"]["value"] = 1e300; }, "1e+300 is out of range");
+  // Grid sizes outside int's range: rejected before the (otherwise undefined) conversion.
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_theta"] = 1e300; }, "luts.grid");
+  ExpectPresetError([](auto& j) { j["luts"]["grid"]["n_gamma"] = -1e300; }, "luts.grid");
 }
 
 TEST(JsonSchema, NearestNameFindsTyposNotStrangers) {

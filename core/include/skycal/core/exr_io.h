@@ -22,6 +22,20 @@ struct ExrAttributes {
 
 enum class ExrPixelType { kFloat, kHalf };
 
+// The largest image the readers accept is image.h's limit (32768 x 16384, a 32K lat-long),
+// checked against the header's data window before any pixel is allocated: a damaged
+// header can claim 2^31 x 2^31 pixels, and allocating what it claimed turned a 2.5 KB file
+// into a 16 GiB allocation (found by fuzz/exr_frame_fuzzer). OpenEXR itself is held to
+// 32768 a side and to tiles of at most 8192 x 8192, so its line-offset table and tile
+// buffers are bounded too. The fuzz build lowers the pixel count (SKYCAL_EXR_MAX_PIXELS)
+// so that headers near the limit stay cheap to try; the check is the same code.
+#ifndef SKYCAL_EXR_MAX_PIXELS
+#define SKYCAL_EXR_MAX_PIXELS (32768LL * 16384LL)
+#endif
+inline constexpr int kMaxExrSide = 32768;
+inline constexpr long long kMaxExrPixels = SKYCAL_EXR_MAX_PIXELS;
+inline constexpr int kMaxExrTileSide = 8192;
+
 // Writes R, G, B channels atomically (temp file + rename). Throws skycal::Error naming the
 // file on failure; no partial file is left. Half output turns finite values above 65504
 // into +inf, so callers that write half choose a pre-exposure first; the report counts
@@ -40,7 +54,7 @@ struct ExrRGB {
 };
 // Reads the R, G, B channels (as float) and the attributes. Throws skycal::Error naming
 // the file and what is wrong: unreadable/truncated file, missing R/G/B channel, empty
-// data window.
+// data window, an image larger than the limits above (the message gives its size).
 ExrRGB ReadExrRGB(const std::string& path);
 
 // Extra single-channel float planes (e.g. masks) written after R, G, B, each
@@ -52,7 +66,7 @@ struct ExrPlane {
 ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& image, const std::vector<ExrPlane>& planes,
                                      const ExrAttributes& attributes, ExrPixelType type = ExrPixelType::kFloat);
 // Reads one named channel as float (width * height values); throws skycal::Error naming the
-// file and the channel when it is missing.
+// file and the channel when it is missing; same size limits as ReadExrRGB.
 std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height);
 
 }  // namespace skycal
