@@ -129,7 +129,7 @@ TEST(ExrIo, HeaderClaimingAHugeImageIsRefusedBeforeAllocating) {
       EXPECT_NE(m.find("20000 x 20000 pixels is larger than skycal's limit"), std::string::npos) << m;
     }
   }
-  // A side beyond 32768: OpenEXR's own header check (set by the readers) refuses it before
+  // A side beyond 4 x 32768: OpenEXR's own header check (set by the readers) refuses it before
   // it allocates its line-offset table.
   const std::string wide = FileClaimingSize(dir, 1 << 20, 64);
   try {

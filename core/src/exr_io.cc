@@ -166,7 +166,10 @@ void CheckAttributeSizes(const std::string& path) {
 // buffers from them.
 void LimitOpenExrAllocations() {
   static const bool once = [] {
-    Imf::Header::setMaxImageSize(kMaxExrSide, kMaxExrSide);
+    // 4x our own side limit: a header between the two gets skycal's message (with its
+    // size, CheckImageSize), one beyond is refused by OpenEXR before its line-offset
+    // table (8 bytes per scanline block: <= 1 MiB here) is allocated.
+    Imf::Header::setMaxImageSize(4 * kMaxExrSide, 4 * kMaxExrSide);
     Imf::Header::setMaxTileSize(kMaxExrTileSide, kMaxExrTileSide);
     return true;
   }();
