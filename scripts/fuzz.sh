@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line)
 
 bash scripts/setup.sh --deps-only
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -35,7 +35,8 @@ options_for() {
     probe_samples) echo "-max_len=8192 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/json.dict" ;;
     json_file)     echo "-max_len=8192 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/json.dict" ;;
     exr_frame)     echo "-max_len=65536 -rss_limit_mb=2048 -timeout=60 -dict=fuzz/exr.dict" ;;
-    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame)" >&2; return 1 ;;
+    command_line)  echo "-max_len=4096 -rss_limit_mb=2048 -timeout=20" ;;
+    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame command_line)" >&2; return 1 ;;
   esac
 }
 

@@ -165,6 +165,28 @@ TEST(ExrIo, AttributeClaimingMoreBytesThanTheFileIsRefused) {
   EXPECT_EQ(ReadExrRGB(dir / "small.exr").image.width, 8);  // an intact header passes
 }
 
+TEST(ExrIo, AFixedSizeAttributeWithAnotherDeclaredSizeIsRefused) {
+  // OpenEXR reads a box2i as 16 bytes whatever size the header declares, and parses the
+  // rest of the header shifted (fuzz/exr_frame_fuzzer: a 465-byte file, 2 GB allocated).
+  ScratchDir dir("fixedexr");
+  WriteExrRGB(dir / "small.exr", Gradient(8, 4), {});
+  std::ifstream in(dir / "small.exr", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string tag = std::string("dataWindow") + '\0' + "box2i" + '\0';
+  const size_t at = bytes.find(tag);
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + tag.size()] = 3;  // the declared size (little-endian int32): 16 -> 3
+  std::ofstream(dir / "shifted.exr", std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  try {
+    ReadExrRGB(dir / "shifted.exr");
+    FAIL() << "a box2i declaring 3 bytes was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("attribute 'dataWindow' (box2i) declares 3 bytes, its type has 16"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ExrIo, UnwritableOutputLeavesNothing) {
   ScratchDir dir("unwritable");
   EXPECT_THROW(WriteExrRGB(dir / "no/such/dir/x.exr", Gradient(8, 4), {}), Error);

@@ -108,6 +108,19 @@ bool ChannelListFits(std::ifstream& f, int32_t size) {
   }
 }
 
+// Byte sizes of OpenEXR's fixed-size attribute types (the OpenEXR file layout
+// documentation's attribute table); 0 for variable-size or unknown types.
+int FixedAttributeSize(const std::string& type) {
+  static const std::map<std::string, int> sizes = {
+      {"box2i", 16},   {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8},
+      {"envmap", 1},   {"float", 4},  {"int", 4},             {"keycode", 28},    {"lineOrder", 1},
+      {"m33f", 36},    {"m33d", 72},  {"m44f", 64},           {"m44d", 128},      {"rational", 8},
+      {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8},           {"v2f", 8},         {"v2d", 16},
+      {"v3i", 12},     {"v3f", 12},   {"v3d", 24},            {"deepImageState", 1}};
+  const auto it = sizes.find(type);
+  return it == sizes.end() ? 0 : it->second;
+}
+
 void CheckAttributeSizes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   f.seekg(0, std::ios::end);
@@ -139,6 +152,13 @@ void CheckAttributeSizes(const std::string& path) {
                     " bytes, the file has " + std::to_string(left) + " left");
       }
       const std::streampos value_start = f.tellg();
+      // Fixed-size types are read by OpenEXR at their own size whatever the declared size
+      // says, so a mismatch shifts the parse of everything after it (fuzz/exr_frame_fuzzer:
+      // a 465-byte file with a 3-byte box2i made OpenEXR allocate ~2 GB).
+      if (const int fixed = FixedAttributeSize(type); fixed > 0 && fixed != size) {
+        throw Error(path + ": damaged OpenEXR header: attribute '" + name + "' (" + type + ") declares " +
+                    std::to_string(size) + " bytes, its type has " + std::to_string(fixed));
+      }
       // OpenEXR parses these two types by their own contents, not the declared size, and
       // reads on past it when they disagree (fuzz/exr_frame_fuzzer: a chlist running past
       // its 51 bytes led OpenEXR to a 2 GB allocation), so their contents must fit it.
