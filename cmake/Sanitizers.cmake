@@ -22,6 +22,16 @@ if(SKYCAL_SANITIZE)
   endif()
   add_compile_options(${_skycal_san_flags})
   add_link_options(${_skycal_san_flags})
+  # Eigen (Memory.h) stops trusting glibc's 16-byte-aligned malloc when __SANITIZE_ADDRESS__
+  # is defined and switches to its hand-made aligned allocation, which keeps the original
+  # pointer just before each block. The prebuilt libceres (no ASan) allocates with plain
+  # malloc, so a matrix it allocates and our instrumented code frees (e.g. the members of
+  # ceres::GradientChecker::ProbeResults) was freed as if hand-made: ASan reported a
+  # heap-buffer-overflow read 8 bytes before the block. Tell Eigen what is true on glibc
+  # x86-64 (and of ASan's allocator): malloc is 16-byte aligned, as libceres assumes.
+  if(SKYCAL_SANITIZE MATCHES "address")
+    add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
+  endif()
   message(STATUS "skycal: sanitizers ${SKYCAL_SANITIZE} on skycal's own targets")
 endif()
 

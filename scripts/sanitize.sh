@@ -20,11 +20,5 @@ gcc -shared -fPIC -O1 -o build-asan/keep_icd_loaded.so scripts/sanitizers/keep_i
 
 source scripts/sanitizers/options.sh
 
-# Left out under the sanitizers (each listed in README.md "Sanitizers"):
-# - FitCost/ProbeCost.JacobiansMatchNumericDifferences: ASan reports a heap-buffer-overflow
-#   READ in ceres::GradientChecker::ProbeResults' destructor (our inline copy of a struct
-#   whose Eigen members libceres allocated): an Eigen allocation mismatch between the
-#   prebuilt libceres and our translation unit, under investigation (bench/results/fuzz.md).
-excluded='^(FitCost\.JacobiansMatchNumericDifferences|ProbeCost\.JacobiansMatchNumericDifferences)$'
 cd build-asan
-ctest --output-on-failure -j2 --timeout 1800 -E "$excluded" "$@"
+ctest --output-on-failure -j2 --timeout 1800 "$@"
