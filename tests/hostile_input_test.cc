@@ -58,6 +58,23 @@ TEST(HostileInput, AbsurdPhysicalParametersAreRefused) {
   ExpectRefused("render --sun-elevation 10 --sun-azimuth 0 --size 100x100 --out " + (dir / "sq.exr"), {"2:1"}, dir);
 }
 
+// The issue's example through the binary: a misspelt preset key used to be ignored (its
+// default used, exit 0); now the run fails naming the key and the nearest valid one.
+TEST(HostileInput, AMisspeltPresetKeyFailsTheRun) {
+  ScratchDir dir("hostile-preset");
+  ASSERT_EQ(Skycal("bake --out " + (dir / "p.json")).rc, 0);
+  std::string text = testing::Slurp(dir / "p.json");
+  const size_t at = text.find("\"haziness_g\"");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 12, "\"haziness\"");
+  std::ofstream(dir / "typo.json") << text;
+  ExpectRefused("render --sun-elevation 10 --sun-azimuth 0 --preset " + (dir / "typo.json") + " --out " + (dir / "o.exr"),
+                {"typo.json", "field 'parameters.haziness': unknown key (did you mean 'haziness_g'?"}, dir);
+  std::ofstream(dir / "rig.json") << R"({"cameras": [{"image": "sky.exr"}]})";
+  ExpectRefused("capture --rig " + (dir / "rig.json") + " --out " + (dir / "c.exr"),
+                {"rig.json", "field 'format_version' is missing"}, dir);
+}
+
 // Replaces the dataWindow box of a small scanline EXR with one of 65536 x 32768: the
 // reader must refuse from the header, before allocating 25 GB.
 TEST(HostileInput, AnImageSizeBeyondTheLimitIsRefusedFromTheHeader) {
