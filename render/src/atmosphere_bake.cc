@@ -30,18 +30,15 @@
 #include <vector>
 
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 
 namespace skycal::render {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::string Num(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
+// Numbers in messages: %g (core/format_number.h).
+std::string Num(double v) { return FormatNumber(v); }
 
 // Density-weighted path lengths (m) of the three constituents: multiplied by the
 // coefficients at density 1 they give optical depths.
