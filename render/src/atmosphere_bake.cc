@@ -25,7 +25,6 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <thread>
 #include <vector>
 
