@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <thread>
 #include <vector>
 
@@ -40,20 +39,22 @@ constexpr int kDetailWorleyCells[] = {2, 4, 8, 16};
 // so the finite differences below are close to the derivatives.
 constexpr int kCurlCells = 4, kCurlOctaves = 3;
 
-// Perlin fBm spans about [-0.6, 0.6] in practice (its octaves rarely align); 0.5 + 0.8 n
-// maps that onto about [0, 1] before the explicit clamp.
-constexpr float kPerlinGain = 0.8f;
-
-// Runs slice(z) for every z in [0, n) on 2 threads (the machine has 2 cores). Each texel
-// depends only on its coordinates, so the result is the same for any thread count.
-void ForEachSlice(int n, const std::function<void(int)>& slice) {
+// An n^3 volume of `channels` channels; texel(x, y, z, t) writes texel (x, y, z)'s
+// channels to t. Runs on 2 threads (the machine has 2 cores), interleaved z slices; each
+// texel depends only on its coordinates, so the result is the same for any thread count.
+template <typename TexelFn>
+std::vector<float> FillVolume(int n, int channels, const TexelFn& texel) {
+  std::vector<float> out(static_cast<size_t>(n) * n * n * channels);
   constexpr int kThreads = 2;
   std::vector<std::thread> threads;
   for (int t = 0; t < kThreads; ++t)
     threads.emplace_back([&, t] {
-      for (int z = t; z < n; z += kThreads) slice(z);
+      for (int z = t; z < n; z += kThreads)
+        for (int y = 0; y < n; ++y)
+          for (int x = 0; x < n; ++x) texel(x, y, z, &out[((static_cast<size_t>(z) * n + y) * n + x) * channels]);
     });
   for (auto& th : threads) th.join();
+  return out;
 }
 
 std::vector<WorleyGrid> MakeGrids(const int* cells, int count, uint64_t seed, uint32_t salt) {
@@ -73,50 +74,31 @@ void WorleyOctaves(const std::vector<WorleyGrid>& grids, int x, int y, int z, in
   }
 }
 
-// Perlin-Worley (the talk: Worley fBm "used as an offset to dilate Perlin noise"): Perlin
-// in [0, 1] remapped from [0, 1] onto [worley, 1], i.e. worley + perlin * (1 - worley).
-// It keeps Perlin's connected shapes and swells them into billows where the Worley is high.
-float PerlinWorley(float perlin01, float worley) { return std::clamp(worley + perlin01 * (1.0f - worley), 0.0f, 1.0f); }
-
 std::vector<float> GenerateBase(uint64_t seed) {
-  constexpr int n = CloudNoise::kBaseSize;
+  constexpr int n = CloudNoise::kBaseSize, c = kBasePerlinCells;
   const auto grids = MakeGrids(kBaseWorleyCells, 5, seed, kSaltBaseWorley);
-  std::vector<float> out(static_cast<size_t>(n) * n * n * 4);
-  ForEachSlice(n, [&](int z) {
+  return FillVolume(n, 4, [&](int x, int y, int z, float* t) {
     float w[5];
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        WorleyOctaves(grids, x, y, z, n, w);
-        constexpr int c = kBasePerlinCells;
-        const float perlin = noise::PeriodicPerlinFbm(Cell(x, n, c), Cell(y, n, c), Cell(z, n, c), c,
-                                                      kBasePerlinOctaves, seed, kSaltBasePerlin);
-        const float perlin01 = std::clamp(0.5f + kPerlinGain * perlin, 0.0f, 1.0f);
-        float* t = &out[((static_cast<size_t>(z) * n + y) * n + x) * 4];
-        t[1] = noise::WorleyFbm(w + 0, 3);
-        t[2] = noise::WorleyFbm(w + 1, 3);
-        t[3] = noise::WorleyFbm(w + 2, 3);
-        t[0] = PerlinWorley(perlin01, t[1]);
-      }
+    WorleyOctaves(grids, x, y, z, n, w);
+    const float perlin = noise::PeriodicPerlinFbm(Cell(x, n, c), Cell(y, n, c), Cell(z, n, c), c,
+                                                  kBasePerlinOctaves, seed, kSaltBasePerlin);
+    t[1] = noise::WorleyFbm(w + 0, 3);  // 4, 8, 16 cells
+    t[2] = noise::WorleyFbm(w + 1, 3);  // 8, 16, 32
+    t[3] = noise::WorleyFbm(w + 2, 3);  // 16, 32, 64
+    t[0] = noise::PerlinWorley(noise::PerlinTo01(perlin), t[1]);
   });
-  return out;
 }
 
 std::vector<float> GenerateDetail(uint64_t seed) {
   constexpr int n = CloudNoise::kDetailSize;
   const auto grids = MakeGrids(kDetailWorleyCells, 4, seed, kSaltDetailWorley);
-  std::vector<float> out(static_cast<size_t>(n) * n * n * 3);
-  ForEachSlice(n, [&](int z) {
+  return FillVolume(n, 3, [&](int x, int y, int z, float* t) {
     float w[4];
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        WorleyOctaves(grids, x, y, z, n, w);
-        float* t = &out[((static_cast<size_t>(z) * n + y) * n + x) * 3];
-        t[0] = noise::WorleyFbm(w + 0, 3);  // 2, 4, 8 cells
-        t[1] = noise::WorleyFbm(w + 1, 3);  // 4, 8, 16
-        t[2] = noise::WorleyFbm(w + 2, 2);  // 8, 16 (32 would be 1 texel a cell)
-      }
+    WorleyOctaves(grids, x, y, z, n, w);
+    t[0] = noise::WorleyFbm(w + 0, 3);  // 2, 4, 8 cells
+    t[1] = noise::WorleyFbm(w + 1, 3);  // 4, 8, 16
+    t[2] = noise::WorleyFbm(w + 2, 2);  // 8, 16 (32 would be 1 texel a cell)
   });
-  return out;
 }
 
 // A tileable n^2 grid of Perlin fBm (a potential), sampled at texel centres.

@@ -140,4 +140,10 @@ float WorleyFbm(const float* values, int count) {
   return std::clamp(sum / total, 0.0f, 1.0f);
 }
 
+float PerlinTo01(float perlin) { return std::clamp(0.5f + 0.8f * perlin, 0.0f, 1.0f); }
+
+float PerlinWorley(float perlin01, float worley) {
+  return std::clamp(worley + perlin01 * (1.0f - worley), 0.0f, 1.0f);
+}
+
 }  // namespace skycal::clouds::noise

@@ -54,6 +54,16 @@ class WorleyGrid {
 // used and their weights renormalised when fewer than 3 fit the texture.
 float WorleyFbm(const float* values, int count);
 
+// Perlin fBm (about [-0.6, 0.6] in practice: its octaves rarely align) mapped onto [0, 1]
+// by 0.5 + 0.8 n, then clamped.
+float PerlinTo01(float perlin);
+
+// Perlin-Worley (Schneider, "The Real-time Volumetric Cloudscapes of Horizon Zero Dawn":
+// Worley fBm "used as an offset to dilate Perlin noise"): Perlin in [0, 1] remapped from
+// [0, 1] onto [worley, 1], i.e. worley + perlin * (1 - worley), in [0, 1]. It keeps
+// Perlin's connected shapes and swells them into billows where the Worley is high.
+float PerlinWorley(float perlin01, float worley);
+
 // Wraps i into [0, n).
 inline int Wrap(int i, int n) {
   const int r = i % n;

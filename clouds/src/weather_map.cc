@@ -42,7 +42,7 @@ bool InRange(const char* name, double value, double lo, double hi, std::string* 
 }
 
 // Tileable noise in [0, 1] on a size^2 grid at texel centres; `billows` dilates Perlin fBm
-// by Worley fBm as the base volume's Perlin-Worley does (cloud_noise.cc).
+// by Worley fBm into Perlin-Worley, as the base volume's R channel (cloud_noise.cc).
 std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells, int octaves, bool billows) {
   int usable = 1;  // octaves finer than 2 texels a cell would alias
   while (usable < octaves && (cells << usable) * 2 <= size) ++usable;
@@ -53,12 +53,11 @@ std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells,
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) {
       const double u = (x + 0.5) * cells / size, v = (y + 0.5) * cells / size;
-      float value = std::clamp(0.5f + 0.8f * noise::PeriodicPerlinFbm(u, v, 0.5, cells, usable, seed, salt), 0.0f, 1.0f);
+      float value = noise::PerlinTo01(noise::PeriodicPerlinFbm(u, v, 0.5, cells, usable, seed, salt));
       if (billows) {
         float w[3];
         for (size_t k = 0; k < grids.size(); ++k) w[k] = grids[k].Inverted(u * (1 << k), v * (1 << k), 0.5);
-        const float worley = noise::WorleyFbm(w, static_cast<int>(grids.size()));
-        value = worley + value * (1.0f - worley);
+        value = noise::PerlinWorley(value, noise::WorleyFbm(w, static_cast<int>(grids.size())));
       }
       field[static_cast<size_t>(y) * size + x] = value;
     }
