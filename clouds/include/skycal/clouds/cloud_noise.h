@@ -33,7 +33,8 @@ std::string CloudNoiseSha256(const CloudNoise& noise);
 // sizes, seed and the payload's sha256 all match); otherwise generates, warns on stderr
 // in one line naming the file when a cache existed but was corrupt or truncated, and
 // writes the cache atomically. A cache directory that cannot be created or written is a
-// warning, never an error: rendering goes on with the generated noise.
+// warning, never an error: rendering goes on with the generated noise. An empty cache_dir
+// (no home directory known) generates without a cache.
 CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir);
 
 // $XDG_CACHE_HOME/skycal when XDG_CACHE_HOME is set and absolute (the XDG base-directory
