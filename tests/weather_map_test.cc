@@ -94,6 +94,16 @@ TEST(WeatherMap, NoiseMapIsDeterministicAndTiles) {
     }
 }
 
+TEST(WeatherMap, FineCellsOnALargeMapUseAPlanarWorleyTable) {
+  // 512 cells across a 1024-texel map: a cubic Worley table would be 512^3 points, 1.6 GB;
+  // the planar one is 3 MB. The map is valid and still has the requested mean.
+  WeatherNoiseOptions o;
+  o.coverage_cells = 512;
+  const WeatherMap m = NoiseWeatherMap(2, 1024, 50000.0, o);
+  EXPECT_EQ(m.width, 1024);
+  EXPECT_NEAR(ChannelMean(m, 0), o.mean_coverage, 1e-3);
+}
+
 TEST(WeatherMap, NoiseOptionsNameTheBadField) {
   auto invalid = [](WeatherNoiseOptions o, const std::string& field) {
     std::string why;

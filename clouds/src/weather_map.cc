@@ -48,7 +48,7 @@ std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells,
   while (usable < octaves && (cells << usable) * 2 <= size) ++usable;
   std::vector<noise::WorleyGrid> grids;
   if (billows)
-    for (int k = 0; k < std::min(usable, 3); ++k) grids.emplace_back(cells << k, seed, kSaltCoverageWorley + k);
+    for (int k = 0; k < std::min(usable, 3); ++k) grids.emplace_back(cells << k, seed, kSaltCoverageWorley + k, 1);  // planar: depth 1
   std::vector<float> field(static_cast<size_t>(size) * size);
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) {
