@@ -34,10 +34,11 @@ constexpr int kBaseWorleyCells[] = {4, 8, 16, 32, 64};
 // Detail volume: 2, 4, 8 cells base frequency; octaves above 16 cells (2 texels a cell in
 // 32^3) are dropped and the remaining weights renormalised (noise::WorleyFbm).
 constexpr int kDetailWorleyCells[] = {2, 4, 8, 16};
-// Curl: stream functions of Perlin fBm from 4 cells per tile over 3 octaves (to 16 cells,
-// 8 texels a cell): turbulence a few times finer than the base shape, smooth at texel scale
-// so the finite differences below are close to the derivatives.
-constexpr int kCurlCells = 4, kCurlOctaves = 3;
+// Curl: stream functions of Perlin fBm from 4 cells per tile over 2 octaves (to 8 cells,
+// 16 texels a cell): swirls smooth at texel scale, so the finite differences below are
+// close to the derivatives. A derivative weighs octave k by 2^k, undoing fBm's 1/2^k: a
+// third octave (tried) made the field as busy as its finest octave.
+constexpr int kCurlCells = 4, kCurlOctaves = 2;
 
 // An n^3 volume of `channels` channels; texel(x, y, z, t) writes texel (x, y, z)'s
 // channels to t. Runs on 2 threads (the machine has 2 cores), interleaved z slices; each
