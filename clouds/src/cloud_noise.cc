@@ -4,9 +4,10 @@
 // 128^2 RGB curl-noise texture. Every octave samples a whole number of lattice cells per
 // tile, so every texture tiles (noise_primitives.h).
 //
-// Measured (Release, 2 threads, this 2-core machine): 1.4 s of CPU for all three textures,
-// ~0.7 s wall when the cores are free (2.7 s at load average 7), nearly all of it the base
-// volume's 2M texels x (5 Worley + 5 Perlin octaves), about half each.
+// Measured (Release, 2 threads, this 2-core machine, median of 5): 1.4 s of CPU for all
+// three textures, so ~0.7 s wall on two free cores; the machine was never idle while this
+// was measured: 3.0 s wall at load average 11. Nearly all of it is the base volume's 2M
+// texels x (5 Worley + 5 Perlin octaves), about half each (perf).
 #include "skycal/clouds/cloud_noise.h"
 
 #include <algorithm>
