@@ -25,6 +25,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/fit/ceiling.h"
+#include "skycal/fit/fit_json.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
@@ -116,14 +117,14 @@ int main(int argc, char** argv) {
     const fit::Reference ref = fit::LoadReference(c.path, defaults);
     const Run run = TimeFit({ref}, defaults, *vulkan, kRepeats);
     const fit::CeilingResult ceiling = fit::ModelCeiling(ref, DefaultStart(), defaults);
-    const auto& ls = run.result.linear_start;
+    const fit::LinearStartSingleReport ls = run.result.linear_start.single.value_or(fit::LinearStartSingleReport{});
     const double err = run.result.references[0].errors.rel_rmse;
     times.push_back(run.timing.median_ms);
     ratios.push_back(err / std::max(ceiling.lut_rel_rmse, 1e-9));
-    search.push_back(1e3 * ls.value("search_time_s", 0.0));
-    robust.push_back(1e3 * ls.value("robust_time_s", 0.0));
-    final_s.push_back(1e3 * ls.value("final_time_s", 0.0));
-    check.push_back(1e3 * ls["render_check"].value("time_s", 0.0));
+    search.push_back(1e3 * ls.search_time_s);
+    robust.push_back(1e3 * ls.robust_time_s);
+    final_s.push_back(1e3 * ls.final_time_s);
+    check.push_back(1e3 * (ls.render_check ? ls.render_check->time_s : 0.0));
     per_ref.push_back({{"reference", c.name},
                        {"timing", run.timing.ToJson()},
                        {"rel_rmse", err},
@@ -131,7 +132,7 @@ int main(int argc, char** argv) {
                        {"ceiling_per_row", ceiling.per_row_rel_rmse},
                        {"within_1.2x_ceiling_plus_0.1pct", err <= 1.2 * ceiling.lut_rel_rmse + 1e-3},
                        {"haziness_g", run.result.preset.haziness_g},
-                       {"linear_start", ls}});
+                       {"linear_start", fit::ToJson(run.result.linear_start)}});
     std::cerr << "[bench fit] " << c.name << ": " << run.timing.median_ms << " ms, rel " << 100 * err << "%, ceiling "
               << 100 * ceiling.lut_rel_rmse << "%\n";
   }
@@ -207,8 +208,8 @@ int main(int argc, char** argv) {
                                           {"rel_rmse_max", worst},
                                           {"haziness_g", day.result.preset.haziness_g},
                                           {"truth_haziness_g", refsky::StandardAtmosphereVariants()[1].haziness_g},
-                                          {"levels", day.result.levels},
-                                          {"linear_start_time_s", day.result.linear_start.value("time_s", 0.0)},
+                                          {"levels", fit::FitSummaryJson(day.result)["levels"]},
+                                          {"linear_start_time_s", day.result.linear_start.time_s()},
                                           {"old_path", {{"timing", old_day.timing.ToJson()}, {"rel_rmse_max", old_worst},
                                                         {"haziness_g", old_day.result.preset.haziness_g}}}};
     std::cerr << "[bench fit] day: " << day.timing.median_ms << " ms, worst rel " << 100 * worst << "%\n";
