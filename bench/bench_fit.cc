@@ -8,7 +8,9 @@
 // measured saving: the Ceres polish (--polish forces it) and the coarse levels (the old
 // path).
 //
-// Writes bench/results/fit.json and fit.md (or into argv[1], a directory).
+// Writes bench/results/fit.json and fit.md (or into argv[1], a directory). With
+// --decisions [DIR]: only bench/results/fit_decisions.md + .json, each skip decision
+// switched off through FitOptions on a few skies (fit_decision_table.h).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,6 +23,7 @@
 #include <sstream>
 
 #include "bench_util.h"
+#include "fit_decision_table.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
@@ -66,10 +69,7 @@ std::vector<Case> WriteReferences(const std::filesystem::path& dir) {
   return cases;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using bench::Median;
 
 struct Run {
   fit::FitResult result;
@@ -98,9 +98,18 @@ double ProcessSeconds(const std::string& reference, const std::filesystem::path&
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::filesystem::path out_dir = argc > 1 ? argv[1] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
+  // --decisions [DIR]: only the per-decision table (bench/fit_decision_table.h).
+  const bool decisions_only = argc > 1 && std::string(argv[1]) == "--decisions";
+  const int dir_arg = decisions_only ? 2 : 1;
+  const std::filesystem::path out_dir =
+      argc > dir_arg ? argv[dir_arg] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
   const auto dir = std::filesystem::temp_directory_path() / ("skycal-bench-fit-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
+  if (decisions_only) {
+    bench::WriteDecisionTable(DefaultStart(), dir, out_dir);
+    std::filesystem::remove_all(dir);
+    return 0;
+  }
   auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
   fit::FitOptions defaults;

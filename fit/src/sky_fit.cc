@@ -14,6 +14,7 @@
 #include "linear_stage.h"
 #include "probe_terms.h"
 #include "pyramid.h"
+#include "sky_fit_terms.h"
 #include "sky_terms.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -165,6 +166,12 @@ ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit) {
 
 FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init, const FitOptions& o,
                  render::SkyRenderer& renderer, const std::vector<const ProbeSamples*>& probes) {
+  return FitSkyWithTerms(refs, init, o, renderer, probes, {});
+}
+
+FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Preset& init, const FitOptions& o,
+                          render::SkyRenderer& renderer, const std::vector<const ProbeSamples*>& probes,
+                          const std::vector<FitTerm*>& extra_terms) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   if (refs.empty()) throw Error("fit: no reference given");
@@ -181,6 +188,7 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   // once the linear start has set the loss scales.
   ProbeTerm probe(refs, probes, o, tied, init.ground_albedo);
   probe.ReportSkips(&result.skipped, &result.decisions);
+  for (const FitTerm* term : extra_terms) term->ReportSkips(&result.skipped, &result.decisions);
   const bool fit_overcast = PlanSharedBlocks(state, o, &result);
   const std::vector<bool> row_fitted = PlanRows(refs, &state, &result);
 
@@ -194,8 +202,9 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   // robust optimum of the linear structure; the Ceres levels then run only where needed.
   LinearStageOutcome linear;
   if (o.linear_start) {
-    linear = RunLinearStage(refs, o, tied, row_fitted, fit_overcast, probe.any(), widths.back(), renderer, &state,
-                            &result);
+    // Terms beyond the linear structure (the probe, extra terms) need the Ceres polish.
+    linear = RunLinearStage(refs, o, tied, row_fitted, fit_overcast, probe.any() || !extra_terms.empty(), widths.back(),
+                            renderer, &state, &result);
     if (widths.size() > 1 && o.skip_coarse_levels) facts.coarse_widths_skipped.assign(widths.begin(), widths.end() - 1);
     if (!linear.polish && o.skip_coarse_levels) {
       facts.polish_skipped = true;
@@ -220,8 +229,10 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
                               : std::vector<RingLossScales>(refs.size(), linear.ring_scales.value_or(RingLossScales{}));
   SkyRowsTerm sky_rows(std::move(sky_setup));
   LutPriorTerm priors({&sky_rows, row_fitted, tied, o.prior_weight, o.smoothness});
-  // Order matters only for the problem's block order: the sky rows, the probe, the priors.
-  const std::vector<FitTerm*> terms = {&sky_rows, &probe, &priors};
+  // Order matters only for the problem's block order: the sky rows, the probe, the
+  // priors, then any extra term (a cloud-lighting term plugs in here, FitSkyWithTerms).
+  std::vector<FitTerm*> terms = {&sky_rows, &probe, &priors};
+  terms.insert(terms.end(), extra_terms.begin(), extra_terms.end());
 
   LevelSolveOptions lo;
   lo.count = widths.size();
