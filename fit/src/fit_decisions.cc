@@ -15,13 +15,13 @@ std::string Number(double v) {
 }  // namespace
 
 const BenchDecisionCosts& MeasuredDecisionCosts() {
-  // bench_fit --decisions, 2026-11-24, this project's 2-core machine: medians over its
-  // skies (bench/results/fit_decisions.md). Re-run it and update these after changing
-  // the fit's stages.
+  // bench_fit --decisions, 2026-11-24, this project's 2-core machine (shared, loaded):
+  // medians over its 3 skies (bench/results/fit_decisions.md). Re-run it and update these
+  // after changing the fit's stages.
   static const BenchDecisionCosts costs{
-      /*polish=*/{600.0, -0.0005, 195000},
-      /*coarse_levels=*/{1000.0, 0.0, 195000},
-      /*inseparable_overcast=*/{10.0, 0.0, 195000},
+      /*polish=*/{1432.8, -3.117e-4, 196410},
+      /*coarse_levels=*/{689.2, -5.73e-6, 196410},
+      /*inseparable_overcast=*/{15.5, -6.5e-8, 196410},
   };
   return costs;
 }

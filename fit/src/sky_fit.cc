@@ -25,10 +25,18 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
+// In ffxv-iso the overcast term is folded into the isotropic table: L_z held at this
+// fraction of the start's (the table, non-negative, can add the term's shape but not
+// subtract it). Measured (bench/results/fit_decisions.md, first version of the decision):
+// L_z held at the start's 4000 cd/m^2 with weight 0.2 left 25%, 285% and 327% rel RMSE on
+// three skies dimmer than that term somewhere, against 0.002-2% with L_z fitted.
+constexpr double kFoldedOvercastFraction = 1e-6;
+
 // Which blocks the scene does not need (fit.json `skipped`); returns whether L_z is fitted.
-// The overcast term only where the sky asks for it: absent when its weight is 0, and held
-// in ffxv-iso, where the isotropic table spans its shape (a function of the view
-// elevation only) and L_z is not separable from it (tests/linear_sky_test.cc).
+// The overcast term only where the sky asks for it: absent when its weight is 0, and
+// folded into the isotropic table in ffxv-iso, where that table spans its shape (a
+// function of the view elevation only) and L_z is not separable from it
+// (tests/linear_sky_test.cc).
 bool PlanSharedBlocks(const FitState& state, const FitOptions& o, FitResult* result) {
   if (state.tables == 2) result->skipped.push_back({"isotropic LUT", "model ffxv has no isotropic term"});
   const bool has_overcast = state.preset.overcast_weight > 0.0;
@@ -41,7 +49,8 @@ bool PlanSharedBlocks(const FitState& state, const FitOptions& o, FitResult* res
                          "from the LUT scale, so the fit never changes it)"
          : !o.fit_overcast ? "disabled by option"
                            : "model ffxv-iso: the overcast shape depends on the view elevation only, which the "
-                             "isotropic table spans, so L_z is not separable from it: held at the initial preset"});
+                             "isotropic table spans, so L_z is not separable from it: folded into that table (L_z "
+                             "held at 1e-6 of the initial preset's)"});
   }
   if (o.absolute) result->skipped.push_back({"exposure", "--absolute: references are calibrated"});
   if (!o.fit_haziness) result->skipped.push_back({"haziness_g", "disabled by option"});
@@ -115,7 +124,8 @@ void RecordDecisions(const std::vector<Reference>& refs, const DecisionFacts& f,
   if (f.overcast_held_inseparable) {
     d.push_back(DecisionFromBench("overcast zenith luminance L_z held (model ffxv-iso)",
                                   "not separable from the isotropic table, which spans the overcast shape (a function "
-                                  "of the view elevation only)",
+                                  "of the view elevation only): the term is folded into that table (L_z held at 1e-6 "
+                                  "of the start's)",
                                   bench.inseparable_overcast, "overcast held (ffxv-iso)", f.samples));
   }
   if (f.overcast_absent) {
@@ -196,6 +206,7 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
   facts.overcast_absent = state.preset.overcast_weight <= 0.0;
   facts.overcast_held_inseparable = !facts.overcast_absent && o.fit_overcast && state.tables == 3 &&
                                     o.hold_inseparable_overcast;
+  if (facts.overcast_held_inseparable) state.log_overcast_zenith += std::log(kFoldedOvercastFraction);
   std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
   facts.finest_width = std::min(widths.back(), refs[0].radiance.width);
   // The linear start (fit/src/linear_stage.h): the LUT, g, L_z and the exposures at the

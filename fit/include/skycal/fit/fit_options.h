@@ -57,8 +57,9 @@ struct FitOptions {
   // it saves (bench/results/fit_decisions.md). Defaults: skip.
   // After the linear start, polish only the finest level (off: the whole pyramid runs).
   bool skip_coarse_levels = true;
-  // ffxv-iso: hold L_z (the overcast shape depends on the view elevation only, which the
-  // isotropic table already spans: the two are not separable). Off: fit L_z there too.
+  // ffxv-iso: fold the overcast term into the isotropic table, L_z held near 0 (the
+  // overcast shape depends on the view elevation only, which that table already spans:
+  // the two are not separable). Off: fit L_z there too.
   bool hold_inseparable_overcast = true;
   bool verbose = true;              // progress on stderr
   std::optional<double> time_of_day_h;  // hours, recorded in the preset for export
