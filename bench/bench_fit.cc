@@ -8,7 +8,9 @@
 // measured saving: the Ceres polish (--polish forces it) and the coarse levels (the old
 // path).
 //
-// Writes bench/results/fit.json and fit.md (or into argv[1], a directory).
+// Writes bench/results/fit.json and fit.md (or into argv[1], a directory). With
+// --decisions [DIR]: only bench/results/fit_decisions.md + .json, each skip decision
+// switched off through FitOptions on a few skies (fit_decision_table.h).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,10 +23,12 @@
 #include <sstream>
 
 #include "bench_util.h"
+#include "fit_decision_table.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/fit/ceiling.h"
+#include "skycal/fit/fit_json.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
@@ -65,10 +69,7 @@ std::vector<Case> WriteReferences(const std::filesystem::path& dir) {
   return cases;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using bench::Median;
 
 struct Run {
   fit::FitResult result;
@@ -97,9 +98,18 @@ double ProcessSeconds(const std::string& reference, const std::filesystem::path&
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::filesystem::path out_dir = argc > 1 ? argv[1] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
+  // --decisions [DIR]: only the per-decision table (bench/fit_decision_table.h).
+  const bool decisions_only = argc > 1 && std::string(argv[1]) == "--decisions";
+  const int dir_arg = decisions_only ? 2 : 1;
+  const std::filesystem::path out_dir =
+      argc > dir_arg ? argv[dir_arg] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results";
   const auto dir = std::filesystem::temp_directory_path() / ("skycal-bench-fit-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
+  if (decisions_only) {
+    bench::WriteDecisionTable(DefaultStart(), dir, out_dir);
+    std::filesystem::remove_all(dir);
+    return 0;
+  }
   auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
   fit::FitOptions defaults;
@@ -116,14 +126,14 @@ int main(int argc, char** argv) {
     const fit::Reference ref = fit::LoadReference(c.path, defaults);
     const Run run = TimeFit({ref}, defaults, *vulkan, kRepeats);
     const fit::CeilingResult ceiling = fit::ModelCeiling(ref, DefaultStart(), defaults);
-    const auto& ls = run.result.linear_start;
+    const fit::LinearStartSingleReport ls = run.result.linear_start.single.value_or(fit::LinearStartSingleReport{});
     const double err = run.result.references[0].errors.rel_rmse;
     times.push_back(run.timing.median_ms);
     ratios.push_back(err / std::max(ceiling.lut_rel_rmse, 1e-9));
-    search.push_back(1e3 * ls.value("search_time_s", 0.0));
-    robust.push_back(1e3 * ls.value("robust_time_s", 0.0));
-    final_s.push_back(1e3 * ls.value("final_time_s", 0.0));
-    check.push_back(1e3 * ls["render_check"].value("time_s", 0.0));
+    search.push_back(1e3 * ls.search_time_s);
+    robust.push_back(1e3 * ls.robust_time_s);
+    final_s.push_back(1e3 * ls.final_time_s);
+    check.push_back(1e3 * (ls.render_check ? ls.render_check->time_s : 0.0));
     per_ref.push_back({{"reference", c.name},
                        {"timing", run.timing.ToJson()},
                        {"rel_rmse", err},
@@ -131,7 +141,7 @@ int main(int argc, char** argv) {
                        {"ceiling_per_row", ceiling.per_row_rel_rmse},
                        {"within_1.2x_ceiling_plus_0.1pct", err <= 1.2 * ceiling.lut_rel_rmse + 1e-3},
                        {"haziness_g", run.result.preset.haziness_g},
-                       {"linear_start", ls}});
+                       {"linear_start", fit::ToJson(run.result.linear_start)}});
     std::cerr << "[bench fit] " << c.name << ": " << run.timing.median_ms << " ms, rel " << 100 * err << "%, ceiling "
               << 100 * ceiling.lut_rel_rmse << "%\n";
   }
@@ -207,8 +217,8 @@ int main(int argc, char** argv) {
                                           {"rel_rmse_max", worst},
                                           {"haziness_g", day.result.preset.haziness_g},
                                           {"truth_haziness_g", refsky::StandardAtmosphereVariants()[1].haziness_g},
-                                          {"levels", day.result.levels},
-                                          {"linear_start_time_s", day.result.linear_start.value("time_s", 0.0)},
+                                          {"levels", fit::FitSummaryJson(day.result)["levels"]},
+                                          {"linear_start_time_s", day.result.linear_start.time_s()},
                                           {"old_path", {{"timing", old_day.timing.ToJson()}, {"rel_rmse_max", old_worst},
                                                         {"haziness_g", old_day.result.preset.haziness_g}}}};
     std::cerr << "[bench fit] day: " << day.timing.median_ms << " ms, worst rel " << 100 * worst << "%\n";

@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
                     {"sky_only_iterations", without.iterations},
                     {"joint", t1.ToJson()},
                     {"joint_iterations", with.iterations},
-                    {"probe_evaluation_time_s_last_run", with.probe["evaluation_time_s"]},
+                    {"probe_evaluation_time_s_last_run", with.probe ? with.probe->evaluation_time_s : 0.0},
                     {"added_ms", t1.median_ms - t0.median_ms},
                     {"ratio", t1.median_ms / t0.median_ms},
                     {"sun_error_max_channel", SunError(*with.references[0].sun, e_sun)},

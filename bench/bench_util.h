@@ -37,6 +37,11 @@ inline Timing Measure(const std::function<void()>& fn, int warmup, int runs) {
   return t;
 }
 
+inline double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
 inline nlohmann::json MachineInfo() {
   char buf[64];
   const std::time_t now = std::time(nullptr);

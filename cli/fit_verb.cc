@@ -21,6 +21,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
+#include "skycal/fit/fit_json.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "verb_common.h"
@@ -229,19 +230,10 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
       {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
       {"fit_ground_albedo", fo.fit_ground_albedo},
       {"numeric_derivatives", fo.numeric_derivatives}};
-  nlohmann::json summary = {{"references", per_ref},
-                            {"haziness_g", result.preset.haziness_g},
-                            {"time_s", result.time_s},
-                            {"probe", result.probe},
-                            {"iterations", result.iterations},
-                            {"termination", result.termination},
-                            {"linear_start", result.linear_start},
-                            {"levels", result.levels},
-                            {"skipped", result.skipped},
-                            {"unobserved_lut_rows", result.unobserved_rows},
-                            {"backend_device", result.backend_description},
-                            {"warnings", warnings},
-                            {"options", resolved}};
+  nlohmann::json summary = fit::FitSummaryJson(result);
+  summary["references"] = per_ref;
+  summary["warnings"] = warnings;
+  summary["options"] = resolved;
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
                                        {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},

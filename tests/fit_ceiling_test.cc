@@ -159,7 +159,7 @@ TEST(FitCeiling, CloudBlobsAndABuildingDoNotPull) {
   const double ceiling = fit::ModelCeiling(clean_ref, DefaultStart(), o).lut_rel_rmse;
   std::cout << "[ceiling] clouds and building over " << 100.0 * touched / sky << "% of the sky: fit vs clean sky "
             << 100 * vs_clean << "%, clean ceiling " << 100 * ceiling << "%, loss scale "
-            << r.linear_start.value("loss_scale", 0.0) << "\n";
+            << r.linear_start.loss_scale() << "\n";
   EXPECT_GT(touched, sky / 20);  // the contamination is not negligible (> 5% of the sky)
   EXPECT_LE(vs_clean, 1.2 * ceiling + 0.01);
 }

@@ -11,19 +11,12 @@
 #include "robust_residual.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
-#include "skycal/render/sky_model.h"
+#include "model_structure.h"
 
 namespace skycal::fit {
 namespace {
 
-// The shared model source, for its coordinate and phase functions only (no LUT reads).
-struct NoLut {
-  template <typename S>
-  glsl::Vec3<S> texel(int, int, int) const {
-    return glsl::Vec3<S>(S(0.0));
-  }
-};
-using ModelD = model::SkyModel<double, NoLut>;
+using ModelD = StructureModel<double>;
 
 ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
   ModelD::SkyParams p{};
@@ -34,7 +27,6 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
   return p;
 }
 
-constexpr double kIsotropicPhase = 1.0 / (4.0 * M_PI);
 // Non-positive entries are held at this fraction of their start rescaled to the data
 // (start_scale_ x initial): relative to the data, so a reference 1000x darker than the
 // preset is not held at a floor that is large for it.
@@ -90,16 +82,15 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
       row.y = y;
       row.first_sample = sample;
       const auto v0 = latlong::PixelDirection(0, y, w, h);
-      row.overcast_shape = (1.0 + 2.0 * std::max(v0[1], 0.0)) / 3.0;
+      row.overcast_shape = OvercastShape(v0[1]);
       for (int x = 0; x < w; ++x) {
         const size_t i = static_cast<size_t>(y) * w + x;
         if (lv.weight[i] <= 0.0 || !used(x, y)) continue;
         const auto v = latlong::PixelDirection(x, y, w, h);
-        const double d[3] = {v[0] - refs[r].sun_dir[0], v[1] - refs[r].sun_dir[1], v[2] - refs[r].sun_dir[2]};
         Pixel px;
         px.x = x;
         px.sqrt_weight = std::sqrt(lv.weight[i] / total_weight);
-        px.one_minus_mu = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        px.one_minus_mu = OneMinusMu(v, refs[r].sun_dir);
         px.mu = 1.0 - px.one_minus_mu;
         px.phase_r = m.phase_rayleigh(px.mu);
         for (int c = 0; c < 3; ++c) px.ref[c] = lv.radiance[3 * i + c];

@@ -31,21 +31,18 @@ constexpr int kMinDecimatedSamples = 3000;
 constexpr int kDayGaussNewtonSteps = 4;
 constexpr double kDaySettled = 0.05;  // a step gaining less than 5% of the cost is the last
 
-nlohmann::json RingScalesToJson(const RingLossScales& r) {
-  nlohmann::json out = nlohmann::json::array();
+std::vector<RingScaleReport> RingScaleReports(const RingLossScales& r) {
+  std::vector<RingScaleReport> out;
   double inner = 0.0;
   for (int k = 0; k < RingLossScales::kRings; ++k) {
-    out.push_back({{"from_deg", inner}, {"to_deg", RingLossScales::kOuterEdgeDeg[k]}, {"scale", r.ring[k]}});
+    out.push_back({inner, RingLossScales::kOuterEdgeDeg[k], r.ring[k]});
     inner = RingLossScales::kOuterEdgeDeg[k];
   }
   return out;
 }
 
-nlohmann::json RenderCheckJson(const render::SkyRenderer& renderer, double difference, double seconds) {
-  return {{"backend", renderer.Describe()},
-          {"max_relative_difference", difference},
-          {"threshold", kRenderCheckThreshold},
-          {"time_s", seconds}};
+RenderCheckReport MakeRenderCheckReport(const render::SkyRenderer& renderer, double difference, double seconds) {
+  return {renderer.Describe(), difference, kRenderCheckThreshold, seconds};
 }
 
 // Whether the Ceres polish still runs after the linear stage, and why (in `skipped`, or a
@@ -55,9 +52,9 @@ void DecidePolish(const FitOptions& o, bool probed, const std::string& converged
   out->render_agrees = out->render_difference <= kRenderCheckThreshold;
   out->polish = o.polish || probed || !out->render_agrees;
   if (!out->polish) {
-    result->skipped.push_back({{"block", "Ceres polish (all pyramid levels)"},
-                               {"reason", converged + " and the " + std::string(render::ToString(o.backend)) +
-                                              " render reproduces its values (render_check)"}});
+    result->skipped.push_back({"Ceres polish (all pyramid levels)",
+                               converged + " and the " + std::string(render::ToString(o.backend)) +
+                                   " render reproduces its values (render_check)"});
   } else if (!out->render_agrees) {
     result->warnings.push_back("the render check failed (max relative difference " +
                                std::to_string(out->render_difference) + "): the Ceres polish runs through the backend");
@@ -218,7 +215,7 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   for (size_t i = 0; i < scales.size(); ++i) {
     scales[i] = out.ring_scales_per_reference[day.SampleReference(i)].At(day.sun_angles_deg()[i]);
   }
-  nlohmann::json costs = nlohmann::json::array();
+  std::vector<double> costs;
   double cost = day.RobustLogCost(sol, exposures, o.loss, scales);
   costs.push_back(cost);
   for (int step = 0; step < kDayGaussNewtonSteps; ++step) {
@@ -254,22 +251,22 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   out.observed_columns.clear();
   for (const auto& tc : day.ObservedColumns()) out.observed_columns.insert(tc);
 
-  nlohmann::json per_ref = nlohmann::json::array();
+  LinearStartDayReport report;
+  report.mode = "each reference on its own (tied rows), combined along the LUT rows, then Gauss-Newton steps of the "
+                "whole day (free rows)";
+  report.haziness_g = state->g;
+  report.loss_scale = out.loss_scale;
+  report.per_reference_time_s = per_reference_time;
+  report.joint_unknowns = day.num_unknowns();
+  report.joint_samples = static_cast<long long>(day.num_samples());
+  report.joint_robust_cost_per_step = costs;
+  report.joint_time_s = joint_time;
+  report.render_check = MakeRenderCheckReport(renderer, out.render_difference, check_time);
   for (size_t r = 0; r < n; ++r) {
-    per_ref.push_back({{"reference", refs[r].name}, {"report", reports[r].linear_start}});
+    report.references.emplace_back(refs[r].name, reports[r].linear_start.single.value_or(LinearStartSingleReport{}));
   }
-  result->linear_start = {{"mode", "each reference on its own (tied rows), combined along the LUT rows, then "
-                                   "Gauss-Newton steps of the whole day (free rows)"},
-                          {"haziness_g", state->g},
-                          {"loss_scale", out.loss_scale},
-                          {"per_reference_time_s", per_reference_time},
-                          {"joint_unknowns", day.num_unknowns()},
-                          {"joint_samples", day.num_samples()},
-                          {"joint_robust_cost_per_step", costs},
-                          {"joint_time_s", joint_time},
-                          {"render_check", RenderCheckJson(renderer, out.render_difference, check_time)},
-                          {"references", per_ref},
-                          {"time_s", Seconds(t0, Clock::now())}};
+  report.time_s = Seconds(t0, Clock::now());
+  result->linear_start.day = std::move(report);
   DecidePolish(o, probed, "the day's joint Gauss-Newton steps minimised the robust log objective", &out, result);
   if (o.verbose) {
     std::cerr << "[fit] linear start of " << n << " references: median g " << state->g << ", "
@@ -332,30 +329,31 @@ LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitO
   out.ring_scales = rep.ring_scales;
   out.held = rep.held;
   if (!out.held.empty()) {
-    result->skipped.push_back({{"block", std::to_string(out.held.size()) + " LUT parameters"},
-                              {"reason", "the linear least-squares solve wants them <= 0 (a table the sky does not "
-                                         "need there): held at 1e-6 of their start, not polished in log space"}});
+    result->skipped.push_back({std::to_string(out.held.size()) + " LUT parameters",
+                               "the linear least-squares solve wants them <= 0 (a table the sky does not "
+                               "need there): held at 1e-6 of their start, not polished in log space"});
   }
   const double linear_time = Seconds(t_linear, Clock::now());
-  result->linear_start = {{"search_width", robust_width / search_options.stride},
-                         {"robust_width", robust_width},
-                         {"width", final_ptrs[0]->width},
-                         {"unknowns", sky.num_unknowns()},
-                         {"samples", sky.num_samples()},
-                         {"solves", rep.solves},
-                         {"gauss_newton_steps", rep.gauss_newton_steps},
-                         {"search_time_s", rep.search_time_s},
-                         {"robust_time_s", rep.robust_time_s},
-                         {"final_time_s", rep.final_time_s},
-                         {"haziness_g", rep.g},
-                         {"rel_rmse_least_squares", rep.rel_rmse_least_squares},
-                         {"rel_rmse_robust", rep.rel_rmse_robust},
-                         {"residual_sigma_log", rep.residual_sigma},
-                         {"loss_scale", rep.loss_scale},
-                         {"loss_scale_floor", o.loss_scale},
-                         {"loss_scale_by_sun_distance", RingScalesToJson(rep.ring_scales)},
-                         {"held_non_positive", rep.held_non_positive},
-                         {"time_s", linear_time}};
+  LinearStartSingleReport report;
+  report.search_width = robust_width / search_options.stride;
+  report.robust_width = robust_width;
+  report.width = final_ptrs[0]->width;
+  report.unknowns = sky.num_unknowns();
+  report.samples = static_cast<long long>(sky.num_samples());
+  report.solves = rep.solves;
+  report.gauss_newton_steps = rep.gauss_newton_steps;
+  report.search_time_s = rep.search_time_s;
+  report.robust_time_s = rep.robust_time_s;
+  report.final_time_s = rep.final_time_s;
+  report.haziness_g = rep.g;
+  report.rel_rmse_least_squares = rep.rel_rmse_least_squares;
+  report.rel_rmse_robust = rep.rel_rmse_robust;
+  report.residual_sigma_log = rep.residual_sigma;
+  report.loss_scale = rep.loss_scale;
+  report.loss_scale_floor = o.loss_scale;
+  report.loss_scale_by_sun_distance = RingScaleReports(rep.ring_scales);
+  report.held_non_positive = rep.held_non_positive;
+  report.time_s = linear_time;
   if (o.verbose) {
     std::cerr << "[fit] linear start at " << linear_width << " wide: g " << rep.g << ", rel RMSE "
               << rep.rel_rmse_least_squares << " (least squares) -> " << rep.rel_rmse_robust << " (robust, scale "
@@ -367,8 +365,9 @@ LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitO
   {
     const auto t_check = Clock::now();
     out.render_difference = RenderCheck(sky, rep.solution, rep.exposures, refs, final_ptrs, *state, renderer);
-    result->linear_start["render_check"] = RenderCheckJson(renderer, out.render_difference, Seconds(t_check, Clock::now()));
+    report.render_check = MakeRenderCheckReport(renderer, out.render_difference, Seconds(t_check, Clock::now()));
   }
+  result->linear_start.single = std::move(report);
   for (const auto& tc : sky.ObservedColumns()) out.observed_columns.insert(tc);
   DecidePolish(o, probed, "the linear start converged on the robust log objective itself", &out, result);
   return out;

@@ -6,22 +6,15 @@
 
 #include "robust_residual.h"
 #include "skycal/core/latlong.h"
-#include "skycal/render/sky_model.h"
+#include "model_structure.h"
 
 namespace skycal::fit {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The shared model source for its coordinate and phase functions only (no LUT reads).
-struct NoLut {
-  template <typename S>
-  glsl::Vec3<S> texel(int, int, int) const {
-    return glsl::Vec3<S>(S(0.0));
-  }
-};
 template <typename S>
-using Model = model::SkyModel<S, NoLut>;
+using Model = StructureModel<S>;
 
 template <typename S>
 typename Model<S>::SkyParams GridParams(const FitState& st) {
@@ -115,17 +108,16 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
         w_(i, k) = omega * std::max(0.0, nn[0] * v[0] + nn[1] * v[1] + nn[2] * v[2]);
       }
       w_(n, k) = omega * std::max(0.0, v[1]);
-      const double d[3] = {v[0] - s[0], v[1] - s[1], v[2] - s[2]};
-      one_minus_mu_[k] = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      one_minus_mu_[k] = OneMinusMu(v, s);
       mu_[k] = 1.0 - one_minus_mu_[k];
       phase_r[k] = m.phase_rayleigh(mu_[k]);
-      shape[k] = (1.0 + 2.0 * std::max(v[1], 0.0)) / 3.0;
+      shape[k] = OvercastShape(v[1]);
     }
   }
   // Fixed G matrices: Rayleigh and isotropic phases do not depend on g.
   g_rayleigh_ = Eigen::MatrixXd::Zero(n + 1, n_gamma_);
   g_isotropic_ = Eigen::MatrixXd::Zero(n + 1, n_gamma_);
-  const Eigen::VectorXd iso = Eigen::VectorXd::Constant(qw_, 1.0 / (4.0 * kPi));
+  const Eigen::VectorXd iso = Eigen::VectorXd::Constant(qw_, kIsotropicPhase);
   for (int y = 0; y < rows_; ++y) {
     const Eigen::VectorXd ar = w_.middleCols(y * qw_, qw_) * phase_r.segment(y * qw_, qw_);
     const Eigen::VectorXd ai = w_.middleCols(y * qw_, qw_) * iso;
@@ -189,14 +181,11 @@ bool ProbeCost::Compute(double const* const* parameters, bool with_derivatives, 
 
   // Mie G(g) and dG/dg.
   const int npix = rows_ * qw_;
-  NoLut nolut;
-  Model<ceres::Jet<double, 1>> mj(nolut);
   Eigen::VectorXd phase_m(npix), dphase_m(npix);
   for (int k = 0; k < npix; ++k) {
-    using J = ceres::Jet<double, 1>;
-    const J pm = mj.phase_cornette_shanks(J(mu_[k]), J(one_minus_mu_[k]), J(g, 0));
-    phase_m[k] = pm.a;
-    dphase_m[k] = pm.v[0];
+    const MiePhase pm = MiePhaseWithDerivative(mu_[k], one_minus_mu_[k], g);
+    phase_m[k] = pm.value;
+    dphase_m[k] = pm.d_dg;
   }
   out->g_mie = Eigen::MatrixXd::Zero(n1, n_gamma_);
   out->dg_mie = Eigen::MatrixXd::Zero(n1, with_derivatives ? n_gamma_ : 0);

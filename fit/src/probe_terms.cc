@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "skycal/core/error.h"
+#include "fit_decisions.h"
+#include "sun_from_probe.h"
 
 namespace skycal::fit {
 namespace {
@@ -235,6 +237,131 @@ int RefitProbesOnFinalSky(const ProbeBlockMaker& make_block, const std::vector<b
     }
   }
   return iterations;
+}
+
+ProbeTerm::ProbeTerm(const std::vector<Reference>& refs, const std::vector<const ProbeSamples*>& probes,
+                     const FitOptions& options, bool tied, double initial_ground_albedo)
+    : refs_(refs), o_(options), tied_(tied), initial_ground_albedo_(initial_ground_albedo),
+      frames_(PrepareProbeFrames(refs, probes)), probed_(refs.size(), false), blocks_(refs.size()) {
+  for (size_t r = 0; r < refs.size(); ++r) {
+    probed_[r] = frames_[r].probe != nullptr;
+    probed_count_ += probed_[r] ? 1 : 0;
+    ground_facing_ += frames_[r].ground_facing;
+  }
+  fit_ground_ = probed_count_ > 0 && o_.fit_ground_albedo && ground_facing_ >= 3;
+  if (probed_count_ > 0 && !fit_ground_) {
+    ground_reason_ = o_.fit_ground_albedo ? "only " + std::to_string(ground_facing_) +
+                                                " probe samples face the ground (normal y < -0.1; need 3): not observable"
+                                          : "disabled by option";
+  }
+}
+
+std::unique_ptr<ProbeCost> ProbeTerm::MakeBlock(const ProbeFrame& f, size_t r, FitState& state,
+                                                const LevelContext& level, std::vector<double*>* blocks) {
+  std::vector<size_t> no_lut_parameters;
+  auto cost = MakeProbeCost(f, refs_[r], state, o_, tied_, (*level.levels)[r].total_weight / level.total_weight, {},
+                            level.loss_scale, &eval_ns_, &no_lut_parameters);
+  *blocks = {&state.g, &state.log_overcast_zenith, &state.log_exposure[r], state.sun_rgb[r].data(),
+             &state.ground_albedo};
+  return cost;
+}
+
+long long ProbeTerm::AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) {
+  if (probed_count_ == 0) return 0;
+  auto make = [&](const ProbeFrame& f, size_t r, std::vector<double*>* blocks) {
+    return MakeBlock(f, r, state, level, blocks);
+  };
+  const ProbeTermCounts counts =
+      AddProbeTerms(make, probed_, level.first, o_.sun_visible_threshold, &frames_, &blocks_, &state, &problem);
+  if (level.first) residuals_ += counts.residuals;
+  if (problem.HasParameterBlock(&state.ground_albedo)) {
+    if (fit_ground_) {
+      problem.SetParameterLowerBound(&state.ground_albedo, 0, 0.0);
+      problem.SetParameterUpperBound(&state.ground_albedo, 0, 1.0);
+    } else {
+      problem.SetParameterBlockConstant(&state.ground_albedo);
+    }
+  }
+  return counts.residuals;
+}
+
+int ProbeTerm::AfterSolve(FitState& state, const LevelContext& level) {
+  if (!level.finest || probed_count_ == 0) return 0;
+  auto make = [&](const ProbeFrame& f, size_t r, std::vector<double*>* blocks) {
+    return MakeBlock(f, r, state, level, blocks);
+  };
+  return RefitProbesOnFinalSky(make, probed_, fit_ground_, o_.sun_visible_threshold, &frames_, &blocks_, &state);
+}
+
+void ProbeTerm::ReportSkips(std::vector<SkipNote>* skipped, std::vector<FitDecision>* decisions) const {
+  if (probed_count_ == 0) {
+    skipped->push_back({"sun illuminance, ground albedo", "no reference has probe samples: only the probe observes them"});
+  } else {
+    for (size_t r = 0; r < refs_.size(); ++r) {
+      if (!probed_[r]) {
+        skipped->push_back({"sun illuminance of " + refs_[r].name, "no probe samples"});
+      } else if (!frames_[r].sun_observable) {
+        skipped->push_back({"sun illuminance of " + refs_[r].name, frames_[r].note});
+      }
+    }
+    if (!fit_ground_) skipped->push_back({"ground_albedo", ground_reason_});
+  }
+  const int unprobed = static_cast<int>(refs_.size()) - probed_count_;
+  if (unprobed > 0) {
+    decisions->push_back(NoCostDecision(
+        "probe blocks of " + std::to_string(unprobed) + " of " + std::to_string(refs_.size()) + " references not built",
+        "no probe samples for them: a block would have no residuals, and their sun illuminance is unobservable",
+        "none: there is nothing to evaluate without samples (what a probe costs when present, with the Ceres polish it "
+        "forces, is in bench/results/probe_fit.json)"));
+  }
+}
+
+void ProbeTerm::MoveScaleGauge(double shift, FitState* state) {
+  // The probe sees exposure * (sky + sun): the sun's model units move with the LUT.
+  for (size_t r = 0; r < refs_.size(); ++r) {
+    for (int c = 0; c < 3; ++c) {
+      state->sun_rgb[r][c] *= std::exp(-shift);
+      frames_[r].fitted_sun[c] *= std::exp(-shift);
+    }
+  }
+}
+
+void ProbeTerm::Summarise(const FitState& state, FitResult* result) const {
+  for (size_t r = 0; r < refs_.size(); ++r) {
+    if (!probed_[r]) continue;
+    const ProbeFrame& f = frames_[r];
+    const double exposure = result->references[r].exposure;
+    ProbeSun ps;
+    ps.observable = f.sun_observable;
+    ps.note = f.note;
+    ps.visible = f.sun_observable && f.visible;
+    for (int c = 0; c < 3; ++c) {
+      ps.illuminance_model[c] = ps.visible ? state.sun_rgb[r][c] : 0.0;
+      ps.illuminance_ref[c] = ps.illuminance_model[c] * exposure;
+      ps.fitted_model[c] = f.fitted_sun[c];
+    }
+    ps.lux = Rec709Luminance(ps.illuminance_model);
+    ps.fraction = f.fraction;
+    ps.residual = f.residual;
+    ps.log_rmse = f.log_rmse;
+    ps.samples = static_cast<int>(f.samples.size());
+    ps.sun_facing_samples = f.sun_facing;
+    ps.ground_facing_samples = f.ground_facing;
+    result->references[r].sun = ps;
+  }
+  if (probed_count_ == 0) return;
+  ProbeReport p;
+  p.references = probed_count_;
+  p.weight = o_.probe_weight;
+  p.quadrature_width = o_.probe_quadrature_width;
+  p.residuals = residuals_;
+  for (const auto& f : frames_) p.dropped_samples += f.dropped;
+  p.evaluation_time_s = 1e-9 * static_cast<double>(eval_ns_.load());
+  p.ground_albedo_fitted = fit_ground_;
+  p.ground_albedo_value = result->preset.ground_albedo;
+  p.ground_albedo_initial = initial_ground_albedo_;
+  p.ground_albedo_reason = ground_reason_;
+  result->probe = p;
 }
 
 }  // namespace skycal::fit

@@ -38,16 +38,14 @@
 
 #include <array>
 #include <functional>
-#include <memory>
 #include <atomic>
 #include <memory>
 #include <set>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "fit_state.h"
+#include "fit_term.h"
 #include "probe_cost.h"
 #include "skycal/fit/sky_fit.h"
 
@@ -120,5 +118,41 @@ ProbeTermCounts AddProbeTerms(const ProbeBlockMaker& make_block, const std::vect
 int RefitProbesOnFinalSky(const ProbeBlockMaker& make_block, const std::vector<bool>& probed, bool fit_ground,
                           double sun_visible_threshold, std::vector<ProbeFrame>* frames,
                           std::vector<std::vector<double*>>* probe_blocks, FitState* state);
+
+// The probe as one term of the fit (fit_term.h): per probed reference its block, the sun
+// decided at each level's start; after the finest level the sun and the ground albedo
+// refitted on the final sky. It lists what it skipped (unprobed references, a sun it
+// cannot observe, the ground albedo) and writes fit.json's `probe` and each reference's
+// `sun`. References without samples get no block at all.
+class ProbeTerm final : public FitTerm {
+ public:
+  ProbeTerm(const std::vector<Reference>& refs, const std::vector<const ProbeSamples*>& probes,
+            const FitOptions& options, bool tied, double initial_ground_albedo);
+  std::string name() const override { return "probe"; }
+  long long AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) override;
+  int AfterSolve(FitState& state, const LevelContext& level) override;
+  void ReportSkips(std::vector<SkipNote>* skipped, std::vector<FitDecision>* decisions) const override;
+  // Needs the references' exposures (FitResult::references[r].exposure) already set.
+  void Summarise(const FitState& state, FitResult* result) const override;
+  // The LUT scale gauge moved by exp(shift) onto the exposures: the sun's model units move.
+  void MoveScaleGauge(double shift, FitState* state);
+  bool any() const { return probed_count_ > 0; }
+
+ private:
+  std::unique_ptr<ProbeCost> MakeBlock(const ProbeFrame& f, size_t r, FitState& state, const LevelContext& level,
+                                       std::vector<double*>* blocks);
+  const std::vector<Reference>& refs_;
+  const FitOptions& o_;
+  bool tied_;
+  double initial_ground_albedo_;
+  std::vector<ProbeFrame> frames_;
+  std::vector<bool> probed_;
+  std::vector<std::vector<double*>> blocks_;
+  int probed_count_ = 0, ground_facing_ = 0;
+  bool fit_ground_ = false;
+  std::string ground_reason_;
+  std::atomic<long long> eval_ns_{0};
+  long long residuals_ = 0;  // of the first level
+};
 
 }  // namespace skycal::fit

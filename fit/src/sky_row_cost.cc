@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "model_structure.h"
 #include "robust_residual.h"
 #include "skycal/render/sky_model.h"
 
@@ -81,13 +82,12 @@ SkyRowCost::SkyRowCost(RowCostSetup setup, std::vector<size_t>* texel_index) : s
     }
   }
   for (const RowPixel& px : s_.pixels) {
-    const double d[3] = {px.view[0] - s_.sun_dir[0], px.view[1] - s_.sun_dir[1], px.view[2] - s_.sun_dir[2]};
-    const double omm = 0.5 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const double omm = OneMinusMu(px.view, s_.sun_dir);
     one_minus_mu_.push_back(omm);
     mu_.push_back(1.0 - omm);
     phase_r_.push_back(m.phase_rayleigh(1.0 - omm));
   }
-  overcast_shape_ = (1.0 + 2.0 * std::max(s_.pixels.front().view[1], 0.0)) / 3.0;
+  overcast_shape_ = OvercastShape(s_.pixels.front().view[1]);
   set_num_residuals(static_cast<int>(s_.pixels.size()));
   for (size_t i = 0; i < texels_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
   for (int i = 0; i < 3; ++i) mutable_parameter_block_sizes()->push_back(1);  // g, log Lz, log k
@@ -128,9 +128,6 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
   }
   Model<double> m(lut);
   const auto p = MakeParams(st, s_.sun_dir, g, lz);
-  using Jet1 = ceres::Jet<double, 1>;
-  BlockLut lut_unused;
-  Model<Jet1> mj(lut_unused);
   const double w_oc = st.preset.overcast_weight;
   // Bilinear sums of each table (this channel), for the g derivative.
   double table_sum[3] = {0.0, 0.0, 0.0};
@@ -151,13 +148,13 @@ bool SkyRowCost::EvaluateImpl(double const* const* parameters, double* residuals
     const double dr_de = rr.dr_de;
     const double inv_m = 1.0 / model_value;
     // Phase values of each table at this pixel.
-    const Jet1 pm = mj.phase_cornette_shanks(Jet1(mu_[i]), Jet1(one_minus_mu_[i]), Jet1(g, 0));
-    const double phase[3] = {phase_r_[i], pm.a, 1.0 / (4.0 * M_PI)};
+    const MiePhase pm = MiePhaseWithDerivative(mu_[i], one_minus_mu_[i], g);
+    const double phase[3] = {phase_r_[i], pm.value, kIsotropicPhase};
     for (int k = 0; k < nt; ++k) {
       if (!jacobians[k]) continue;
       jacobians[k][i] = dr_de * (1.0 - w_oc) * texel_sum[k] * phase[texels_[k].table] * inv_m;
     }
-    if (jacobians[nt]) jacobians[nt][i] = dr_de * (1.0 - w_oc) * table_sum[1] * pm.v[0] * inv_m;
+    if (jacobians[nt]) jacobians[nt][i] = dr_de * (1.0 - w_oc) * table_sum[1] * pm.d_dg * inv_m;
     if (jacobians[nt + 1]) jacobians[nt + 1][i] = dr_de * w_oc * lz * overcast_shape_ * inv_m;
     if (jacobians[nt + 2]) jacobians[nt + 2][i] = dr_de;
   }

@@ -103,8 +103,9 @@ AddedSkyRows AddSkyRowTerms(const SkyRowTerms& in, FitState* state, ceres::Probl
   return out;
 }
 
-void AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, const std::vector<bool>& row_fitted,
-                      bool tied, double prior_weight, double smoothness, FitState* state, ceres::Problem* problem) {
+long long AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, const std::vector<bool>& row_fitted,
+                           bool tied, double prior_weight, double smoothness, FitState* state, ceres::Problem* problem) {
+  long long residuals = 0;
   const auto& grid = state->preset.luts.grid;
   const std::vector<double>& initial_log_lut = state->initial_log_lut;
   for (const auto& [t, col] : observed_columns) {
@@ -113,6 +114,7 @@ void AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, con
         double* d = &state->log_delta[state->DeltaIndex(t, col, ch)];
         problem->AddResidualBlock(
             new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(new PriorResidual{std::sqrt(prior_weight), 0.0}), nullptr, d);
+        ++residuals;
         continue;
       }
       for (int row = 0; row < grid.n_theta; ++row) {
@@ -121,6 +123,7 @@ void AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, con
         problem->AddResidualBlock(new ceres::AutoDiffCostFunction<PriorResidual, 1, 1>(new PriorResidual{
                                       std::sqrt(prior_weight), initial_log_lut[u - state->log_lut.data()]}),
                                   nullptr, u);
+        ++residuals;
         if (row >= 1 && row + 1 < grid.n_theta && row_fitted[row - 1] && row_fitted[row + 1] && smoothness > 0.0) {
           const ptrdiff_t stride = static_cast<ptrdiff_t>(grid.n_gamma) * 3;
           const size_t k = static_cast<size_t>(u - state->log_lut.data());
@@ -128,10 +131,50 @@ void AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, con
                                         new SecondDifferenceOfChange{std::sqrt(smoothness), initial_log_lut[k - stride],
                                                                      initial_log_lut[k], initial_log_lut[k + stride]}),
                                     nullptr, u - stride, u, u + stride);
+          ++residuals;
         }
       }
     }
   }
+  return residuals;
+}
+
+long long SkyRowsTerm::AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) {
+  SkyRowTerms rows;
+  rows.refs = level.refs;
+  rows.levels = level.levels;
+  rows.total_weight = level.total_weight;
+  rows.tied = s_.tied;
+  rows.loss = s_.loss;
+  rows.loss_scale = level.loss_scale;
+  rows.numeric_derivatives = s_.numeric_derivatives;
+  rows.rendered = level.rendered;
+  rows.rendered_valid = level.rendered_valid;
+  rows.ring_scales = s_.ring_scales;
+  rows.use_ring_scales = s_.use_ring_scales;
+  AddedSkyRows added = AddSkyRowTerms(rows, &state, &problem);
+  numeric_owners_ = std::move(added.numeric_owners);
+  // Regularisation needs the LUT parameters some pixel reaches; columns no pixel reaches
+  // (the lowest, horizon-hugging ones at coarse sizes) are filled in after the solve from
+  // their nearest observed column (fit_finish.h): as free parameters held only by a weak
+  // prior they made the normal equations nearly singular and Levenberg-Marquardt slow.
+  const auto& grid = state.preset.luts.grid;
+  const size_t table_size = state.preset.luts.table_size();
+  observed_columns_.clear();
+  for (double* b : added.texel_blocks) {
+    const size_t k = s_.tied ? static_cast<size_t>(b - state.log_delta.data())
+                             : static_cast<size_t>(b - state.log_lut.data());
+    const int col = static_cast<int>((k / 3) % grid.n_gamma);
+    const int table = s_.tied ? static_cast<int>(k / (3 * grid.n_gamma)) : static_cast<int>(k / table_size);
+    observed_columns_.insert({table, col});
+  }
+  last_residuals_ = added.residuals;
+  return added.residuals;
+}
+
+long long LutPriorTerm::AddTo(ceres::Problem& problem, FitState& state, const LevelContext& /*level*/) {
+  return AddLutPriorTerms(s_.sky->observed_columns(), s_.row_fitted, s_.tied, s_.prior_weight, s_.smoothness, &state,
+                          &problem);
 }
 
 }  // namespace skycal::fit

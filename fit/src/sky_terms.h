@@ -6,6 +6,7 @@
 //  - AddLutPriorTerms: the weak pull of each LUT parameter some pixel reaches toward the
 //    initial preset and, with free rows, the second difference of the change along the
 //    sun zenith; columns no pixel reaches are not parameters (fit_finish.h fills them).
+// SkyRowsTerm and LutPriorTerm are the two as FitTerms (fit_term.h).
 #pragma once
 #include <ceres/ceres.h>
 
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "fit_state.h"
+#include "fit_term.h"
 #include "linear_start.h"
 #include "pyramid.h"
 #include "sky_row_cost.h"
@@ -45,7 +47,50 @@ struct AddedSkyRows {
 
 AddedSkyRows AddSkyRowTerms(const SkyRowTerms& in, FitState* state, ceres::Problem* problem);
 
-void AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, const std::vector<bool>& row_fitted,
+// Returns the number of residuals added.
+long long AddLutPriorTerms(const std::set<std::pair<int, int>>& observed_columns, const std::vector<bool>& row_fitted,
                       bool tied, double prior_weight, double smoothness, FitState* state, ceres::Problem* problem);
+
+// The sky pixels of every reference, as one term: a SkyRowCost per (reference, level row,
+// channel) with fitted pixels.
+class SkyRowsTerm final : public FitTerm {
+ public:
+  struct Setup {
+    bool tied = false;
+    RobustLoss loss = RobustLoss::kCauchy;
+    bool numeric_derivatives = false;
+    bool use_ring_scales = false;               // after the linear start
+    std::vector<RingLossScales> ring_scales;    // one per reference (with use_ring_scales)
+  };
+  explicit SkyRowsTerm(Setup setup) : s_(std::move(setup)) {}
+  std::string name() const override { return "sky rows"; }
+  long long AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) override;
+  // (table, LUT column) pairs some fitted pixel of the last level reads.
+  const std::set<std::pair<int, int>>& observed_columns() const { return observed_columns_; }
+  long long last_residuals() const { return last_residuals_; }  // of the last level
+
+ private:
+  Setup s_;
+  std::set<std::pair<int, int>> observed_columns_;
+  long long last_residuals_ = 0;
+  std::vector<std::unique_ptr<SkyRowCost>> numeric_owners_;  // the baseline's wrapped costs
+};
+
+// The LUT priors on the parameters the sky rows reach (AddLutPriorTerms).
+class LutPriorTerm final : public FitTerm {
+ public:
+  struct Setup {
+    const SkyRowsTerm* sky = nullptr;  // its observed columns (added before this term)
+    std::vector<bool> row_fitted;
+    bool tied = false;
+    double prior_weight = 1e-8, smoothness = 1e-6;
+  };
+  explicit LutPriorTerm(Setup setup) : s_(std::move(setup)) {}
+  std::string name() const override { return "LUT priors"; }
+  long long AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) override;
+
+ private:
+  Setup s_;
+};
 
 }  // namespace skycal::fit

@@ -53,6 +53,14 @@ struct FitOptions {
   int probe_quadrature_width = 128; // lat-long width of the model sky's irradiance quadrature
   bool fit_ground_albedo = true;    // fitted when probe samples face the ground
   double sun_visible_threshold = 0.25;  // the sun's share of the brightest sun-facing samples
+  // Skip decisions (fit.json `decisions`), each switchable so bench_fit can measure what
+  // it saves (bench/results/fit_decisions.md). Defaults: skip.
+  // After the linear start, polish only the finest level (off: the whole pyramid runs).
+  bool skip_coarse_levels = true;
+  // ffxv-iso: fold the overcast term into the isotropic table, L_z held near 0 (the
+  // overcast shape depends on the view elevation only, which that table already spans:
+  // the two are not separable). Off: fit L_z there too.
+  bool hold_inseparable_overcast = true;
   bool verbose = true;              // progress on stderr
   std::optional<double> time_of_day_h;  // hours, recorded in the preset for export
 

@@ -5,11 +5,10 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "skycal/capture/probe.h"
 #include "skycal/core/image.h"
 #include "skycal/fit/fit_options.h"
+#include "skycal/fit/fit_report.h"
 #include "skycal/fit/reference.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
@@ -58,22 +57,23 @@ struct ReferenceFit {
   std::optional<ProbeSun> sun;     // with probe samples
 };
 
+// Typed throughout (fit_report.h); skycal/fit/fit_json.h writes it into fit.json.
 struct FitResult {
   render::Preset preset;
   std::vector<ReferenceFit> references;
   double time_s = 0.0;
   int iterations = 0;
   std::string termination;
-  nlohmann::json levels = nlohmann::json::array();   // per pyramid level: size, iterations, cost, time
-  nlohmann::json skipped = nlohmann::json::array();  // parameter blocks / passes not needed, with reasons
-  nlohmann::json unobserved_rows = nlohmann::json::array();
+  std::vector<LevelReport> levels;       // per Ceres pyramid level that ran
+  std::vector<SkipNote> skipped;         // parameter blocks / passes not needed, with reasons
+  std::vector<FitDecision> decisions;    // what was not evaluated, and what that saved
+  std::vector<UnobservedRow> unobserved_rows;
   std::string backend_description;
   std::vector<std::string> warnings;  // e.g. a failed render check
-  // The linear start's report (fit/src/linear_start.h); null when it did not run.
-  nlohmann::json linear_start;
+  LinearStartReportOut linear_start;  // fit/src/linear_start.h; empty when it did not run
   // With probe samples: weight, quadrature, residual counts, the ground albedo (fitted or
   // held, and why), the time spent evaluating the probe residuals.
-  nlohmann::json probe;
+  std::optional<ProbeReport> probe;
 };
 
 // Fits `init` (grid, sun, overcast weight ...) to the references. `renderer` is the
