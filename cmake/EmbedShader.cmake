@@ -1,10 +1,16 @@
-# skycal_embed_shader(TARGET <lib> SOURCE <file.comp> NAME <c_identifier>)
+# skycal_embed_shader(TARGET <lib> SOURCE <file.comp> NAME <c_identifier>
+#                     [INCLUDE_DIRS <dir>...])
 # Compiles a GLSL compute shader to SPIR-V with glslc at build time and embeds the words
 # as a C array (glslc -mfmt=c). A DEPFILE makes edits to #included model sources
-# (render/model/*.glsl.h) rebuild the shader. libshaderc is not used: its Debian 12
-# package has an ABI mismatch (DESIGN.md section 4).
+# (render/model/*.glsl.h and any INCLUDE_DIRS, e.g. clouds/model) rebuild the shader.
+# libshaderc is not used: its Debian 12 package has an ABI mismatch (DESIGN.md section 4).
 function(skycal_embed_shader)
-  cmake_parse_arguments(ARG "" "TARGET;SOURCE;NAME" "" ${ARGN})
+  cmake_parse_arguments(ARG "" "TARGET;SOURCE;NAME" "INCLUDE_DIRS" ${ARGN})
+  set(include_flags -I "${PROJECT_SOURCE_DIR}/render/model")
+  foreach(dir IN LISTS ARG_INCLUDE_DIRS)
+    get_filename_component(abs_dir "${dir}" ABSOLUTE)
+    list(APPEND include_flags -I "${abs_dir}")
+  endforeach()
   get_filename_component(src "${ARG_SOURCE}" ABSOLUTE)
   set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/shaders")
   set(words "${gen_dir}/${ARG_NAME}.spv.inc")
@@ -13,7 +19,7 @@ function(skycal_embed_shader)
   add_custom_command(
     OUTPUT "${words}"
     COMMAND Vulkan::glslc --target-env=vulkan1.1 -O -Werror -mfmt=c
-            -I "${PROJECT_SOURCE_DIR}/render/model"
+            ${include_flags}
             -MD -MF "${words}.d" -o "${words}" "${src}"
     DEPENDS "${src}"
     DEPFILE "${words}.d"

@@ -1,5 +1,7 @@
 // Vulkan instance, device and queue, created once and shared by every pipeline of the
-// process. Plain C API (vulkan.h): vulkan.hpp is slow to compile (DESIGN.md).
+// process (the sky's and the clouds'). Plain C API (vulkan.h): vulkan.hpp is slow to
+// compile (DESIGN.md). Include only from renderer sources, never from a public header of
+// render/ or clouds/.
 #pragma once
 #include <vulkan/vulkan.h>
 
@@ -7,7 +9,7 @@
 #include <memory>
 #include <string>
 
-namespace skycal::render {
+namespace skycal::gpu {
 
 // A host-visible buffer, persistently mapped.
 struct MappedBuffer {
@@ -23,6 +25,9 @@ class VulkanContext {
   // Throws skycal::Error with a message that says what to install or which backend to
   // use instead, when no Vulkan driver or no compute-capable device exists.
   static std::shared_ptr<VulkanContext> Create(bool validation);
+  // The process's context for `validation`: created on first use, shared while anyone
+  // holds it (the sky and cloud renderers of one render use one device and queue).
+  static std::shared_ptr<VulkanContext> Shared(bool validation);
   ~VulkanContext();
   VulkanContext(const VulkanContext&) = delete;
   VulkanContext& operator=(const VulkanContext&) = delete;
@@ -61,4 +66,4 @@ class VulkanContext {
 void CheckVk(VkResult result, const char* what);
 const char* VkResultName(VkResult r);
 
-}  // namespace skycal::render
+}  // namespace skycal::gpu

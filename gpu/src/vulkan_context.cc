@@ -1,13 +1,14 @@
-#include "vulkan_context.h"
+#include "skycal/gpu/vulkan_context.h"
 
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <mutex>
 #include <vector>
 
 #include "skycal/core/error.h"
 
-namespace skycal::render {
+namespace skycal::gpu {
 
 const char* VkResultName(VkResult r) {
   switch (r) {
@@ -168,6 +169,20 @@ std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
   return ctx;
 }
 
+std::shared_ptr<VulkanContext> VulkanContext::Shared(bool validation) {
+  // A cache of a device handle, not of options: at most one context per validation mode,
+  // released when its last renderer goes.
+  static std::mutex mutex;
+  static std::weak_ptr<VulkanContext> cached[2];
+  std::lock_guard<std::mutex> lock(mutex);
+  std::shared_ptr<VulkanContext> ctx = cached[validation ? 1 : 0].lock();
+  if (!ctx) {
+    ctx = Create(validation);
+    cached[validation ? 1 : 0] = ctx;
+  }
+  return ctx;
+}
+
 VulkanContext::~VulkanContext() {
   if (device_) vkDestroyDevice(device_, nullptr);
   if (messenger_) {
@@ -239,4 +254,4 @@ void VulkanContext::FlushForDevice(const MappedBuffer& b) {
   CheckVk(vkFlushMappedMemoryRanges(device_, 1, &range), "vkFlushMappedMemoryRanges");
 }
 
-}  // namespace skycal::render
+}  // namespace skycal::gpu

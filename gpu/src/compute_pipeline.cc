@@ -1,0 +1,191 @@
+#include "skycal/gpu/compute_pipeline.h"
+
+#include <string>
+
+#include "skycal/core/error.h"
+
+namespace skycal::gpu {
+namespace {
+
+VkBufferUsageFlags UsageFor(VkDescriptorType type) {
+  switch (type) {
+    case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: return VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT;
+    case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: return VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    default: throw Error("ComputePipeline: only uniform and storage buffer bindings are supported");
+  }
+}
+
+}  // namespace
+
+ComputePipeline::ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
+                                 std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec)
+    : ctx_(std::move(ctx)), types_(std::move(bindings)), buffers_(types_.size()) {
+  for (VkDescriptorType t : types_) UsageFor(t);  // reject other types before creating anything
+  try {
+    CreateObjects(spirv, spirv_bytes, spec);
+  } catch (...) {
+    Release();  // a throwing constructor runs no destructor: release what exists
+    throw;
+  }
+}
+
+ComputePipeline::~ComputePipeline() { Release(); }
+
+void ComputePipeline::Release() {
+  VkDevice d = ctx_->device();
+  vkDeviceWaitIdle(d);
+  for (MappedBuffer& b : buffers_) ctx_->DestroyBuffer(b);
+  if (fence_) vkDestroyFence(d, fence_, nullptr);
+  if (pool_) vkDestroyCommandPool(d, pool_, nullptr);
+  if (descriptor_pool_) vkDestroyDescriptorPool(d, descriptor_pool_, nullptr);
+  if (pipeline_) vkDestroyPipeline(d, pipeline_, nullptr);
+  if (pipeline_layout_) vkDestroyPipelineLayout(d, pipeline_layout_, nullptr);
+  if (set_layout_) vkDestroyDescriptorSetLayout(d, set_layout_, nullptr);
+  if (shader_) vkDestroyShaderModule(d, shader_, nullptr);
+  fence_ = VK_NULL_HANDLE;
+  pool_ = VK_NULL_HANDLE;
+  descriptor_pool_ = VK_NULL_HANDLE;
+  pipeline_ = VK_NULL_HANDLE;
+  pipeline_layout_ = VK_NULL_HANDLE;
+  set_layout_ = VK_NULL_HANDLE;
+  shader_ = VK_NULL_HANDLE;
+}
+
+void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, const std::vector<uint32_t>& spec) {
+  VkDevice d = ctx_->device();
+  VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  smci.codeSize = spirv_bytes;
+  smci.pCode = spirv;
+  CheckVk(vkCreateShaderModule(d, &smci, nullptr, &shader_), "vkCreateShaderModule");
+
+  const uint32_t n = static_cast<uint32_t>(types_.size());
+  std::vector<VkDescriptorSetLayoutBinding> layout_bindings(n);
+  uint32_t uniforms = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    layout_bindings[i].binding = i;
+    layout_bindings[i].descriptorType = types_[i];
+    layout_bindings[i].descriptorCount = 1;
+    layout_bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    if (types_[i] == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER) ++uniforms;
+  }
+  VkDescriptorSetLayoutCreateInfo dslci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dslci.bindingCount = n;
+  dslci.pBindings = layout_bindings.data();
+  CheckVk(vkCreateDescriptorSetLayout(d, &dslci, nullptr, &set_layout_), "vkCreateDescriptorSetLayout");
+
+  VkPipelineLayoutCreateInfo plci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  plci.setLayoutCount = 1;
+  plci.pSetLayouts = &set_layout_;
+  CheckVk(vkCreatePipelineLayout(d, &plci, nullptr, &pipeline_layout_), "vkCreatePipelineLayout");
+
+  std::vector<VkSpecializationMapEntry> entries(spec.size());
+  for (uint32_t i = 0; i < spec.size(); ++i) entries[i] = {i, static_cast<uint32_t>(i * sizeof(uint32_t)), sizeof(uint32_t)};
+  VkSpecializationInfo spec_info{static_cast<uint32_t>(entries.size()), entries.data(), spec.size() * sizeof(uint32_t),
+                                 spec.data()};
+  VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  cpci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+  cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  cpci.stage.module = shader_;
+  cpci.stage.pName = "main";
+  cpci.stage.pSpecializationInfo = spec.empty() ? nullptr : &spec_info;
+  cpci.layout = pipeline_layout_;
+  CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
+
+  std::vector<VkDescriptorPoolSize> sizes;
+  if (uniforms) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, uniforms});
+  if (n - uniforms) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, n - uniforms});
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = 1;
+  dpci.poolSizeCount = static_cast<uint32_t>(sizes.size());
+  dpci.pPoolSizes = sizes.data();
+  CheckVk(vkCreateDescriptorPool(d, &dpci, nullptr, &descriptor_pool_), "vkCreateDescriptorPool");
+  VkDescriptorSetAllocateInfo dsai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  dsai.descriptorPool = descriptor_pool_;
+  dsai.descriptorSetCount = 1;
+  dsai.pSetLayouts = &set_layout_;
+  CheckVk(vkAllocateDescriptorSets(d, &dsai, &set_), "vkAllocateDescriptorSets");
+
+  VkCommandPoolCreateInfo cpi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  cpi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  cpi.queueFamilyIndex = ctx_->queue_family();
+  CheckVk(vkCreateCommandPool(d, &cpi, nullptr, &pool_), "vkCreateCommandPool");
+  VkCommandBufferAllocateInfo cbai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  cbai.commandPool = pool_;
+  cbai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  cbai.commandBufferCount = 1;
+  CheckVk(vkAllocateCommandBuffers(d, &cbai, &cmd_), "vkAllocateCommandBuffers");
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  CheckVk(vkCreateFence(d, &fci, nullptr, &fence_), "vkCreateFence");
+}
+
+void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
+  if (binding >= buffers_.size()) throw Error("ComputePipeline: binding " + std::to_string(binding) + " does not exist");
+  MappedBuffer& b = buffers_[binding];
+  if (!b.buffer || b.size < bytes) {
+    if (b.buffer) {
+      vkDeviceWaitIdle(ctx_->device());
+      ctx_->DestroyBuffer(b);
+    }
+    // Vulkan forbids zero-sized buffers; an empty binding still needs a valid descriptor.
+    b = ctx_->CreateMappedBuffer(bytes > 0 ? bytes : 16, UsageFor(types_[binding]), host_readback);
+    descriptors_stale_ = true;
+  }
+  return b.mapped;
+}
+
+void ComputePipeline::Flush(uint32_t binding) { ctx_->FlushForDevice(buffers_.at(binding)); }
+
+const void* ComputePipeline::Read(uint32_t binding) const { return buffers_.at(binding).mapped; }
+
+size_t ComputePipeline::Size(uint32_t binding) const { return static_cast<size_t>(buffers_.at(binding).size); }
+
+void ComputePipeline::WriteDescriptors() {
+  const uint32_t n = static_cast<uint32_t>(types_.size());
+  std::vector<VkDescriptorBufferInfo> infos(n);
+  std::vector<VkWriteDescriptorSet> writes(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    if (!buffers_[i].buffer) throw Error("ComputePipeline: binding " + std::to_string(i) + " has no buffer (Map it before Dispatch)");
+    infos[i] = {buffers_[i].buffer, 0, VK_WHOLE_SIZE};
+    writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    writes[i].dstSet = set_;
+    writes[i].dstBinding = i;
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = types_[i];
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(ctx_->device(), n, writes.data(), 0, nullptr);
+  descriptors_stale_ = false;
+}
+
+void ComputePipeline::Record(uint32_t gx, uint32_t gy, uint32_t gz) {
+  CheckVk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  CheckVk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
+  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+  vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_layout_, 0, 1, &set_, 0, nullptr);
+  vkCmdDispatch(cmd_, gx, gy, gz);
+  // Make the shader's writes visible to the host once the fence signals.
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
+                       nullptr, 0, nullptr);
+  CheckVk(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
+}
+
+void ComputePipeline::Dispatch(uint32_t gx, uint32_t gy, uint32_t gz) {
+  if (descriptors_stale_) WriteDescriptors();
+  Record(gx, gy, gz);
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd_;
+  CheckVk(vkQueueSubmit(ctx_->queue(), 1, &si, fence_), "vkQueueSubmit");
+  CheckVk(vkWaitForFences(ctx_->device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  CheckVk(vkResetFences(ctx_->device(), 1, &fence_), "vkResetFences");
+  for (uint32_t i = 0; i < buffers_.size(); ++i) {
+    if (types_[i] == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER) ctx_->InvalidateForRead(buffers_[i]);
+  }
+}
+
+}  // namespace skycal::gpu
