@@ -47,7 +47,7 @@ CloudWeather cloud_weather(Scalar x, Scalar z, Scalar distance, CloudShadeParams
                           (wx / p.weather_extent + Scalar(0.5)) * Scalar(p.weather_width),
                           (wz / p.weather_extent + Scalar(0.5)) * Scalar(p.weather_height));
   CloudWeather w;
-  w.coverage = saturate1(t.r * p.coverage_scale);
+  w.coverage = saturate1(t.r);
   w.precipitation = saturate1(t.g);
   w.type = saturate1(t.b);
   // Rain clouds are cumulonimbus of at least 70% coverage.
@@ -58,6 +58,8 @@ CloudWeather cloud_weather(Scalar x, Scalar z, Scalar distance, CloudShadeParams
   Scalar bias = p.horizon_rule * smooth_ramp(p.horizon_start, p.horizon_end, distance);
   w.coverage = mix(w.coverage, p.horizon_coverage, bias);
   w.type = mix(w.type, Scalar(0.5), bias);
+  // The scale applies last: 0 empties the sky, horizon rule and rain included.
+  w.coverage = saturate1(w.coverage * p.coverage_scale);
   return w;
 }
 

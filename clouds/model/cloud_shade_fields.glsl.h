@@ -19,7 +19,7 @@
   SC_FIELD(wind_x)             // m: wind offset (velocity x time) along x
   SC_FIELD(wind_z)             // m: wind offset along z
   // Shape.
-  SC_FIELD(coverage_scale)     // 1: multiplies the weather map's coverage
+  SC_FIELD(coverage_scale)     // 1: multiplies the final coverage (0: no clouds)
   SC_FIELD(erosion)            // 1: strength of the detail erosion
   SC_FIELD(height_shaping)     // 1: 1 = HZD height gradients, 0 = uniform slab (tests)
   SC_FIELD(horizon_rule)       // 0 or 1

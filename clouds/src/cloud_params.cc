@@ -47,7 +47,7 @@ const std::vector<CloudParamSpec>& CloudParameterSpecs() {
       {"wind_speed", "m/s", 0.0, 100.0, 10.0, S::kReal, "wind speed; the clouds move by speed x --cloud-time",
        SC_CLOUD_FIELD(wind_speed_m_s)},
       // Shape.
-      {"coverage_scale", "1", 0.0, 2.0, 1.0, S::kReal, "multiplies the weather map's coverage (clamped to 1)",
+      {"coverage_scale", "1", 0.0, 2.0, 1.0, S::kReal, "multiplies the coverage after precipitation and the horizon rule (clamped to 1; 0: no clouds)",
        SC_CLOUD_FIELD(coverage_scale)},
       {"erosion", "1", 0.0, 0.9, 0.35, S::kReal, "strength of the detail noise's erosion of the base shape's edges",
        SC_CLOUD_FIELD(erosion)},
