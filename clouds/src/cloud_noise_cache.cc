@@ -1,0 +1,137 @@
+// The on-disk cache of generated cloud noise: one file per (generator version, seed),
+// written atomically and trusted only after its header and sha256 check out. Reading the
+// 33 MB file and hashing it is cheaper than regenerating (measured on this
+// machine: 0.25 s to load and verify vs 0.7-2.7 s to generate).
+//
+// File layout (host byte order, little-endian on every platform skycal builds for):
+//   bytes  0..7   magic "SKYCLDNZ"
+//          8..11  uint32 generator version (kCloudNoiseVersion)
+//         12..23  uint32 base, detail, curl sizes (128, 32, 128)
+//         24..31  uint64 seed
+//         32..95  sha256 of the payload, 64 lowercase hex digits
+//         96..    payload: base, detail, curl floats in the contract order
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+
+#include "skycal/clouds/cloud_noise.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/core/sha256.h"
+
+namespace skycal::clouds {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'K', 'Y', 'C', 'L', 'D', 'N', 'Z'};
+constexpr size_t kHeaderBytes = 96;
+
+struct Header {
+  char magic[8];
+  uint32_t version;
+  uint32_t sizes[3];
+  uint64_t seed;
+  char sha256[64];
+};
+static_assert(sizeof(Header) == kHeaderBytes, "cache header layout");
+
+size_t BaseCount() { return size_t{CloudNoise::kBaseSize} * CloudNoise::kBaseSize * CloudNoise::kBaseSize * 4; }
+size_t DetailCount() { return size_t{CloudNoise::kDetailSize} * CloudNoise::kDetailSize * CloudNoise::kDetailSize * 3; }
+size_t CurlCount() { return size_t{CloudNoise::kCurlSize} * CloudNoise::kCurlSize * 3; }
+size_t PayloadBytes() { return (BaseCount() + DetailCount() + CurlCount()) * sizeof(float); }
+
+std::string CachePath(const std::string& dir, uint64_t seed) {
+  return (std::filesystem::path(dir) /
+          ("cloud_noise_v" + std::to_string(kCloudNoiseVersion) + "_seed" + std::to_string(seed) + ".bin"))
+      .string();
+}
+
+std::string Serialize(const CloudNoise& noise) {
+  Header h{};
+  std::memcpy(h.magic, kMagic, sizeof kMagic);
+  h.version = kCloudNoiseVersion;
+  h.sizes[0] = CloudNoise::kBaseSize;
+  h.sizes[1] = CloudNoise::kDetailSize;
+  h.sizes[2] = CloudNoise::kCurlSize;
+  h.seed = noise.seed;
+  std::memcpy(h.sha256, noise.sha256.data(), std::min<size_t>(noise.sha256.size(), sizeof h.sha256));
+  std::string bytes(reinterpret_cast<const char*>(&h), sizeof h);
+  bytes.reserve(kHeaderBytes + PayloadBytes());
+  for (const auto* v : {&noise.base, &noise.detail, &noise.curl})
+    bytes.append(reinterpret_cast<const char*>(v->data()), v->size() * sizeof(float));
+  return bytes;
+}
+
+std::vector<float> Floats(const std::string& bytes, size_t offset, size_t count) {
+  std::vector<float> v(count);
+  std::memcpy(v.data(), bytes.data() + offset, count * sizeof(float));
+  return v;
+}
+
+// Why the cache bytes cannot be trusted, or "" when `noise` now holds them.
+std::string Parse(const std::string& bytes, uint64_t seed, CloudNoise* noise) {
+  if (bytes.size() != kHeaderBytes + PayloadBytes())
+    return std::to_string(bytes.size()) + " bytes, expected " + std::to_string(kHeaderBytes + PayloadBytes());
+  Header h;
+  std::memcpy(&h, bytes.data(), sizeof h);
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) return "not a skycal cloud noise cache (bad magic)";
+  if (h.version != kCloudNoiseVersion) return "generator version " + std::to_string(h.version);
+  if (h.sizes[0] != CloudNoise::kBaseSize || h.sizes[1] != CloudNoise::kDetailSize ||
+      h.sizes[2] != CloudNoise::kCurlSize)
+    return "texture sizes differ from 128/32/128";
+  if (h.seed != seed) return "seed " + std::to_string(h.seed) + ", expected " + std::to_string(seed);
+  const std::string sha = Sha256Hex(bytes.substr(kHeaderBytes));
+  if (sha != std::string(h.sha256, sizeof h.sha256)) return "sha256 of the payload does not match its header";
+  noise->seed = seed;
+  noise->base = Floats(bytes, kHeaderBytes, BaseCount());
+  noise->detail = Floats(bytes, kHeaderBytes + BaseCount() * sizeof(float), DetailCount());
+  noise->curl = Floats(bytes, kHeaderBytes + (BaseCount() + DetailCount()) * sizeof(float), CurlCount());
+  noise->sha256 = sha;
+  return "";
+}
+
+void Warn(const std::string& message) { std::cerr << "skycal: warning: " << message << "\n"; }
+
+// Writes the cache; a directory that cannot be made or written costs a warning only.
+void TryWriteCache(const CloudNoise& noise, const std::string& dir, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  try {
+    WriteFileAtomically(path, Serialize(noise));
+  } catch (const Error& e) {
+    Warn("cloud noise cache not written (" + std::string(e.what()) + "); using the generated noise");
+  }
+}
+
+}  // namespace
+
+CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir) {
+  if (cache_dir.empty()) return GenerateCloudNoise(seed);
+  const std::string path = CachePath(cache_dir, seed);
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) {
+    std::string why;
+    try {
+      CloudNoise noise;
+      why = Parse(ReadFile(path), seed, &noise);
+      if (why.empty()) return noise;
+    } catch (const Error& e) {
+      why = e.what();
+    }
+    Warn("cloud noise cache " + path + " is corrupt (" + why + "); regenerating it");
+  }
+  CloudNoise noise = GenerateCloudNoise(seed);
+  TryWriteCache(noise, cache_dir, path);
+  return noise;
+}
+
+std::string DefaultCloudNoiseCacheDir() {
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg && xdg[0] == '/') return (std::filesystem::path(xdg) / "skycal").string();
+  const char* home = std::getenv("HOME");
+  if (home && home[0] != '\0') return (std::filesystem::path(home) / ".cache" / "skycal").string();
+  return "";
+}
+
+}  // namespace skycal::clouds
