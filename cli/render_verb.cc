@@ -83,7 +83,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   std::vector<NamedPath> inputs = PresetInputs("--preset", preset_path);
   for (const NamedPath& p : CloudInputs(o.clouds, preset_path)) inputs.push_back(p);
   RefuseOutputsOverInputs(outputs, inputs);
-  RefuseOutputsOverInputs({outputs.back()}, {outputs.front()});
+  if (!o.out_png.empty()) RefuseOutputsOverInputs({outputs.back()}, {outputs.front()});  // --png vs --out
   // Fail on unwritable outputs before spending time rendering.
   { AtomicOutput probe(o.out_exr); }
   if (!o.out_png.empty()) { AtomicOutput probe(o.out_png); }

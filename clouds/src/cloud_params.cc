@@ -49,7 +49,7 @@ const std::vector<CloudParamSpec>& CloudParameterSpecs() {
       // Shape.
       {"coverage_scale", "1", 0.0, 2.0, 1.0, S::kReal, "multiplies the coverage after precipitation and the horizon rule (clamped to 1; 0: no clouds)",
        SC_CLOUD_FIELD(coverage_scale)},
-      {"erosion", "1", 0.0, 0.9, 0.35, S::kReal, "strength of the detail noise's erosion of the base shape's edges",
+      {"erosion", "1", 0.0, 0.9, 0.45, S::kReal, "strength of the detail noise's erosion of the base shape's edges",
        SC_CLOUD_FIELD(erosion)},
       {"height_shaping", "1", 0.0, 1.0, 1.0, S::kReal,
        "1: HZD's height gradients by cloud type and thinner bottoms; 0: density uniform through the layer (a slab)",
@@ -74,7 +74,7 @@ const std::vector<CloudParamSpec>& CloudParameterSpecs() {
        SC_CLOUD_FIELD(phase_g2)},
       {"phase_blend", "1", 0.0, 1.0, 0.25, S::kReal, "weight of the g2 lobe: phase = mix(HG(g1), HG(g2), blend)",
        SC_CLOUD_FIELD(phase_blend)},
-      {"powder_strength", "1", 0.0, 1.0, 0.6, S::kReal,
+      {"powder_strength", "1", 0.0, 1.0, 0.4, S::kReal,
        "blend of Beer's law toward Beer-Powder 2 exp(-d) (1 - exp(-2d)) for the sun light (dark edges)",
        SC_CLOUD_FIELD(powder_strength)},
       {"powder_view_fade", "1", 0.0, 1.0, 1.0, S::kReal,

@@ -37,7 +37,7 @@ struct CloudParams {
   double wind_speed_m_s = 10.0;
   // Shape.
   double coverage_scale = 1.0;
-  double erosion = 0.35;
+  double erosion = 0.45;
   double height_shaping = 1.0;
   double horizon_rule = 1.0;  // 0 off, 1 on
   double horizon_start_m = 15000.0;
@@ -49,7 +49,7 @@ struct CloudParams {
   double phase_g1 = 0.5;
   double phase_g2 = 0.9;
   double phase_blend = 0.25;
-  double powder_strength = 0.6;
+  double powder_strength = 0.4;
   double powder_view_fade = 1.0;
   double rain_absorption = 1.5;
   double ambient_strength = 1.0;
