@@ -1,10 +1,12 @@
 // Texture reads of the cloud model with exact filtering weights computed here, in the
 // shared source (the LUT's rule: no hardware filtering in anything the fit differentiates
 // or the parity test compares). The backend supplies one hook,
-//   Scalar cloud_texel(int texture, int index)
-// the float at `index` of a texture's array (clouds/include/skycal/clouds/cloud_textures.h
-// fixes the layouts): GLSL reads std430 float storage buffers, C++ the CloudNoise and
-// WeatherMap vectors. Every texture wraps (tiles).
+//   Texel4 cloud_texel4(int texture, int texel)
+// every channel of texel number `texel` (row-major, x fastest, as
+// clouds/include/skycal/clouds/cloud_textures.h lays them out; unused channels 0): C++
+// reads the CloudNoise and WeatherMap vectors; GLSL reads vec4 storage buffers (the host
+// pads 3-channel textures to 4), one 16-byte load per texel instead of one per channel,
+// which lavapipe's gathers make the march's main cost. Every texture wraps (tiles).
 
 // Texture sizes (CloudNoise::kBaseSize etc.; the C++ side checks them with static_asserts).
 SC_CONST_INT(CLOUD_BASE_SIZE, 128)
@@ -15,12 +17,14 @@ SC_CONST_INT(CLOUD_TEX_DETAIL, 1)   // 32^3 x 3
 SC_CONST_INT(CLOUD_TEX_CURL, 2)     // 128^2 x 3
 SC_CONST_INT(CLOUD_TEX_WEATHER, 3)  // width x height x 3
 
+#ifndef CLOUD_TEXEL4_DECLARED  // the shader declares it before its hook
 struct Texel4 {
   Scalar r;
   Scalar g;
   Scalar b;
   Scalar a;
 };
+#endif
 
 // One axis of a wrapped linear filter: texel coordinate u (texel centres at i + 0.5)
 // -> the two texel indices and the weight of the second.
@@ -53,18 +57,19 @@ Texel4 texel4_zero() {
   return t;
 }
 
-// Adds weight x texel (channels 0..channels-1) at `index` (the texel's first float).
-Texel4 texel4_accumulate(Texel4 acc, int tex, int index, int channels, Scalar weight) {
-  acc.r = acc.r + weight * cloud_texel(tex, index);
-  if (channels > 1) acc.g = acc.g + weight * cloud_texel(tex, index + 1);
-  if (channels > 2) acc.b = acc.b + weight * cloud_texel(tex, index + 2);
-  if (channels > 3) acc.a = acc.a + weight * cloud_texel(tex, index + 3);
+// Adds weight x texel number `texel`.
+Texel4 texel4_accumulate(Texel4 acc, int tex, int texel, Scalar weight) {
+  Texel4 t = cloud_texel4(tex, texel);
+  acc.r = acc.r + weight * t.r;
+  acc.g = acc.g + weight * t.g;
+  acc.b = acc.b + weight * t.b;
+  acc.a = acc.a + weight * t.a;
   return acc;
 }
 
-// Trilinear read of an n^3 volume with `channels` channels at texel coordinates (u, v, w)
-// (x, y, z; one unit = one texel).
-Texel4 sample_volume(int tex, int n, int channels, Scalar u, Scalar v, Scalar w) {
+// Trilinear read of an n^3 volume at texel coordinates (u, v, w) (x, y, z; one unit = one
+// texel).
+Texel4 sample_volume(int tex, int n, Scalar u, Scalar v, Scalar w) {
   WrapAxis ax = wrap_axis(u, n);
   WrapAxis ay = wrap_axis(v, n);
   WrapAxis az = wrap_axis(w, n);
@@ -74,27 +79,27 @@ Texel4 sample_volume(int tex, int n, int channels, Scalar u, Scalar v, Scalar w)
   Scalar gz0 = Scalar(1.0) - az.f;
   int z0 = az.i0 * n;
   int z1 = az.i1 * n;
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i0) * channels, channels, gz0 * gy0 * gx0);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i1) * channels, channels, gz0 * gy0 * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i0) * channels, channels, gz0 * ay.f * gx0);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i1) * channels, channels, gz0 * ay.f * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i0) * channels, channels, az.f * gy0 * gx0);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i1) * channels, channels, az.f * gy0 * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i0) * channels, channels, az.f * ay.f * gx0);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i1) * channels, channels, az.f * ay.f * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i0), gz0 * gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i1), gz0 * gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i0), gz0 * ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i1), gz0 * ay.f * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i0), az.f * gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i1), az.f * gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i0), az.f * ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i1), az.f * ay.f * ax.f);
   return acc;
 }
 
-// Bilinear read of a width x height image with 3 channels at texel coordinates (u, v).
+// Bilinear read of a width x height image at texel coordinates (u, v).
 Texel4 sample_image(int tex, int width, int height, Scalar u, Scalar v) {
   WrapAxis ax = wrap_axis(u, width);
   WrapAxis ay = wrap_axis(v, height);
   Texel4 acc = texel4_zero();
   Scalar gx0 = Scalar(1.0) - ax.f;
   Scalar gy0 = Scalar(1.0) - ay.f;
-  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i0) * 3, 3, gy0 * gx0);
-  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i1) * 3, 3, gy0 * ax.f);
-  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i0) * 3, 3, ay.f * gx0);
-  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i1) * 3, 3, ay.f * ax.f);
+  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i0), gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i1), gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i0), ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i1), ay.f * ax.f);
   return acc;
 }

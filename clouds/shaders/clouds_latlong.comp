@@ -9,12 +9,12 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 // 0: CloudShadeParams in cloud_shade_fields.glsl.h's order, then image width and height.
 layout(std430, set = 0, binding = 0) readonly buffer ParamBuffer { float P[]; };
-// 1-4: the textures, float arrays in cloud_textures.h's layout (exact filtering in the
-// shared source; no samplers).
-layout(std430, set = 0, binding = 1) readonly buffer BaseBuffer { float base_noise[]; };
-layout(std430, set = 0, binding = 2) readonly buffer DetailBuffer { float detail_noise[]; };
-layout(std430, set = 0, binding = 3) readonly buffer CurlBuffer { float curl_noise[]; };
-layout(std430, set = 0, binding = 4) readonly buffer WeatherBuffer { float weather_map[]; };
+// 1-4: the textures in cloud_textures.h's texel order, one vec4 per texel (the host pads
+// the RGB ones with a zero channel): exact filtering in the shared source, no samplers.
+layout(std430, set = 0, binding = 1) readonly buffer BaseBuffer { vec4 base_noise[]; };
+layout(std430, set = 0, binding = 2) readonly buffer DetailBuffer { vec4 detail_noise[]; };
+layout(std430, set = 0, binding = 3) readonly buffer CurlBuffer { vec4 curl_noise[]; };
+layout(std430, set = 0, binding = 4) readonly buffer WeatherBuffer { vec4 weather_map[]; };
 // 5: (sin, cos) of latitude per row [0, height), of longitude per column [height, height + width),
 // filled by the host in double (shader sin/cos carry ~1e-6 error).
 layout(std430, set = 0, binding = 5) readonly buffer TrigBuffer { vec2 trig[]; };
@@ -23,13 +23,28 @@ layout(std430, set = 0, binding = 6) writeonly buffer OutBuffer { float out_rt[]
 
 #include "glsl_prelude.glsl.h"
 
-float cloud_texel(int texture, int index) {
-  if (texture == 0) return base_noise[index];
-  if (texture == 1) return detail_noise[index];
-  if (texture == 2) return curl_noise[index];
-  return weather_map[index];
+struct Texel4 {
+  float r;
+  float g;
+  float b;
+  float a;
+};
+
+Texel4 cloud_texel4(int texture, int texel) {
+  vec4 v;
+  if (texture == 0) v = base_noise[texel];
+  else if (texture == 1) v = detail_noise[texel];
+  else if (texture == 2) v = curl_noise[texel];
+  else v = weather_map[texel];
+  Texel4 t;
+  t.r = v.x;
+  t.g = v.y;
+  t.b = v.z;
+  t.a = v.w;
+  return t;
 }
 
+#define CLOUD_TEXEL4_DECLARED
 #include "cloud_textures.glsl.h"
 #include "cloud_shade_params.glsl.h"
 #include "cloud_geometry.glsl.h"

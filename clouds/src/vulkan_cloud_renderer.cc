@@ -1,5 +1,6 @@
 // The Vulkan cloud renderer on gpu::ComputePipeline (clouds/shaders/clouds_latlong.comp).
-// The textures are uploaded once per change of noise or weather map (keyed by content);
+// The textures are uploaded once per change of noise or weather map (keyed by content),
+// the RGB ones padded to one vec4 per texel;
 // parameters and the direction table per render.
 //
 // Workgroups of 8 x 8 pixels, not the sky's one image row: the march's cost varies by
@@ -90,19 +91,31 @@ class VulkanCloudRenderer final : public CloudRenderer {
     std::memcpy(pipeline_.Map(binding, v.size() * sizeof(float)), v.data(), v.size() * sizeof(float));
     pipeline_.Flush(binding);
   }
+  // An RGB texture as one vec4 per texel (alpha 0): the shader loads 16 bytes per texel.
+  void UploadPadded(uint32_t binding, const std::vector<float>& rgb) {
+    const size_t texels = rgb.size() / 3;
+    float* dst = static_cast<float*>(pipeline_.Map(binding, texels * 4 * sizeof(float)));
+    for (size_t i = 0; i < texels; ++i) {
+      dst[4 * i] = rgb[3 * i];
+      dst[4 * i + 1] = rgb[3 * i + 1];
+      dst[4 * i + 2] = rgb[3 * i + 2];
+      dst[4 * i + 3] = 0.0f;
+    }
+    pipeline_.Flush(binding);
+  }
   void UploadTextures(const CloudNoise& noise, const WeatherMap& weather) {
     const uint64_t noise_key = noise.sha256.empty() ? Fnv(noise.curl, Fnv(noise.detail, Fnv(noise.base)))
                                                     : Fnv(std::vector<float>{}, std::hash<std::string>{}(noise.sha256));
     if (noise_key != noise_key_ || !noise_uploaded_) {
       Upload(kBase, noise.base);
-      Upload(kDetail, noise.detail);
-      Upload(kCurl, noise.curl);
+      UploadPadded(kDetail, noise.detail);
+      UploadPadded(kCurl, noise.curl);
       noise_key_ = noise_key;
       noise_uploaded_ = true;
     }
     const uint64_t weather_key = Fnv(weather.rgb, static_cast<uint64_t>(weather.width) * 65537u + weather.height);
     if (weather_key != weather_key_ || !weather_uploaded_) {
-      Upload(kWeather, weather.rgb);
+      UploadPadded(kWeather, weather.rgb);
       weather_key_ = weather_key;
       weather_uploaded_ = true;
     }

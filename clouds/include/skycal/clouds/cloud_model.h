@@ -2,7 +2,8 @@
 // the scalar type (double: the reference; float: the CPU path that takes the shader's
 // decisions; ceres::Jet: the lighting fit) and the texture source, as render::SkyModel.
 // TextureSource provides `template <class S> S texel(int texture, int index) const`
-// (cloud_textures.glsl.h's hook; CpuCloudTextures below for CloudNoise + WeatherMap).
+// (the float at `index` of a texture's array; CpuCloudTextures below for CloudNoise +
+// WeatherMap); the model turns it into cloud_textures.glsl.h's texel hook.
 #pragma once
 #include "../../../../render/model/glsl_compat.h"
 #include "skycal/clouds/cloud_textures.h"
@@ -17,9 +18,19 @@ struct CloudModel {
 
   explicit CloudModel(const TextureSource& source) : texture_source(source) {}
   const TextureSource& texture_source;
-  Scalar cloud_texel(int texture, int index) const { return texture_source.template texel<Scalar>(texture, index); }
 
 #include "../../../model/cloud_textures.glsl.h"
+  // The shared source's texture hook (cloud_textures.glsl.h): base RGBA, the others RGB.
+  Texel4 cloud_texel4(int texture, int texel) const {
+    const int channels = texture == CLOUD_TEX_BASE ? 4 : 3;
+    const int i = texel * channels;
+    Texel4 t;
+    t.r = texture_source.template texel<Scalar>(texture, i);
+    t.g = texture_source.template texel<Scalar>(texture, i + 1);
+    t.b = texture_source.template texel<Scalar>(texture, i + 2);
+    t.a = channels == 4 ? texture_source.template texel<Scalar>(texture, i + 3) : Scalar(0.0);
+    return t;
+  }
 #include "../../../model/cloud_shade_params.glsl.h"
 #include "../../../model/cloud_geometry.glsl.h"
 #include "../../../model/cloud_density.glsl.h"
