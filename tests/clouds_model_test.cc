@@ -2,6 +2,7 @@
 // Beer transmittance of a uniform slab and of a shaped layer within the march's step-error
 // bound, Henyey-Greenstein normalisation, energy conservation of single scattering,
 // Beer-Powder values, coverage 0 -> the clear sky exactly, and the parameter section.
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -243,6 +244,51 @@ TEST(CloudsModel, CompositeIsSkyTimesTransmittancePlusClouds) {
   EXPECT_EQ(CompositeClouds(sky, c).pixels, (std::vector<float>{1.0f, 1.5f, 2.0f, 1, 0, 0}));
   c.transmittance = {1.0f};
   EXPECT_THROW(CompositeClouds(sky, c), Error);
+}
+
+// The lighting fit (issue 11) differentiates the model: the shared source instantiates on
+// ceres::Jet, and its derivatives of a whole march with respect to lighting parameters
+// match central finite differences of the double model (relative 1e-5: the step h = 1e-6
+// relative leaves truncation ~h^2 and rounding ~1e-16/h ~ 1e-10).
+TEST(CloudsModel, JetDerivativesOfTheMarchMatchFiniteDifferences) {
+  using J = ceres::Jet<double, 3>;
+  Fixture f;
+  f.noise = testing::SinusoidCloudNoise();
+  f.weather = testing::PatchyWeather(0.6f, 0.5f);
+  f.request.sun_dir = {0.4, 0.5, 0.77};
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModel<J, CpuCloudTextures> mj(tex);
+  CloudModelD md(tex);
+  auto js = CastCloudShade<CloudModel<J, CpuCloudTextures>::CloudShadeParams>(s);
+  js.g1 = J(s.g1, 0);
+  js.powder_strength = J(s.powder_strength, 1);
+  js.ambient_strength = J(s.ambient_strength, 2);
+  int checked = 0;
+  for (double elevation : {5.0, 20.0, 60.0}) {
+    for (double azimuth : {0.0, 120.0, 250.0}) {
+      const auto dir = Dir(elevation, azimuth);
+      const auto r = mj.cloud_march(glsl::Vec3<J>(J(dir.x), J(dir.y), J(dir.z)), js);
+      if (r.transmittance.a > 0.999) continue;  // no cloud on this ray
+      double* fields[3] = {nullptr, nullptr, nullptr};
+      CloudShadeD sp = s;
+      fields[0] = &sp.g1;
+      fields[1] = &sp.powder_strength;
+      fields[2] = &sp.ambient_strength;
+      for (int k = 0; k < 3; ++k) {
+        const double h = 1e-6 * std::max(std::abs(*fields[k]), 1.0), v = *fields[k];
+        *fields[k] = v + h;
+        const double up = md.cloud_march(dir, sp).radiance.y;
+        *fields[k] = v - h;
+        const double down = md.cloud_march(dir, sp).radiance.y;
+        *fields[k] = v;
+        const double fd = (up - down) / (2.0 * h);
+        EXPECT_NEAR(r.radiance.y.v[k], fd, 1e-5 * std::abs(r.radiance.y.a) + 1e-9) << elevation << " " << azimuth << " " << k;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 3);
 }
 
 TEST(CloudsParams, SectionRoundTripsAndRefusesBadFields) {

@@ -152,19 +152,6 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   return s;
 }
 
-CloudShadeF ToFloat(const CloudShadeD& d) {
-  CloudShadeF f{};
-#define SC_FIELD(name) f.name = static_cast<float>(d.name);
-#define SC_FIELD_VEC3(name) \
-  f.name = glsl::Vec3<float>(static_cast<float>(d.name.x), static_cast<float>(d.name.y), static_cast<float>(d.name.z));
-#define SC_FIELD_INT(name) f.name = d.name;
-#include "../model/cloud_shade_fields.glsl.h"
-#undef SC_FIELD
-#undef SC_FIELD_VEC3
-#undef SC_FIELD_INT
-  return f;
-}
-
 std::vector<float> PackCloudShade(const CloudShadeD& d) {
   std::vector<float> v;
 #define SC_FIELD(name) v.push_back(static_cast<float>(d.name));
