@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line weather_map)
 
 bash scripts/setup.sh --deps-only
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -36,7 +36,8 @@ options_for() {
     json_file)     echo "-max_len=8192 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/json.dict" ;;
     exr_frame)     echo "-max_len=65536 -rss_limit_mb=2048 -timeout=60 -dict=fuzz/exr.dict" ;;
     command_line)  echo "-max_len=4096 -rss_limit_mb=2048 -timeout=20" ;;
-    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame command_line)" >&2; return 1 ;;
+    weather_map)   echo "-max_len=65536 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/exr.dict" ;;
+    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame command_line weather_map)" >&2; return 1 ;;
   esac
 }
 

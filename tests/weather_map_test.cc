@@ -94,6 +94,16 @@ TEST(WeatherMap, NoiseMapIsDeterministicAndTiles) {
     }
 }
 
+TEST(WeatherMap, FineCellsOnALargeMapUseAPlanarWorleyTable) {
+  // 512 cells across a 1024-texel map: a cubic Worley table would be 512^3 points, 1.6 GB;
+  // the planar one is 3 MB. The map is valid and still has the requested mean.
+  WeatherNoiseOptions o;
+  o.coverage_cells = 512;
+  const WeatherMap m = NoiseWeatherMap(2, 1024, 50000.0, o);
+  EXPECT_EQ(m.width, 1024);
+  EXPECT_NEAR(ChannelMean(m, 0), o.mean_coverage, 1e-3);
+}
+
 TEST(WeatherMap, NoiseOptionsNameTheBadField) {
   auto invalid = [](WeatherNoiseOptions o, const std::string& field) {
     std::string why;
@@ -195,7 +205,16 @@ TEST(WeatherMapFile, WrongSizesAreNamed) {
   ExpectErrorNaming([&] { LoadWeatherMap(dir / "six.exr", 1000.0); }, {"six.exr", "6 x 6"});
   WriteMap(dir / "tiny.exr", 2, 2);
   ExpectErrorNaming([&] { LoadWeatherMap(dir / "tiny.exr", 1000.0); }, {"tiny.exr", "2 x 2", "from 4 to 4096"});
-  // Too large, checked on the map itself (an 8192^2 file would be 800 MB): size comes first.
+  // Too large: refused by the header, before the pixels. The file holds a header claiming
+  // 8192 x 8192 and no pixels (an 800 MB float map, had it been read).
+  {
+    Imf::Header header(8192, 8192);
+    for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile out((dir / "huge.exr").c_str(), header);
+  }
+  ASSERT_LT(std::filesystem::file_size(dir / "huge.exr"), 200000u);
+  ExpectErrorNaming([&] { LoadWeatherMap(dir / "huge.exr", 1000.0); }, {"huge.exr", "8192 x 8192", "from 4 to 4096"});
+  // And on a map in memory: size comes first.
   WeatherMap big;
   big.width = big.height = 8192;
   big.extent_m = 1000.0;

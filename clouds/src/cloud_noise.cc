@@ -4,9 +4,10 @@
 // 128^2 RGB curl-noise texture. Every octave samples a whole number of lattice cells per
 // tile, so every texture tiles (noise_primitives.h).
 //
-// Measured (Release, 2 threads, this 2-core machine): 1.4 s of CPU for all three textures,
-// ~0.7 s wall when the cores are free (2.7 s at load average 7), nearly all of it the base
-// volume's 2M texels x (5 Worley + 5 Perlin octaves), about half each.
+// Measured (Release, 2 threads, this 2-core machine, median of 5): 1.4 s of CPU for all
+// three textures, so ~0.7 s wall on two free cores; the machine was never idle while this
+// was measured: 3.0 s wall at load average 11. Nearly all of it is the base volume's 2M
+// texels x (5 Worley + 5 Perlin octaves), about half each (perf).
 #include "skycal/clouds/cloud_noise.h"
 
 #include <algorithm>
@@ -34,10 +35,11 @@ constexpr int kBaseWorleyCells[] = {4, 8, 16, 32, 64};
 // Detail volume: 2, 4, 8 cells base frequency; octaves above 16 cells (2 texels a cell in
 // 32^3) are dropped and the remaining weights renormalised (noise::WorleyFbm).
 constexpr int kDetailWorleyCells[] = {2, 4, 8, 16};
-// Curl: stream functions of Perlin fBm from 4 cells per tile over 3 octaves (to 16 cells,
-// 8 texels a cell): turbulence a few times finer than the base shape, smooth at texel scale
-// so the finite differences below are close to the derivatives.
-constexpr int kCurlCells = 4, kCurlOctaves = 3;
+// Curl: stream functions of Perlin fBm from 4 cells per tile over 2 octaves (to 8 cells,
+// 16 texels a cell): swirls smooth at texel scale, so the finite differences below are
+// close to the derivatives. A derivative weighs octave k by 2^k, undoing fBm's 1/2^k: a
+// third octave (tried) made the field as busy as its finest octave.
+constexpr int kCurlCells = 4, kCurlOctaves = 2;
 
 // An n^3 volume of `channels` channels; texel(x, y, z, t) writes texel (x, y, z)'s
 // channels to t. Runs on 2 threads (the machine has 2 cores), interleaved z slices; each

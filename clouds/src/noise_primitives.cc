@@ -80,11 +80,11 @@ float PeriodicPerlinFbm(double x, double y, double z, int period, int octaves, u
   return static_cast<float>(sum / total);
 }
 
-WorleyGrid::WorleyGrid(int cells, uint64_t seed, uint32_t salt)
-    : cells_(cells), offsets_(static_cast<size_t>(cells) * cells * cells * 3) {
+WorleyGrid::WorleyGrid(int cells, uint64_t seed, uint32_t salt, int depth)
+    : cells_(cells), depth_(depth > 0 ? depth : cells), offsets_(static_cast<size_t>(cells) * cells * depth_ * 3) {
   const uint64_t key = NoiseKey(seed, salt);
   size_t i = 0;
-  for (int z = 0; z < cells; ++z)
+  for (int z = 0; z < depth_; ++z)
     for (int y = 0; y < cells; ++y)
       for (int x = 0; x < cells; ++x) {
         // Three 10-bit fractions from one hash, one per axis: 1024 positions per axis in
@@ -100,16 +100,16 @@ float WorleyGrid::F1(double x, double y, double z) const {
   const double fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
   const float px = static_cast<float>(x - fx), py = static_cast<float>(y - fy), pz = static_cast<float>(z - fz);
   // Neighbour cell indices, wrapped once here rather than 39 integer divisions per query.
-  auto neighbours = [&](double f, int out[3]) {
-    const int c = Wrap(static_cast<int>(f), cells_);
-    out[0] = c == 0 ? cells_ - 1 : c - 1;
+  auto neighbours = [](double f, int n, int out[3]) {
+    const int c = Wrap(static_cast<int>(f), n);
+    out[0] = c == 0 ? n - 1 : c - 1;
     out[1] = c;
-    out[2] = c + 1 == cells_ ? 0 : c + 1;
+    out[2] = c + 1 == n ? 0 : c + 1;
   };
   int nx[3], ny[3], nz[3];
-  neighbours(fx, nx);
-  neighbours(fy, ny);
-  neighbours(fz, nz);
+  neighbours(fx, cells_, nx);
+  neighbours(fy, cells_, ny);
+  neighbours(fz, depth_, nz);
   float best = 1e30f;
   for (int oz = 0; oz < 3; ++oz)
     for (int oy = 0; oy < 3; ++oy) {

@@ -27,25 +27,27 @@ float PeriodicPerlin(double x, double y, double z, int period, uint64_t seed, ui
 // divided by the amplitude sum, so the result stays in about [-1, 1].
 float PeriodicPerlinFbm(double x, double y, double z, int period, int octaves, uint64_t seed, uint32_t salt);
 
-// Worley noise on a periodic grid of `cells`^3 cells, one feature point per cell at a
-// hashed position inside it. The points are drawn once (a table of cells^3 points), since
-// a texture evaluates each octave at millions of texels.
+// Worley noise on a periodic grid of cells x cells x depth cells (depth = cells unless
+// given), one feature point per cell at a hashed position inside it. The points are drawn
+// once (a table), since a texture evaluates each octave at millions of texels. A 2D use
+// (the weather map samples the plane z = 0.5) passes depth 1: a table of cells^2 points
+// rather than cells^3, which at 1024 cells would be 12 GB.
 class WorleyGrid {
  public:
-  WorleyGrid(int cells, uint64_t seed, uint32_t salt);
+  WorleyGrid(int cells, uint64_t seed, uint32_t salt, int depth = 0);
   int cells() const { return cells_; }
   // Distance from (x, y, z) (in cells) to the nearest feature point, in cells: F1 of
   // Worley 1996. With one point per cell the nearest one lies in the 3x3x3 block around
   // the query's cell, so the search visits those 27 cells only.
-  // The query must lie in [0, cells) on each axis (texel centres do).
+  // The query must lie in [0, cells) on x and y and [0, depth) on z (texel centres do).
   float F1(double x, double y, double z) const;
   // 1 - F1 clamped to [0, 1]: "inverted" Worley, bright at the feature points, the
   // billows of the Horizon Zero Dawn talk.
   float Inverted(double x, double y, double z) const;
 
  private:
-  int cells_;
-  std::vector<float> offsets_;  // cells^3 * 3 in-cell positions in [0, 1)
+  int cells_, depth_;
+  std::vector<float> offsets_;  // cells^2 * depth * 3 in-cell positions in [0, 1)
 };
 
 // The fBm of Worley octaves the talk layers "like the standard Perlin fBm": weights

@@ -18,13 +18,6 @@ constexpr uint32_t kSaltCoverage = 0x1000, kSaltCoverageWorley = 0x1100, kSaltPr
 
 bool IsPowerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
-void CheckSize(int width, int height, const std::string& origin) {
-  const std::string size = std::to_string(width) + " x " + std::to_string(height);
-  if (width != height || !IsPowerOfTwo(width) || width < kMinWeatherMapSize || width > kMaxWeatherMapSize)
-    throw Error(origin + ": weather map is " + size + " texels: expected a square power of two from " +
-                std::to_string(kMinWeatherMapSize) + " to " + std::to_string(kMaxWeatherMapSize) + " a side");
-}
-
 void CheckExtent(double extent_m, const std::string& origin) {
   if (!(extent_m > 0.0) || !(extent_m <= kMaxWeatherExtentM))
     throw Error(origin + ": weather map extent " + FormatNumber(extent_m) +
@@ -48,7 +41,7 @@ std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells,
   while (usable < octaves && (cells << usable) * 2 <= size) ++usable;
   std::vector<noise::WorleyGrid> grids;
   if (billows)
-    for (int k = 0; k < std::min(usable, 3); ++k) grids.emplace_back(cells << k, seed, kSaltCoverageWorley + k);
+    for (int k = 0; k < std::min(usable, 3); ++k) grids.emplace_back(cells << k, seed, kSaltCoverageWorley + k, 1);  // planar: depth 1
   std::vector<float> field(static_cast<size_t>(size) * size);
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) {
@@ -86,8 +79,15 @@ void RemapToMean(std::vector<float>& field, double target, double contrast) {
 
 }  // namespace
 
+void CheckWeatherMapSize(int width, int height, const std::string& origin) {
+  const std::string size = std::to_string(width) + " x " + std::to_string(height);
+  if (width != height || !IsPowerOfTwo(width) || width < kMinWeatherMapSize || width > kMaxWeatherMapSize)
+    throw Error(origin + ": weather map is " + size + " texels: expected a square power of two from " +
+                std::to_string(kMinWeatherMapSize) + " to " + std::to_string(kMaxWeatherMapSize) + " a side");
+}
+
 void ValidateWeatherMap(const WeatherMap& map, const std::string& origin) {
-  CheckSize(map.width, map.height, origin);
+  CheckWeatherMapSize(map.width, map.height, origin);
   CheckExtent(map.extent_m, origin);
   const size_t expected = static_cast<size_t>(map.width) * map.height * 3;
   if (map.rgb.size() != expected)
@@ -127,7 +127,7 @@ WeatherMap NoiseWeatherMap(uint64_t seed, int size, double extent_m, const Weath
   const std::string origin = "noise weather map";
   std::string why;
   if (!options.IsValid(&why)) throw Error(origin + ": " + why);
-  CheckSize(size, size, origin);
+  CheckWeatherMapSize(size, size, origin);
   if (size < 2 * options.coverage_cells)
     throw Error(origin + ": WeatherNoiseOptions.coverage_cells = " + std::to_string(options.coverage_cells) +
                 " is too fine for a " + std::to_string(size) + "-texel map: expected at most size / 2");

@@ -10,9 +10,16 @@ namespace skycal::clouds {
 WeatherMap LoadWeatherMap(const std::string& exr_path, double extent_m) {
   const std::string origin = "weather map " + exr_path;
   ExrRGB exr;
+  bool size_refused = false;
   try {
-    exr = ReadExrRGB(exr_path);
+    // The size rule runs on the header: an 8192^2 file is refused before 800 MB is read.
+    exr = ReadExrRGB(exr_path, [&](int w, int h) {
+      size_refused = true;
+      CheckWeatherMapSize(w, h, origin);
+      size_refused = false;
+    });
   } catch (const Error& e) {
+    if (size_refused) throw;  // already says what a weather map must be
     throw Error(std::string(e.what()) + " [weather map: expected an RGB EXR, R coverage, G precipitation, B cloud type]");
   }
   for (const std::string& c : exr.channels)

@@ -282,7 +282,9 @@ std::vector<float> ReadExrChannel(const std::string& path, const std::string& ch
   }
 }
 
-ExrRGB ReadExrRGB(const std::string& path) {
+ExrRGB ReadExrRGB(const std::string& path) { return ReadExrRGB(path, nullptr); }
+
+ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw Error(path + ": no such file (expected an OpenEXR image)");
@@ -292,6 +294,7 @@ ExrRGB ReadExrRGB(const std::string& path) {
   CheckAttributeSizes(path);
   try {
     const auto [w, h] = CheckReadableLayout(path);
+    if (check_size) check_size(w, h);
     Imf::InputFile file(path.c_str());
     const Imf::Header& header = file.header();
     const Imath::Box2i dw = header.dataWindow();

@@ -29,6 +29,8 @@ inline constexpr double kMaxWeatherExtentM = 1.0e6;
 // array's length, the extent, or the first texel that is NaN, infinite, negative or above
 // 1 (its x, y and channel).
 void ValidateWeatherMap(const WeatherMap& map, const std::string& origin);
+// The size part of it alone (LoadWeatherMap runs it on the EXR header, before the pixels).
+void CheckWeatherMapSize(int width, int height, const std::string& origin);
 
 // A 4x4 map of one coverage, precipitation and type (each in [0, 1]) over `extent_m`.
 WeatherMap UniformWeatherMap(double coverage, double precipitation, double type, double extent_m);

@@ -2,6 +2,7 @@
 // types in a file are kept out of ExrAttributes (they are not needed), never an error.
 #pragma once
 #include <array>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -56,6 +57,11 @@ struct ExrRGB {
 // the file and what is wrong: unreadable/truncated file, missing R/G/B channel, empty
 // data window, an image larger than the limits above (the message gives its size).
 ExrRGB ReadExrRGB(const std::string& path);
+// The same, calling `check_size(width, height)` on the header's data window before any
+// pixel is allocated: a reader with a tighter rule than the limits above (a weather map is
+// at most 4096 a side) refuses a file by its header, not after reading 6 GiB of it. The
+// check throws skycal::Error to refuse.
+ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size);
 
 // Extra single-channel float planes (e.g. masks) written after R, G, B, each
 // width * height floats, row-major. Same atomicity and errors as WriteExrRGB.
