@@ -106,6 +106,12 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   const auto t_init = Clock::now();
   auto renderer = render::CreateRenderer(o.backend, vk);
   Log("render", "backend: " + renderer->Describe());
+  // The cloud pipeline is created (lavapipe compiles the shader) before the render clock starts.
+  std::unique_ptr<clouds::CloudRenderer> cloud_renderer;
+  if (cloud_inputs) {
+    cloud_renderer = o.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer(o.vulkan_validation)
+                                                           : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
+  }
   render::RenderRequest request;
   request.sun_dir = sun;
   request.width = o.width;
@@ -119,8 +125,6 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   nlohmann::json clouds_summary = nullptr;
   if (cloud_inputs) {
     // The clouds over the sky (disc included: the clouds' transmittance hides it).
-    auto cloud_renderer = o.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer(o.vulkan_validation)
-                                                                : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
     clouds::CloudRenderRequest cr;
     cr.sun_dir = sun;
     cr.width = o.width;
