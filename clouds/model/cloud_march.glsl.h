@@ -77,53 +77,51 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   int guard = 8 * n + 64;
   for (int it = 0; it < guard; ++it) {
     if (!(t < seg.t1)) break;
+    // One weather + base evaluation serves both modes (on SIMD hardware, lanes in the cheap
+    // and the full mode share it instead of running two copies).
+    Scalar step = cheap == 1 ? cheap_dt : min(dt, seg.t1 - t);
+    Scalar tm = cheap == 1 ? min(t + Scalar(0.5) * cheap_dt, seg.t1) : t + Scalar(0.5) * step;
+    vec3 pos = view * tm;
+    Scalar alt = cloud_altitude(pos, p);
+    CloudWeather w = cloud_weather(pos.x, pos.z, tm, p);
+    Scalar d = cloud_base_density(pos.x, pos.z, alt, w, p);
     if (cheap == 1) {
-      Scalar tm = min(t + Scalar(0.5) * cheap_dt, seg.t1);
-      vec3 pos = view * tm;
-      Scalar alt = cloud_altitude(pos, p);
-      CloudWeather w = cloud_weather(pos.x, pos.z, tm, p);
-      if (cloud_base_density(pos.x, pos.z, alt, w, p) > Scalar(0.0)) {
+      if (d > Scalar(0.0)) {
         cheap = 0;
         empty = 0;
         // With the step back, full samples resume at the previous cheap sample; without
         // it, at this one (what lies between them is skipped, as HZD's naive version did).
         t = p.step_back == 1 ? max(tm - cheap_dt, seg.t0) : tm;
-        continue;
+      } else {
+        t = t + cheap_dt;
       }
-      t = t + cheap_dt;
-      continue;
-    }
-    Scalar step = min(dt, seg.t1 - t);
-    Scalar tm = t + Scalar(0.5) * step;
-    vec3 pos = view * tm;
-    Scalar alt = cloud_altitude(pos, p);
-    CloudWeather w = cloud_weather(pos.x, pos.z, tm, p);
-    Scalar d = cloud_base_density(pos.x, pos.z, alt, w, p);
-    r.full_samples = r.full_samples + 1;
-    if (d > Scalar(0.0)) d = cloud_full_density(d, pos.x, pos.z, alt, p);
-    if (d > Scalar(0.0)) {
-      empty = 0;
-      Scalar sigma_s = p.albedo * p.extinction * d;
-      Scalar sigma_t = p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation);
-      Scalar tau = light_optical_depth(pos, tm, Scalar(1.0) - r.transmittance, p);
-      Scalar h = height_fraction(alt, p);
-      vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
-      Scalar x = sigma_t * step;
-      Scalar step_t = exp(-x);
-      r.radiance = r.radiance + source * (r.transmittance * step * step_integral_factor(x, p));
-      Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
-      depth_sum = depth_sum + absorbed * tm;
-      weight_sum = weight_sum + absorbed;
-      r.transmittance = r.transmittance * step_t;
-      if (p.opacity_stop == 1 && r.transmittance < stop_below) break;
     } else {
-      empty = empty + 1;
-      if (p.cheap_march == 1 && p.empty_to_cheap > 0 && empty >= p.empty_to_cheap) {
-        cheap = 1;
+      r.full_samples = r.full_samples + 1;
+      if (d > Scalar(0.0)) d = cloud_full_density(d, pos.x, pos.z, alt, p);
+      if (d > Scalar(0.0)) {
         empty = 0;
+        Scalar sigma_s = p.albedo * p.extinction * d;
+        Scalar sigma_t = p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation);
+        Scalar tau = light_optical_depth(pos, tm, Scalar(1.0) - r.transmittance, p);
+        Scalar h = height_fraction(alt, p);
+        vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
+        Scalar x = sigma_t * step;
+        Scalar step_t = exp(-x);
+        r.radiance = r.radiance + source * (r.transmittance * step * step_integral_factor(x, p));
+        Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
+        depth_sum = depth_sum + absorbed * tm;
+        weight_sum = weight_sum + absorbed;
+        r.transmittance = r.transmittance * step_t;
+        if (p.opacity_stop == 1 && r.transmittance < stop_below) break;
+      } else {
+        empty = empty + 1;
+        if (p.cheap_march == 1 && p.empty_to_cheap > 0 && empty >= p.empty_to_cheap) {
+          cheap = 1;
+          empty = 0;
+        }
       }
+      t = t + step;
     }
-    t = t + step;
   }
   // Aerial perspective: blend toward the clear sky's colour behind the cloud with the
   // cloud's mean distance (Schneider 2015: distant clouds take the atmosphere's colour).
