@@ -5,7 +5,11 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <nlohmann/json.hpp>
 
@@ -289,6 +293,25 @@ TEST(CloudsModel, JetDerivativesOfTheMarchMatchFiniteDifferences) {
     }
   }
   EXPECT_GE(checked, 3);
+}
+
+// render::Preset carries the section opaquely: LoadPreset -> SavePreset -> LoadPreset keeps
+// it unchanged, and the preset's files include the weather map it names (file safety).
+TEST(CloudsParams, PresetCarriesTheSectionThroughAndListsTheWeatherMap) {
+  const std::string bundled = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
+  const render::Preset p = render::LoadPreset(bundled);
+  ASSERT_FALSE(p.clouds_json.empty());
+  const CloudParams c = ParseCloudSectionText(p.clouds_json, bundled);
+  EXPECT_EQ(c.weather_map, "default_cloudy.weather.exr");
+  const auto files = render::PresetFiles(bundled);
+  EXPECT_NE(std::find(files.begin(), files.end(),
+                      std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.weather.exr"),
+            files.end());
+  const std::string dir = (std::filesystem::temp_directory_path() / ("skycal-clouds-preset-" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  render::SavePreset(p, dir + "/copy.json");
+  EXPECT_EQ(render::LoadPreset(dir + "/copy.json").clouds_json, p.clouds_json);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(CloudsParams, SectionRoundTripsAndRefusesBadFields) {
