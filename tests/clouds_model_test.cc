@@ -117,6 +117,24 @@ TEST(CloudsModel, ShapedLayerWithinMidpointBound) {
   EXPECT_GT(tau, 1.0);  // a meaningful depth, not a vacuous check
 }
 
+// The 2D cirrus sheet over a base noise of 1 (pattern 1 x coverage remap = 1 at coverage
+// 1): straight up its transmittance is exp(-depth) exactly (mu = 1), and at 30 deg the slant
+// through the spherical sheet, exp(-depth / mu), mu from the sphere's geometry.
+TEST(CloudsModel, CirrusSheetTransmittance) {
+  Fixture f;
+  f.params.coverage_scale = 0.0;  // the volumetric layer empty
+  f.params.cirrus_coverage = 1.0;
+  f.params.cirrus_optical_depth = 0.4;
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  EXPECT_NEAR(m.cloud_march(Dir(90.0, 0.0), s).transmittance, std::exp(-0.4), 1e-12);
+  const double e = 30.0 * kPi / 180.0, rc = s.planet_radius + s.camera_height, rs = s.planet_radius + s.cirrus_altitude;
+  const double mu = std::sqrt(1.0 - std::pow(rc * std::cos(e) / rs, 2.0));  // sin rule at the sheet
+  EXPECT_NEAR(m.cloud_march(Dir(30.0, 0.0), s).transmittance, std::exp(-0.4 / mu), 1e-9);
+  EXPECT_DOUBLE_EQ(m.cloud_march(Dir(-5.0, 0.0), s).transmittance, 1.0);  // below the horizon: ground
+}
+
 // Each HG lobe and their blend integrate to 1 over the sphere: integral of p 2 pi dmu over
 // mu in [-1, 1] by the midpoint rule in u = 1 - mu on two geometric grids, from u = 0 up
 // and from u = 2 down (dense at the forward and the backward peak, whose width is

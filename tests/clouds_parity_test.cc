@@ -12,7 +12,8 @@
 //      reference, within kStatRel (float rounding over ~10^2 samples, plus branch flips on
 //      the image's edges of clouds).
 // The sweep: sun -10..90 deg, coverage 0..1, the three cloud types, the game's march and
-// the naive one (128 x 64 images keep it cheap).
+// the naive one, octaves 0-2, both integrations, the cirrus sheet on and off (128 x 64
+// images keep it cheap).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -75,6 +76,7 @@ TEST(CloudsParity, FloatCpuVsVulkanPerPixelAndDoubleVsVulkanStatistics) {
     CloudParams params;
     params.ms_octaves = i % 3;
     params.integration = i % 4 == 3 ? 1.0 : 0.0;
+    params.cirrus_coverage = i % 2 == 1 ? 0.6 : 0.0;  // the 2D sheet in half the cases
     CloudRenderRequest request;
     request.width = 128;
     request.height = 64;

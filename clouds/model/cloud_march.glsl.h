@@ -53,16 +53,46 @@ Scalar light_optical_depth(vec3 pos, Scalar primary_distance, Scalar opacity, Cl
   return tau;
 }
 
+// The optional 2D alto/cirrus sheet: a thin layer at cirrus_altitude whose vertical optical
+// depth is cirrus_depth x a pattern (one slice of the base noise, Perlin-Worley x Worley,
+// remapped by the coverage, scrolling with the wind). Single scattering in an optically
+// thin sheet lit by the unattenuated sun and the sky: L = (E_sun phase + ambient) albedo
+// (1 - T), T = exp(-tau / mu) with mu the cosine of the ray at the sheet.
+CloudResult cirrus_sheet(vec3 view, Scalar one_minus_mu, CloudShadeParams p) {
+  CloudResult c;
+  c.radiance = vec3(Scalar(0.0));
+  c.transmittance = Scalar(1.0);
+  c.full_samples = 0;
+  if (!(p.cirrus_coverage > Scalar(0.0)) || p.camera_height >= p.cirrus_altitude) return c;
+  SphereHit hit = sphere_hit(view.y, p.cirrus_altitude, p);
+  SphereHit ground = sphere_hit(view.y, Scalar(0.0), p);
+  if (ground.hit == 1 && ground.near > Scalar(0.0)) return c;
+  Scalar t = hit.far;
+  vec3 pos = view * t;
+  Scalar s = Scalar(CLOUD_BASE_SIZE) / p.cirrus_tile;
+  Texel4 n = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, (pos.x + p.wind_x) * s, Scalar(0.5), (pos.z + p.wind_z) * s);
+  Scalar pattern = saturate1((n.r * n.g - (Scalar(1.0) - p.cirrus_coverage)) / max(p.cirrus_coverage, Scalar(1e-6))) * p.cirrus_coverage;
+  Scalar mu = ((p.planet_radius + p.camera_height) * view.y + t) / (p.planet_radius + p.cirrus_altitude);
+  Scalar tau = p.cirrus_depth * pattern / max(mu, Scalar(0.02));
+  c.transmittance = exp(-tau);
+  vec3 light = p.sun_illuminance * phase_two_lobe(one_minus_mu, p.g1, p.g2, p.phase_blend) + ambient_inscatter(Scalar(1.0), p);
+  c.radiance = light * (p.albedo * (Scalar(1.0) - c.transmittance));
+  // The atmosphere's colour takes over with distance, as for the volumetric clouds.
+  Scalar f = Scalar(1.0) - exp(-t / p.atmosphere_blend);
+  vec3 sky_view = sky_sh_radiance(normalize(vec3(view.x, max(view.y, Scalar(0.02)), view.z)), p);
+  c.radiance = mix(c.radiance, sky_view * (Scalar(1.0) - c.transmittance), f);
+  return c;
+}
+
 CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   CloudResult r;
   r.radiance = vec3(Scalar(0.0));
   r.transmittance = Scalar(1.0);
   r.full_samples = 0;
-  CloudSegment seg = cloud_segment(view, p);
-  if (!(seg.t1 > seg.t0)) return r;
-
   vec3 diff = view - p.sun_dir;
   Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
+  CloudSegment seg = cloud_segment(view, p);
+  if (!(seg.t1 > seg.t0)) return cirrus_sheet(view, one_minus_mu, p);  // nothing in front of the sheet
   Scalar up = view.y < Scalar(0.0) ? -view.y : view.y;
   int n = floor_to_int(mix(Scalar(p.steps_horizon), Scalar(p.steps_zenith), up) + Scalar(0.5));
   Scalar dt = (seg.t1 - seg.t0) / Scalar(n);
@@ -130,5 +160,9 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
     vec3 sky_view = sky_sh_radiance(normalize(vec3(view.x, max(view.y, Scalar(0.02)), view.z)), p);
     r.radiance = mix(r.radiance, sky_view * (Scalar(1.0) - r.transmittance), f);
   }
+  // The sheet lies behind the volumetric layer (the camera is below both).
+  CloudResult sheet = cirrus_sheet(view, one_minus_mu, p);
+  r.radiance = r.radiance + sheet.radiance * r.transmittance;
+  r.transmittance = r.transmittance * sheet.transmittance;
   return r;
 }

@@ -26,6 +26,12 @@
   SC_FIELD(horizon_start)      // m: bias toward cumulus begins
   SC_FIELD(horizon_end)        // m: bias complete
   SC_FIELD(horizon_coverage)   // 1: coverage the bias tends to (type: cumulus, 0.5)
+  // The optional 2D alto/cirrus layer above the volumetric one (Schneider 2015: scrolling
+  // textures above 4 km).
+  SC_FIELD(cirrus_coverage)    // 1: 0 switches the layer off
+  SC_FIELD(cirrus_altitude)    // m above the ground
+  SC_FIELD(cirrus_depth)       // 1: vertical optical depth where the pattern is 1
+  SC_FIELD(cirrus_tile)        // m covered by one tile of its pattern
   // Lighting.
   SC_FIELD(extinction)         // 1/m per unit density
   SC_FIELD(albedo)             // 1: scattering / extinction

@@ -63,6 +63,17 @@ const std::vector<CloudParamSpec>& CloudParameterSpecs() {
        SC_CLOUD_FIELD(horizon_end_m)},
       {"horizon_coverage", "1", 0.0, 1.0, 0.5, S::kReal, "coverage the horizon rule tends to (HZD: ~50%)",
        SC_CLOUD_FIELD(horizon_coverage)},
+      // The 2D alto/cirrus layer.
+      {"cirrus_coverage", "1", 0.0, 1.0, 0.0, S::kReal,
+       "coverage of the optional 2D alto/cirrus layer (a thin scrolling sheet above the volumetric layer); 0: off",
+       SC_CLOUD_FIELD(cirrus_coverage)},
+      {"cirrus_altitude", "m", 4000.0, 20000.0, 8000.0, S::kReal, "altitude of the alto/cirrus sheet (above layer_top)",
+       SC_CLOUD_FIELD(cirrus_altitude_m)},
+      {"cirrus_optical_depth", "1", 0.0, 5.0, 0.3, S::kReal, "vertical optical depth of the sheet where its pattern is full",
+       SC_CLOUD_FIELD(cirrus_optical_depth)},
+      {"cirrus_tile", "m", 1000.0, 1.0e6, 30000.0, S::kReal,
+       "world size of one tile of the sheet's pattern (the base noise's Perlin-Worley x Worley, one slice)",
+       SC_CLOUD_FIELD(cirrus_tile_m)},
       // Lighting.
       {"extinction", "1/m", 0.0, 1.0, 0.05, S::kReal, "extinction coefficient per unit density (Beer's law)",
        SC_CLOUD_FIELD(extinction_per_m)},
@@ -134,6 +145,10 @@ void ValidateCloudParams(const CloudParams& in, const std::string& origin) {
   if (!(p.layer_bottom_m < p.layer_top_m)) {
     throw Error(Field(origin, "layer_bottom") + " = " + FormatNumber(p.layer_bottom_m) + " m is not below clouds.layer_top = " +
                 FormatNumber(p.layer_top_m) + " m (expected bottom < top)");
+  }
+  if (p.cirrus_coverage > 0.0 && !(p.cirrus_altitude_m > p.layer_top_m && p.cirrus_altitude_m > p.camera_height_m)) {
+    throw Error(Field(origin, "cirrus_altitude") + " = " + FormatNumber(p.cirrus_altitude_m) +
+                " m is not above clouds.layer_top and the camera (expected a sheet above both)");
   }
   if (!(p.horizon_start_m < p.horizon_end_m)) {
     throw Error(Field(origin, "horizon_start") + " = " + FormatNumber(p.horizon_start_m) +

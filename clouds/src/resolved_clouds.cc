@@ -93,6 +93,10 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.horizon_start = c.horizon_start_m;
   s.horizon_end = c.horizon_end_m;
   s.horizon_coverage = c.horizon_coverage;
+  s.cirrus_coverage = c.cirrus_coverage;
+  s.cirrus_altitude = c.cirrus_altitude_m;
+  s.cirrus_depth = c.cirrus_optical_depth;
+  s.cirrus_tile = c.cirrus_tile_m;
   s.extinction = c.extinction_per_m;
   s.albedo = c.scattering_albedo;
   s.g1 = c.phase_g1;

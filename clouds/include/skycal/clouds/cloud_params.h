@@ -43,6 +43,11 @@ struct CloudParams {
   double horizon_start_m = 15000.0;
   double horizon_end_m = 35000.0;
   double horizon_coverage = 0.5;
+  // The optional 2D alto/cirrus layer (off at coverage 0).
+  double cirrus_coverage = 0.0;
+  double cirrus_altitude_m = 8000.0;
+  double cirrus_optical_depth = 0.3;
+  double cirrus_tile_m = 30000.0;
   // Lighting (the fit's parameters).
   double extinction_per_m = 0.05;
   double scattering_albedo = 0.99;
