@@ -35,11 +35,12 @@ namespace {
 //     ulp of the CPU's (lavapipe's exp is not correctly rounded): ~100 x 6e-8 ~ 6e-6;
 //   kPixelL 3e-4 relative [1.4e-4; < 1e-5 of L_max]: the same rounding on sums of ~10^2
 //     terms, largest in thin, faint cloud where the sum cancels least favourably;
-//   kFlipFraction 0.5% [0.012%: one pixel of 8,192]: a flipped branch touches the pixels where a density sits within
-//     rounding of 0 or an opacity within rounding of 0.3 / 0.999, a thin set;
+//   kFlipFraction 0.5% [0.012%: one pixel of 8,192, itself within 1e-5 of L_max]: a flipped
+//     branch touches the pixels where a density sits within rounding of 0 or an opacity
+//     within rounding of 0.3 / 0.999, a thin set;
 //   kPixelWorst 0.25 of L_max or in T: one flipped decision changes one or a few samples;
 //   kStatRel 1e-3 [2.2e-5]: double vs float rounding averages out over an image; the margin
-//     allows branch flips on edges of clouds with noise less smooth than this test's.
+//     allows branch flips on edges of clouds.
 constexpr double kPixelT = 2e-5, kPixelL = 3e-4, kFlipFraction = 0.005, kPixelWorst = 0.25, kStatRel = 1e-3;
 
 struct Stats {
