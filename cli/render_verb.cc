@@ -14,6 +14,8 @@
 #include "skycal/color/preview.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/clouds/cloud_renderer.h"
+#include "skycal/clouds/composite.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -49,6 +51,15 @@ bool RenderOptions::IsValid(std::string* why) const {
     *why = "--png: expected a path ending in .png";
     return false;
   }
+  if (!clouds.enabled && (!clouds.weather_map.empty() || clouds.steps || clouds.light_samples || clouds.naive ||
+                          clouds.time_s != 0.0)) {
+    *why = "--weather-map, --cloud-time, --cloud-steps, --cloud-light-samples and --cloud-naive need --clouds";
+    return false;
+  }
+  if (!(std::abs(clouds.time_s) <= 1.0e7)) {
+    *why = "--cloud-time: expected seconds within [-1e7, 1e7]";
+    return false;
+  }
   if (!std::isnan(png_exposure_ev) && std::abs(png_exposure_ev) > 64) {
     *why = "--exposure: expected stops in [-64, 64]";
     return false;
@@ -66,15 +77,20 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   const std::string preset_path = o.preset_path.empty() ? DefaultPresetPath() : o.preset_path;
+  const clouds::MarchOptions march = CloudMarchOptions(o.clouds);
   std::vector<NamedPath> outputs{{"--out", o.out_exr}};
   if (!o.out_png.empty()) outputs.push_back({"--png", o.out_png});
-  RefuseOutputsOverInputs(outputs, PresetInputs("--preset", preset_path));
-  RefuseOutputsOverInputs({outputs.back()}, {outputs.front()});
+  std::vector<NamedPath> inputs = PresetInputs("--preset", preset_path);
+  for (const NamedPath& p : CloudInputs(o.clouds, preset_path)) inputs.push_back(p);
+  RefuseOutputsOverInputs(outputs, inputs);
+  if (!o.out_png.empty()) RefuseOutputsOverInputs({outputs.back()}, {outputs.front()});  // --png vs --out
   // Fail on unwritable outputs before spending time rendering.
   { AtomicOutput probe(o.out_exr); }
   if (!o.out_png.empty()) { AtomicOutput probe(o.out_png); }
 
   const render::Preset preset = render::LoadPreset(preset_path);
+  std::optional<CloudInputsLoaded> cloud_inputs;
+  if (o.clouds.enabled) cloud_inputs = LoadCloudInputs(o.clouds, preset, preset_path);  // before any time is spent
   const auto sun = o.SunDirection();
   const double elevation = latlong::ElevationDeg(sun), azimuth = latlong::AzimuthDeg(sun);
   nlohmann::json warnings = nlohmann::json::array();
@@ -90,6 +106,12 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   const auto t_init = Clock::now();
   auto renderer = render::CreateRenderer(o.backend, vk);
   Log("render", "backend: " + renderer->Describe());
+  // The cloud pipeline is created (lavapipe compiles the shader) before the render clock starts.
+  std::unique_ptr<clouds::CloudRenderer> cloud_renderer;
+  if (cloud_inputs) {
+    cloud_renderer = o.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer(o.vulkan_validation)
+                                                           : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
+  }
   render::RenderRequest request;
   request.sun_dir = sun;
   request.width = o.width;
@@ -99,6 +121,33 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   const auto t_render = Clock::now();
   capture::LatLongFrame frame;
   frame.radiance = renderer->Render(preset, request);
+  const auto t_sky = Clock::now();
+  nlohmann::json clouds_summary = nullptr;
+  if (cloud_inputs) {
+    // The clouds over the sky (disc included: the clouds' transmittance hides it).
+    clouds::CloudRenderRequest cr;
+    cr.sun_dir = sun;
+    cr.width = o.width;
+    cr.height = o.height;
+    cr.time_s = o.clouds.time_s;
+    cr.march = march;
+    const clouds::CloudScene scene{&preset, &cloud_inputs->params, &cloud_inputs->noise, &cloud_inputs->weather};
+    const clouds::CloudImage cloud = cloud_renderer->Render(scene, cr);
+    frame.radiance = clouds::CompositeClouds(frame.radiance, cloud);
+    frame.planes.push_back({"cloudTransmittance", cloud.transmittance});
+    frame.extra.strings["skycalClouds"] = cloud_inputs->params_origin;
+    frame.extra.strings["skycalWeatherMap"] = cloud_inputs->weather_origin;
+    frame.extra.floats["skycalCloudTimeS"] = static_cast<float>(o.clouds.time_s);
+    double t_mean = 0.0;
+    for (float t : cloud.transmittance) t_mean += t / cloud.transmittance.size();
+    clouds_summary = {{"device", cloud_renderer->Describe()},
+                      {"parameters", cloud_inputs->params_origin},
+                      {"weather_map", cloud_inputs->weather_origin},
+                      {"time_s", o.clouds.time_s},
+                      {"transmittance_mean", t_mean},
+                      {"steps", {march.steps_zenith, march.steps_horizon}},
+                      {"light_samples", march.light_samples}};
+  }
   const auto t_done = Clock::now();
   frame.sun_direction = sun;
   frame.extra.strings["skycalPreset"] = preset_path;
@@ -142,7 +191,13 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
           {"out", o.out_exr},
           {"png", preview},
           {"radiance_cd_m2", {{"max", max_v}, {"mean", n ? sum / n : 0.0}}},
-          {"time_ms", {{"init", ms(t_init, t_render)}, {"render", ms(t_render, t_done)}, {"total", ms(t0, Clock::now())}}},
+          {"clouds", clouds_summary},
+          {"time_ms",
+           {{"init", ms(t_init, t_render)},
+            {"render", ms(t_render, t_done)},
+            {"sky", ms(t_render, t_sky)},
+            {"clouds", ms(t_sky, t_done)},
+            {"total", ms(t0, Clock::now())}}},
           {"warnings", warnings}};
 }
 
@@ -155,7 +210,8 @@ render::GroundMode ParseGroundMode(const std::string& text, const std::string& o
 RenderOptions ParseRenderArgs(int argc, char** argv) {
   VerbCommandLine cl("render", "skycal render: render a sky preset to a lat-long EXR",
                      "  skycal render [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)\n"
-                     "                [--size WxH] [--backend vulkan|cpu] --out OUT.exr [--png OUT.png] [--json]",
+                     "                [--size WxH] [--backend vulkan|cpu] --out OUT.exr [--png OUT.png] [--json]\n"
+                     "                [--clouds [--weather-map W.exr] [--cloud-time S] [--cloud-steps Z,H] [--cloud-naive]]",
                      "Output units: cd/m^2 per channel, scene-linear Rec.709.");
   RenderOptions o;
   std::optional<std::string> sun_dir, size, backend, ground;
@@ -174,6 +230,16 @@ RenderOptions ParseRenderArgs(int argc, char** argv) {
   cl.Number("--exposure", &o.png_exposure_ev, "EV", "preview exposure in stops (default: automatic, log-average -> 0.18)");
   cl.Flag("--vulkan-validation", &o.vulkan_validation, "enable VK_LAYER_KHRONOS_validation");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Flag("--clouds", &o.clouds.enabled,
+          "composite HZD volumetric clouds over the sky: the preset's `clouds` section, or the bundled "
+          "datasets/presets/default_cloudy.json's when it has none; the EXR gains a cloudTransmittance channel");
+  cl.Text("--weather-map", &o.clouds.weather_map, "W.exr",
+          "with --clouds: weather map (RGB EXR: coverage, precipitation, type; square, power of two) instead of the section's");
+  cl.Number("--cloud-time", &o.clouds.time_s, "S", "with --clouds: time in seconds; the wind moves the clouds by speed x time (default 0)");
+  cl.Text("--cloud-steps", &o.clouds.steps, "Z,H",
+          "with --clouds: primary samples looking up and at the horizon, each 1..4096 (default 64,128, HZD's)");
+  cl.Text("--cloud-light-samples", &o.clouds.light_samples, "N", "with --clouds: samples toward the sun, 0..64 (default 6)");
+  cl.Flag("--cloud-naive", &o.clouds.naive, "with --clouds: every HZD march optimisation off (for measurement)");
   cl.Parse(argc, argv);
   if (sun_dir) o.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
   if (size) {

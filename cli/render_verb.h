@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "render_clouds.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::cli {
@@ -26,6 +27,7 @@ struct RenderOptions {
   std::string out_png;                           // optional, *.png
   double png_exposure_ev = std::numeric_limits<double>::quiet_NaN();  // NaN: automatic
   bool vulkan_validation = false;
+  CloudOptions clouds;                           // --clouds and its options
 
   bool IsValid(std::string* why) const;
   std::array<double, 3> SunDirection() const;  // unit vector (valid options only)

@@ -18,7 +18,7 @@ void WriteLatLongFrame(const std::string& path, const LatLongFrame& frame, bool 
     const auto& s = *frame.sun_direction;
     attrs.v3fs[kSunAttribute] = {static_cast<float>(s[0]), static_cast<float>(s[1]), static_cast<float>(s[2])};
   }
-  WriteExrRGB(path, frame.radiance, attrs, half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
+  WriteExrRGBWithPlanes(path, frame.radiance, frame.planes, attrs, half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
 }
 
 LatLongFrame ReadLatLongFrame(const std::string& path) {

@@ -150,6 +150,7 @@ json PresetToJson(const Preset& preset_in, const std::string& lut_stem) {
   json j = {{"format", kFormat}, {"format_version", kFormatVersion}, {"tool_version", kSkycalVersion},
             {"name", preset.name}, {"model", ToString(preset.variant)}, {"parameters", params}, {"luts", luts}};
   if (std::isfinite(preset.time_of_day_h)) j["time_of_day_h"] = preset.time_of_day_h;
+  if (!preset.clouds_json.empty()) j["clouds"] = json::parse(preset.clouds_json);
   return j;
 }
 
@@ -198,7 +199,7 @@ Preset LoadPreset(const std::string& path) {
     throw Error(Field(path, "format") + ": expected \"" + kFormat + "\" (is this a skycal preset?)");
   }
   RequireKnownKeys(j, {"format", "format_version", "tool_version", "name", "model", "time_of_day_h", "parameters", "luts",
-                       "provenance"},
+                       "provenance", "clouds"},
                    path, "");
   RequireFormatVersion(j, kFormatVersion, path, "bake or fit it again with this skycal");
   Preset p;
@@ -211,6 +212,10 @@ Preset LoadPreset(const std::string& path) {
     if (!(p.time_of_day_h >= 0.0 && p.time_of_day_h < 24.0)) {
       throw Error(Field(path, "time_of_day_h") + ": expected hours in [0, 24)");
     }
+  }
+  if (j.contains("clouds")) {
+    if (!j["clouds"].is_object()) throw Error(Field(path, "clouds") + ": expected an object (the cloudscape's parameters)");
+    p.clouds_json = j["clouds"].dump();
   }
   const json& params = Require(j, "parameters", path, "");
   std::vector<std::string> names;
@@ -289,6 +294,11 @@ std::vector<std::string> PresetFiles(const std::string& json_path) {
     for (const char* key : {kLutNames[0], kLutNames[1], kLutNames[2], "sun_transmittance"}) {
       const auto it = j["luts"].find(key);
       if (it != j["luts"].end() && it->is_string()) files.push_back((dir / it->get<std::string>()).string());
+    }
+    const auto clouds = j.find("clouds");
+    if (clouds != j.end() && clouds->is_object()) {
+      const auto map = clouds->find("weather_map");
+      if (map != clouds->end() && map->is_string()) files.push_back((dir / map->get<std::string>()).string());
     }
   } catch (const Error&) {
     // Unreadable: LoadPreset reports it with the field; the JSON's own path is still guarded.

@@ -6,6 +6,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "skycal/core/exr_io.h"
 #include "skycal/core/image.h"
@@ -16,6 +17,9 @@ struct LatLongFrame {
   ImageRGB radiance;
   std::optional<std::array<double, 3>> sun_direction;
   ExrAttributes extra;  // further attributes (strings, floats, V3f) written/read verbatim
+  // Further single-channel planes written after R, G, B (e.g. the clouds' transmittance);
+  // not read back by ReadLatLongFrame.
+  std::vector<ExrPlane> planes;
 };
 
 // Writes atomically; `half` stores 16-bit floats. Throws skycal::Error on failure.

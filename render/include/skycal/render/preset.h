@@ -55,6 +55,10 @@ struct Preset {
   double ground_albedo = 0.1;               // 1, diffuse ground below the horizon
   double time_of_day_h = std::numeric_limits<double>::quiet_NaN();  // hours [0, 24), NaN: none
   SkyLuts luts;
+  // The preset's `clouds` section as JSON text, carried through unchanged (LoadPreset
+  // fills it, SavePreset writes it back); empty when the preset has none. The clouds
+  // module (above render) parses and validates it: clouds::ParseCloudSectionText.
+  std::string clouds_json;
 };
 
 struct ParamSpec {
@@ -75,8 +79,9 @@ void ValidatePreset(const Preset& preset, const std::string& origin);
 nlohmann::json PresetToJson(const Preset& preset, const std::string& lut_stem);
 // Reads a preset JSON and its LUT EXRs (paths relative to the JSON's directory).
 Preset LoadPreset(const std::string& path);
-// The files a preset consists of: its JSON and the LUT EXRs it names (as far as the JSON
-// can be read; an unreadable JSON gives just its own path). Verbs list them as inputs so
+// The files a preset consists of: its JSON, the LUT EXRs it names and the weather-map EXR
+// its `clouds` section names (as far as the JSON can be read; an unreadable JSON gives
+// just its own path). Verbs list them as inputs so
 // that no output replaces a preset's LUT (file_safety.h).
 std::vector<std::string> PresetFiles(const std::string& json_path);
 // The files SavePreset(json_path) writes for a preset of `variant`.

@@ -1,0 +1,64 @@
+// Rendering the cloudscape to a full-sphere lat-long (core/latlong.h convention): per pixel
+// the clouds' in-scattered radiance (cd/m^2, scene-linear Rec.709) and their transmittance.
+// Composite over the clear sky with composite.h. Backends share one model source
+// (clouds/model/*.glsl.h): the double reference, a float CPU path taking the shader's
+// decisions (the parity test's twin of the shader), and Vulkan (clouds_latlong.comp).
+#pragma once
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_textures.h"
+#include "skycal/core/image.h"
+#include "skycal/render/preset.h"
+
+namespace skycal::clouds {
+
+struct CloudRenderRequest {
+  std::array<double, 3> sun_dir = {0.0, 1.0, 0.0};  // toward the sun, normalised by Render
+  int width = 1024;    // pixels, >= 2
+  int height = 512;    // pixels, >= 2
+  double time_s = 0.0;  // the wind moves the clouds by wind_speed x time
+  MarchOptions march;
+  bool IsValid(std::string* why) const;
+};
+
+struct CloudImage {
+  ImageRGB radiance;                // in-scattered radiance L_cloud, cd/m^2 per channel
+  std::vector<float> transmittance; // T per pixel (width x height, row-major), 1
+  long long full_samples = 0;       // full-density primary samples taken (all pixels)
+};
+
+// Everything a cloud render needs. The preset supplies the light: its sun (illuminance x
+// tint x the LUT's transmittance, render::SunIlluminanceAtGround), the SH-9 of its clear
+// sky (ambient and the atmosphere's colour) and its lit ground.
+struct CloudScene {
+  const render::Preset* preset = nullptr;
+  const CloudParams* params = nullptr;
+  const CloudNoise* noise = nullptr;
+  const WeatherMap* weather = nullptr;
+};
+
+enum class CloudPrecision { kDouble, kFloat };
+
+class CloudRenderer {
+ public:
+  virtual ~CloudRenderer() = default;
+  // Throws skycal::Error on invalid parameters, textures or request, or a backend failure.
+  virtual CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) = 0;
+  virtual std::string Describe() const = 0;
+};
+
+// CPU: `threads` workers over rows (0: the hardware's count).
+std::unique_ptr<CloudRenderer> CreateCpuCloudRenderer(CloudPrecision precision, int threads = 0);
+// Vulkan (lavapipe or a GPU); keeps its pipeline and uploaded textures between renders.
+// Throws skycal::Error when no Vulkan device is available.
+std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation = false);
+
+// Throws skycal::Error naming `origin` unless the textures match the layout contract
+// (sizes, finite values, the weather map's channels in [0, 1]).
+void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, const std::string& origin);
+
+}  // namespace skycal::clouds

@@ -1,0 +1,168 @@
+// The ray march of Schneider 2015 with each optimisation switchable (for measurement):
+//   - samples: steps_zenith looking up rising to steps_horizon at the horizon (64 -> 128),
+//     spread evenly over the ray's part inside the layer (midpoint rule);
+//   - cheap march: base-shape-only samples cheap_step_factor x longer until the base
+//     density is non-zero; step back one cheap step, then full samples; back to cheap after
+//     empty_to_cheap empty full samples;
+//   - stop once the opacity reaches opacity_threshold (~1);
+//   - light: light_samples in a cone toward the sun, the last far away (distant
+//     shadowing); cheap light samples once the opacity exceeds cheap_light_opacity.
+// HZD's temporal reprojection (1 of 16 pixels per frame) is a real-time amortisation a
+// still render does not need: every pixel is marched fully here.
+//
+// Output: in-scattered radiance (cd/m^2) and transmittance along the view; the host
+// composites L = L_sky T + L_cloud (clouds/include/skycal/clouds/composite.h).
+
+SC_CONST(CLOUD_CONE_SPREAD, 0.3)  // cone half-width per unit distance along the light ray
+
+struct CloudResult {
+  vec3 radiance;          // cd/m^2
+  Scalar transmittance;   // 1
+  int full_samples;       // full-density samples taken (for measurement)
+};
+
+// A fixed kernel of 6 unit-ish offsets spreading the light samples over the cone
+// (deterministic: a still render, and both backends take the same positions).
+vec3 cone_kernel(int i) {
+  if (i == 0) return vec3(Scalar(0.38), Scalar(-0.41), Scalar(0.83));
+  if (i == 1) return vec3(Scalar(-0.75), Scalar(0.29), Scalar(0.59));
+  if (i == 2) return vec3(Scalar(0.21), Scalar(0.92), Scalar(-0.33));
+  if (i == 3) return vec3(Scalar(-0.52), Scalar(-0.66), Scalar(-0.54));
+  if (i == 4) return vec3(Scalar(0.87), Scalar(0.15), Scalar(-0.47));
+  return vec3(Scalar(-0.12), Scalar(-0.30), Scalar(-0.95));
+}
+
+// Optical depth (1) from `pos` toward the sun through the cone. `primary_distance`: the
+// view distance of the primary sample (the horizon rule's distance); `opacity`: 1 - T of
+// the view ray so far.
+Scalar light_optical_depth(vec3 pos, Scalar primary_distance, Scalar opacity, CloudShadeParams p) {
+  Scalar tau = Scalar(0.0);
+  int cheap = (p.cheap_light == 1 && opacity > p.cheap_light_opacity) ? 1 : 0;
+  for (int i = 0; i < p.light_samples; ++i) {
+    int far = (p.far_light == 1 && i == p.light_samples - 1) ? 1 : 0;
+    Scalar along = far == 1 ? p.far_light_distance : p.light_step * (Scalar(i) + Scalar(0.5));
+    Scalar spread = far == 1 ? Scalar(0.0) : p.light_step * Scalar(i + 1) * Scalar(CLOUD_CONE_SPREAD);
+    vec3 q = pos + p.sun_dir * along + cone_kernel(i) * spread;
+    Scalar alt = cloud_altitude(q, p);
+    if (alt < p.layer_bottom || alt > p.layer_top) continue;
+    CloudWeather w = cloud_weather(q.x, q.z, primary_distance, p);
+    Scalar d = cloud_base_density(q.x, q.z, alt, w, p);
+    if (cheap == 0 && d > Scalar(0.0)) d = cloud_full_density(d, q.x, q.z, alt, p);
+    tau = tau + p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation) * p.light_step;
+  }
+  return tau;
+}
+
+// The optional 2D alto/cirrus sheet: a thin layer at cirrus_altitude whose vertical optical
+// depth is cirrus_depth x a pattern (one slice of the base noise, Perlin-Worley x Worley,
+// remapped by the coverage, scrolling with the wind). Single scattering in an optically
+// thin sheet lit by the unattenuated sun and the sky: L = (E_sun phase + ambient) albedo
+// (1 - T), T = exp(-tau / mu) with mu the cosine of the ray at the sheet.
+CloudResult cirrus_sheet(vec3 view, Scalar one_minus_mu, CloudShadeParams p) {
+  CloudResult c;
+  c.radiance = vec3(Scalar(0.0));
+  c.transmittance = Scalar(1.0);
+  c.full_samples = 0;
+  if (!(p.cirrus_coverage > Scalar(0.0)) || p.camera_height >= p.cirrus_altitude) return c;
+  SphereHit hit = sphere_hit(view.y, p.cirrus_altitude, p);
+  SphereHit ground = sphere_hit(view.y, Scalar(0.0), p);
+  if (ground.hit == 1 && ground.near > Scalar(0.0)) return c;
+  Scalar t = hit.far;
+  vec3 pos = view * t;
+  Scalar s = Scalar(CLOUD_BASE_SIZE) / p.cirrus_tile;
+  Texel4 n = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, (pos.x + p.wind_x) * s, Scalar(0.5), (pos.z + p.wind_z) * s);
+  Scalar pattern = saturate1((n.r * n.g - (Scalar(1.0) - p.cirrus_coverage)) / max(p.cirrus_coverage, Scalar(1e-6))) * p.cirrus_coverage;
+  Scalar mu = ((p.planet_radius + p.camera_height) * view.y + t) / (p.planet_radius + p.cirrus_altitude);
+  Scalar tau = p.cirrus_depth * pattern / max(mu, Scalar(0.02));
+  c.transmittance = exp(-tau);
+  vec3 light = p.sun_illuminance * phase_two_lobe(one_minus_mu, p.g1, p.g2, p.phase_blend) + ambient_inscatter(Scalar(1.0), p);
+  c.radiance = light * (p.albedo * (Scalar(1.0) - c.transmittance));
+  // The atmosphere's colour takes over with distance, as for the volumetric clouds.
+  Scalar f = Scalar(1.0) - exp(-t / p.atmosphere_blend);
+  vec3 sky_view = sky_sh_radiance(normalize(vec3(view.x, max(view.y, Scalar(0.02)), view.z)), p);
+  c.radiance = mix(c.radiance, sky_view * (Scalar(1.0) - c.transmittance), f);
+  return c;
+}
+
+CloudResult cloud_march(vec3 view, CloudShadeParams p) {
+  CloudResult r;
+  r.radiance = vec3(Scalar(0.0));
+  r.transmittance = Scalar(1.0);
+  r.full_samples = 0;
+  vec3 diff = view - p.sun_dir;
+  Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
+  CloudSegment seg = cloud_segment(view, p);
+  if (!(seg.t1 > seg.t0)) return cirrus_sheet(view, one_minus_mu, p);  // nothing in front of the sheet
+  Scalar up = view.y < Scalar(0.0) ? -view.y : view.y;
+  int n = floor_to_int(mix(Scalar(p.steps_horizon), Scalar(p.steps_zenith), up) + Scalar(0.5));
+  Scalar dt = (seg.t1 - seg.t0) / Scalar(n);
+  Scalar cheap_dt = dt * p.cheap_step_factor;
+  Scalar stop_below = Scalar(1.0) - p.opacity_threshold;
+
+  Scalar t = seg.t0;  // start of the current step
+  int cheap = p.cheap_march;
+  int empty = 0;
+  Scalar depth_sum = Scalar(0.0);    // opacity-weighted distance (atmosphere blend)
+  Scalar weight_sum = Scalar(0.0);
+  int guard = 8 * n + 64;
+  for (int it = 0; it < guard; ++it) {
+    if (!(t < seg.t1)) break;
+    // One weather + base evaluation serves both modes (on SIMD hardware, lanes in the cheap
+    // and the full mode share it instead of running two copies).
+    Scalar step = cheap == 1 ? cheap_dt : min(dt, seg.t1 - t);
+    Scalar tm = cheap == 1 ? min(t + Scalar(0.5) * cheap_dt, seg.t1) : t + Scalar(0.5) * step;
+    vec3 pos = view * tm;
+    Scalar alt = cloud_altitude(pos, p);
+    CloudWeather w = cloud_weather(pos.x, pos.z, tm, p);
+    Scalar d = cloud_base_density(pos.x, pos.z, alt, w, p);
+    if (cheap == 1) {
+      if (d > Scalar(0.0)) {
+        cheap = 0;
+        empty = 0;
+        // With the step back, full samples resume at the previous cheap sample; without
+        // it, at this one (what lies between them is skipped, as HZD's naive version did).
+        t = p.step_back == 1 ? max(tm - cheap_dt, seg.t0) : tm;
+      } else {
+        t = t + cheap_dt;
+      }
+    } else {
+      r.full_samples = r.full_samples + 1;
+      if (d > Scalar(0.0)) d = cloud_full_density(d, pos.x, pos.z, alt, p);
+      if (d > Scalar(0.0)) {
+        empty = 0;
+        Scalar sigma_s = p.albedo * p.extinction * d;
+        Scalar sigma_t = p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation);
+        Scalar tau = light_optical_depth(pos, tm, Scalar(1.0) - r.transmittance, p);
+        Scalar h = height_fraction(alt, p);
+        vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
+        Scalar x = sigma_t * step;
+        Scalar step_t = exp(-x);
+        r.radiance = r.radiance + source * (r.transmittance * step * step_integral_factor(x, p));
+        Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
+        depth_sum = depth_sum + absorbed * tm;
+        weight_sum = weight_sum + absorbed;
+        r.transmittance = r.transmittance * step_t;
+        if (p.opacity_stop == 1 && r.transmittance < stop_below) break;
+      } else {
+        empty = empty + 1;
+        if (p.cheap_march == 1 && p.empty_to_cheap > 0 && empty >= p.empty_to_cheap) {
+          cheap = 1;
+          empty = 0;
+        }
+      }
+      t = t + step;
+    }
+  }
+  // Aerial perspective: blend toward the clear sky's colour behind the cloud with the
+  // cloud's mean distance (Schneider 2015: distant clouds take the atmosphere's colour).
+  if (weight_sum > Scalar(0.0)) {
+    Scalar f = Scalar(1.0) - exp(-(depth_sum / weight_sum) / p.atmosphere_blend);
+    vec3 sky_view = sky_sh_radiance(normalize(vec3(view.x, max(view.y, Scalar(0.02)), view.z)), p);
+    r.radiance = mix(r.radiance, sky_view * (Scalar(1.0) - r.transmittance), f);
+  }
+  // The sheet lies behind the volumetric layer (the camera is below both).
+  CloudResult sheet = cirrus_sheet(view, one_minus_mu, p);
+  r.radiance = r.radiance + sheet.radiance * r.transmittance;
+  r.transmittance = r.transmittance * sheet.transmittance;
+  return r;
+}

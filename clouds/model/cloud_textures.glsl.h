@@ -1,0 +1,105 @@
+// Texture reads of the cloud model with exact filtering weights computed here, in the
+// shared source (the LUT's rule: no hardware filtering in anything the fit differentiates
+// or the parity test compares). The backend supplies one hook,
+//   Texel4 cloud_texel4(int texture, int texel)
+// every channel of texel number `texel` (row-major, x fastest, as
+// clouds/include/skycal/clouds/cloud_textures.h lays them out; unused channels 0): C++
+// reads the CloudNoise and WeatherMap vectors; GLSL reads vec4 storage buffers (the host
+// pads 3-channel textures to 4), one 16-byte load per texel instead of one per channel,
+// which lavapipe's gathers make the march's main cost. Every texture wraps (tiles).
+
+// Texture sizes (CloudNoise::kBaseSize etc.; the C++ side checks them with static_asserts).
+SC_CONST_INT(CLOUD_BASE_SIZE, 128)
+SC_CONST_INT(CLOUD_DETAIL_SIZE, 32)
+SC_CONST_INT(CLOUD_CURL_SIZE, 128)
+SC_CONST_INT(CLOUD_TEX_BASE, 0)     // 128^3 x 4
+SC_CONST_INT(CLOUD_TEX_DETAIL, 1)   // 32^3 x 3
+SC_CONST_INT(CLOUD_TEX_CURL, 2)     // 128^2 x 3
+SC_CONST_INT(CLOUD_TEX_WEATHER, 3)  // width x height x 3
+
+#ifndef CLOUD_TEXEL4_DECLARED  // the shader declares it before its hook
+struct Texel4 {
+  Scalar r;
+  Scalar g;
+  Scalar b;
+  Scalar a;
+};
+#endif
+
+// One axis of a wrapped linear filter: texel coordinate u (texel centres at i + 0.5)
+// -> the two texel indices and the weight of the second.
+struct WrapAxis {
+  int i0;
+  int i1;
+  Scalar f;
+};
+
+WrapAxis wrap_axis(Scalar u, int n) {
+  Scalar t = u - Scalar(0.5);
+  Scalar nn = Scalar(n);
+  t = t - nn * floor(t / nn);  // [0, n) up to rounding
+  WrapAxis w;
+  w.i0 = floor_to_int(t);
+  w.f = t - Scalar(w.i0);
+  if (w.i0 >= n) w.i0 = w.i0 - n;
+  if (w.i0 < 0) w.i0 = w.i0 + n;
+  w.i1 = w.i0 + 1;
+  if (w.i1 >= n) w.i1 = 0;
+  return w;
+}
+
+Texel4 texel4_zero() {
+  Texel4 t;
+  t.r = Scalar(0.0);
+  t.g = Scalar(0.0);
+  t.b = Scalar(0.0);
+  t.a = Scalar(0.0);
+  return t;
+}
+
+// Adds weight x texel number `texel`.
+Texel4 texel4_accumulate(Texel4 acc, int tex, int texel, Scalar weight) {
+  Texel4 t = cloud_texel4(tex, texel);
+  acc.r = acc.r + weight * t.r;
+  acc.g = acc.g + weight * t.g;
+  acc.b = acc.b + weight * t.b;
+  acc.a = acc.a + weight * t.a;
+  return acc;
+}
+
+// Trilinear read of an n^3 volume at texel coordinates (u, v, w) (x, y, z; one unit = one
+// texel).
+Texel4 sample_volume(int tex, int n, Scalar u, Scalar v, Scalar w) {
+  WrapAxis ax = wrap_axis(u, n);
+  WrapAxis ay = wrap_axis(v, n);
+  WrapAxis az = wrap_axis(w, n);
+  Texel4 acc = texel4_zero();
+  Scalar gx0 = Scalar(1.0) - ax.f;
+  Scalar gy0 = Scalar(1.0) - ay.f;
+  Scalar gz0 = Scalar(1.0) - az.f;
+  int z0 = az.i0 * n;
+  int z1 = az.i1 * n;
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i0), gz0 * gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i1), gz0 * gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i0), gz0 * ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i1), gz0 * ay.f * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i0), az.f * gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i1), az.f * gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i0), az.f * ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i1), az.f * ay.f * ax.f);
+  return acc;
+}
+
+// Bilinear read of a width x height image at texel coordinates (u, v).
+Texel4 sample_image(int tex, int width, int height, Scalar u, Scalar v) {
+  WrapAxis ax = wrap_axis(u, width);
+  WrapAxis ay = wrap_axis(v, height);
+  Texel4 acc = texel4_zero();
+  Scalar gx0 = Scalar(1.0) - ax.f;
+  Scalar gy0 = Scalar(1.0) - ay.f;
+  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i0), gy0 * gx0);
+  acc = texel4_accumulate(acc, tex, (ay.i0 * width + ax.i1), gy0 * ax.f);
+  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i0), ay.f * gx0);
+  acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i1), ay.f * ax.f);
+  return acc;
+}

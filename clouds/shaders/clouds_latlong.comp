@@ -1,0 +1,98 @@
+#version 450
+// Renders the cloudscape into a full-sphere lat-long (OpenEXR LatLong convention), one
+// invocation per pixel: in-scattered radiance and transmittance. The model is
+// clouds/model/*.glsl.h, the same source the CPU paths (and the fit) compile as C++.
+#extension GL_GOOGLE_include_directive : require
+
+// Workgroup size: specialization constants 0 and 1 (vulkan_cloud_renderer.cc: 8 x 8 tiles).
+layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
+
+// 0: CloudShadeParams in cloud_shade_fields.glsl.h's order, then image width and height.
+layout(std430, set = 0, binding = 0) readonly buffer ParamBuffer { float P[]; };
+// 1-4: the textures in cloud_textures.h's texel order, one vec4 per texel (the host pads
+// the RGB ones with a zero channel): exact filtering in the shared source, no samplers.
+layout(std430, set = 0, binding = 1) readonly buffer BaseBuffer { vec4 base_noise[]; };
+layout(std430, set = 0, binding = 2) readonly buffer DetailBuffer { vec4 detail_noise[]; };
+layout(std430, set = 0, binding = 3) readonly buffer CurlBuffer { vec4 curl_noise[]; };
+layout(std430, set = 0, binding = 4) readonly buffer WeatherBuffer { vec4 weather_map[]; };
+// 5: (sin, cos) of latitude per row [0, height), of longitude per column [height, height + width),
+// filled by the host in double (shader sin/cos carry ~1e-6 error).
+layout(std430, set = 0, binding = 5) readonly buffer TrigBuffer { vec2 trig[]; };
+// 6: output, 4 floats per pixel: radiance rgb (cd/m^2), transmittance.
+layout(std430, set = 0, binding = 6) writeonly buffer OutBuffer { float out_rt[]; };
+
+#include "glsl_prelude.glsl.h"
+
+struct Texel4 {
+  float r;
+  float g;
+  float b;
+  float a;
+};
+
+Texel4 cloud_texel4(int texture, int texel) {
+  vec4 v;
+  if (texture == 0) v = base_noise[texel];
+  else if (texture == 1) v = detail_noise[texel];
+  else if (texture == 2) v = curl_noise[texel];
+  else v = weather_map[texel];
+  Texel4 t;
+  t.r = v.x;
+  t.g = v.y;
+  t.b = v.z;
+  t.a = v.w;
+  return t;
+}
+
+#define CLOUD_TEXEL4_DECLARED
+#include "cloud_textures.glsl.h"
+#include "cloud_shade_params.glsl.h"
+#include "cloud_geometry.glsl.h"
+#include "cloud_density.glsl.h"
+#include "cloud_lighting.glsl.h"
+#include "cloud_march.glsl.h"
+
+CloudShadeParams load_params() {
+  CloudShadeParams p;
+  int k = 0;
+#define SC_FIELD(name) p.name = P[k]; k += 1;
+#define SC_FIELD_VEC3(name) p.name = vec3(P[k], P[k + 1], P[k + 2]); k += 3;
+#define SC_FIELD_INT(name) p.name = int(P[k]); k += 1;
+#include "cloud_shade_fields.glsl.h"
+#undef SC_FIELD
+#undef SC_FIELD_VEC3
+#undef SC_FIELD_INT
+  return p;
+}
+
+int param_count() {
+  int k = 0;
+#define SC_FIELD(name) k += 1;
+#define SC_FIELD_VEC3(name) k += 3;
+#define SC_FIELD_INT(name) k += 1;
+#include "cloud_shade_fields.glsl.h"
+#undef SC_FIELD
+#undef SC_FIELD_VEC3
+#undef SC_FIELD_INT
+  return k;
+}
+
+void main() {
+  int n = param_count();
+  int width = int(P[n]);
+  int height = int(P[n + 1]);
+  int x = int(gl_GlobalInvocationID.x);
+  int y = int(gl_GlobalInvocationID.y);
+  if (x >= width || y >= height) return;
+  CloudShadeParams p = load_params();
+  vec2 lat = trig[y];
+  vec2 lon = trig[height + x];
+  // The same products as the C++ paths (cpu_cloud_renderer.cc), in the same order.
+  vec3 view = vec3(lon.x * lat.y, lat.x, lon.y * lat.y);
+  CloudResult r = cloud_march(view, p);
+  int o = (y * width + x) * 4;
+  out_rt[o] = r.radiance.x;
+  out_rt[o + 1] = r.radiance.y;
+  out_rt[o + 2] = r.radiance.z;
+  out_rt[o + 3] = r.transmittance;
+}

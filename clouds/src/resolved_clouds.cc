@@ -1,0 +1,189 @@
+#include "resolved_clouds.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+#include "skycal/render/irradiance.h"
+#include "skycal/render/renderer.h"
+
+namespace skycal::clouds {
+namespace {
+constexpr double kPi = std::numbers::pi;
+// The clear sky is rendered this small for its SH-9 (order 2 resolves nothing finer than
+// ~60 deg; 128 x 64 pixels put the quadrature error far below that).
+constexpr int kShWidth = 128, kShHeight = 64;
+
+static_assert(CloudModelD::CLOUD_BASE_SIZE == CloudNoise::kBaseSize && CloudModelD::CLOUD_DETAIL_SIZE == CloudNoise::kDetailSize &&
+                  CloudModelD::CLOUD_CURL_SIZE == CloudNoise::kCurlSize,
+              "clouds/model/cloud_textures.glsl.h sizes must match cloud_textures.h");
+}  // namespace
+
+bool CloudRenderRequest::IsValid(std::string* why) const {
+  render::RenderRequest r;
+  r.width = width;
+  r.height = height;
+  r.sun_dir = sun_dir;
+  if (!r.IsValid(why)) return false;
+  if (!std::isfinite(time_s) || std::abs(time_s) > 1.0e7) {
+    *why = "cloud time " + std::to_string(time_s) + " s (expected a finite time within 1e7 s)";
+    return false;
+  }
+  if (!march.IsValid(why)) {
+    *why = "march: " + *why;
+    return false;
+  }
+  return true;
+}
+
+void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, const std::string& origin) {
+  auto check = [&](const std::vector<float>& v, size_t n, float lo, float hi, const std::string& what) {
+    if (v.size() != n) {
+      throw Error(origin + ": " + what + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
+    }
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (!std::isfinite(v[i]) || v[i] < lo || v[i] > hi) {
+        throw Error(origin + ": " + what + " value " + std::to_string(i) + " = " + std::to_string(v[i]) +
+                    " (expected finite, in [" + std::to_string(lo) + ", " + std::to_string(hi) + "])");
+      }
+    }
+  };
+  const size_t b = CloudNoise::kBaseSize, d = CloudNoise::kDetailSize, c = CloudNoise::kCurlSize;
+  check(noise.base, b * b * b * 4, 0.0f, 1.0f, "base noise");
+  check(noise.detail, d * d * d * 3, 0.0f, 1.0f, "detail noise");
+  check(noise.curl, c * c * 3, -1.0f, 1.0f, "curl noise");
+  if (weather.width < 1 || weather.height < 1 || weather.width > 16384 || weather.height > 16384) {
+    throw Error(origin + ": weather map is " + std::to_string(weather.width) + "x" + std::to_string(weather.height) +
+                " texels (expected 1..16384 a side)");
+  }
+  check(weather.rgb, static_cast<size_t>(weather.width) * weather.height * 3, 0.0f, 1.0f,
+        "weather map (R coverage, G precipitation, B type)");
+}
+
+CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request) {
+  if (!scene.preset || !scene.params || !scene.noise || !scene.weather) throw Error("cloud render: incomplete scene");
+  std::string why;
+  if (!request.IsValid(&why)) throw Error("cloud render request: " + why);
+  const CloudParams& c = *scene.params;
+  ValidateCloudParams(c, "cloud parameters");
+  ValidateCloudTextures(*scene.noise, *scene.weather, "cloud textures");
+  const render::Preset& preset = *scene.preset;
+  const auto sun = latlong::Normalized(request.sun_dir, "sun direction");
+
+  CloudShadeD s{};
+  s.planet_radius = c.planet_radius_m;
+  s.layer_bottom = c.layer_bottom_m;
+  s.layer_top = c.layer_top_m;
+  s.camera_height = c.camera_height_m;
+  s.draw_distance = c.draw_distance_m;
+  s.weather_extent = c.weather_extent_m;
+  s.base_tile = c.base_noise_tile_m;
+  s.detail_tile = c.detail_noise_tile_m;
+  s.curl_tile = c.curl_noise_tile_m;
+  s.curl_strength = c.curl_strength_m;
+  // Density at x is the texture at x - wind x time: the clouds drift with the wind.
+  const double az = c.wind_direction_deg * kPi / 180.0;
+  s.wind_x = -std::sin(az) * c.wind_speed_m_s * request.time_s;
+  s.wind_z = -std::cos(az) * c.wind_speed_m_s * request.time_s;
+  s.coverage_scale = c.coverage_scale;
+  s.erosion = c.erosion;
+  s.height_shaping = c.height_shaping;
+  s.horizon_rule = c.horizon_rule;
+  s.horizon_start = c.horizon_start_m;
+  s.horizon_end = c.horizon_end_m;
+  s.horizon_coverage = c.horizon_coverage;
+  s.cirrus_coverage = c.cirrus_coverage;
+  s.cirrus_altitude = c.cirrus_altitude_m;
+  s.cirrus_depth = c.cirrus_optical_depth;
+  s.cirrus_tile = c.cirrus_tile_m;
+  s.extinction = c.extinction_per_m;
+  s.albedo = c.scattering_albedo;
+  s.g1 = c.phase_g1;
+  s.g2 = c.phase_g2;
+  s.phase_blend = c.phase_blend;
+  s.powder_strength = c.powder_strength;
+  s.powder_view_fade = c.powder_view_fade;
+  s.rain_absorption = c.rain_absorption;
+  s.ambient_strength = c.ambient_strength;
+  s.ambient_height_bias = c.ambient_height_bias;
+  s.ground_bounce = c.ground_bounce;
+  s.ms_a = c.ms_a;
+  s.ms_b = c.ms_b;
+  s.ms_c = c.ms_c;
+  s.atmosphere_blend = c.atmosphere_blend_m;
+  s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
+
+  // The light the atmosphere already models: direct sun at the ground, the clear sky's
+  // SH-9 (no disc: the sun is the direct term) and the lit ground below.
+  const render::Rgb e_sun = render::SunIlluminanceAtGround(preset, sun);
+  s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
+  render::RenderRequest sky_request;
+  sky_request.sun_dir = sun;
+  sky_request.width = kShWidth;
+  sky_request.height = kShHeight;
+  sky_request.sun_disc = false;
+  const ImageRGB sky = render::CreateRenderer(render::Backend::kCpu)->Render(preset, sky_request);
+  const render::ShCoefficients sh = render::ProjectSh9(sky);
+  glsl::Vec3<double>* shs[9] = {&s.sh0, &s.sh1, &s.sh2, &s.sh3, &s.sh4, &s.sh5, &s.sh6, &s.sh7, &s.sh8};
+  for (int k = 0; k < 9; ++k) *shs[k] = glsl::Vec3<double>(sh[k][0], sh[k][1], sh[k][2]);
+  const render::Rgb e_up = render::ShIrradiance(sh, {0.0, 1.0, 0.0});
+  s.sky_irradiance_up = glsl::Vec3<double>(std::max(e_up[0], 0.0), std::max(e_up[1], 0.0), std::max(e_up[2], 0.0));
+  const double k = preset.ground_albedo / kPi, cos_sun = std::max(sun[1], 0.0);
+  s.ground_radiance = glsl::Vec3<double>(k * (e_sun[0] * cos_sun + s.sky_irradiance_up.x),
+                                         k * (e_sun[1] * cos_sun + s.sky_irradiance_up.y),
+                                         k * (e_sun[2] * cos_sun + s.sky_irradiance_up.z));
+  s.weather_width = scene.weather->width;
+  s.weather_height = scene.weather->height;
+  s.ms_octaves = static_cast<int>(c.ms_octaves);
+  s.integration = static_cast<int>(c.integration);
+
+  const MarchOptions& m = request.march;
+  s.steps_zenith = m.steps_zenith;
+  s.steps_horizon = m.steps_horizon;
+  s.light_samples = m.light_samples;
+  s.cheap_march = m.cheap_march ? 1 : 0;
+  s.step_back = m.step_back ? 1 : 0;
+  s.empty_to_cheap = m.empty_to_cheap;
+  s.opacity_stop = m.opacity_stop ? 1 : 0;
+  s.cheap_light = m.cheap_light ? 1 : 0;
+  s.far_light = m.far_light ? 1 : 0;
+  s.cheap_step_factor = m.cheap_step_factor;
+  s.opacity_threshold = m.opacity_threshold;
+  s.cheap_light_opacity = m.cheap_light_opacity;
+  s.light_step = m.light_step_m;
+  s.far_light_distance = m.far_light_distance_m;
+  return s;
+}
+
+std::vector<float> PackCloudShade(const CloudShadeD& d) {
+  std::vector<float> v;
+#define SC_FIELD(name) v.push_back(static_cast<float>(d.name));
+#define SC_FIELD_VEC3(name)                  \
+  v.push_back(static_cast<float>(d.name.x)); \
+  v.push_back(static_cast<float>(d.name.y)); \
+  v.push_back(static_cast<float>(d.name.z));
+#define SC_FIELD_INT(name) v.push_back(static_cast<float>(d.name));
+#include "../model/cloud_shade_fields.glsl.h"
+#undef SC_FIELD
+#undef SC_FIELD_VEC3
+#undef SC_FIELD_INT
+  return v;
+}
+
+LatLongTrig MakeLatLongTrig(int width, int height) {
+  LatLongTrig t;
+  for (int y = 0; y < height; ++y) {
+    const double lat = (height - 1 - 2 * y) * (0.5 * kPi / (height - 1));  // sky_model.glsl.h's latlong_latitude
+    t.sin_lat.push_back(std::sin(lat));
+    t.cos_lat.push_back(std::cos(lat));
+  }
+  for (int x = 0; x < width; ++x) {
+    const double lon = (width - 1 - 2 * x) * (kPi / (width - 1));
+    t.sin_lon.push_back(std::sin(lon));
+    t.cos_lon.push_back(std::cos(lon));
+  }
+  return t;
+}
+
+}  // namespace skycal::clouds

@@ -1,0 +1,371 @@
+// The cloud model's analytic checks (clouds/model/*.glsl.h through the double instance):
+// Beer transmittance of a uniform slab and of a shaped layer within the march's step-error
+// bound, Henyey-Greenstein normalisation, energy conservation of single scattering,
+// Beer-Powder values, coverage 0 -> the clear sky exactly, and the parameter section.
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <nlohmann/json.hpp>
+
+#include "cloud_test_scenes.h"
+#include "resolved_clouds.h"
+#include "skycal/clouds/composite.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+#include "skycal/render/renderer.h"
+
+namespace skycal::clouds {
+namespace {
+constexpr double kPi = std::numbers::pi;
+
+render::Preset DefaultPreset() { return render::LoadPreset(std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json"); }
+
+struct Fixture {
+  render::Preset preset = DefaultPreset();
+  CloudParams params;
+  CloudNoise noise = testing::ConstantCloudNoise(1.0f, 1.0f);
+  WeatherMap weather = testing::UniformWeather(1.0f, 0.0f, 0.5f);
+  CloudRenderRequest request;
+  CloudScene scene() const { return {&preset, &params, &noise, &weather}; }
+  CloudShadeD shade() const { return ResolveCloudShade(scene(), request); }
+};
+
+glsl::Vec3<double> Dir(double elevation_deg, double azimuth_deg) {
+  const double e = elevation_deg * kPi / 180.0, a = azimuth_deg * kPi / 180.0;
+  return {std::sin(a) * std::cos(e), std::sin(e), std::cos(a) * std::cos(e)};
+}
+
+// Path length inside the shell [R + b, R + t] from a camera at height h below it, along a
+// ray of elevation e: independent of the model's stable-root code.
+double ShellPath(double R, double h, double b, double t, double e) {
+  auto far = [&](double a) {
+    const double rc = R + h, mu = std::sin(e);
+    return -rc * mu + std::sqrt(rc * rc * mu * mu - rc * rc + (R + a) * (R + a));
+  };
+  return far(t) - far(b);
+}
+
+// Beer's law through a uniform slab: base noise 1, coverage 1, shaping 0 -> density 1, so
+// sigma_t = extinction everywhere in the layer. The march samples the midpoint of n equal
+// steps spanning exactly [t0, t1] (ray-sphere roots): for a constant integrand the midpoint
+// rule is exact, so the optical depth's only error is rounding, n steps x 1 ulp relative
+// (n <= 128: < 1e-13 in double). Bound used: |T - exp(-sigma L)| <= 1e-12. Both the naive
+// march and the game's (the cheap march finds cloud at its first sample and steps back to
+// t0, so the full steps again span [t0, t1]; opacity stays above the stop threshold).
+TEST(CloudsModel, UniformSlabBeerTransmittance) {
+  for (bool game : {false, true}) {
+    Fixture f;
+    f.params.height_shaping = 0.0;
+    f.params.horizon_rule = 0.0;
+    // Optical depth 0.75 at the zenith, 5.4 at 8 deg: T stays above the opacity stop (1e-3).
+    f.params.extinction_per_m = 0.0003;
+    f.request.march = game ? MarchOptions{} : MarchOptions::Naive();
+    const CloudShadeD s = f.shade();
+    CpuCloudTextures tex(f.noise, f.weather);
+    CloudModelD m(tex);
+    for (double elevation : {90.0, 45.0, 20.0, 8.0}) {
+      const auto r = m.cloud_march(Dir(elevation, 30.0), s);
+      const double L = std::min(ShellPath(s.planet_radius, s.camera_height, s.layer_bottom, s.layer_top, elevation * kPi / 180.0),
+                                s.draw_distance - ShellPath(s.planet_radius, s.camera_height, 0.0, s.layer_bottom, elevation * kPi / 180.0));
+      const double expected = std::exp(-s.extinction * L);
+      EXPECT_NEAR(r.transmittance, expected, 1e-12) << "elevation " << elevation << " game " << game;
+    }
+  }
+}
+
+// A shaped layer (cumulus gradient x bottom ramp, base noise 1, coverage 1) looking
+// straight up, where altitude = camera height + t. Midpoint rule error over [t0, t1] with
+// n steps of size dt: |tau_n - tau| <= sigma (L dt^2 / 24) max|f''(t)|, f the density
+// profile (composite midpoint rule). max|f''| is measured on a fine grid of the model's own
+// profile (central differences, 100x finer than dt) and taken x1.5 for safety; the
+// reference optical depth is the same profile integrated with 65,536 midpoint steps.
+TEST(CloudsModel, ShapedLayerWithinMidpointBound) {
+  Fixture f;
+  f.params.horizon_rule = 0.0;
+  f.params.extinction_per_m = 0.004;
+  f.request.march = MarchOptions::Naive();
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  auto density = [&](double altitude) {
+    const auto w = m.cloud_weather(0.0, 0.0, altitude, s);
+    const double base = m.cloud_base_density(0.0, 0.0, altitude, w, s);
+    return base > 0.0 ? m.cloud_full_density(base, 0.0, 0.0, altitude, s) : 0.0;
+  };
+  const double L = s.layer_top - s.layer_bottom;
+  const int n = s.steps_zenith;
+  const double dt = L / n;
+  double tau = 0.0;
+  const int fine = 65536;
+  for (int i = 0; i < fine; ++i) tau += density(s.layer_bottom + (i + 0.5) * L / fine) * (L / fine);
+  tau *= s.extinction;
+  double f2 = 0.0;
+  const double hstep = dt / 100.0;
+  for (double a = s.layer_bottom + hstep; a < s.layer_top - hstep; a += hstep) {
+    f2 = std::max(f2, std::abs(density(a + hstep) - 2.0 * density(a) + density(a - hstep)) / (hstep * hstep));
+  }
+  const double bound = 1.5 * s.extinction * L * dt * dt / 24.0 * f2;
+  const auto r = m.cloud_march(Dir(90.0, 0.0), s);
+  const double tau_march = -std::log(r.transmittance);
+  EXPECT_LE(std::abs(tau_march - tau), bound) << "tau " << tau << " bound " << bound;
+  EXPECT_GT(tau, 1.0);  // a meaningful depth, not a vacuous check
+}
+
+// The 2D cirrus sheet over a base noise of 1 (pattern 1 x coverage remap = 1 at coverage
+// 1): straight up its transmittance is exp(-depth) exactly (mu = 1), and at 30 deg the slant
+// through the spherical sheet, exp(-depth / mu), mu from the sphere's geometry.
+TEST(CloudsModel, CirrusSheetTransmittance) {
+  Fixture f;
+  f.params.coverage_scale = 0.0;  // the volumetric layer empty
+  f.params.cirrus_coverage = 1.0;
+  f.params.cirrus_optical_depth = 0.4;
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  EXPECT_NEAR(m.cloud_march(Dir(90.0, 0.0), s).transmittance, std::exp(-0.4), 1e-12);
+  const double e = 30.0 * kPi / 180.0, rc = s.planet_radius + s.camera_height, rs = s.planet_radius + s.cirrus_altitude;
+  const double mu = std::sqrt(1.0 - std::pow(rc * std::cos(e) / rs, 2.0));  // sin rule at the sheet
+  EXPECT_NEAR(m.cloud_march(Dir(30.0, 0.0), s).transmittance, std::exp(-0.4 / mu), 1e-9);
+  EXPECT_DOUBLE_EQ(m.cloud_march(Dir(-5.0, 0.0), s).transmittance, 1.0);  // below the horizon: ground
+}
+
+// Each HG lobe and their blend integrate to 1 over the sphere: integral of p 2 pi dmu over
+// mu in [-1, 1] by the midpoint rule in u = 1 - mu on two geometric grids, from u = 0 up
+// and from u = 2 down (dense at the forward and the backward peak, whose width is
+// ~(1 - |g|)^2). 2 x 20,000 cells from 1e-9: the midpoint error, h^2/24 |p''| per cell
+// with h/u ~ 1e-3, is ~1e-7 relative; tolerance 1e-5.
+TEST(CloudsModel, PhaseLobesIntegrateToOne) {
+  Fixture f;
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  const int cells = 20000;
+  const double u0 = 1e-9, ratio = std::pow(1.0 / u0, 1.0 / (cells - 1));
+  auto integrate = [&](auto phase) {
+    double sum = 0.0;
+    for (int side = 0; side < 2; ++side) {
+      double a = 0.0, b = u0;
+      for (int i = 0; i < cells; ++i) {
+        const double mid = 0.5 * (a + b);
+        sum += phase(side == 0 ? mid : 2.0 - mid) * (b - a) * 2.0 * kPi;
+        a = b;
+        b = std::min(b * ratio, 1.0);
+      }
+    }
+    return sum;
+  };
+  for (double g : {-0.9, -0.3, 0.0, 0.5, 0.8, 0.9, 0.99}) {
+    EXPECT_NEAR(integrate([&](double u) { return m.phase_hg(u, g); }), 1.0, 1e-5) << "g " << g;
+  }
+  for (double blend : {0.0, 0.25, 0.7, 1.0}) {
+    EXPECT_NEAR(integrate([&](double u) { return m.phase_two_lobe(u, 0.5, 0.95, blend); }), 1.0, 1e-5) << blend;
+  }
+}
+
+// Beer-Powder 2 exp(-d) (1 - exp(-2d)): 0 at d = 0, its maximum 4 / (3 sqrt 3) at
+// d = ln(3) / 2, 2 e^-1 (1 - e^-2) at 1; strength 0 leaves Beer's exp(-d).
+TEST(CloudsModel, PowderValues) {
+  Fixture f;
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  EXPECT_DOUBLE_EQ(m.beer_powder(0.0), 0.0);
+  EXPECT_NEAR(m.beer_powder(0.5 * std::log(3.0)), 4.0 / (3.0 * std::sqrt(3.0)), 1e-15);
+  EXPECT_NEAR(m.beer_powder(1.0), 2.0 * std::exp(-1.0) * (1.0 - std::exp(-2.0)), 1e-15);
+  EXPECT_NEAR(m.beer_powder(1e-4), 4e-4, 1e-7);  // 4 d for small d: edges go dark
+  CloudShadeD s = f.shade();
+  s.powder_strength = 0.0;
+  EXPECT_DOUBLE_EQ(m.sun_attenuation(0.7, 0.3, s), std::exp(-0.7));
+  s.powder_strength = 1.0;
+  s.powder_view_fade = 0.0;
+  EXPECT_NEAR(m.sun_attenuation(0.7, 0.3, s), m.beer_powder(0.7), 1e-15);
+  s.powder_view_fade = 1.0;  // toward the sun (1 - mu = 0): no powder
+  EXPECT_NEAR(m.sun_attenuation(0.7, 0.0, s), std::exp(-0.7), 1e-15);
+}
+
+// Energy: albedo 1, no absorption (no rain), single scattering, no powder, ambient, ground
+// or atmosphere blend: a camera inside a uniform slab sees L(w) <= E_sun p(w) (1 - T(w))
+// per view (light reaching a sample is at most E_sun; the energy-conserving step scatters
+// at most what it removes), so over the sphere integral of L dw <= E_sun: out-scattered <= incident.
+TEST(CloudsModel, SingleScatteringConservesEnergy) {
+  Fixture f;
+  f.params.height_shaping = 0.0;
+  f.params.horizon_rule = 0.0;
+  f.params.scattering_albedo = 1.0;
+  f.params.camera_height_m = 2750.0;  // mid-layer: cloud in every direction
+  f.params.extinction_per_m = 0.002;
+  f.params.ms_octaves = 0.0;
+  f.params.powder_strength = 0.0;
+  f.request.sun_dir = {0.3, 0.8, 0.2};
+  f.request.march = MarchOptions::Naive();
+  CloudShadeD s = f.shade();
+  s.sky_irradiance_up = s.ground_radiance = glsl::Vec3<double>(0.0);
+  s.atmosphere_blend = 1e30;
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  const int w = 96, h = 48;
+  double integral = 0.0;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const auto d = latlong::PixelDirection(x, y, w, h);
+      const glsl::Vec3<double> v(d[0], d[1], d[2]);
+      const auto r = m.cloud_march(v, s);
+      const glsl::Vec3<double> diff = v - s.sun_dir;
+      const double bound = s.sun_illuminance.y * m.phase_two_lobe(0.5 * glsl::dot(diff, diff), s.g1, s.g2, s.phase_blend) *
+                           (1.0 - r.transmittance);
+      ASSERT_LE(r.radiance.y, bound * (1.0 + 1e-12)) << x << "," << y;
+      integral += r.radiance.y * latlong::PixelSolidAngle(x, y, w, h);
+    }
+  }
+  EXPECT_LE(integral, s.sun_illuminance.y);
+  EXPECT_GT(integral, 0.05 * s.sun_illuminance.y);  // and the test scatters a real amount
+}
+
+// Coverage 0 (scale 0, or an empty weather map without rain or horizon rule) -> T = 1 and
+// L_cloud = 0 in every pixel, so the composite equals the clear sky bit for bit.
+TEST(CloudsModel, CoverageZeroCompositesToTheClearSky) {
+  for (int variant = 0; variant < 2; ++variant) {
+    Fixture f;
+    f.noise = testing::SinusoidCloudNoise();
+    if (variant == 0) {
+      f.params.coverage_scale = 0.0;
+      f.weather = testing::PatchyWeather(0.6f, 0.5f);
+    } else {
+      f.weather = testing::UniformWeather(0.0f, 0.0f, 1.0f);
+      f.params.horizon_rule = 0.0;
+    }
+    for (double elevation : {-10.0, 20.0, 90.0}) {
+      f.request.width = 64;
+      f.request.height = 32;
+      f.request.sun_dir = {0.0, std::sin(elevation * kPi / 180.0), std::cos(elevation * kPi / 180.0)};
+      render::RenderRequest sky_request;
+      sky_request.sun_dir = f.request.sun_dir;
+      sky_request.width = 64;
+      sky_request.height = 32;
+      const ImageRGB sky = render::CreateRenderer(render::Backend::kCpu)->Render(f.preset, sky_request);
+      for (CloudPrecision p : {CloudPrecision::kDouble, CloudPrecision::kFloat}) {
+        const CloudImage clouds = CreateCpuCloudRenderer(p, 2)->Render(f.scene(), f.request);
+        const ImageRGB out = CompositeClouds(sky, clouds);
+        EXPECT_EQ(out.pixels, sky.pixels) << "variant " << variant << " elevation " << elevation;
+      }
+    }
+  }
+}
+
+TEST(CloudsModel, CompositeIsSkyTimesTransmittancePlusClouds) {
+  ImageRGB sky(2, 1);
+  sky.pixels = {1, 2, 3, 4, 5, 6};
+  CloudImage c;
+  c.radiance = ImageRGB(2, 1);
+  c.radiance.pixels = {0.5f, 0.5f, 0.5f, 1, 0, 0};
+  c.transmittance = {0.5f, 0.0f};
+  EXPECT_EQ(CompositeClouds(sky, c).pixels, (std::vector<float>{1.0f, 1.5f, 2.0f, 1, 0, 0}));
+  c.transmittance = {1.0f};
+  EXPECT_THROW(CompositeClouds(sky, c), Error);
+}
+
+// The lighting fit (issue 11) differentiates the model: the shared source instantiates on
+// ceres::Jet, and its derivatives of a whole march with respect to lighting parameters
+// match central finite differences of the double model (relative 1e-5: the step h = 1e-6
+// relative leaves truncation ~h^2 and rounding ~1e-16/h ~ 1e-10).
+TEST(CloudsModel, JetDerivativesOfTheMarchMatchFiniteDifferences) {
+  using J = ceres::Jet<double, 3>;
+  Fixture f;
+  f.noise = testing::SinusoidCloudNoise();
+  f.weather = testing::PatchyWeather(0.6f, 0.5f);
+  f.request.sun_dir = {0.4, 0.5, 0.77};
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModel<J, CpuCloudTextures> mj(tex);
+  CloudModelD md(tex);
+  auto js = CastCloudShade<CloudModel<J, CpuCloudTextures>::CloudShadeParams>(s);
+  js.g1 = J(s.g1, 0);
+  js.powder_strength = J(s.powder_strength, 1);
+  js.ambient_strength = J(s.ambient_strength, 2);
+  int checked = 0;
+  for (double elevation : {5.0, 20.0, 60.0}) {
+    for (double azimuth : {0.0, 120.0, 250.0}) {
+      const auto dir = Dir(elevation, azimuth);
+      const auto r = mj.cloud_march(glsl::Vec3<J>(J(dir.x), J(dir.y), J(dir.z)), js);
+      if (r.transmittance.a > 0.999) continue;  // no cloud on this ray
+      double* fields[3] = {nullptr, nullptr, nullptr};
+      CloudShadeD sp = s;
+      fields[0] = &sp.g1;
+      fields[1] = &sp.powder_strength;
+      fields[2] = &sp.ambient_strength;
+      for (int k = 0; k < 3; ++k) {
+        const double h = 1e-6 * std::max(std::abs(*fields[k]), 1.0), v = *fields[k];
+        *fields[k] = v + h;
+        const double up = md.cloud_march(dir, sp).radiance.y;
+        *fields[k] = v - h;
+        const double down = md.cloud_march(dir, sp).radiance.y;
+        *fields[k] = v;
+        const double fd = (up - down) / (2.0 * h);
+        EXPECT_NEAR(r.radiance.y.v[k], fd, 1e-5 * std::abs(r.radiance.y.a) + 1e-9) << elevation << " " << azimuth << " " << k;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 3);
+}
+
+// render::Preset carries the section opaquely: LoadPreset -> SavePreset -> LoadPreset keeps
+// it unchanged, and the preset's files include the weather map it names (file safety).
+TEST(CloudsParams, PresetCarriesTheSectionThroughAndListsTheWeatherMap) {
+  const std::string bundled = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
+  const render::Preset p = render::LoadPreset(bundled);
+  ASSERT_FALSE(p.clouds_json.empty());
+  const CloudParams c = ParseCloudSectionText(p.clouds_json, bundled);
+  EXPECT_EQ(c.weather_map, "default_cloudy.weather.exr");
+  const auto files = render::PresetFiles(bundled);
+  EXPECT_NE(std::find(files.begin(), files.end(),
+                      std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.weather.exr"),
+            files.end());
+  const std::string dir = (std::filesystem::temp_directory_path() / ("skycal-clouds-preset-" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  render::SavePreset(p, dir + "/copy.json");
+  EXPECT_EQ(render::LoadPreset(dir + "/copy.json").clouds_json, p.clouds_json);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CloudsParams, SectionRoundTripsAndRefusesBadFields) {
+  CloudParams p;
+  p.coverage_scale = 0.7;
+  p.integration = 1.0;
+  p.weather_map = "w.exr";
+  const nlohmann::json j = CloudSectionToJson(p);
+  const CloudParams q = ParseCloudSection(j, "t.json");
+  EXPECT_EQ(q.coverage_scale, 0.7);
+  EXPECT_EQ(q.integration_mode(), CloudIntegration::kHzdSimple);
+  EXPECT_EQ(q.weather_map, "w.exr");
+  EXPECT_EQ(CloudSectionToJson(q), j);
+  auto error = [](const nlohmann::json& section) {
+    try {
+      ParseCloudSection(section, "t.json");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error({{"extintion", 0.1}}).find("did you mean 'extinction'"), std::string::npos);
+  EXPECT_NE(error({{"layer_bottom", 5000.0}}).find("clouds.layer_bottom"), std::string::npos);
+  EXPECT_NE(error({{"layer_bottom", -1.0}}).find("m)"), std::string::npos);
+  EXPECT_NE(error({{"ms_octaves", 1.5}}).find("an integer"), std::string::npos);
+  EXPECT_NE(error({{"integration", "fast"}}).find("energy-conserving"), std::string::npos);
+  EXPECT_NE(error({{"horizon_rule", 1}}).find("true or false"), std::string::npos);
+  MarchOptions m;
+  std::string why;
+  EXPECT_TRUE(m.IsValid(&why));
+  m.steps_zenith = 0;
+  EXPECT_FALSE(m.IsValid(&why));
+  EXPECT_NE(why.find("steps_zenith"), std::string::npos);
+  m.steps_zenith = 1000000;
+  EXPECT_FALSE(m.IsValid(&why));
+}
+
+}  // namespace
+}  // namespace skycal::clouds
