@@ -330,7 +330,6 @@ bool AtmosphereOptions::IsValid(std::string* why) const {
     return false;
   };
   auto finite_nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  auto finite_pos = [](double v) { return std::isfinite(v) && v > 0.0; };
   // Physical bounds (atmosphere_bake.h): generous around Earth, tight enough that the
   // bake means something. Above an optical depth of 50 along the vertical, single
   // scattering leaves every LUT at zero (e^-50 ~ 2e-22): the preset would be black.
