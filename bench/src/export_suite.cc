@@ -1,0 +1,58 @@
+// Suite `export`: `skycal export` (RunExportImpl) of the bundled preset, grid over the
+// pre-exposure headroom (the largest LUT texel is at most H x 65504). Time: the whole
+// export; error: the largest relative error of a LUT texel read back from the half-float
+// EXR (divided by the pre-exposure) against the preset's float table, positive texels
+// only: FP16's rounding (2^-11) plus what underflows into subnormals when H is small.
+#include <algorithm>
+#include <cmath>
+
+#include "export_verb.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/render/preset.h"
+#include "suite_util.h"
+#include "suites_internal.h"
+
+namespace skycal::bench {
+
+Suite ExportSuite() {
+  Suite s;
+  s.name = "export";
+  s.summary = "skycal export of the bundled preset: pre-exposure headroom";
+  s.error_metric = "max rel error of a half-float LUT texel vs the float table";
+  s.run = [](const SuiteOptions& o) {
+    Grid grid;
+    grid.axes = {{"headroom", {"1e-6", "1e-4", "0.01", "0.25", "1"}, "0.25"}};  // ExportOptions default
+    const render::Preset preset = render::LoadPreset(DefaultPresetPath());
+    const int repeats = o.Repeats(o.quick ? 3 : 7);
+    int k = 0;
+    return RunGrid("export", grid, o, [&](CaseResult& c) {
+      cli::ExportOptions eo;
+      eo.presets = {DefaultPresetPath()};
+      eo.headroom = std::stod(Get(c.settings, "headroom"));
+      eo.backend = render::Backend::kCpu;
+      eo.out_dir = (o.scratch / ("export_" + std::to_string(k++))).string();
+      nlohmann::json summary;
+      c.time = Measure([&] { summary = cli::RunExportImpl(eo); }, o.warmup, repeats);
+      const double scale = summary.at("pre_exposure").get<double>();
+      double worst = 0.0;
+      const std::string dir = eo.out_dir + "/" + summary.at("presets").at(0).at("name").get<std::string>();
+      for (const auto& [name, table] : {std::pair{"rayleigh", &preset.luts.rayleigh}, std::pair{"mie", &preset.luts.mie}}) {
+        const ImageRGB back = ReadExrRGB(dir + "/" + name + ".exr").image;
+        for (size_t i = 0; i < table->size() && i < back.pixels.size(); ++i) {
+          if (!((*table)[i] > 0.0f)) continue;
+          const double r = std::abs(back.pixels[i] / scale - (*table)[i]) / (*table)[i];
+          worst = std::max(worst, std::isfinite(r) ? r : INFINITY);
+        }
+      }
+      c.error = worst;
+      c.extra = {{"pre_exposure", scale}, {"half_underflow_texels", summary.value("half_underflow_texels", 0LL)}};
+      if (!std::isfinite(worst)) {
+        c.outcome = Outcome::kNonFinite;
+        c.message = "a texel read back non-finite";
+      }
+    });
+  };
+  return s;
+}
+
+}  // namespace skycal::bench
