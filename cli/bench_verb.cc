@@ -35,7 +35,8 @@ std::string VulkanDevice() {
 std::string ShortLabel(const bench::CaseResult& c, const bench::Settings& defaults) {
   std::string label;
   for (size_t i = 0; i < c.settings.size() && i < defaults.size(); ++i)
-    if (c.settings[i].second != defaults[i].second) label += (label.empty() ? "" : " ") + c.settings[i].second;
+    if (c.settings[i].second != defaults[i].second)
+      label += (label.empty() ? "" : " ") + c.settings[i].first + "=" + c.settings[i].second;
   return label.empty() ? std::string() : label;
 }
 
@@ -138,7 +139,10 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
         const bool usable = c.outcome == bench::Outcome::kOk;
         points.push_back({usable ? c.time.median_ms : NAN, usable ? c.error : NAN});
       }
-      for (int i : bench::ParetoFront(points)) {
+      // Within 10% in time (the compare noise floor: quick cases run once) or 1% in error
+      // two cases count as equal.
+      const bench::ParetoTolerance tolerance{0.10, 0.01};
+      for (int i : bench::ParetoFront(points, tolerance)) {
         rep.front.push_back(cases[i].name);
       }
       // The plot shows the usable cases only.
@@ -150,12 +154,12 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
       }
       std::vector<bench::TimeError> shown;
       for (const bench::CaseResult* c : plot.cases) shown.push_back({c->time.median_ms, c->error});
-      plot.front = bench::ParetoFront(shown);
+      plot.front = bench::ParetoFront(shown, tolerance);
       plot.default_index = default_index;
       plot.title = suite->name + ": " + suite->summary;
       plot.subtitle = results.machine.cpu_model + ", " + std::to_string(results.machine.cores) + " cores; commit " +
                       results.machine.commit.substr(0, 10) + (o.quick ? "; --quick" : "");
-      plot.error_label = suite->error_metric;
+      plot.error_label = suite->error_axis.empty() ? suite->error_metric : suite->error_axis;
       for (const bench::CaseResult& c : cases) {
         if (!c.is_default) continue;
         rep.default_case = c.name;

@@ -118,6 +118,12 @@ TEST(BenchPareto, ExactMembershipOnAHandMadeSet) {
   const std::vector<TimeError> pts = {{1.0, 0.5}, {2.0, 0.1}, {3.0, 0.2}, {1.0, 0.5}, {0.5, 9.0}, {NAN, 0.0}, {2.0, 0.3}};
   EXPECT_EQ(ParetoFront(pts), (std::vector<int>{0, 1, 3, 4}));
   EXPECT_TRUE(ParetoFront({}).empty());
+  // With tolerances: 5% faster at the same error is noise (both kept), 20% faster is not;
+  // 0.5% more accurate at 3x the time is not better either.
+  const std::vector<TimeError> noisy = {{100, 0.01}, {95, 0.01}, {80, 0.01}, {300, 0.00995}};
+  EXPECT_EQ(ParetoFront(noisy), (std::vector<int>{2, 3}));
+  EXPECT_EQ(ParetoFront({{100, 0.01}, {95, 0.01}}, {0.10, 0.01}), (std::vector<int>{0, 1}));
+  EXPECT_EQ(ParetoFront(noisy, {0.10, 0.01}), (std::vector<int>{2}));
 }
 
 TEST(BenchCompare, FlagsAPlanted2xRegressionAndNotA5PercentWobble) {
@@ -200,7 +206,8 @@ TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
     EXPECT_TRUE(c0.contains(k)) << k;
   EXPECT_EQ(c0["case"], "size=small method=a");
   EXPECT_DOUBLE_EQ(c0["time_ms"]["median_ms"].get<double>(), 1.0);
-  // Front: (1, 0.1) and (10, 0.01); (2, 0.2) and (20, 0.02) dominated. Default large/a on it.
+  // Front: (1, 0.1) and (10, 0.01); (2, 0.2) and (20, 0.02) dominated (beyond the 10% / 1%
+  // tolerances too). Default large/a on it.
   ASSERT_EQ(j["suites"].size(), 1u);
   EXPECT_EQ(j["suites"][0]["pareto_front"], nlohmann::json({"size=small method=a", "size=large method=a"}));
   EXPECT_EQ(j["suites"][0]["default_case"], "size=large method=a");

@@ -23,6 +23,7 @@ Suite CaptureSuite() {
   s.name = "capture";
   s.summary = "skycal capture: 7 fisheye PNG brackets -> lat-long frame: response x output size";
   s.error_metric = "rel RMSE vs the scene above 10 deg, after one exposure scale";
+  s.error_axis = "rel RMSE vs the scene (one scale)";
   s.run = [](const SuiteOptions& o) {
     const int fisheye = o.quick ? 1000 : 4000, scene_w = o.quick ? 1024 : 2048;
     Grid grid;

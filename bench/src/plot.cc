@@ -34,12 +34,12 @@ Axis ChooseAxis(const std::vector<double>& v) {
   }
   if (v.empty()) return a;
   a.log = std::isfinite(min_pos) && min_v >= 0.0 && max_v / min_pos > 10.0;
-  if (a.log) {
+  if (a.log) {  // decades
     a.floor = min_pos / 3.0;
     a.lo = std::log10(min_v > 0.0 ? min_pos : a.floor);
     a.hi = std::log10(max_v);
   } else {
-    a.lo = std::min(min_v, 0.0);
+    a.lo = min_v;
     a.hi = max_v;
   }
   if (a.hi - a.lo < 1e-12) {
@@ -56,7 +56,7 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
   plstream pls;
   pls.sdev(device.c_str());
   pls.sfnam(path.c_str());
-  pls.setopt("geometry", "1200x800");
+  pls.setopt("geometry", "1200x860");
   pls.scol0(kBackground, 255, 255, 255);
   pls.scol0(kInk, 0, 0, 0);
   pls.scol0(kGrey, 170, 170, 170);
@@ -71,14 +71,22 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     e.push_back(c->error);
   }
   const Axis ax = ChooseAxis(t), ay = ChooseAxis(e);
+  // Frame with room below for the key, left for the y label.
+  pls.adv(0);
+  pls.vpor(0.10, 0.97, 0.22, 0.88);
+  pls.wind(ax.lo, ax.hi, ay.lo, ay.hi);
   pls.col0(kInk);
-  pls.env(ax.lo, ax.hi, ay.lo, ay.hi, 0, (ax.log ? 10 : 0) + (ay.log ? 20 : 0) + 2);  // +2: grid lines
+  pls.box((std::string("bcnstg") + (ax.log ? "l" : "")).c_str(), 0.0, 0, (std::string("bcnstvg") + (ay.log ? "l" : "")).c_str(), 0.0, 0);
   const std::string xl = "median wall time per case (ms)" + std::string(ax.log ? ", log scale" : "");
   std::string yl = p.error_label + (ay.log ? ", log scale" : "");
   if (ay.log && std::any_of(e.begin(), e.end(), [](double v) { return v <= 0.0; })) yl += " (0 drawn at the floor)";
-  pls.lab(xl.c_str(), yl.c_str(), p.title.c_str());
-  pls.schr(0.0, 0.7);
-  pls.mtex("t", 0.6, 1.0, 1.0, p.subtitle.c_str());
+  pls.schr(0.0, 0.85);
+  pls.mtex("t", 3.2, 0.5, 0.5, p.title.c_str());
+  pls.schr(0.0, 0.8);
+  pls.mtex("b", 3.0, 0.5, 0.5, xl.c_str());
+  pls.mtex("l", 5.0, 0.5, 0.5, yl.c_str());
+  pls.schr(0.0, 0.65);
+  pls.mtex("t", 1.8, 0.5, 0.5, p.subtitle.c_str());
 
   std::vector<bool> on_front(p.cases.size(), false);
   for (int i : p.front) on_front[i] = true;
@@ -127,16 +135,16 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     pls.poin(1, &x, &y, 4);
     pls.schr(0.0, 0.8);
     const std::string tag = on_front[d] ? "default (on the front)" : "default (dominated)";
-    pls.ptex(x, y - 0.045 * (ay.hi - ay.lo), 1.0, 0.0, 0.5, tag.c_str());
+    pls.ptex(x, y - 0.07 * (ay.hi - ay.lo), 1.0, 0.0, 0.5, tag.c_str());
   }
-  // Key, bottom left inside the frame.
+  // Key, below the x label.
   pls.schr(0.0, 0.7);
   pls.col0(kFront);
-  pls.mtex("b", -2.6, 0.02, 0.0, "#(850) Pareto front (no case both faster and more accurate)");
+  pls.mtex("b", 5.0, 0.0, 0.0, "blue dots and line: the Pareto front (no other case is both faster and more accurate)");
   pls.col0(kGrey);
-  pls.mtex("b", -1.3, 0.02, 0.0, "#(229) dominated");
+  pls.mtex("b", 6.5, 0.0, 0.0, "grey crosses: dominated settings (labels: the settings that differ from the default)");
   pls.col0(kDefault);
-  pls.mtex("b", -3.9, 0.02, 0.0, "#(850) red ring: the default setting");
+  pls.mtex("b", 8.0, 0.0, 0.0, "red ring: the default setting");
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ Suite ProbeSuite() {
   s.name = "probe";
   s.summary = "gray-probe irradiance at 256 normals: quadrature of a W-wide sky vs SH-9";
   s.error_metric = "RMS rel. irradiance error vs quadrature of a converged CPU sky";
+  s.error_axis = "RMS rel. irradiance error";
   s.run = [](const SuiteOptions& o) {
     Grid grid;
     const std::vector<std::string> widths = o.quick ? std::vector<std::string>{"32", "64", "128", "256"}

@@ -19,6 +19,7 @@ Suite RenderSuite() {
   s.name = "render";
   s.summary = "sky render of the bundled preset (sun 35 deg, no disc): backend x size";
   s.error_metric = "rel RMSE above the horizon vs CPU reference at 2x the largest size (bilinear)";
+  s.error_axis = "rel RMSE vs a 2x-size CPU sky";
   s.run = [](const SuiteOptions& o) {
     Grid grid;
     const std::vector<std::string> sizes = o.quick ? std::vector<std::string>{"256x128", "512x256", "1024x512"}

@@ -75,8 +75,14 @@ struct Runner {
   void operator()(const std::string& area, const std::string& input, const std::function<void(CaseResult&)>& body) {
     out.push_back(RunCase("stress", {{"area", area}, {"input", input}}, {}, k++, -1, o, [&](CaseResult& c) {
       const auto t0 = Clock::now();
-      body(c);
-      c.time = FromSamples({std::chrono::duration<double, std::milli>(Clock::now() - t0).count()});
+      auto stamp = [&] { c.time = FromSamples({std::chrono::duration<double, std::milli>(Clock::now() - t0).count()}); };
+      try {
+        body(c);
+      } catch (...) {
+        stamp();  // a refusal's time too: it should be quick
+        throw;
+      }
+      stamp();
     }));
   }
 };

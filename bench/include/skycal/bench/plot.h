@@ -21,7 +21,7 @@ struct ParetoPlot {
   std::vector<std::string> labels;
 };
 
-// Writes `png_path` (1200x800) and `svg_path`. Throws skycal::Error when PLplot cannot open
+// Writes `png_path` (1200x860) and `svg_path`. Throws skycal::Error when PLplot cannot open
 // a device (the message names the missing driver package).
 void WriteParetoPlot(const ParetoPlot& plot, const std::string& png_path, const std::string& svg_path);
 

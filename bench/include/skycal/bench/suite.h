@@ -30,6 +30,7 @@ struct Suite {
   std::string name;
   std::string summary;       // one line: what is measured, at which sizes
   std::string error_metric;  // what `error` is, with units ("rel RMSE vs CPU 4096x2048")
+  std::string error_axis;    // the same, short, for the plot's y axis
   bool pareto = true;        // time against error is meaningful (not for stress)
   std::function<std::vector<CaseResult>(const SuiteOptions&)> run;
 };
