@@ -5,16 +5,11 @@
 // RunCaptureImpl (decode, merge, colour, unwrap, sun, masks, EXR write); error: rel RMSE of
 // the frame against the scene above 10 deg elevation (the fisheye's rim excluded), after the
 // best single exposure scale (a capture's absolute scale is the camera's, not the scene's).
-#include <algorithm>
-#include <thread>
-
-#include "capture_verb.h"
+#include "fisheye_brackets.h"
 #include "image_compare.h"
 #include "skycal/capture/latlong_frame.h"
 #include "suite_util.h"
 #include "suites_internal.h"
-#include "../../tests/synthetic_brackets.h"
-#include "../../tests/synthetic_fisheye.h"
 
 namespace skycal::bench {
 
@@ -31,37 +26,20 @@ Suite CaptureSuite() {
                                                    : std::vector<std::string>{"512x256", "1024x512", "2048x1024"};
     // Defaults: CaptureOptions (Debevec response, 2048x1024).
     grid.axes = {{"response", {"debevec", "srgb"}, "debevec"}, {"size", sizes, "2048x1024"}};
-    std::string source;
-    const ImageRGB scene = synthetic::LoadBracketScene(scene_w, scene_w / 2, &source);
-    capture::RigCamera cam;
-    cam.lens = synthetic::InscribedLens(capture::LensModel::kEquisolid, 180.0, fisheye);
-    cam.width = cam.height = fisheye;
-    cam.rotation = capture::RotationFromYawPitchRollDeg(0.0, 90.0, 0.0);
-    synthetic::BracketSpec spec;
-    spec.curve = synthetic::CameraCurve::kSrgb;
-    const std::vector<std::string> paths = synthetic::WriteBracketsPng(
-        synthetic::MakeSyntheticBrackets(synthetic::RenderCameraView(scene, cam, std::max(2u, std::thread::hardware_concurrency())), spec),
-        o.scratch.string());
-    o.Log("[capture] scene " + source + ", " + std::to_string(fisheye) + "x" + std::to_string(fisheye) + " fisheye, " +
-          std::to_string(paths.size()) + " brackets");
+    const FisheyeBrackets b = WriteFisheyeBrackets(scene_w, fisheye, o.scratch.string());
+    o.Log("[capture] scene " + b.scene_source + ", " + std::to_string(fisheye) + "x" + std::to_string(fisheye) +
+          " fisheye, " + std::to_string(b.paths.size()) + " brackets");
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     std::vector<CaseResult> out = RunGrid("capture", grid, o, [&](CaseResult& c) {
-      cli::CaptureOptions co;
-      co.brackets = paths;
-      co.exposure_times_s = spec.exposure_times_s;
-      co.merge.response = capture::ParseResponseModel(Get(c.settings, "response"), "response");
-      co.lens.model = capture::LensModel::kEquisolid;
-      co.lens.fov_deg = 180.0;
-      co.camera_ypr_deg = {0.0, 90.0, 0.0};
       const std::string& size = Get(c.settings, "size");
-      co.width = std::stoi(size.substr(0, size.find('x')));
-      co.height = co.width / 2;
-      co.out = (o.scratch / "capture_frame.exr").string();
+      const cli::CaptureOptions co = FisheyeCaptureOptions(b.paths, b.exposure_times_s, Get(c.settings, "response"),
+                                                           std::stoi(size.substr(0, size.find('x'))),
+                                                           (o.scratch / "capture_frame.exr").string());
       nlohmann::json summary;
       c.time = Measure([&] { summary = cli::RunCaptureImpl(co); }, o.quick ? 0 : o.warmup, repeats);
       const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;
-      c.error = RelRmse(scene, frame, 10.0, /*fit_scale=*/true);
-      c.extra = {{"stages_ms", summary.value("stages", nlohmann::json())}, {"scene", source}, {"fisheye", fisheye}};
+      c.error = RelRmse(b.scene, frame, 10.0, /*fit_scale=*/true);
+      c.extra = {{"stages_ms", summary.value("stages", nlohmann::json())}, {"scene", b.scene_source}, {"fisheye", fisheye}};
     });
     return out;
   };

@@ -23,7 +23,7 @@ struct Axis {
 };
 
 // Log when every value is positive (or a few are 0, drawn at a floor) and they span more than
-// a decade; a margin of 8% either side.
+// a decade; a margin of 10% either side.
 Axis ChooseAxis(const std::vector<double>& v) {
   Axis a;
   double min_pos = INFINITY, max_v = -INFINITY, min_v = INFINITY;
@@ -46,7 +46,7 @@ Axis ChooseAxis(const std::vector<double>& v) {
     a.lo -= a.log ? 0.5 : std::max(std::abs(a.lo) * 0.1, 1e-12);
     a.hi += a.log ? 0.5 : std::max(std::abs(a.hi) * 0.1, 1e-12);
   }
-  const double margin = 0.08 * (a.hi - a.lo);
+  const double margin = 0.10 * (a.hi - a.lo);
   a.lo -= margin;
   a.hi += margin;
   return a;
@@ -63,6 +63,9 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
   pls.scol0(kFront, 31, 90, 180);
   pls.scol0(kDefault, 210, 30, 30);
   pls.init();
+  // Plain numbers on the axes, never a separate "(x10^-3)" that collides with the title.
+  pls.sxax(12, 0);
+  pls.syax(12, 0);
   pls.schr(0.0, 0.9);
 
   std::vector<double> t, e;
@@ -73,7 +76,7 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
   const Axis ax = ChooseAxis(t), ay = ChooseAxis(e);
   // Frame with room below for the key, left for the y label.
   pls.adv(0);
-  pls.vpor(0.10, 0.97, 0.22, 0.88);
+  pls.vpor(0.11, 0.97, 0.22, 0.88);
   pls.wind(ax.lo, ax.hi, ay.lo, ay.hi);
   pls.col0(kInk);
   pls.box((std::string("bcnstg") + (ax.log ? "l" : "")).c_str(), 0.0, 0, (std::string("bcnstvg") + (ay.log ? "l" : "")).c_str(), 0.0, 0);
@@ -84,7 +87,7 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
   pls.mtex("t", 3.2, 0.5, 0.5, p.title.c_str());
   pls.schr(0.0, 0.8);
   pls.mtex("b", 3.0, 0.5, 0.5, xl.c_str());
-  pls.mtex("l", 5.0, 0.5, 0.5, yl.c_str());
+  pls.mtex("l", 6.0, 0.5, 0.5, yl.c_str());
   pls.schr(0.0, 0.65);
   pls.mtex("t", 1.8, 0.5, 0.5, p.subtitle.c_str());
 
@@ -118,12 +121,47 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     const PLFLT x = ax.Map(t[i]), y = ay.Map(e[i]);
     pls.poin(1, &x, &y, 17);
   }
-  // Labels beside each point (front in blue, others grey), small.
+  // Labels beside the points (front in blue first, then grey), small; a label that would
+  // overlap one already placed tries the other side, above and below, else is left out
+  // (every case is in results.csv). Boxes in fractions of the frame, character sizes
+  // measured on the 1200-pixel-wide output at this character scale.
   pls.schr(0.0, 0.55);
-  for (size_t i = 0; i < p.cases.size() && i < p.labels.size(); ++i) {
+  struct Box {
+    double x0, x1, y0, y1;
+  };
+  std::vector<Box> placed;
+  std::vector<size_t> label_order;
+  for (size_t i = 0; i < p.cases.size() && i < p.labels.size(); ++i)
+    if (on_front[i]) label_order.push_back(i);
+  for (size_t i = 0; i < p.cases.size() && i < p.labels.size(); ++i)
+    if (!on_front[i]) label_order.push_back(i);
+  // The default's tag: below its ring (above when the ring is near the bottom), kept inside
+  // the frame; its box is reserved before the other labels.
+  double tag_fx = 0.5, tag_fy = 0.5;
+  if (p.default_index >= 0) {
+    const double fx = (ax.Map(t[p.default_index]) - ax.lo) / (ax.hi - ax.lo);
+    const double fy = (ay.Map(e[p.default_index]) - ay.lo) / (ay.hi - ay.lo);
+    tag_fx = std::clamp(fx, 0.15, 0.85);
+    tag_fy = fy > 0.15 ? fy - 0.08 : fy + 0.08;
+    placed.push_back({tag_fx - 0.14, tag_fx + 0.14, tag_fy - 0.025, tag_fy + 0.025});
+  }
+  for (size_t i : label_order) {
     if (p.labels[i].empty()) continue;
-    pls.col0(on_front[i] ? kFront : kGrey);
-    pls.ptex(ax.Map(t[i]) + 0.012 * (ax.hi - ax.lo), ay.Map(e[i]), 1.0, 0.0, 0.0, p.labels[i].c_str());
+    const double fx = (ax.Map(t[i]) - ax.lo) / (ax.hi - ax.lo), fy = (ay.Map(e[i]) - ay.lo) / (ay.hi - ay.lo);
+    const double w = 0.0085 * p.labels[i].size(), h = 0.035;
+    const double tries[4][3] = {{0.012, 0.0, 0.0}, {-0.012, 0.0, 1.0}, {0.012, 0.045, 0.0}, {0.012, -0.045, 0.0}};
+    for (const auto& tr : tries) {
+      const double x0 = tr[2] == 0.0 ? fx + tr[0] : fx + tr[0] - w;
+      const Box b{x0, x0 + w, fy + tr[1] - h / 2, fy + tr[1] + h / 2};
+      bool clash = b.x1 > 1.0 || b.x0 < 0.0;
+      for (const Box& o : placed) clash = clash || (b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1);
+      if (clash) continue;
+      placed.push_back(b);
+      pls.col0(on_front[i] ? kFront : kGrey);
+      pls.ptex(ax.lo + (fx + tr[0]) * (ax.hi - ax.lo), ay.lo + (fy + tr[1]) * (ay.hi - ay.lo), 1.0, 0.0, tr[2],
+               p.labels[i].c_str());
+      break;
+    }
   }
   // The default: a red ring and its name.
   if (p.default_index >= 0 && p.default_index < static_cast<int>(p.cases.size())) {
@@ -135,7 +173,7 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     pls.poin(1, &x, &y, 4);
     pls.schr(0.0, 0.8);
     const std::string tag = on_front[d] ? "default (on the front)" : "default (dominated)";
-    pls.ptex(x, y - 0.07 * (ay.hi - ay.lo), 1.0, 0.0, 0.5, tag.c_str());
+    pls.ptex(ax.lo + tag_fx * (ax.hi - ax.lo), ay.lo + tag_fy * (ay.hi - ay.lo), 1.0, 0.0, 0.5, tag.c_str());
   }
   // Key, below the x label.
   pls.schr(0.0, 0.7);

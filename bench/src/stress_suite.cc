@@ -21,8 +21,8 @@
 #include <memory>
 #include <random>
 
-#include "capture_verb.h"
 #include "export_verb.h"
+#include "fisheye_brackets.h"
 #include "image_compare.h"
 #include "probe_extract_verb.h"
 #include "skycal/capture/latlong_frame.h"
@@ -33,8 +33,6 @@
 #include "skycal/refsky/reference_skies.h"
 #include "suite_util.h"
 #include "suites_internal.h"
-#include "../../tests/synthetic_brackets.h"
-#include "../../tests/synthetic_fisheye.h"
 
 namespace skycal::bench {
 namespace {
@@ -233,17 +231,10 @@ void FitArea(Runner& run, const SuiteOptions& o) {
 
 void CaptureArea(Runner& run, const SuiteOptions& o) {
   constexpr int kFisheye = 256;
-  std::string source;
-  const ImageRGB scene = synthetic::LoadBracketScene(256, 128, &source);
-  capture::RigCamera cam;
-  cam.lens = synthetic::InscribedLens(capture::LensModel::kEquisolid, 180.0, kFisheye);
-  cam.width = cam.height = kFisheye;
-  cam.rotation = capture::RotationFromYawPitchRollDeg(0.0, 90.0, 0.0);
-  synthetic::BracketSpec spec;
-  spec.curve = synthetic::CameraCurve::kSrgb;
   const std::string dir = (o.scratch / "stress_capture").string();
   std::filesystem::create_directories(dir);
-  const std::vector<std::string> good = synthetic::WriteBracketsPng(synthetic::MakeSyntheticBrackets(synthetic::RenderCameraView(scene, cam, 2), spec), dir);
+  const FisheyeBrackets b = WriteFisheyeBrackets(256, kFisheye, dir);
+  const std::vector<std::string>& good = b.paths;
   auto constant = [&](const std::string& name, int value) {
     const std::string p = dir + "/" + name + ".png";
     cv::imwrite(p, cv::Mat(kFisheye, kFisheye, CV_8UC3, cv::Scalar(value, value, value)));
@@ -255,7 +246,7 @@ void CaptureArea(Runner& run, const SuiteOptions& o) {
     std::vector<std::string> brackets;
     std::vector<double> times;
   };
-  const std::vector<double>& t = spec.exposure_times_s;
+  const std::vector<double>& t = b.exposure_times_s;
   std::vector<Input> inputs = {
       {"all clipped", std::vector<std::string>(t.size(), white), t},
       {"all black", std::vector<std::string>(t.size(), black), t},
@@ -268,15 +259,8 @@ void CaptureArea(Runner& run, const SuiteOptions& o) {
   for (const Input& in : inputs)
     for (const char* response : {"debevec", "srgb"}) {
       run("capture", in.name + " " + response, [&](CaseResult& c) {
-        cli::CaptureOptions co;
-        co.brackets = in.brackets;
-        co.exposure_times_s = in.times;
-        co.merge.response = capture::ParseResponseModel(response, "response");
-        co.lens.model = capture::LensModel::kEquisolid;
-        co.lens.fov_deg = 180.0;
-        co.width = 128;
-        co.height = 64;
-        co.out = dir + "/frame_" + std::to_string(n++) + ".exr";
+        const cli::CaptureOptions co =
+            FisheyeCaptureOptions(in.brackets, in.times, response, 128, dir + "/frame_" + std::to_string(n++) + ".exr");
         const nlohmann::json summary = cli::RunCaptureImpl(co);
         const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;
         if (!AllFinite(frame)) NonFinite(c, "non-finite radiance in the frame");
