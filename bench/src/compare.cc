@@ -15,6 +15,12 @@ double Spread(const Timing& t) { return t.median_ms > 0.0 ? (t.max_ms - t.min_ms
 
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
+std::string FormatMs(double ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", ms);
+  return buf;
+}
+
 }  // namespace
 
 bool CompareOptions::IsValid(std::string* why) const {
@@ -104,6 +110,13 @@ std::string Comparison::ToText() const {
                 "ratio", "noise", "verdict", "error old -> new");
   s << line;
   for (const CaseComparison& c : cases) {
+    if (c.verdict == Verdict::kOnlyOld || c.verdict == Verdict::kOnlyNew) {
+      std::snprintf(line, sizeof line, "%-8s %-48s %11s %11s %7s %6s  %-11s\n", c.suite.c_str(), c.name.substr(0, 48).c_str(),
+                    c.verdict == Verdict::kOnlyOld ? FormatMs(c.old_ms).c_str() : "-",
+                    c.verdict == Verdict::kOnlyNew ? FormatMs(c.new_ms).c_str() : "-", "-", "-", ToString(c.verdict));
+      s << line;
+      continue;
+    }
     std::snprintf(line, sizeof line, "%-8s %-48s %11.3f %11.3f %7.3f %5.0f%%  %-11s %.4g -> %.4g%s\n", c.suite.c_str(),
                   c.name.substr(0, 48).c_str(), c.old_ms, c.new_ms, c.ratio, 100.0 * c.noise, ToString(c.verdict),
                   c.old_error, c.new_error, c.error_worse ? "  ERROR WORSE" : "");
