@@ -77,9 +77,9 @@ std::vector<FitReference> WriteReferences(const SuiteOptions& o, const fit::FitO
 Suite FitSuite() {
   Suite s;
   s.name = "fit";
-  s.summary = "one-sky fit from the bundled preset, 256x128: linear start x loss x backend x polish x Jacobians";
+  s.summary = "one-sky fit from the bundled preset, 256x128: start x loss x backend x polish x Jacobians";
   s.error_metric = "mean rel RMSE of the fitted sky vs the clean reference";
-  s.error_axis = "mean rel RMSE, fit vs reference";
+  s.error_axis = "mean rel RMSE, fit vs the clean sky";
   s.run = [](const SuiteOptions& o) {
     Grid grid;
     // Defaults: fit::FitOptions (linear start, Cauchy, vulkan, analytic).
