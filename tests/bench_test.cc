@@ -159,6 +159,13 @@ TEST(BenchCompare, FlagsAPlanted2xRegressionAndNotA5PercentWobble) {
   EXPECT_EQ(d.cases[0].verdict, Verdict::kSame);
   EXPECT_EQ(d.cases[1].verdict, Verdict::kOnlyNew);
   EXPECT_FALSE(d.Regressed());
+  // An untimed case (a stress input, one run) is compared by outcome only, not by time.
+  new_run.cases = {MakeCase("x", {{"a", "1"}}, T(300, 300, 300, 1), 0.0)};
+  new_run.cases[0].timed = false;
+  new_run.cases[0].outcome = Outcome::kNonFinite;
+  const Comparison u = Compare(old_run, new_run, CompareOptions{});
+  EXPECT_EQ(u.cases[0].verdict, Verdict::kSame);
+  EXPECT_EQ(u.outcome_worse, 1);
 }
 
 TEST(BenchStressTable, CountsOutcomesPerArea) {
@@ -202,7 +209,7 @@ TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
   EXPECT_EQ(j["machine"]["date_utc"].get<std::string>().size(), 20u);  // 2026-01-01T00:00:00Z
   ASSERT_EQ(j["cases"].size(), 4u);
   const auto& c0 = j["cases"][0];
-  for (const char* k : {"suite", "case", "settings", "default", "time_ms", "error", "outcome", "message", "converged", "extra"})
+  for (const char* k : {"suite", "case", "settings", "default", "time_ms", "timed", "error", "outcome", "message", "converged", "extra"})
     EXPECT_TRUE(c0.contains(k)) << k;
   EXPECT_EQ(c0["case"], "size=small method=a");
   EXPECT_DOUBLE_EQ(c0["time_ms"]["median_ms"].get<double>(), 1.0);

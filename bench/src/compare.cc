@@ -72,8 +72,10 @@ Comparison Compare(const Results& old_run, const Results& new_run, const Compare
     cc.old_outcome = ToString(p.outcome);
     cc.noise = std::max({Spread(p.time), Spread(n.time), o.noise_floor});
     cc.ratio = p.time.median_ms > 0.0 ? n.time.median_ms / p.time.median_ms : std::nan("");
-    if (std::isfinite(cc.ratio) && cc.ratio > 1.0 + cc.noise) cc.verdict = Verdict::kSlower;
-    else if (std::isfinite(cc.ratio) && cc.ratio < 1.0 / (1.0 + cc.noise)) cc.verdict = Verdict::kFaster;
+    // Untimed cases (stress: one run each, the input's outcome is what matters) get no time verdict.
+    const bool timed = p.timed && n.timed;
+    if (timed && std::isfinite(cc.ratio) && cc.ratio > 1.0 + cc.noise) cc.verdict = Verdict::kSlower;
+    else if (timed && std::isfinite(cc.ratio) && cc.ratio < 1.0 / (1.0 + cc.noise)) cc.verdict = Verdict::kFaster;
     // Error: worse beyond the relative tolerance (plus a tiny absolute floor for ~0 errors),
     // or a number that became non-finite.
     if (std::isfinite(p.error)) {

@@ -92,6 +92,7 @@ nlohmann::json CaseToJson(const CaseResult& c) {
            }()},
           {"default", c.is_default},
           {"time_ms", c.time.ToJson()},
+          {"timed", c.timed},
           {"error", Number(c.error)},
           {"outcome", ToString(c.outcome)},
           {"message", c.message},
@@ -111,6 +112,7 @@ CaseResult CaseFromJson(const nlohmann::json& j) {
     c.time.min_ms = t.at("min_ms").get<double>();
     c.time.max_ms = t.at("max_ms").get<double>();
     c.time.runs = t.at("runs").get<int>();
+    c.timed = j.value("timed", true);
     c.error = NumberOr(j.at("error"), std::nan(""));
     c.outcome = ParseOutcome(j.at("outcome").get<std::string>());
     c.message = j.value("message", "");

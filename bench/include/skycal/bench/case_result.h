@@ -23,6 +23,7 @@ struct CaseResult {
   Settings settings;
   bool is_default = false;  // the settings a user gets without options
   Timing time;              // ms
+  bool timed = true;        // false: the time is recorded, not benchmarked (one run of a stress case)
   double error = std::numeric_limits<double>::quiet_NaN();  // in the suite's error metric
   Outcome outcome = Outcome::kOk;
   std::string message;      // the error's text, or what was non-finite
