@@ -429,7 +429,7 @@ int Run(int argc, char** argv) {
   }
   nlohmann::json result = {
       {"benchmark", "fit accuracy against the 15 CIE standard general skies (CIE S 011 / ISO 15469), one reference per fit"},
-      {"machine", bench::MachineInfo()},
+      {"machine", bench::MachineJson()},
       {"settings",
        {{"reference", "256x128 lat-long, grey RGB = CIE luminance, Lz = 5000 cd/m^2, 0 below the horizon, sun azimuth 0"},
         {"init_preset", "datasets/presets/default_clear.json"},
@@ -502,7 +502,7 @@ int Run(int argc, char** argv) {
   }
   md << "\nTarget (spec): ffxv-iso median rel RMSE <= " << Percent(kTargetMedianRelRmse) << "%: "
      << (iso_median <= kTargetMedianRelRmse ? "met" : "**not met**") << " (" << Percent(iso_median) << "%). Total run time "
-     << static_cast<int>(std::lround(total_s)) << " s on " << bench::MachineInfo()["hardware_threads"].get<unsigned>()
+     << static_cast<int>(std::lround(total_s)) << " s on " << bench::MachineJson()["hardware_threads"].get<unsigned>()
      << " hardware threads.\n";
 
   if (write_files) {

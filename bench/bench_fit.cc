@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
   defaults.verbose = false;
   nlohmann::json result = {{"benchmark", "fit from the bundled default preset, default options (ffxv-iso, Cauchy, linear "
                                          "start, vulkan render check), 512x256 references the preset was not built from"},
-                           {"machine", bench::MachineInfo()}};
+                           {"machine", bench::MachineJson()}};
 
   // 1. Every reference: the default fit, its stages and its ceiling.
   const std::vector<Case> cases = WriteReferences(dir);
@@ -232,7 +232,7 @@ int main(int argc, char** argv) {
   std::ostringstream md;
   md << std::fixed << std::setprecision(3);
   md << "# Fit benchmark (bench/bench_fit.cc)\n\nFrom the bundled default preset, default options, 512x256 references "
-        "the preset was not built from. Machine: " << bench::MachineInfo()["hardware_threads"] << " hardware threads, "
+        "the preset was not built from. Machine: " << bench::MachineJson()["hardware_threads"] << " hardware threads, "
      << result["machine"]["date_utc"].get<std::string>() << ".\n\n"
      << "| reference | fit ms (median of " << kRepeats << ") | rel RMSE % | LUT ceiling % | g |\n|---|---|---|---|---|\n";
   for (const auto& r : per_ref) {

@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
                     "albedo 0.25; start: +-20% LUT, g + 0.06, ground 0.1; references 2% noise clipped above the "
                     "99.5th percentile; ball albedo 0.18, 1% noise, " +
                         std::to_string(probe.samples.size()) + " samples"},
-      {"machine", bench::MachineInfo()}};
+      {"machine", bench::MachineJson()}};
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
 
   // 1. Added cost, 512x256.

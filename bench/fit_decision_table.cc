@@ -103,7 +103,7 @@ void WriteDecisionTable(const render::Preset& start, const std::filesystem::path
      << " from the bundled default preset (Vulkan backend, median of " << kRuns << " runs after a warm-up). "
         "saved ms = fit time with the decision off minus on; rel RMSE change = with the skip minus without "
         "(percentage points; negative: the skip lowered the error). Machine: "
-     << MachineInfo()["hardware_threads"] << " hardware threads, " << MachineInfo()["date_utc"].get<std::string>()
+     << MachineJson()["hardware_threads"] << " hardware threads, " << MachineJson()["date_utc"].get<std::string>()
      << ".\n\n| decision | sky | on ms | off ms | saved ms | rel RMSE on % | off % | change (pp) |\n"
         "|---|---|---|---|---|---|---|---|\n";
   nlohmann::json medians;
@@ -147,7 +147,7 @@ void WriteDecisionTable(const render::Preset& start, const std::filesystem::path
      << " (the scale fit.json's estimates use, fit/src/fit_decisions.cc).\n";
   std::filesystem::create_directories(out_dir);
   WriteJsonFileAtomically((out_dir / "fit_decisions.json").string(),
-                          {{"machine", MachineInfo()}, {"rows", rows}, {"medians", medians}});
+                          {{"machine", MachineJson()}, {"rows", rows}, {"medians", medians}});
   WriteFileAtomically((out_dir / "fit_decisions.md").string(), md.str());
   std::cout << md.str();
 }

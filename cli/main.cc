@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bake_verb.h"
+#include "bench_verb.h"
 #include "capture_verb.h"
 #include "ceiling_verb.h"
 #include "export_verb.h"
@@ -37,6 +38,7 @@ const std::vector<Verb>& Verbs() {
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},
       {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
+      {"bench", "run time against error per setting (Pareto plots), numerical stress, --compare two runs", &skycal::cli::RunBench},
       {"sun", "the sun's position (zenith, azimuth, lat-long direction) for a place and time", &skycal::cli::RunSun},
   };
   return verbs;

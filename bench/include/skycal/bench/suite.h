@@ -1,0 +1,54 @@
+// A benchmark suite and the registry `skycal bench --suite` picks from. A suite measures
+// a grid of settings (grid.h) and returns one CaseResult per point; the verb writes them,
+// computes the Pareto front and plots it. New areas (e.g. the clouds renderer and fit)
+// register one more Suite in BuiltinSuites (suites.cc): nothing else changes.
+#pragma once
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "skycal/bench/case_result.h"
+
+namespace skycal::bench {
+
+struct SuiteOptions {
+  bool quick = false;  // CI sizes: every suite in seconds, not minutes
+  int repeat = 0;      // timed repeats per case; 0: the suite's own default
+  int warmup = 1;      // untimed runs before the repeats
+  std::filesystem::path scratch;  // a directory the suite may write temporaries into
+  std::function<void(const std::string&)> log;        // progress lines (may be empty)
+  std::function<void(const CaseResult&)> on_case;     // called as each case finishes (may be empty)
+
+  bool IsValid(std::string* why) const;
+  int Repeats(int suite_default) const { return repeat > 0 ? repeat : suite_default; }
+  void Log(const std::string& line) const { if (log) log(line); }
+  void Done(const CaseResult& c) const { if (on_case) on_case(c); }
+};
+
+struct Suite {
+  std::string name;
+  std::string summary;       // one line: what is measured, at which sizes
+  std::string error_metric;  // what `error` is, with units ("rel RMSE vs CPU 4096x2048")
+  std::string error_axis;    // the same, short, for the plot's y axis
+  bool pareto = true;        // time against error is meaningful (not for stress)
+  std::function<std::vector<CaseResult>(const SuiteOptions&)> run;
+};
+
+class SuiteRegistry {
+ public:
+  void Add(Suite suite);  // throws skycal::Error on a duplicate or empty name
+  const Suite* Find(const std::string& name) const;
+  std::vector<std::string> Names() const;
+  // "render,fit" -> the suites, in the order given; throws skycal::Error naming an
+  // unknown suite and listing the valid names.
+  std::vector<const Suite*> Resolve(const std::string& comma_list) const;
+
+ private:
+  std::vector<Suite> suites_;
+};
+
+// render, fit, probe, capture, export, stress, clouds (suites.cc).
+SuiteRegistry BuiltinSuites();
+
+}  // namespace skycal::bench

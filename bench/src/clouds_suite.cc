@@ -1,0 +1,178 @@
+// Suite `clouds`: run time against error of the Horizon Zero Dawn cloud march (issue 10's
+// benchmark). Scene: the bundled default_cloudy preset (its clouds section and weather
+// map), noise seed 1, sun 25 deg elevation. Error: solid-angle weighted rel RMSE of the
+// composite (clear sky x T + clouds) above the horizon against a converged reference —
+// the double CPU renderer with every optimisation off, 1,024 primary steps at every
+// elevation and 64 light samples spread over the game's whole light path (its 6 x 120 m
+// cone plus the far sample at 3 km), so the reference converges to the integral the
+// game's samples approximate. The error is taken at 256x128 (per-pixel error does not
+// depend on the image size; the reference is the costly part); time is one render at
+// 512x256. Grid: backend x march (the game's settings, the naive march, each HZD
+// optimisation switched off alone) x primary steps x light samples, one axis away from
+// the game's settings at a time; the CPU reference is timed at the game's and the naive
+// settings only.
+#include <filesystem>
+#include <memory>
+
+#include "image_compare.h"
+#include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
+#include "skycal/clouds/composite.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+#include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
+#include "suite_util.h"
+#include "suites_internal.h"
+
+namespace skycal::bench {
+namespace {
+
+// The march settings of the `march` axis: the game's, the naive march, or the game's with
+// one optimisation off.
+clouds::MarchOptions MarchFor(const std::string& name) {
+  clouds::MarchOptions m;
+  if (name == "game") return m;
+  if (name == "naive") return clouds::MarchOptions::Naive();
+  if (name == "no-cheap-march") m.cheap_march = false;
+  else if (name == "no-step-back") m.step_back = false;
+  else if (name == "no-return-to-cheap") m.empty_to_cheap = 0;
+  else if (name == "no-opacity-stop") m.opacity_stop = false;
+  else if (name == "no-cheap-light") m.cheap_light = false;
+  else if (name == "no-far-light") m.far_light = false;
+  else throw Error("clouds suite: unknown march setting '" + name + "'");
+  return m;
+}
+
+// "64/128" -> zenith and horizon primary steps.
+void SetSteps(clouds::MarchOptions& m, const std::string& steps) {
+  const size_t slash = steps.find('/');
+  m.steps_zenith = std::stoi(steps.substr(0, slash));
+  m.steps_horizon = std::stoi(steps.substr(slash + 1));
+}
+
+// Light samples with the cone's length kept (samples x step = the game's 6 x 120 m).
+void SetLightSamples(clouds::MarchOptions& m, int samples) {
+  const clouds::MarchOptions game;
+  m.light_step_m = game.light_step_m * game.light_samples / samples;
+  m.light_samples = samples;
+}
+
+struct CloudScene {
+  render::Preset preset;
+  clouds::CloudParams params;
+  clouds::CloudNoise noise;
+  clouds::WeatherMap weather;
+  clouds::CloudScene View() const { return {&preset, &params, &noise, &weather}; }
+};
+
+CloudScene LoadDefaultCloudyScene() {
+  const std::string path = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
+  CloudScene s;
+  s.preset = render::LoadPreset(path);
+  s.params = clouds::ParseCloudSectionText(s.preset.clouds_json, path);
+  const std::string map = (std::filesystem::path(path).parent_path() / s.params.weather_map).string();
+  s.weather = clouds::LoadWeatherMap(map, s.params.weather_extent_m);
+  s.noise = clouds::LoadOrGenerateCloudNoise(1, clouds::DefaultCloudNoiseCacheDir());
+  return s;
+}
+
+}  // namespace
+
+Suite CloudsSuite() {
+  Suite s;
+  s.name = "clouds";
+  s.summary = "HZD cloud march of the bundled cloudy preset (sun 25 deg): backend x march x steps x light samples";
+  s.error_metric = "rel RMSE of the composite above the horizon vs a converged double reference (1,024 steps, 64 light samples)";
+  s.error_axis = "rel RMSE vs converged clouds";
+  s.run = [](const SuiteOptions& o) {
+    const CloudScene scene = LoadDefaultCloudyScene();
+    Grid grid;
+    grid.axes = {{"backend", {"vulkan", "cpu"}, "vulkan"},
+                 {"march", o.quick ? std::vector<std::string>{"game", "naive"}
+                                   : std::vector<std::string>{"game", "naive", "no-cheap-march", "no-step-back",
+                                                              "no-return-to-cheap", "no-opacity-stop", "no-cheap-light",
+                                                              "no-far-light"},
+                  "game"},
+                 {"steps", o.quick ? std::vector<std::string>{"32/64", "64/128"}
+                                   : std::vector<std::string>{"16/32", "32/64", "64/128", "96/192", "128/256", "256/512"},
+                  "64/128"},
+                 {"light_samples", o.quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"}};
+    grid.skip = [](const Settings& c) -> std::string {
+      const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") + (Get(c, "light_samples") != "6");
+      if (off_default > 1) return "one setting away from the game's at a time";
+      const bool game_or_naive = off_default == 0 || (Get(c, "march") == "naive");
+      if (Get(c, "backend") == "cpu" && !game_or_naive) return "the CPU reference is timed at the game's and the naive settings";
+      return "";
+    };
+
+    clouds::CloudRenderRequest error_req;
+    error_req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
+    error_req.width = o.quick ? 64 : 256;
+    error_req.height = error_req.width / 2;
+    clouds::CloudRenderRequest time_req = error_req;
+    time_req.width = o.quick ? 128 : 512;
+    time_req.height = time_req.width / 2;
+
+    const clouds::MarchOptions game;
+    clouds::MarchOptions converged = clouds::MarchOptions::Naive();
+    converged.steps_zenith = converged.steps_horizon = o.quick ? 256 : 1024;
+    converged.light_samples = o.quick ? 16 : 64;
+    converged.light_step_m = (game.light_samples * game.light_step_m + game.far_light_distance_m) / converged.light_samples;
+    converged.far_light = false;
+
+    auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
+    render::RenderRequest sky_req;
+    sky_req.sun_dir = error_req.sun_dir;
+    sky_req.width = error_req.width;
+    sky_req.height = error_req.height;
+    sky_req.sun_disc = false;  // the disc would dominate the rel error where clouds leave it visible
+    const ImageRGB sky = sky_renderer->Render(scene.preset, sky_req);
+
+    std::unique_ptr<clouds::CloudRenderer> cpu = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
+    std::unique_ptr<clouds::CloudRenderer> vulkan = clouds::CreateVulkanCloudRenderer();
+    o.Log("[clouds] reference: cpu double, " + std::to_string(converged.steps_zenith) + " steps, " +
+          std::to_string(converged.light_samples) + " light samples, " + std::to_string(error_req.width) + "x" +
+          std::to_string(error_req.height));
+    clouds::CloudRenderRequest ref_req = error_req;
+    ref_req.march = converged;
+    const clouds::CloudImage reference = cpu->Render(scene.View(), ref_req);
+    const ImageRGB truth = clouds::CompositeClouds(sky, reference);
+
+    const int repeats = o.Repeats(o.quick ? 3 : 5);
+    return RunGrid("clouds", grid, o, [&](CaseResult& c) {
+      clouds::CloudRenderer& r = Get(c.settings, "backend") == "cpu" ? *cpu : *vulkan;
+      clouds::MarchOptions m = MarchFor(Get(c.settings, "march"));
+      SetSteps(m, Get(c.settings, "steps"));
+      SetLightSamples(m, std::stoi(Get(c.settings, "light_samples")));
+      clouds::CloudRenderRequest er = error_req, tr = time_req;
+      er.march = tr.march = m;
+      const clouds::CloudImage at_error_size = r.Render(scene.View(), er);
+      const ImageRGB composite = clouds::CompositeClouds(sky, at_error_size);
+      c.time = Measure([&] { r.Render(scene.View(), tr); }, o.warmup, repeats);
+      if (!AllFinite(composite)) {
+        c.outcome = Outcome::kNonFinite;
+        c.message = "non-finite composite";
+      }
+      c.error = RelRmse(truth, composite, 0.0);
+      // Transmittance error over the reference's cloud pixels (T < 0.99), the clouds alone.
+      double sum = 0.0;
+      int n = 0;
+      for (size_t i = 0; i < reference.transmittance.size(); ++i) {
+        if (reference.transmittance[i] < 0.99f) {
+          sum += std::abs(at_error_size.transmittance[i] - reference.transmittance[i]);
+          ++n;
+        }
+      }
+      c.extra["transmittance_mae_cloud_pixels"] = n ? sum / n : 0.0;
+      c.extra["cloud_pixels"] = n;
+      c.extra["size_timed"] = std::to_string(time_req.width) + "x" + std::to_string(time_req.height);
+      c.extra["device"] = r.Describe();
+    });
+  };
+  return s;
+}
+
+}  // namespace skycal::bench

@@ -1,0 +1,50 @@
+#include "suite_util.h"
+
+#include <cstdio>
+#include <exception>
+
+#include "skycal/core/error.h"
+
+namespace skycal::bench {
+
+std::string FormatG(double v, int digits) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+CaseResult RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
+                   const SuiteOptions& o, const std::function<void(CaseResult&)>& body) {
+  CaseResult c;
+  c.suite = suite;
+  c.settings = settings;
+  c.name = Label(settings);
+  c.is_default = !defaults.empty() && settings == defaults;
+  try {
+    body(c);
+  } catch (const Error& e) {
+    c.outcome = Outcome::kClearError;
+    c.message = e.what();
+  } catch (const std::exception& e) {
+    c.outcome = Outcome::kCrash;
+    c.message = std::string("unexpected exception: ") + e.what();
+  }
+  std::string line = "[" + suite + " " + std::to_string(k + 1) + (n > 0 ? "/" + std::to_string(n) : "") + "] " + c.name + ": ";
+  line += FormatG(c.time.median_ms) + " ms (" + FormatG(c.time.min_ms) + ".." + FormatG(c.time.max_ms) + ", " +
+          std::to_string(c.time.runs) + " runs), error " + FormatG(c.error) + ", " + ToString(c.outcome);
+  if (!c.message.empty()) line += ": " + c.message;
+  o.Log(line);
+  o.Done(c);
+  return c;
+}
+
+std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, const SuiteOptions& o,
+                                const std::function<void(CaseResult&)>& body) {
+  const std::vector<Settings> points = grid.Expand();
+  std::vector<CaseResult> out;
+  for (size_t k = 0; k < points.size(); ++k)
+    out.push_back(RunCase(suite, points[k], grid.Defaults(), static_cast<int>(k), static_cast<int>(points.size()), o, body));
+  return out;
+}
+
+}  // namespace skycal::bench

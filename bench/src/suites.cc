@@ -1,0 +1,21 @@
+#include "skycal/bench/suite.h"
+#include "suites_internal.h"
+
+namespace skycal::bench {
+
+std::string DefaultPresetPath() { return std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json"; }
+
+SuiteRegistry BuiltinSuites() {
+  SuiteRegistry r;
+  r.Add(RenderSuite());
+  r.Add(FitSuite());
+  r.Add(ProbeSuite());
+  r.Add(CaptureSuite());
+  r.Add(ExportSuite());
+  r.Add(StressSuite());
+  r.Add(CloudsSuite());
+  // The cloud-lighting fit (issue 11) registers its suite here when it lands.
+  return r;
+}
+
+}  // namespace skycal::bench

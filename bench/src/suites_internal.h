@@ -1,0 +1,20 @@
+// The built-in suites, one file each (private to skycal_bench; suites.cc registers them).
+#pragma once
+#include <string>
+
+#include "skycal/bench/suite.h"
+
+namespace skycal::bench {
+
+Suite RenderSuite();   // render_suite.cc
+Suite FitSuite();      // fit_suite.cc
+Suite ProbeSuite();    // probe_suite.cc
+Suite CaptureSuite();  // capture_suite.cc
+Suite ExportSuite();   // export_suite.cc
+Suite StressSuite();   // stress_suite.cc
+Suite CloudsSuite();   // clouds_suite.cc
+
+// datasets/presets/default_clear.json of this checkout.
+std::string DefaultPresetPath();
+
+}  // namespace skycal::bench

@@ -1,0 +1,245 @@
+#include "bench_verb.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+
+#include "command_line.h"
+#include "skycal/bench/compare.h"
+#include "skycal/bench/pareto.h"
+#include "skycal/bench/plot.h"
+#include "skycal/bench/results.h"
+#include "skycal/bench/stress_table.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+#include "skycal/render/renderer.h"
+#include "staged_directory.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+namespace {
+
+std::string VulkanDevice() {
+  try {
+    return render::CreateRenderer(render::Backend::kVulkan)->Describe();
+  } catch (const Error& e) {
+    return std::string("none (") + e.what() + ")";
+  }
+}
+
+// A point's label on the plot: the settings that differ from the default ("default" for it).
+std::string ShortLabel(const bench::CaseResult& c, const bench::Settings& defaults) {
+  std::string label;
+  for (size_t i = 0; i < c.settings.size() && i < defaults.size(); ++i)
+    if (c.settings[i].second != defaults[i].second)
+      label += (label.empty() ? "" : " ") + c.settings[i].first + "=" + c.settings[i].second;
+  return label.empty() ? std::string() : label;
+}
+
+nlohmann::json Compare(const BenchOptions& o) {
+  bench::CompareOptions co;
+  co.noise_floor = o.noise_floor;
+  const bench::Results a = bench::ResultsFromJson(ReadJsonFile(o.compare[0]), o.compare[0]);
+  const bench::Results b = bench::ResultsFromJson(ReadJsonFile(o.compare[1]), o.compare[1]);
+  const bench::Comparison c = bench::Compare(a, b, co);
+  std::cerr << c.ToText();
+  if (a.machine.cpu_model != b.machine.cpu_model || a.machine.cores != b.machine.cores)
+    Log("bench", "warning: the runs are from different machines ('" + a.machine.cpu_model + "' vs '" + b.machine.cpu_model +
+                     "'): ratios compare machines as much as commits");
+  return c.ToJson();
+}
+
+}  // namespace
+
+bool BenchOptions::IsValid(std::string* why) const {
+  if (!compare.empty()) {
+    if (compare.size() != 2) {
+      *why = "--compare: expected two files, OLD.json NEW.json";
+      return false;
+    }
+    if (!suites.empty() || !out.empty()) {
+      *why = "--compare: runs nothing; leave out --suite and --out";
+      return false;
+    }
+    if (!(noise_floor >= 0.0 && noise_floor < 10.0)) {
+      *why = "--noise-floor: expected a fraction in [0, 10)";
+      return false;
+    }
+    return true;
+  }
+  if (suites.empty()) {
+    *why = "--suite: expected one or more suite names (NAME[,NAME...])";
+    return false;
+  }
+  if (out.empty()) {
+    *why = "--out: expected the results directory";
+    return false;
+  }
+  if (repeat < 0 || repeat > 1000) {
+    *why = "--repeat: expected an integer in [1, 1000]";
+    return false;
+  }
+  return true;
+}
+
+nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& registry) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  if (!o.compare.empty()) return Compare(o);
+  const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
+  StagedDirectory out(o.out, "--out", "bench", {});
+  // Scratch for the suites' inputs (references, brackets): beside the staging directory,
+  // never part of the results, removed on exit and on interruption.
+  const fs::path scratch = out.staging().parent_path() / ("." + out.staging().filename().string() + "-scratch");
+  TemporaryGuard scratch_guard(scratch.string());
+  struct RemoveScratch {
+    fs::path p;
+    ~RemoveScratch() {
+      std::error_code ec;
+      fs::remove_all(p, ec);
+    }
+  } remove_scratch{scratch};
+  fs::create_directories(scratch);
+
+  bench::Results results;
+  results.machine = bench::DescribeMachine(VulkanDevice());
+  results.options = {{"suites", o.suites}, {"quick", o.quick}, {"repeat", o.repeat}};
+  Log("bench", "machine: " + results.machine.cpu_model + ", " + std::to_string(results.machine.cores) + " cores, " +
+                   results.machine.vulkan_device + "; commit " + results.machine.commit);
+  for (const bench::Suite* suite : suites) {
+    bench::SuiteOptions so;
+    so.quick = o.quick;
+    so.repeat = o.repeat;
+    so.scratch = scratch / suite->name;
+    so.log = [](const std::string& line) { Log("bench", line); };
+    fs::create_directories(so.scratch);
+    std::string suite_why;
+    if (!so.IsValid(&suite_why)) throw Error(suite_why);
+    const auto t0 = std::chrono::steady_clock::now();
+    Log("bench", "suite " + suite->name + ": " + suite->summary + (o.quick ? " (--quick)" : ""));
+    std::vector<bench::CaseResult> cases = suite->run(so);
+    bench::SuiteReport rep;
+    rep.name = suite->name;
+    rep.summary = suite->summary;
+    rep.error_metric = suite->error_metric;
+    rep.cases = static_cast<int>(cases.size());
+    rep.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (suite->pareto && !cases.empty()) {
+      std::vector<bench::TimeError> points;
+      bench::ParetoPlot plot;
+      int default_index = -1;
+      bench::Settings defaults;
+      for (const bench::CaseResult& c : cases)
+        if (c.is_default) defaults = c.settings;
+      for (const bench::CaseResult& c : cases) {
+        const bool usable = c.outcome == bench::Outcome::kOk;
+        points.push_back({usable ? c.time.median_ms : NAN, usable ? c.error : NAN});
+      }
+      // Within 10% in time (the compare noise floor: quick cases run once) or 1% in error
+      // two cases count as equal.
+      const bench::ParetoTolerance tolerance{0.10, 0.01};
+      for (int i : bench::ParetoFront(points, tolerance)) {
+        rep.front.push_back(cases[i].name);
+      }
+      // The plot shows the usable cases only.
+      for (size_t i = 0; i < cases.size(); ++i) {
+        if (!std::isfinite(points[i].time) || !std::isfinite(points[i].error)) continue;
+        if (cases[i].is_default) default_index = static_cast<int>(plot.cases.size());
+        plot.cases.push_back(&cases[i]);
+        plot.labels.push_back(cases[i].is_default ? std::string() : ShortLabel(cases[i], defaults));
+      }
+      std::vector<bench::TimeError> shown;
+      for (const bench::CaseResult* c : plot.cases) shown.push_back({c->time.median_ms, c->error});
+      plot.front = bench::ParetoFront(shown, tolerance);
+      plot.default_index = default_index;
+      plot.title = suite->name + ": " + suite->summary;
+      plot.subtitle = results.machine.cpu_model + ", " + std::to_string(results.machine.cores) + " cores; commit " +
+                      results.machine.commit.substr(0, 10) + (o.quick ? "; --quick" : "");
+      plot.error_label = suite->error_axis.empty() ? suite->error_metric : suite->error_axis;
+      for (const bench::CaseResult& c : cases) {
+        if (!c.is_default) continue;
+        rep.default_case = c.name;
+        for (const std::string& f : rep.front) rep.default_on_front = rep.default_on_front || f == c.name;
+      }
+      if (!plot.cases.empty()) {
+        const std::string stem = suite->name + "_pareto";
+        bench::WriteParetoPlot(plot, out / (stem + ".png"), out / (stem + ".svg"));
+        rep.plots = {stem + ".png", stem + ".svg"};
+      }
+      Log("bench", suite->name + ": " + std::to_string(rep.front.size()) + " of " + std::to_string(cases.size()) +
+                       " cases on the Pareto front; default " +
+                       (rep.default_case.empty() ? std::string("not in this grid")
+                                                 : (rep.default_on_front ? "on the front" : "DOMINATED")));
+    }
+    results.suites.push_back(rep);
+    results.cases.insert(results.cases.end(), cases.begin(), cases.end());
+  }
+  const std::vector<bench::StressArea> table = bench::StressTable(results.cases);
+  if (!table.empty()) {
+    results.stress = bench::StressTableToJson(table);
+    WriteFileAtomically(out / "stress.md", "# skycal bench --suite stress\n\n" + bench::StressTableToText(table));
+    std::cerr << bench::StressTableToText(table);
+  }
+  WriteJsonFileAtomically(out / "results.json", bench::ToJson(results));
+  WriteFileAtomically(out / "results.csv", bench::ToCsv(results));
+  out.Commit();
+  Log("bench", "wrote " + o.out + "/results.json, results.csv" + (table.empty() ? "" : ", stress.md") + " and the plots");
+
+  int failed = 0;
+  nlohmann::json failures = nlohmann::json::array();
+  for (const bench::CaseResult& c : results.cases) {
+    if (c.outcome != bench::Outcome::kNonFinite && c.outcome != bench::Outcome::kCrash) continue;
+    ++failed;
+    failures.push_back({{"suite", c.suite}, {"case", c.name}, {"outcome", bench::ToString(c.outcome)}, {"message", c.message}});
+  }
+  if (failed) {
+    for (const auto& f : failures) Log("bench", "FAILED " + f.dump());
+    throw Error(std::to_string(failed) + " case(s) ended with a non-finite output or a crash (listed in " + o.out +
+                "/results.csv, outcome column)");
+  }
+  nlohmann::json summary = {{"out", o.out}, {"machine", results.machine.ToJson()}, {"stress", results.stress}};
+  for (const bench::SuiteReport& s : results.suites)
+    summary["suites"].push_back({{"name", s.name}, {"cases", s.cases}, {"pareto_front", s.front},
+                                 {"default_case", s.default_case}, {"default_on_front", s.default_on_front},
+                                 {"plots", s.plots}, {"wall_s", s.wall_s}});
+  return summary;
+}
+
+BenchOptions ParseBenchArgs(int argc, char** argv) {
+  VerbCommandLine cl("bench",
+                     "skycal bench: run time against error across the pipeline, and numerical stress\n\n"
+                     "Each suite measures a grid of settings; per case the median wall time of the repeats\n"
+                     "after a warm-up (with min and max) and the error against truth or a converged reference.\n"
+                     "Writes DIR/results.json (machine, commit, date, cases, each suite's Pareto front),\n"
+                     "DIR/results.csv, DIR/<suite>_pareto.png/.svg and, for stress, DIR/stress.md. Exit 1 when\n"
+                     "any case produced a non-finite output or crashed.",
+                     "  skycal bench --suite NAME[,NAME...] [--quick] [--repeat N] --out DIR [--json]\n"
+                     "  skycal bench --compare OLD.json NEW.json [--noise-floor F] [--json]",
+                     "Suites: render, fit, probe, capture, export, stress.\n"
+                     "--compare flags a case SLOWER when new/old median > 1 + noise, noise being the larger\n"
+                     "relative spread (max - min) / median of the two runs, at least --noise-floor.");
+  BenchOptions o;
+  bool json = false;
+  cl.Text("--suite", &o.suites, "NAMES", "comma-separated suites: render, fit, probe, capture, export, stress");
+  cl.Flag("--quick", &o.quick, "CI sizes (smaller images and grids, fewer repeats)");
+  cl.Integer("--repeat", &o.repeat, 1, 1000, "expected an integer in [1, 1000]", "N",
+             "timed repeats per case after the warm-up (default: each suite's own, 1-11)");
+  cl.Text("--out", &o.out, "DIR", "results directory, written atomically; an existing one is replaced only\n"
+                                  "when it is an earlier `skycal bench` output");
+  cl.List("--compare", &o.compare, "OLD.json NEW.json", "compare two results.json instead of running");
+  cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
+  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  cl.Parse(argc, argv);
+  return o;
+}
+
+int RunBench(int argc, char** argv) {
+  return RunVerb("bench", WantsJson(argc, argv),
+                 [&]() { return RunBenchImpl(ParseBenchArgs(argc, argv), bench::BuiltinSuites()); });
+}
+
+}  // namespace skycal::cli

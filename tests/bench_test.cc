@@ -1,0 +1,323 @@
+// `skycal bench`'s plumbing (no timed assertions): grid expansion, the Pareto front on a
+// hand-made set, the results files' schema, --compare's regression flag against the
+// measured noise, the stress table, and bad input (unknown suite, a user's directory,
+// --repeat). A fake suite with fixed numbers drives the verb end to end.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "bench_verb.h"
+#include "command_line.h"
+#include "skycal/bench/compare.h"
+#include "skycal/bench/grid.h"
+#include "skycal/bench/pareto.h"
+#include "skycal/bench/results.h"
+#include "skycal/bench/stress_table.h"
+#include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+#include "test_util.h"
+
+using namespace skycal;
+using namespace skycal::bench;
+
+namespace {
+
+Timing T(double median, double min, double max, int runs = 5) {
+  Timing t;
+  t.median_ms = median;
+  t.min_ms = min;
+  t.max_ms = max;
+  t.runs = runs;
+  return t;
+}
+
+CaseResult MakeCase(const std::string& suite, const Settings& s, Timing t, double error, bool is_default = false) {
+  CaseResult c;
+  c.suite = suite;
+  c.settings = s;
+  c.name = Label(s);
+  c.time = t;
+  c.error = error;
+  c.is_default = is_default;
+  return c;
+}
+
+// A suite with fixed numbers: size x method; "fast" dominated by nothing, "slow-bad" dominated.
+SuiteRegistry FakeRegistry(Outcome last_outcome = Outcome::kOk) {
+  SuiteRegistry r;
+  Suite s;
+  s.name = "fake";
+  s.summary = "fixed numbers";
+  s.error_metric = "rel error";
+  s.run = [last_outcome](const SuiteOptions& o) {
+    Grid g;
+    g.axes = {{"size", {"small", "large"}, "large"}, {"method", {"a", "b"}, "a"}};
+    std::vector<CaseResult> out;
+    const double times[] = {1.0, 2.0, 10.0, 20.0}, errors[] = {0.1, 0.2, 0.01, 0.02};
+    int i = 0;
+    for (const Settings& st : g.Expand()) {
+      out.push_back(MakeCase("fake", st, T(times[i], times[i] * 0.9, times[i] * 1.1), errors[i], st == g.Defaults()));
+      ++i;
+    }
+    out.back().outcome = last_outcome;
+    for (const CaseResult& c : out) o.Done(c);
+    return out;
+  };
+  r.Add(s);
+  return r;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST(BenchGrid, ExpandsTheProductInAxisOrder) {
+  Grid g;
+  g.axes = {{"backend", {"vulkan", "cpu"}, "vulkan"}, {"size", {"256", "512", "1024"}, "1024"}};
+  const std::vector<Settings> pts = g.Expand();
+  ASSERT_EQ(pts.size(), 6u);
+  EXPECT_EQ(Label(pts[0]), "backend=vulkan size=256");
+  EXPECT_EQ(Label(pts[1]), "backend=vulkan size=512");
+  EXPECT_EQ(Label(pts[3]), "backend=cpu size=256");
+  EXPECT_EQ(Label(pts[5]), "backend=cpu size=1024");
+  EXPECT_EQ(Label(g.Defaults()), "backend=vulkan size=1024");
+  EXPECT_EQ(Get(pts[4], "size"), "512");
+  EXPECT_THROW(Get(pts[4], "loss"), Error);
+}
+
+TEST(BenchGrid, SkipDropsPointsAndBadGridsThrow) {
+  Grid g;
+  g.axes = {{"linear_start", {"on", "off"}, "on"}, {"loss", {"cauchy", "huber", "none"}, "cauchy"},
+            {"jacobian", {"analytic", "numeric"}, "analytic"}};
+  g.skip = [](const Settings& s) -> std::string {
+    return Get(s, "jacobian") == "numeric" && (Get(s, "linear_start") == "on" || Get(s, "loss") != "cauchy") ? "no effect" : "";
+  };
+  const std::vector<Settings> pts = g.Expand();
+  ASSERT_EQ(pts.size(), 7u);  // 6 analytic + 1 numeric (off, cauchy)
+  int numeric = 0;
+  for (const Settings& s : pts) numeric += Get(s, "jacobian") == "numeric";
+  EXPECT_EQ(numeric, 1);
+  Grid bad;
+  bad.axes = {{"x", {"1", "2"}, "3"}};
+  EXPECT_THROW(bad.Expand(), Error);
+  bad.axes = {{"x", {}, ""}};
+  EXPECT_THROW(bad.Expand(), Error);
+  bad.axes = {{"x", {"1"}, "1"}, {"x", {"2"}, "2"}};
+  EXPECT_THROW(bad.Expand(), Error);
+}
+
+TEST(BenchPareto, ExactMembershipOnAHandMadeSet) {
+  // (time, error): 0 and 1 trade off; 2 is dominated by 1; 3 ties 0 exactly (both kept);
+  // 4 is fastest but worst; 5 is not finite; 6 equals 1 in time and is worse in error.
+  const std::vector<TimeError> pts = {{1.0, 0.5}, {2.0, 0.1}, {3.0, 0.2}, {1.0, 0.5}, {0.5, 9.0}, {NAN, 0.0}, {2.0, 0.3}};
+  EXPECT_EQ(ParetoFront(pts), (std::vector<int>{0, 1, 3, 4}));
+  EXPECT_TRUE(ParetoFront({}).empty());
+  // With tolerances: 5% faster at the same error is noise (both kept), 20% faster is not;
+  // 0.5% more accurate at 3x the time is not better either.
+  const std::vector<TimeError> noisy = {{100, 0.01}, {95, 0.01}, {80, 0.01}, {300, 0.00995}};
+  EXPECT_EQ(ParetoFront(noisy), (std::vector<int>{2, 3}));
+  EXPECT_EQ(ParetoFront({{100, 0.01}, {95, 0.01}}, {0.10, 0.01}), (std::vector<int>{0, 1}));
+  EXPECT_EQ(ParetoFront(noisy, {0.10, 0.01}), (std::vector<int>{2}));
+}
+
+TEST(BenchCompare, FlagsAPlanted2xRegressionAndNotA5PercentWobble) {
+  Results old_run, new_run;
+  old_run.machine.commit = "old";
+  new_run.machine.commit = "new";
+  // Noise: spread (max - min) / median = 10% in both runs.
+  old_run.cases = {MakeCase("render", {{"size", "512"}}, T(100, 95, 105), 0.01),
+                   MakeCase("render", {{"size", "1024"}}, T(400, 380, 420), 0.005),
+                   MakeCase("fit", {{"loss", "cauchy"}}, T(250, 240, 265), 0.02)};
+  new_run.cases = {MakeCase("render", {{"size", "512"}}, T(200, 190, 210), 0.01),    // planted 2x
+                   MakeCase("render", {{"size", "1024"}}, T(420, 400, 440), 0.005),  // 5% wobble
+                   MakeCase("fit", {{"loss", "cauchy"}}, T(250, 240, 265), 0.04)};   // error doubled
+  const Comparison c = Compare(old_run, new_run, CompareOptions{});
+  ASSERT_EQ(c.cases.size(), 3u);
+  EXPECT_EQ(c.cases[0].verdict, Verdict::kSlower);
+  EXPECT_DOUBLE_EQ(c.cases[0].ratio, 2.0);
+  EXPECT_EQ(c.cases[1].verdict, Verdict::kSame);
+  EXPECT_NEAR(c.cases[1].ratio, 1.05, 1e-12);
+  EXPECT_EQ(c.cases[2].verdict, Verdict::kSame);
+  EXPECT_TRUE(c.cases[2].error_worse);
+  EXPECT_EQ(c.slower, 1);
+  EXPECT_EQ(c.error_worse, 1);
+  EXPECT_TRUE(c.Regressed());
+  // A noisy case (spread 150%) hides a 2x change: not flagged.
+  old_run.cases = {MakeCase("render", {{"size", "512"}}, T(100, 50, 200), 0.01)};
+  new_run.cases = {MakeCase("render", {{"size", "512"}}, T(200, 190, 210), 0.01)};
+  EXPECT_EQ(Compare(old_run, new_run, CompareOptions{}).cases[0].verdict, Verdict::kSame);
+  // One-run cases (no spread): the 10% floor still keeps a 5% wobble unflagged.
+  old_run.cases = {MakeCase("x", {{"a", "1"}}, T(100, 100, 100, 1), 0.0)};
+  new_run.cases = {MakeCase("x", {{"a", "1"}}, T(105, 105, 105, 1), 0.0), MakeCase("x", {{"a", "2"}}, T(1, 1, 1, 1), 0.0)};
+  const Comparison d = Compare(old_run, new_run, CompareOptions{});
+  EXPECT_EQ(d.cases[0].verdict, Verdict::kSame);
+  EXPECT_EQ(d.cases[1].verdict, Verdict::kOnlyNew);
+  EXPECT_FALSE(d.Regressed());
+  // An untimed case (a stress input, one run) is compared by outcome only, not by time.
+  new_run.cases = {MakeCase("x", {{"a", "1"}}, T(300, 300, 300, 1), 0.0)};
+  new_run.cases[0].timed = false;
+  new_run.cases[0].outcome = Outcome::kNonFinite;
+  const Comparison u = Compare(old_run, new_run, CompareOptions{});
+  EXPECT_EQ(u.cases[0].verdict, Verdict::kSame);
+  EXPECT_EQ(u.outcome_worse, 1);
+}
+
+TEST(BenchStressTable, CountsOutcomesPerArea) {
+  std::vector<CaseResult> cases;
+  auto add = [&](const std::string& area, Outcome o, std::optional<bool> conv) {
+    CaseResult c = MakeCase("stress", {{"area", area}, {"input", std::to_string(cases.size())}}, T(1, 1, 1, 1), NAN);
+    c.outcome = o;
+    c.converged = conv;
+    cases.push_back(c);
+  };
+  add("render", Outcome::kOk, std::nullopt);
+  add("render", Outcome::kNonFinite, std::nullopt);
+  add("fit", Outcome::kOk, true);
+  add("fit", Outcome::kOk, false);
+  add("fit", Outcome::kClearError, std::nullopt);
+  const auto table = StressTable(cases);
+  ASSERT_EQ(table.size(), 2u);
+  EXPECT_EQ(table[0].area, "render");
+  EXPECT_EQ(table[0].cases, 2);
+  EXPECT_DOUBLE_EQ(table[0].FinitePercent(), 50.0);
+  EXPECT_FALSE(table[0].Passed());
+  EXPECT_EQ(table[1].clear_error, 1);
+  EXPECT_EQ(table[1].with_convergence, 2);
+  EXPECT_EQ(table[1].converged, 1);
+  EXPECT_TRUE(table[1].Passed());
+  EXPECT_DOUBLE_EQ(StressTableToJson(table)[1]["converged_percent"].get<double>(), 50.0);
+}
+
+TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
+  skycal::testing::ScratchDir dir("bench-verb");
+  cli::BenchOptions o;
+  o.suites = "fake";
+  o.out = dir / "results";
+  const nlohmann::json summary = cli::RunBenchImpl(o, FakeRegistry());
+  const nlohmann::json j = ReadJsonFile(dir / "results/results.json");
+  EXPECT_EQ(j["schema"], kResultsSchema);
+  EXPECT_EQ(j["version"], kResultsVersion);
+  for (const char* k : {"cpu_model", "cores", "vulkan_device", "commit", "commit_dirty", "date_utc", "skycal_version"})
+    EXPECT_TRUE(j["machine"].contains(k)) << k;
+  EXPECT_GE(j["machine"]["cores"].get<int>(), 1);
+  EXPECT_EQ(j["machine"]["date_utc"].get<std::string>().size(), 20u);  // 2026-01-01T00:00:00Z
+  ASSERT_EQ(j["cases"].size(), 4u);
+  const auto& c0 = j["cases"][0];
+  for (const char* k : {"suite", "case", "settings", "default", "time_ms", "timed", "error", "outcome", "message", "converged", "extra"})
+    EXPECT_TRUE(c0.contains(k)) << k;
+  EXPECT_EQ(c0["case"], "size=small method=a");
+  EXPECT_DOUBLE_EQ(c0["time_ms"]["median_ms"].get<double>(), 1.0);
+  // Front: (1, 0.1) and (10, 0.01); (2, 0.2) and (20, 0.02) dominated (beyond the 10% / 1%
+  // tolerances too). Default large/a on it.
+  ASSERT_EQ(j["suites"].size(), 1u);
+  EXPECT_EQ(j["suites"][0]["pareto_front"], nlohmann::json({"size=small method=a", "size=large method=a"}));
+  EXPECT_EQ(j["suites"][0]["default_case"], "size=large method=a");
+  EXPECT_TRUE(j["suites"][0]["default_on_front"].get<bool>());
+  // CSV: the header and one row per case, the front column matching.
+  std::istringstream csv(ReadText(dir / "results/results.csv"));
+  std::string line;
+  std::getline(csv, line);
+  std::string header;
+  for (const std::string& c : CsvColumns()) header += (header.empty() ? "" : ",") + c;
+  EXPECT_EQ(line, header);
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0].rfind("fake,size=small method=a,0,1,0.9,1.1,5,0.1,rel error,ok,,1,", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[1].rfind("fake,size=small method=b,0,2,", 0), 0u) << rows[1];
+  EXPECT_NE(rows[1].find(",ok,,0,"), std::string::npos) << rows[1];
+  // Plots: a PNG (its signature) and an SVG.
+  EXPECT_EQ(ReadText(dir / "results/fake_pareto.png").substr(1, 3), "PNG");
+  EXPECT_NE(ReadText(dir / "results/fake_pareto.svg").find("<svg"), std::string::npos);
+  // The JSON reads back as it was written.
+  const Results back = ResultsFromJson(j, "results.json");
+  ASSERT_EQ(back.cases.size(), 4u);
+  EXPECT_EQ(back.cases[3].settings, (Settings{{"size", "large"}, {"method", "b"}}));
+  EXPECT_DOUBLE_EQ(back.cases[3].error, 0.02);
+  // A second run replaces its own earlier output.
+  EXPECT_NO_THROW(cli::RunBenchImpl(o, FakeRegistry()));
+}
+
+TEST(BenchVerb, FailsAfterWritingWhenACaseIsNonFinite) {
+  skycal::testing::ScratchDir dir("bench-nonfinite");
+  cli::BenchOptions o;
+  o.suites = "fake";
+  o.out = dir / "results";
+  EXPECT_THROW(cli::RunBenchImpl(o, FakeRegistry(Outcome::kNonFinite)), Error);
+  const nlohmann::json j = ReadJsonFile(dir / "results/results.json");
+  EXPECT_EQ(j["cases"][3]["outcome"], "non_finite");
+}
+
+TEST(BenchVerb, BadInput) {
+  skycal::testing::ScratchDir dir("bench-bad");
+  cli::BenchOptions o;
+  o.suites = "render,nosuch";
+  o.out = dir / "results";
+  try {
+    cli::RunBenchImpl(o, BuiltinSuites());
+    FAIL() << "unknown suite accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, probe, capture, export, stress, clouds)"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "results"));
+  // A user's directory is never replaced.
+  std::filesystem::create_directories(dir / "mine");
+  skycal::testing::WriteText(dir / "mine/notes.txt", "mine");
+  o.suites = "fake";
+  o.out = dir / "mine";
+  try {
+    cli::RunBenchImpl(o, FakeRegistry());
+    FAIL() << "a user's directory was replaced";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("refusing to replace it"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadText(dir / "mine/notes.txt"), "mine");
+  // --repeat: integers in [1, 1000].
+  for (const char* bad : {"0", "1.5", "-3", "1001", "x"}) {
+    std::vector<std::string> args = {"--suite", "render", "--repeat", bad, "--out", "o"};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    EXPECT_THROW(cli::ParseBenchArgs(static_cast<int>(argv.size()), argv.data()), Error) << bad;
+  }
+  cli::BenchOptions r;
+  r.suites = "fake";
+  r.out = dir / "r";
+  r.repeat = -1;
+  EXPECT_THROW(cli::RunBenchImpl(r, FakeRegistry()), Error);
+  // --compare takes exactly two files and runs nothing else.
+  cli::BenchOptions c;
+  c.compare = {"a.json"};
+  std::string why;
+  EXPECT_FALSE(c.IsValid(&why));
+  c.compare = {"a.json", "b.json"};
+  c.out = "x";
+  EXPECT_FALSE(c.IsValid(&why));
+}
+
+TEST(BenchVerb, CompareReadsTwoResultsFiles) {
+  skycal::testing::ScratchDir dir("bench-compare");
+  Results a, b;
+  a.machine.commit = "a";
+  b.machine.commit = "b";
+  a.cases = {MakeCase("render", {{"size", "512"}}, T(100, 95, 105), 0.01)};
+  b.cases = {MakeCase("render", {{"size", "512"}}, T(200, 190, 210), 0.01)};
+  WriteJsonFileAtomically(dir / "a.json", ToJson(a));
+  WriteJsonFileAtomically(dir / "b.json", ToJson(b));
+  cli::BenchOptions o;
+  o.compare = {dir / "a.json", dir / "b.json"};
+  const nlohmann::json j = cli::RunBenchImpl(o, FakeRegistry());
+  EXPECT_EQ(j["slower"], 1);
+  EXPECT_TRUE(j["regressed"].get<bool>());
+  EXPECT_EQ(j["cases"][0]["verdict"], "SLOWER");
+  skycal::testing::WriteText(dir / "c.json", "{\"schema\": \"other\"}");
+  o.compare = {dir / "a.json", dir / "c.json"};
+  EXPECT_THROW(cli::RunBenchImpl(o, FakeRegistry()), Error);
+}
