@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "cloud_scene.h"
 #include "image_compare.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/cloud_params.h"
@@ -60,17 +61,11 @@ void SetLightSamples(clouds::MarchOptions& m, int samples) {
   m.light_samples = samples;
 }
 
-struct CloudScene {
-  render::Preset preset;
-  clouds::CloudParams params;
-  clouds::CloudNoise noise;
-  clouds::WeatherMap weather;
-  clouds::CloudScene View() const { return {&preset, &params, &noise, &weather}; }
-};
+}  // namespace
 
-CloudScene LoadDefaultCloudyScene() {
+CloudBenchScene LoadDefaultCloudyScene() {
   const std::string path = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
-  CloudScene s;
+  CloudBenchScene s;
   s.preset = render::LoadPreset(path);
   s.params = clouds::ParseCloudSectionText(s.preset.clouds_json, path);
   const std::string map = (std::filesystem::path(path).parent_path() / s.params.weather_map).string();
@@ -79,8 +74,6 @@ CloudScene LoadDefaultCloudyScene() {
   return s;
 }
 
-}  // namespace
-
 Suite CloudsSuite() {
   Suite s;
   s.name = "clouds";
@@ -88,7 +81,7 @@ Suite CloudsSuite() {
   s.error_metric = "rel RMSE of the composite above the horizon vs a converged double reference (1,024 steps, 64 light samples)";
   s.error_axis = "rel RMSE vs converged clouds";
   s.run = [](const SuiteOptions& o) {
-    const CloudScene scene = LoadDefaultCloudyScene();
+    const CloudBenchScene scene = LoadDefaultCloudyScene();
     Grid grid;
     grid.axes = {{"backend", {"vulkan", "cpu"}, "vulkan"},
                  {"march", o.quick ? std::vector<std::string>{"game", "naive"}

@@ -21,11 +21,14 @@
 #include <memory>
 #include <random>
 
+#include "cloud_scene.h"
 #include "export_verb.h"
 #include "fisheye_brackets.h"
 #include "image_compare.h"
 #include "probe_extract_verb.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/fit/reference.h"
@@ -121,6 +124,65 @@ void RenderArea(Runner& run, const SuiteOptions& o) {
           ScaleLuts(p, k);
           render_case(*r, p, el, c);
         });
+  }
+}
+
+// Clouds: extreme densities (extinction per unit density up to the spec's bound, then
+// beyond it: a refusal naming the field is a pass), step counts 1...2,048, no and many
+// light samples, the sun around the horizon and at the zenith; both backends. Checked:
+// radiance finite and >= 0, transmittance finite and in [0, 1].
+void CloudsArea(Runner& run, const SuiteOptions& o) {
+  const CloudBenchScene scene = LoadDefaultCloudyScene();
+  std::unique_ptr<clouds::CloudRenderer> backends[2] = {clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble),
+                                                        clouds::CreateVulkanCloudRenderer()};
+  const int width = o.quick ? 32 : 64;
+  auto cloud_case = [&](clouds::CloudRenderer& r, const clouds::CloudParams& params, const clouds::MarchOptions& m,
+                        double el, CaseResult& c) {
+    clouds::CloudRenderRequest req;
+    req.width = width;
+    req.height = width / 2;
+    req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(el, 40.0);
+    req.march = m;
+    const clouds::CloudScene view{&scene.preset, &params, &scene.noise, &scene.weather};
+    const clouds::CloudImage im = r.Render(view, req);
+    if (!AllFinite(im.radiance)) return NonFinite(c, "non-finite cloud radiance");
+    float min_l = 0.0f, min_t = 1.0f, max_t = 0.0f;
+    for (float v : im.radiance.pixels) min_l = std::min(min_l, v);
+    for (float t : im.transmittance) {
+      if (!std::isfinite(t)) return NonFinite(c, "non-finite transmittance");
+      min_t = std::min(min_t, t);
+      max_t = std::max(max_t, t);
+    }
+    if (min_l < 0.0f) return NonFinite(c, "negative cloud radiance " + Num(min_l));
+    if (min_t < 0.0f || max_t > 1.0f) return NonFinite(c, "transmittance outside [0, 1]: " + Num(min_t) + " .. " + Num(max_t));
+    c.extra = {{"min_transmittance", min_t}};
+  };
+  for (auto& r : backends) {
+    const std::string be = r->Describe().rfind("vulkan", 0) == 0 ? "vulkan" : "cpu";
+    for (double ext : {0.0, 1e-9, 0.05, 1.0, 1e3})
+      for (double coverage : {0.0, 1.0, 2.0}) {
+        run("clouds", be + " extinction " + Num(ext) + "/m coverage x" + Num(coverage), [&](CaseResult& c) {
+          clouds::CloudParams p = scene.params;
+          p.extinction_per_m = ext;
+          p.coverage_scale = coverage;
+          clouds::ValidateCloudParams(p, "stress");  // 1e3 /m is out of bounds: a clear refusal
+          cloud_case(*r, p, clouds::MarchOptions{}, 25.0, c);
+        });
+      }
+    for (int steps : {1, 2, 2048})
+      for (int light : {0, 1, 64}) {
+        if (o.quick && steps == 2048 && light == 64) continue;  // the CI size stays in seconds
+        run("clouds", be + " steps " + std::to_string(steps) + " light " + std::to_string(light), [&](CaseResult& c) {
+          clouds::MarchOptions m;
+          m.steps_zenith = m.steps_horizon = steps;
+          m.light_samples = light;
+          std::string why;
+          if (!m.IsValid(&why)) throw Error(why);
+          cloud_case(*r, scene.params, m, 25.0, c);
+        });
+      }
+    for (double el : {-18.0, -1e-7, 0.0, 1e-7, 90.0})
+      run("clouds", be + " sun " + Num(el), [&](CaseResult& c) { cloud_case(*r, scene.params, clouds::MarchOptions{}, el, c); });
   }
 }
 
@@ -365,12 +427,13 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
 Suite StressSuite() {
   Suite s;
   s.name = "stress";
-  s.summary = "numerical stability: extreme and hostile inputs across render, fit, capture, probe, export";
+  s.summary = "numerical stability: extreme and hostile inputs across render, clouds, fit, capture, probe, export";
   s.error_metric = "fit: rel RMSE (other areas: none); the table counts outcomes";
   s.pareto = false;
   s.run = [](const SuiteOptions& o) {
     Runner run{o, {}, 0};
     RenderArea(run, o);
+    CloudsArea(run, o);
     FitArea(run, o);
     CaptureArea(run, o);
     ProbeArea(run, o);
