@@ -88,10 +88,14 @@ void main() {
   int n = param_count();
   int width = int(P[n]);
   int height = int(P[n + 1]);
+  // The parameters before any control flow: lavapipe loads a uniform-indexed buffer
+  // element once for all lanes only while every lane is known active; after the bounds
+  // check's return it loads each of the ~90 fields lane by lane (a scalar loop through the
+  // stack per field), which cost ~20% of the render.
+  CloudShadeParams p = load_params();
   int x = int(gl_GlobalInvocationID.x);
   int y = int(gl_GlobalInvocationID.y);
   if (x >= width || y >= height) return;
-  CloudShadeParams p = load_params();
   vec2 lat = trig[y];
   vec2 lon = trig[height + x];
   // The same products as the C++ paths (cpu_cloud_renderer.cc), in the same order.
