@@ -13,6 +13,8 @@
 namespace skycal::spirv {
 extern const uint32_t pipeline_probe[];
 extern const size_t pipeline_probe_size;
+extern const uint32_t texel_probe[];
+extern const size_t texel_probe_size;
 }  // namespace skycal::spirv
 
 namespace skycal::gpu {
@@ -68,6 +70,33 @@ TEST(ComputePipeline, TwoPipelinesShareOneContext) {
   for (size_t i = 0; i < in.size(); ++i) {
     ASSERT_EQ(out_a[i], in[i] * 0.5f + 1.0f);
     ASSERT_EQ(out_b[i], in[i] * 4.0f + 3.0f);
+  }
+}
+
+// Uniform texel buffers (the cloud textures): texelFetch reads the texel the host wrote,
+// all four channels, at per-invocation indices; growing the buffer replaces its view.
+TEST(ComputePipeline, TexelBufferReadsEveryChannelAndFollowsGrowth) {
+  ComputePipeline p(VulkanContext::Shared(false), spirv::texel_probe, spirv::texel_probe_size,
+                    {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
+  for (uint32_t n : {100u, 5000u, 37u}) {
+    const Params params{{1.0f, 16.0f, 256.0f, 4096.0f}, {n, 0, 0, 0}};
+    std::memcpy(p.Map(0, sizeof(params)), &params, sizeof(params));
+    float* texels = static_cast<float*>(p.Map(1, n * 4 * sizeof(float)));
+    for (uint32_t i = 0; i < n; ++i) {
+      for (uint32_t c = 0; c < 4; ++c) texels[4 * i + c] = static_cast<float>((i + c) % 8);
+    }
+    p.Map(2, n * sizeof(float), /*host_readback=*/true);
+    p.Flush(0);
+    p.Flush(1);
+    p.Dispatch((n + 63) / 64, 1, 1);
+    const float* out = static_cast<const float*>(p.Read(2));
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t t = n - 1 - i;
+      const float expected = static_cast<float>(t % 8) + 16.0f * ((t + 1) % 8) + 256.0f * ((t + 2) % 8) +
+                             4096.0f * ((t + 3) % 8);
+      ASSERT_EQ(out[i], expected) << "n=" << n << " i=" << i;
+    }
   }
 }
 

@@ -32,25 +32,14 @@ vec3 cone_kernel(int i) {
   return vec3(Scalar(-0.12), Scalar(-0.30), Scalar(-0.95));
 }
 
-// Optical depth (1) from `pos` toward the sun through the cone. `primary_distance`: the
-// view distance of the primary sample (the horizon rule's distance); `opacity`: 1 - T of
-// the view ray so far.
-Scalar light_optical_depth(vec3 pos, Scalar primary_distance, Scalar opacity, CloudShadeParams p) {
-  Scalar tau = Scalar(0.0);
-  int cheap = (p.cheap_light == 1 && opacity > p.cheap_light_opacity) ? 1 : 0;
-  for (int i = 0; i < p.light_samples; ++i) {
-    int far = (p.far_light == 1 && i == p.light_samples - 1) ? 1 : 0;
-    Scalar along = far == 1 ? p.far_light_distance : p.light_step * (Scalar(i) + Scalar(0.5));
-    Scalar spread = far == 1 ? Scalar(0.0) : p.light_step * Scalar(i + 1) * Scalar(CLOUD_CONE_SPREAD);
-    vec3 q = pos + p.sun_dir * along + cone_kernel(i) * spread;
-    Scalar alt = cloud_altitude(q, p);
-    if (alt < p.layer_bottom || alt > p.layer_top) continue;
-    CloudWeather w = cloud_weather(q.x, q.z, primary_distance, p);
-    Scalar d = cloud_base_density(q.x, q.z, alt, w, p);
-    if (cheap == 0 && d > Scalar(0.0)) d = cloud_full_density(d, q.x, q.z, alt, p);
-    tau = tau + p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation) * p.light_step;
-  }
-  return tau;
+// Light sample i (0 .. light_samples - 1) of the primary sample at `pos`: in the cone
+// toward the sun, light_step apart, the last one far_light_distance away (distant
+// shadowing) when far_light is on.
+vec3 light_sample_position(vec3 pos, int i, CloudShadeParams p) {
+  int far = (p.far_light == 1 && i == p.light_samples - 1) ? 1 : 0;
+  Scalar along = far == 1 ? p.far_light_distance : p.light_step * (Scalar(i) + Scalar(0.5));
+  Scalar spread = far == 1 ? Scalar(0.0) : p.light_step * Scalar(i + 1) * Scalar(CLOUD_CONE_SPREAD);
+  return pos + p.sun_dir * along + cone_kernel(i) * spread;
 }
 
 // The optional 2D alto/cirrus sheet: a thin layer at cirrus_altitude whose vertical optical
@@ -104,18 +93,58 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   int empty = 0;
   Scalar depth_sum = Scalar(0.0);    // opacity-weighted distance (atmosphere blend)
   Scalar weight_sum = Scalar(0.0);
-  int guard = 8 * n + 64;
-  for (int it = 0; it < guard; ++it) {
-    if (!(t < seg.t1)) break;
-    // One weather + base evaluation serves both modes (on SIMD hardware, lanes in the cheap
-    // and the full mode share it instead of running two copies).
-    Scalar step = cheap == 1 ? cheap_dt : min(dt, seg.t1 - t);
-    Scalar tm = cheap == 1 ? min(t + Scalar(0.5) * cheap_dt, seg.t1) : t + Scalar(0.5) * step;
-    vec3 pos = view * tm;
+  int guard = 8 * n + 64;            // primary iterations at most
+  int it = 0;
+  // One density sample per iteration: a primary sample (cheap or full) or one light sample
+  // of the lit primary sample pending in lit_*; light_i >= 0 is the light sample this
+  // iteration takes. Why not a light loop inside the primary one: lavapipe (Mesa 22.3)
+  // executes both sides of every if under a lane mask, even when no lane takes it, and a
+  // loop's body at least once, so every primary step paid for the full-density reads, one
+  // light sample and the lighting whether or not any of its 8 lanes was in cloud (an empty
+  // sky cost as much as a cloudy one). Here the texture reads appear once in the body; a
+  // lane's light samples interleave with its neighbours' primary steps. The same
+  // operations in the same order per pixel as the nested loops: both backends' results are
+  // unchanged.
+  int light_i = -1;
+  int lit_cheap = 0;                 // the pending sample's light samples are cheap (base only)
+  vec3 lit_pos = vec3(Scalar(0.0));
+  Scalar lit_tm = Scalar(0.0);
+  Scalar lit_alt = Scalar(0.0);
+  Scalar lit_step = Scalar(0.0);
+  Scalar lit_d = Scalar(0.0);
+  Scalar lit_precipitation = Scalar(0.0);
+  Scalar tau = Scalar(0.0);          // optical depth toward the sun of the pending sample
+  int guard_all = guard * (p.light_samples + 1);
+  for (int k = 0; k < guard_all; ++k) {
+    Scalar step = Scalar(0.0);
+    Scalar tm = lit_tm;  // the horizon rule's distance: the primary sample's
+    vec3 pos;
+    if (light_i < 0) {
+      if (!(it < guard) || !(t < seg.t1)) break;
+      it = it + 1;
+      // One weather + base evaluation serves both modes (on SIMD hardware, lanes in the
+      // cheap and the full mode share it instead of running two copies).
+      step = cheap == 1 ? cheap_dt : min(dt, seg.t1 - t);
+      tm = cheap == 1 ? min(t + Scalar(0.5) * cheap_dt, seg.t1) : t + Scalar(0.5) * step;
+      pos = view * tm;
+    } else {
+      pos = light_sample_position(lit_pos, light_i, p);
+    }
     Scalar alt = cloud_altitude(pos, p);
     CloudWeather w = cloud_weather(pos.x, pos.z, tm, p);
     Scalar d = cloud_base_density(pos.x, pos.z, alt, w, p);
-    if (cheap == 1) {
+    int inside = (alt < p.layer_bottom || alt > p.layer_top) ? 0 : 1;
+    int full = light_i < 0 ? 1 - cheap : (inside == 1 && lit_cheap == 0 ? 1 : 0);
+    if (full == 1 && d > Scalar(0.0)) d = cloud_full_density(d, pos.x, pos.z, alt, p);
+    int finish = 0;  // the pending sample's light samples are complete: light it
+    if (light_i >= 0) {
+      if (inside == 1) tau = tau + p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation) * p.light_step;
+      light_i = light_i + 1;
+      if (light_i >= p.light_samples) {
+        light_i = -1;
+        finish = 1;
+      }
+    } else if (cheap == 1) {
       if (d > Scalar(0.0)) {
         cheap = 0;
         empty = 0;
@@ -127,30 +156,44 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
       }
     } else {
       r.full_samples = r.full_samples + 1;
-      if (d > Scalar(0.0)) d = cloud_full_density(d, pos.x, pos.z, alt, p);
       if (d > Scalar(0.0)) {
         empty = 0;
-        Scalar sigma_s = p.albedo * p.extinction * d;
-        Scalar sigma_t = p.extinction * d * (Scalar(1.0) + p.rain_absorption * w.precipitation);
-        Scalar tau = light_optical_depth(pos, tm, Scalar(1.0) - r.transmittance, p);
-        Scalar h = height_fraction(alt, p);
-        vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
-        Scalar x = sigma_t * step;
-        Scalar step_t = exp(-x);
-        r.radiance = r.radiance + source * (r.transmittance * step * step_integral_factor(x, p));
-        Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
-        depth_sum = depth_sum + absorbed * tm;
-        weight_sum = weight_sum + absorbed;
-        r.transmittance = r.transmittance * step_t;
-        if (p.opacity_stop == 1 && r.transmittance < stop_below) break;
+        lit_pos = pos;
+        lit_tm = tm;
+        lit_alt = alt;
+        lit_step = step;
+        lit_d = d;
+        lit_precipitation = w.precipitation;
+        tau = Scalar(0.0);
+        lit_cheap = (p.cheap_light == 1 && Scalar(1.0) - r.transmittance > p.cheap_light_opacity) ? 1 : 0;
+        if (p.light_samples > 0) {
+          light_i = 0;
+        } else {
+          finish = 1;
+        }
       } else {
         empty = empty + 1;
         if (p.cheap_march == 1 && p.empty_to_cheap > 0 && empty >= p.empty_to_cheap) {
           cheap = 1;
           empty = 0;
         }
+        t = t + step;
       }
-      t = t + step;
+    }
+    if (finish == 1) {
+      Scalar sigma_s = p.albedo * p.extinction * lit_d;
+      Scalar sigma_t = p.extinction * lit_d * (Scalar(1.0) + p.rain_absorption * lit_precipitation);
+      Scalar h = height_fraction(lit_alt, p);
+      vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
+      Scalar x = sigma_t * lit_step;
+      Scalar step_t = exp(-x);
+      r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, p));
+      Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
+      depth_sum = depth_sum + absorbed * lit_tm;
+      weight_sum = weight_sum + absorbed;
+      r.transmittance = r.transmittance * step_t;
+      if (p.opacity_stop == 1 && r.transmittance < stop_below) break;
+      t = t + lit_step;
     }
   }
   // Aerial perspective: blend toward the clear sky's colour behind the cloud with the

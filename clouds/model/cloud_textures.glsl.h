@@ -4,9 +4,10 @@
 //   Texel4 cloud_texel4(int texture, int texel)
 // every channel of texel number `texel` (row-major, x fastest, as
 // clouds/include/skycal/clouds/cloud_textures.h lays them out; unused channels 0): C++
-// reads the CloudNoise and WeatherMap vectors; GLSL reads vec4 storage buffers (the host
-// pads 3-channel textures to 4), one 16-byte load per texel instead of one per channel,
-// which lavapipe's gathers make the march's main cost. Every texture wraps (tiles).
+// reads the CloudNoise and WeatherMap vectors; GLSL reads vec4 texel buffers with
+// texelFetch (the host pads 3-channel textures to 4): one 16-byte load per texel and lane
+// (lavapipe compiles storage-buffer loads at per-lane indices into scalar loops per lane
+// and component, which were ~90% of its render time). Every texture wraps (tiles).
 
 // Texture sizes (CloudNoise::kBaseSize etc.; the C++ side checks them with static_asserts).
 SC_CONST_INT(CLOUD_BASE_SIZE, 128)

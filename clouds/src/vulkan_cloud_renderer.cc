@@ -1,6 +1,9 @@
 // The Vulkan cloud renderer on gpu::ComputePipeline (clouds/shaders/clouds_latlong.comp).
 // The textures are uploaded once per change of noise or weather map (keyed by content),
-// the RGB ones padded to one vec4 per texel;
+// the RGB ones padded to one vec4 per texel, as uniform texel buffers (read by texelFetch:
+// lavapipe turns storage-buffer loads at per-lane indices into scalar loops, 3x slower
+// overall; clouds_latlong.comp); the base noise is 128^3 = 2M texels (lavapipe allows 2^27;
+// a device below that fails with ComputePipeline's maxTexelBufferElements error);
 // parameters and the direction table per render.
 //
 // Workgroups of 8 x 8 pixels, not the sky's one image row: the march's cost varies by
@@ -40,7 +43,11 @@ class VulkanCloudRenderer final : public CloudRenderer {
   explicit VulkanCloudRenderer(bool validation)
       : ctx_(gpu::VulkanContext::Shared(validation)),
         pipeline_(ctx_, spirv::clouds_latlong, spirv::clouds_latlong_size,
-                  std::vector<VkDescriptorType>(7, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER), {kLocalX, kLocalY}) {}
+                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                   VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
+                   VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {kLocalX, kLocalY}) {}
 
   CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
     const CloudShadeD shade = ResolveCloudShade(scene, request);

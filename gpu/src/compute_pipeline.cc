@@ -11,7 +11,8 @@ VkBufferUsageFlags UsageFor(VkDescriptorType type) {
   switch (type) {
     case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: return VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT;
     case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: return VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    default: throw Error("ComputePipeline: only uniform and storage buffer bindings are supported");
+    case VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER: return VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
+    default: throw Error("ComputePipeline: only uniform, storage and uniform texel buffer bindings are supported");
   }
 }
 
@@ -19,8 +20,11 @@ VkBufferUsageFlags UsageFor(VkDescriptorType type) {
 
 ComputePipeline::ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
                                  std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec)
-    : ctx_(std::move(ctx)), types_(std::move(bindings)), buffers_(types_.size()) {
+    : ctx_(std::move(ctx)), types_(std::move(bindings)), buffers_(types_.size()), views_(types_.size(), VK_NULL_HANDLE) {
   for (VkDescriptorType t : types_) UsageFor(t);  // reject other types before creating anything
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(ctx_->physical_device(), &props);
+  max_texel_buffer_elements_ = props.limits.maxTexelBufferElements;
   try {
     CreateObjects(spirv, spirv_bytes, spec);
   } catch (...) {
@@ -34,6 +38,10 @@ ComputePipeline::~ComputePipeline() { Release(); }
 void ComputePipeline::Release() {
   VkDevice d = ctx_->device();
   vkDeviceWaitIdle(d);
+  for (VkBufferView& v : views_) {
+    if (v) vkDestroyBufferView(d, v, nullptr);
+    v = VK_NULL_HANDLE;
+  }
   for (MappedBuffer& b : buffers_) ctx_->DestroyBuffer(b);
   if (fence_) vkDestroyFence(d, fence_, nullptr);
   if (pool_) vkDestroyCommandPool(d, pool_, nullptr);
@@ -60,13 +68,20 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
 
   const uint32_t n = static_cast<uint32_t>(types_.size());
   std::vector<VkDescriptorSetLayoutBinding> layout_bindings(n);
-  uint32_t uniforms = 0;
+  std::vector<VkDescriptorPoolSize> sizes;
   for (uint32_t i = 0; i < n; ++i) {
     layout_bindings[i].binding = i;
     layout_bindings[i].descriptorType = types_[i];
     layout_bindings[i].descriptorCount = 1;
     layout_bindings[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
-    if (types_[i] == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER) ++uniforms;
+    bool counted = false;
+    for (VkDescriptorPoolSize& ps : sizes) {
+      if (ps.type == types_[i]) {
+        ++ps.descriptorCount;
+        counted = true;
+      }
+    }
+    if (!counted) sizes.push_back({types_[i], 1});
   }
   VkDescriptorSetLayoutCreateInfo dslci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   dslci.bindingCount = n;
@@ -91,9 +106,6 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
   cpci.layout = pipeline_layout_;
   CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
 
-  std::vector<VkDescriptorPoolSize> sizes;
-  if (uniforms) sizes.push_back({VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, uniforms});
-  if (n - uniforms) sizes.push_back({VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, n - uniforms});
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = 1;
   dpci.poolSizeCount = static_cast<uint32_t>(sizes.size());
@@ -122,12 +134,27 @@ void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
   if (binding >= buffers_.size()) throw Error("ComputePipeline: binding " + std::to_string(binding) + " does not exist");
   MappedBuffer& b = buffers_[binding];
   if (!b.buffer || b.size < bytes) {
+    if (types_[binding] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER && bytes / 16 > max_texel_buffer_elements_) {
+      throw Error("ComputePipeline: binding " + std::to_string(binding) + " needs " + std::to_string(bytes / 16) +
+                  " texels, more than the device's maxTexelBufferElements (" +
+                  std::to_string(max_texel_buffer_elements_) + ")");
+    }
     if (b.buffer) {
       vkDeviceWaitIdle(ctx_->device());
+      if (views_[binding]) vkDestroyBufferView(ctx_->device(), views_[binding], nullptr);
+      views_[binding] = VK_NULL_HANDLE;
       ctx_->DestroyBuffer(b);
     }
     // Vulkan forbids zero-sized buffers; an empty binding still needs a valid descriptor.
     b = ctx_->CreateMappedBuffer(bytes > 0 ? bytes : 16, UsageFor(types_[binding]), host_readback);
+    if (types_[binding] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+      VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+      vci.buffer = b.buffer;
+      vci.format = kTexelBufferFormat;
+      vci.offset = 0;
+      vci.range = VK_WHOLE_SIZE;
+      CheckVk(vkCreateBufferView(ctx_->device(), &vci, nullptr, &views_[binding]), "vkCreateBufferView");
+    }
     descriptors_stale_ = true;
   }
   return b.mapped;
@@ -151,7 +178,11 @@ void ComputePipeline::WriteDescriptors() {
     writes[i].dstBinding = i;
     writes[i].descriptorCount = 1;
     writes[i].descriptorType = types_[i];
-    writes[i].pBufferInfo = &infos[i];
+    if (types_[i] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+      writes[i].pTexelBufferView = &views_[i];
+    } else {
+      writes[i].pBufferInfo = &infos[i];
+    }
   }
   vkUpdateDescriptorSets(ctx_->device(), n, writes.data(), 0, nullptr);
   descriptors_stale_ = false;

@@ -5,7 +5,7 @@
 // hardware filtering in anything the fit differentiates or the parity test compares).
 //
 // Layout contract (shared by the generator, the cache, the CPU reference and the Vulkan
-// storage buffers): texel (x, y, z) of an N^3 volume with C channels sits at
+// texel buffers): texel (x, y, z) of an N^3 volume with C channels sits at
 // ((z * N + y) * N + x) * C + c; a 2D N^2 texture at (y * N + x) * C + c. Every texture
 // tiles: texel N wraps to texel 0.
 #pragma once

@@ -19,8 +19,15 @@ namespace skycal::gpu {
 
 class ComputePipeline {
  public:
-  // bindings[i]: the descriptor type of binding i (VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER or
-  // VK_DESCRIPTOR_TYPE_STORAGE_BUFFER); spec[i]: specialization constant i (uint32).
+  // The format of every VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER binding's view: vec4 of float.
+  static constexpr VkFormat kTexelBufferFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+
+  // bindings[i]: the descriptor type of binding i (VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER,
+  // VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, or VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER: a
+  // samplerBuffer of kTexelBufferFormat texels, read with texelFetch; on lavapipe a
+  // texelFetch of a vec4 gathers one 16-byte texel per lane, where a storage-buffer load
+  // runs a bounds-checked scalar loop per lane and component); spec[i]: specialization
+  // constant i (uint32).
   // Throws skycal::Error on a Vulkan failure or an unsupported descriptor type.
   ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
                   std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec = {});
@@ -29,7 +36,8 @@ class ComputePipeline {
   ComputePipeline& operator=(const ComputePipeline&) = delete;
 
   // The mapped memory of `binding`'s buffer, at least `bytes` long (grown, never shrunk;
-  // growing waits for the device and rebinds the set). `host_readback` asks for
+  // growing waits for the device and rebinds the set; a texel buffer larger than the
+  // device's maxTexelBufferElements throws skycal::Error). `host_readback` asks for
   // HOST_CACHED memory: reading a large output from write-combined memory is slow.
   void* Map(uint32_t binding, size_t bytes, bool host_readback = false);
   // Makes host writes to `binding` visible to the device (a no-op on coherent memory).
@@ -52,6 +60,8 @@ class ComputePipeline {
   std::shared_ptr<VulkanContext> ctx_;
   std::vector<VkDescriptorType> types_;
   std::vector<MappedBuffer> buffers_;
+  std::vector<VkBufferView> views_;
+  uint32_t max_texel_buffer_elements_ = 0;  // per binding: the texel buffer's view (VK_NULL_HANDLE otherwise)
   bool descriptors_stale_ = true;
   VkShaderModule shader_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
