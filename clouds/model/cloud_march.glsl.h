@@ -13,7 +13,6 @@
 // Output: in-scattered radiance (cd/m^2) and transmittance along the view; the host
 // composites L = L_sky T + L_cloud (clouds/include/skycal/clouds/composite.h).
 
-SC_CONST(CLOUD_CONE_SPREAD, 0.3)  // cone half-width per unit distance along the light ray
 
 struct CloudResult {
   vec3 radiance;          // cd/m^2
@@ -38,7 +37,7 @@ vec3 cone_kernel(int i) {
 vec3 light_sample_position(vec3 pos, int i, CloudShadeParams p) {
   int far = (p.far_light == 1 && i == p.light_samples - 1) ? 1 : 0;
   Scalar along = far == 1 ? p.far_light_distance : p.light_step * (Scalar(i) + Scalar(0.5));
-  Scalar spread = far == 1 ? Scalar(0.0) : p.light_step * Scalar(i + 1) * Scalar(CLOUD_CONE_SPREAD);
+  Scalar spread = far == 1 ? Scalar(0.0) : p.light_step * Scalar(i + 1) * p.cone_spread;
   return pos + p.sun_dir * along + cone_kernel(i) * spread;
 }
 

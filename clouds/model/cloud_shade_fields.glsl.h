@@ -81,3 +81,4 @@
   SC_FIELD(cheap_light_opacity)  // HZD: 0.3
   SC_FIELD(light_step)         // m between light samples in the cone
   SC_FIELD(far_light_distance) // m to the far light sample
+  SC_FIELD(cone_spread)        // light cone half-width per metre along the light ray (HZD-style: 0.3)

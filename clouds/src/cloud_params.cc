@@ -279,6 +279,7 @@ bool MarchOptions::IsValid(std::string* why) const {
   return count("steps_zenith", steps_zenith, 1, 4096) && count("steps_horizon", steps_horizon, 1, 4096) &&
          count("light_samples", light_samples, 0, 64) && count("empty_to_cheap", empty_to_cheap, 0, 4096) &&
          real("light_step", light_step_m, 1.0, 1.0e4, "m") && real("far_light_distance", far_light_distance_m, 1.0, 1.0e5, "m") &&
+         real("cone_spread", cone_spread, 0.0, 1.0, "(m per m along the light ray)") &&
          real("cheap_step_factor", cheap_step_factor, 1.0, 16.0, "(x the full step)") &&
          real("opacity_threshold", opacity_threshold, 0.5, 1.0, "(1)") &&
          real("cheap_light_opacity", cheap_light_opacity, 0.0, 1.0, "(1)");

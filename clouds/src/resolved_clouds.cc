@@ -153,6 +153,7 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.cheap_light_opacity = m.cheap_light_opacity;
   s.light_step = m.light_step_m;
   s.far_light_distance = m.far_light_distance_m;
+  s.cone_spread = m.cone_spread;
   return s;
 }
 

@@ -108,6 +108,10 @@ struct MarchOptions {
   int light_samples = 6;      // samples toward the sun in a cone
   double light_step_m = 120.0;       // metres between light samples
   double far_light_distance_m = 3000.0;  // the far (distant-shadow) light sample
+  // Light sample i sits light_step x (i + 1) x cone_spread off the sun ray (a fixed
+  // kernel of directions): HZD's cone, soft shadows from few samples. 0: on the ray, what
+  // a converged light integral uses (the benchmark's reference).
+  double cone_spread = 0.3;  // cone half-width per metre along the light ray, 1
   bool cheap_march = true;    // base-shape-only long steps until the base density is non-zero
   double cheap_step_factor = 2.0;  // cheap step length / full step length
   bool step_back = true;      // one cheap step back when the cheap march finds cloud
