@@ -8,6 +8,7 @@
 
 #include "command_line.h"
 #include "skycal/bench/compare.h"
+#include "skycal/bench/isolated_run.h"
 #include "skycal/bench/pareto.h"
 #include "skycal/bench/plot.h"
 #include "skycal/bench/results.h"
@@ -50,12 +51,151 @@ nlohmann::json Compare(const BenchOptions& o) {
   if (a.machine.cpu_model != b.machine.cpu_model || a.machine.cores != b.machine.cores)
     Log("bench", "warning: the runs are from different machines ('" + a.machine.cpu_model + "' vs '" + b.machine.cpu_model +
                      "'): ratios compare machines as much as commits");
-  return c.ToJson();
+  nlohmann::json j = c.ToJson();
+  if (c.Regressed()) {
+    Log("bench", "regression: " + std::to_string(c.slower) + " case(s) slower beyond the noise, " +
+                     std::to_string(c.error_worse) + " with a larger error, " + std::to_string(c.outcome_worse) +
+                     " with a worse outcome (exit 1)");
+    j["failed"] = true;
+  }
+  return j;
+}
+
+// One suite's Pareto front, where its default sits, and its plot (DIR/<suite>_pareto.png
+// and .svg) from its cases; fills rep's front, default and plots. `rep` carries the
+// suite's name and summary.
+void AnalyseSuite(const std::string& error_label, const std::vector<bench::CaseResult>& cases,
+                  const bench::MachineInfo& machine, bool quick, const fs::path& dir, bench::SuiteReport* rep) {
+  std::vector<bench::TimeError> points;
+  bench::ParetoPlot plot;
+  int default_index = -1;
+  bench::Settings defaults;
+  for (const bench::CaseResult& c : cases)
+    if (c.is_default) defaults = c.settings;
+  for (const bench::CaseResult& c : cases) {
+    const bool usable = c.outcome == bench::Outcome::kOk;
+    points.push_back({usable ? c.time.median_ms : NAN, usable ? c.error : NAN});
+  }
+  // Within 10% in time (the compare noise floor: quick cases run once) or 1% in error
+  // two cases count as equal.
+  const bench::ParetoTolerance tolerance{0.10, 0.01};
+  rep->front.clear();
+  for (int i : bench::ParetoFront(points, tolerance)) rep->front.push_back(cases[i].name);
+  // The plot shows the usable cases only.
+  for (size_t i = 0; i < cases.size(); ++i) {
+    if (!std::isfinite(points[i].time) || !std::isfinite(points[i].error)) continue;
+    if (cases[i].is_default) default_index = static_cast<int>(plot.cases.size());
+    plot.cases.push_back(&cases[i]);
+    plot.labels.push_back(cases[i].is_default ? std::string() : ShortLabel(cases[i], defaults));
+  }
+  std::vector<bench::TimeError> shown;
+  for (const bench::CaseResult* c : plot.cases) shown.push_back({c->time.median_ms, c->error});
+  plot.front = bench::ParetoFront(shown, tolerance);
+  plot.default_index = default_index;
+  plot.title = rep->name + ": " + rep->summary;
+  plot.subtitle = machine.cpu_model + ", " + std::to_string(machine.cores) + " cores; commit " +
+                  machine.commit.substr(0, 10) + (quick ? "; --quick" : "");
+  plot.error_label = error_label;
+  rep->default_case.clear();
+  rep->default_on_front = false;
+  for (const bench::CaseResult& c : cases) {
+    if (!c.is_default) continue;
+    rep->default_case = c.name;
+    for (const std::string& f : rep->front) rep->default_on_front = rep->default_on_front || f == c.name;
+  }
+  rep->plots.clear();
+  if (!plot.cases.empty()) {
+    const std::string stem = rep->name + "_pareto";
+    bench::WriteParetoPlot(plot, dir / (stem + ".png"), dir / (stem + ".svg"));
+    rep->plots = {stem + ".png", stem + ".svg"};
+  }
+  Log("bench", rep->name + ": " + std::to_string(rep->front.size()) + " of " + std::to_string(cases.size()) +
+                   " cases on the Pareto front; default " +
+                   (rep->default_case.empty() ? std::string("not in this grid")
+                                              : (rep->default_on_front ? "on the front" : "DOMINATED")));
+}
+
+// The stress table of `results` (if it has stress cases) as DIR/stress.md and in results.
+bool WriteStressTable(bench::Results* results, const StagedDirectory& out) {
+  const std::vector<bench::StressArea> table = bench::StressTable(results->cases);
+  if (table.empty()) return false;
+  results->stress = bench::StressTableToJson(table);
+  WriteFileAtomically(out / "stress.md", "# skycal bench --suite stress\n\n" + bench::StressTableToText(table));
+  std::cerr << bench::StressTableToText(table);
+  return true;
+}
+
+// --replot: an earlier run's results.json -> its Pareto fronts and plots redrawn by this
+// build (after a change to the plotting or the front's tolerance), into a new directory.
+nlohmann::json Replot(const BenchOptions& o, const bench::SuiteRegistry& registry) {
+  bench::Results results = bench::ResultsFromJson(ReadJsonFile(o.replot), o.replot);
+  StagedDirectory out(o.out, "--out", "bench", {{"--replot", o.replot}});
+  const bool quick = results.options.value("quick", false);
+  for (bench::SuiteReport& rep : results.suites) {
+    std::vector<bench::CaseResult> cases;
+    for (const bench::CaseResult& c : results.cases)
+      if (c.suite == rep.name) cases.push_back(c);
+    const bench::Suite* suite = registry.Find(rep.name);
+    const bool pareto = suite ? suite->pareto : !rep.plots.empty();
+    if (!pareto || cases.empty()) continue;
+    const std::string label = suite && !suite->error_axis.empty() ? suite->error_axis : rep.error_metric;
+    AnalyseSuite(label, cases, results.machine, quick, out.staging(), &rep);
+  }
+  WriteStressTable(&results, out);
+  WriteJsonFileAtomically(out / "results.json", bench::ToJson(results));
+  WriteFileAtomically(out / "results.csv", bench::ToCsv(results));
+  out.Commit();
+  Log("bench", "redrew " + o.replot + " into " + o.out);
+  nlohmann::json summary = {{"out", o.out}, {"replot", o.replot}};
+  for (const bench::SuiteReport& s : results.suites)
+    summary["suites"].push_back({{"name", s.name}, {"pareto_front", s.front}, {"default_on_front", s.default_on_front},
+                                 {"plots", s.plots}});
+  return summary;
+}
+
+// The worker's side of an isolated run: the one suite, journaled; the parent collects.
+nlohmann::json RunWorker(const BenchOptions& o, const bench::SuiteRegistry& registry) {
+  const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
+  if (suites.size() != 1) throw Error("--worker-journal: expected exactly one --suite");
+  bench::SuiteOptions so;
+  so.quick = o.quick;
+  so.repeat = o.repeat;
+  so.scratch = o.worker_scratch;
+  so.log = [](const std::string& line) { Log("bench", line); };
+  bench::AttachJournal(so, o.worker_journal);
+  std::string why;
+  if (!so.IsValid(&why)) throw Error(why);
+  suites[0]->run(so);
+  return {{"worker", true}};
+}
+
+// A suite's cases: in a worker process (crash-isolated) or in this one.
+std::vector<bench::CaseResult> RunSuite(const BenchOptions& o, const bench::Suite& suite, const bench::SuiteOptions& so) {
+  if (o.worker_executable.empty()) return suite.run(so);
+  bench::IsolatedRunOptions io;
+  io.journal = so.scratch / "journal.jsonl";
+  io.worker_argv = {o.worker_executable, "bench", "--suite", suite.name, "--worker-journal", io.journal.string(),
+                    "--worker-scratch", so.scratch.string()};
+  if (o.quick) io.worker_argv.push_back("--quick");
+  if (o.repeat > 0) io.worker_argv.insert(io.worker_argv.end(), {"--repeat", std::to_string(o.repeat)});
+  io.log = so.log;
+  return bench::RunSuiteIsolated(suite.name, io);
 }
 
 }  // namespace
 
 bool BenchOptions::IsValid(std::string* why) const {
+  if (!replot.empty()) {
+    if (!compare.empty() || !suites.empty()) {
+      *why = "--replot: runs nothing; leave out --suite and --compare";
+      return false;
+    }
+    if (out.empty()) {
+      *why = "--replot: expected --out DIR for the redrawn results";
+      return false;
+    }
+    return true;
+  }
   if (!compare.empty()) {
     if (compare.size() != 2) {
       *why = "--compare: expected two files, OLD.json NEW.json";
@@ -75,6 +215,17 @@ bool BenchOptions::IsValid(std::string* why) const {
     *why = "--suite: expected one or more suite names (NAME[,NAME...])";
     return false;
   }
+  if (worker_journal.empty() != worker_scratch.empty()) {
+    *why = "--worker-journal and --worker-scratch go together (the verb passes them to its workers)";
+    return false;
+  }
+  if (!worker_journal.empty()) {
+    if (!out.empty()) {
+      *why = "--worker-journal: a worker writes no results; leave out --out";
+      return false;
+    }
+    return repeat >= 0 && repeat <= 1000;
+  }
   if (out.empty()) {
     *why = "--out: expected the results directory";
     return false;
@@ -90,6 +241,8 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   if (!o.compare.empty()) return Compare(o);
+  if (!o.replot.empty()) return Replot(o, registry);
+  if (!o.worker_journal.empty()) return RunWorker(o, registry);
   const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
   StagedDirectory out(o.out, "--out", "bench", {});
   // Scratch for the suites' inputs (references, brackets): beside the staging directory,
@@ -121,73 +274,24 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
     if (!so.IsValid(&suite_why)) throw Error(suite_why);
     const auto t0 = std::chrono::steady_clock::now();
     Log("bench", "suite " + suite->name + ": " + suite->summary + (o.quick ? " (--quick)" : ""));
-    std::vector<bench::CaseResult> cases = suite->run(so);
+    std::vector<bench::CaseResult> cases = RunSuite(o, *suite, so);
     bench::SuiteReport rep;
     rep.name = suite->name;
     rep.summary = suite->summary;
     rep.error_metric = suite->error_metric;
     rep.cases = static_cast<int>(cases.size());
     rep.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (suite->pareto && !cases.empty()) {
-      std::vector<bench::TimeError> points;
-      bench::ParetoPlot plot;
-      int default_index = -1;
-      bench::Settings defaults;
-      for (const bench::CaseResult& c : cases)
-        if (c.is_default) defaults = c.settings;
-      for (const bench::CaseResult& c : cases) {
-        const bool usable = c.outcome == bench::Outcome::kOk;
-        points.push_back({usable ? c.time.median_ms : NAN, usable ? c.error : NAN});
-      }
-      // Within 10% in time (the compare noise floor: quick cases run once) or 1% in error
-      // two cases count as equal.
-      const bench::ParetoTolerance tolerance{0.10, 0.01};
-      for (int i : bench::ParetoFront(points, tolerance)) {
-        rep.front.push_back(cases[i].name);
-      }
-      // The plot shows the usable cases only.
-      for (size_t i = 0; i < cases.size(); ++i) {
-        if (!std::isfinite(points[i].time) || !std::isfinite(points[i].error)) continue;
-        if (cases[i].is_default) default_index = static_cast<int>(plot.cases.size());
-        plot.cases.push_back(&cases[i]);
-        plot.labels.push_back(cases[i].is_default ? std::string() : ShortLabel(cases[i], defaults));
-      }
-      std::vector<bench::TimeError> shown;
-      for (const bench::CaseResult* c : plot.cases) shown.push_back({c->time.median_ms, c->error});
-      plot.front = bench::ParetoFront(shown, tolerance);
-      plot.default_index = default_index;
-      plot.title = suite->name + ": " + suite->summary;
-      plot.subtitle = results.machine.cpu_model + ", " + std::to_string(results.machine.cores) + " cores; commit " +
-                      results.machine.commit.substr(0, 10) + (o.quick ? "; --quick" : "");
-      plot.error_label = suite->error_axis.empty() ? suite->error_metric : suite->error_axis;
-      for (const bench::CaseResult& c : cases) {
-        if (!c.is_default) continue;
-        rep.default_case = c.name;
-        for (const std::string& f : rep.front) rep.default_on_front = rep.default_on_front || f == c.name;
-      }
-      if (!plot.cases.empty()) {
-        const std::string stem = suite->name + "_pareto";
-        bench::WriteParetoPlot(plot, out / (stem + ".png"), out / (stem + ".svg"));
-        rep.plots = {stem + ".png", stem + ".svg"};
-      }
-      Log("bench", suite->name + ": " + std::to_string(rep.front.size()) + " of " + std::to_string(cases.size()) +
-                       " cases on the Pareto front; default " +
-                       (rep.default_case.empty() ? std::string("not in this grid")
-                                                 : (rep.default_on_front ? "on the front" : "DOMINATED")));
-    }
+    if (suite->pareto && !cases.empty())
+      AnalyseSuite(suite->error_axis.empty() ? suite->error_metric : suite->error_axis, cases, results.machine, o.quick,
+                   out.staging(), &rep);
     results.suites.push_back(rep);
     results.cases.insert(results.cases.end(), cases.begin(), cases.end());
   }
-  const std::vector<bench::StressArea> table = bench::StressTable(results.cases);
-  if (!table.empty()) {
-    results.stress = bench::StressTableToJson(table);
-    WriteFileAtomically(out / "stress.md", "# skycal bench --suite stress\n\n" + bench::StressTableToText(table));
-    std::cerr << bench::StressTableToText(table);
-  }
+  const bool stress = WriteStressTable(&results, out);
   WriteJsonFileAtomically(out / "results.json", bench::ToJson(results));
   WriteFileAtomically(out / "results.csv", bench::ToCsv(results));
   out.Commit();
-  Log("bench", "wrote " + o.out + "/results.json, results.csv" + (table.empty() ? "" : ", stress.md") + " and the plots");
+  Log("bench", "wrote " + o.out + "/results.json, results.csv" + (stress ? ", stress.md" : "") + " and the plots");
 
   int failed = 0;
   nlohmann::json failures = nlohmann::json::array();
@@ -210,30 +314,47 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
 }
 
 BenchOptions ParseBenchArgs(int argc, char** argv) {
+  // The suite names from the registry itself, so the help cannot drift from it.
+  std::string names;
+  for (const std::string& n : bench::BuiltinSuites().Names()) names += (names.empty() ? "" : ", ") + n;
   VerbCommandLine cl("bench",
                      "skycal bench: run time against error across the pipeline, and numerical stress\n\n"
                      "Each suite measures a grid of settings; per case the median wall time of the repeats\n"
                      "after a warm-up (with min and max) and the error against truth or a converged reference.\n"
                      "Writes DIR/results.json (machine, commit, date, cases, each suite's Pareto front),\n"
                      "DIR/results.csv, DIR/<suite>_pareto.png/.svg and, for stress, DIR/stress.md. Exit 1 when\n"
-                     "any case produced a non-finite output or crashed.",
+                     "any case produced a non-finite output or crashed, and when --compare finds a regression.",
                      "  skycal bench --suite NAME[,NAME...] [--quick] [--repeat N] --out DIR [--json]\n"
-                     "  skycal bench --compare OLD.json NEW.json [--noise-floor F] [--json]",
-                     "Suites: render, fit, probe, capture, export, stress.\n"
+                     "  skycal bench --compare OLD.json NEW.json [--noise-floor F] [--json]\n"
+                     "  skycal bench --replot RESULTS.json --out DIR",
+                     "Suites: " + names + ".\n"
                      "--compare flags a case SLOWER when new/old median > 1 + noise, noise being the larger\n"
                      "relative spread (max - min) / median of the two runs, at least --noise-floor.");
   BenchOptions o;
   bool json = false;
-  cl.Text("--suite", &o.suites, "NAMES", "comma-separated suites: render, fit, probe, capture, export, stress");
+  cl.Text("--suite", &o.suites, "NAMES", "comma-separated suites: " + names);
   cl.Flag("--quick", &o.quick, "CI sizes (smaller images and grids, fewer repeats)");
   cl.Integer("--repeat", &o.repeat, 1, 1000, "expected an integer in [1, 1000]", "N",
              "timed repeats per case after the warm-up (default: each suite's own, 1-11)");
   cl.Text("--out", &o.out, "DIR", "results directory, written atomically; an existing one is replaced only\n"
                                   "when it is an earlier `skycal bench` output");
   cl.List("--compare", &o.compare, "OLD.json NEW.json", "compare two results.json instead of running");
+  cl.Text("--replot", &o.replot, "RESULTS.json",
+          "redraw an earlier run's Pareto fronts and plots with this build, into --out (runs nothing)");
   cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
+  bool in_process = false;
+  cl.Flag("--in-process", &in_process,
+          "run the suites in this process (default: each in a worker process, so a case that\n"
+          "crashes its process is recorded as one `crash` case and the run goes on)");
+  cl.Text("--worker-journal", &o.worker_journal, "FILE", "internal: a worker's journal")->group("");
+  cl.Text("--worker-scratch", &o.worker_scratch, "DIR", "internal: a worker's scratch directory")->group("");
   cl.Parse(argc, argv);
+  if (!in_process && o.worker_journal.empty()) {
+    std::error_code ec;
+    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) o.worker_executable = self.string();  // else: in-process (no /proc)
+  }
   return o;
 }
 

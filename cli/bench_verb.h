@@ -18,7 +18,16 @@ struct BenchOptions {
   int repeat = 0;                    // timed repeats per case, [1, 1000]; 0: each suite's default
   std::string out;                   // output directory, staged (cli/staged_directory.h)
   std::vector<std::string> compare;  // OLD.json NEW.json: compare instead of running
+  std::string replot;                // RESULTS.json: redraw its plots (and fronts) into --out, run nothing
   double noise_floor = 0.10;         // --compare: relative noise below which a ratio is not flagged
+  // Each suite runs in a worker process started from this executable (a case that kills
+  // its process becomes one `crash` case: skycal/bench/isolated_run.h); empty: in this
+  // process (library callers and tests). ParseBenchArgs sets /proc/self/exe unless
+  // --in-process.
+  std::string worker_executable;
+  // Worker mode (hidden options; the parent passes them): run the one suite, journaling
+  // to worker_journal, with worker_scratch as its scratch directory; no results written.
+  std::string worker_journal, worker_scratch;
 
   bool IsValid(std::string* why) const;
 };

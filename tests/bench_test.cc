@@ -17,6 +17,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "test_util.h"
+#include "verb_common.h"
 
 using namespace skycal;
 using namespace skycal::bench;
@@ -244,6 +245,33 @@ TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
   EXPECT_NO_THROW(cli::RunBenchImpl(o, FakeRegistry()));
 }
 
+TEST(BenchVerb, ReplotRedrawsAnEarlierRunWithoutTouchingIt) {
+  skycal::testing::ScratchDir dir("bench-replot");
+  cli::BenchOptions o;
+  o.suites = "fake";
+  o.out = dir / "results";
+  cli::RunBenchImpl(o, FakeRegistry());
+  const std::string before = ReadText(dir / "results/results.json");
+  cli::BenchOptions r;
+  r.replot = dir / "results/results.json";
+  r.out = dir / "redrawn";
+  const nlohmann::json summary = cli::RunBenchImpl(r, FakeRegistry());
+  const nlohmann::json j = ReadJsonFile(dir / "redrawn/results.json");
+  ASSERT_EQ(j["suites"].size(), 1u);
+  EXPECT_EQ(j["suites"][0]["pareto_front"], nlohmann::json({"size=small method=a", "size=large method=a"}));
+  EXPECT_EQ(j["cases"].size(), 4u);
+  EXPECT_EQ(ReadText(dir / "redrawn/fake_pareto.png").substr(1, 3), "PNG");
+  EXPECT_EQ(ReadText(dir / "results/results.json"), before);
+  // Redrawing into the directory the input lives in would replace it: refused.
+  r.out = dir / "results";
+  EXPECT_THROW(cli::RunBenchImpl(r, FakeRegistry()), Error);
+  EXPECT_EQ(ReadText(dir / "results/results.json"), before);
+  // --replot runs nothing: no --suite beside it.
+  r.suites = "fake";
+  std::string why;
+  EXPECT_FALSE(r.IsValid(&why));
+}
+
 TEST(BenchVerb, FailsAfterWritingWhenACaseIsNonFinite) {
   skycal::testing::ScratchDir dir("bench-nonfinite");
   cli::BenchOptions o;
@@ -263,7 +291,7 @@ TEST(BenchVerb, BadInput) {
     cli::RunBenchImpl(o, BuiltinSuites());
     FAIL() << "unknown suite accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, probe, capture, export, stress, clouds)"),
+    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, probe, capture, export, stress, clouds)"),
               std::string::npos)
         << e.what();
   }
@@ -317,6 +345,12 @@ TEST(BenchVerb, CompareReadsTwoResultsFiles) {
   EXPECT_EQ(j["slower"], 1);
   EXPECT_TRUE(j["regressed"].get<bool>());
   EXPECT_EQ(j["cases"][0]["verdict"], "SLOWER");
+  EXPECT_TRUE(j.value("failed", false));
+  // The verb's exit code: 1 on a regression (the summary still printed), 0 on a run against itself.
+  EXPECT_EQ(cli::RunVerb("bench", false, [&] { return cli::RunBenchImpl(o, FakeRegistry()); }), 1);
+  cli::BenchOptions same = o;
+  same.compare = {dir / "a.json", dir / "a.json"};
+  EXPECT_EQ(cli::RunVerb("bench", false, [&] { return cli::RunBenchImpl(same, FakeRegistry()); }), 0);
   skycal::testing::WriteText(dir / "c.json", "{\"schema\": \"other\"}");
   o.compare = {dir / "a.json", dir / "c.json"};
   EXPECT_THROW(cli::RunBenchImpl(o, FakeRegistry()), Error);

@@ -2,7 +2,7 @@
 // DESIGN.md section 6) on clear skies the preset was not built from (CIE general skies,
 // another atmosphere's bake) and the CIE sky again with a building and a cloud, 256x128.
 // Grid: linear start on/off x robust loss x backend x the Ceres polish (a skip decision of
-// the linear start) x Jacobians (analytic, or central differences: the baseline, run only
+// the linear start) x pyramid levels (with the other defaults) x Jacobians (analytic, or central differences: the baseline, run only
 // on the Ceres path with the CPU backend and Cauchy, as bench_fit does, since elsewhere it
 // changes nothing or costs minutes). Time: the fits of all references of the case, median
 // of repeats; error: their mean rel RMSE (fit::CompareToReference) against the clean
@@ -77,7 +77,7 @@ std::vector<FitReference> WriteReferences(const SuiteOptions& o, const fit::FitO
 Suite FitSuite() {
   Suite s;
   s.name = "fit";
-  s.summary = "one-sky fit from the bundled preset, 256x128: start x loss x backend x polish x Jacobians";
+  s.summary = "one-sky fit from the bundled preset, 256x128: start x loss x backend x polish x Jacobians x levels";
   s.error_metric = "mean rel RMSE of the fitted sky vs the clean reference";
   s.error_axis = "mean rel RMSE, fit vs the clean sky";
   s.run = [](const SuiteOptions& o) {
@@ -87,8 +87,15 @@ Suite FitSuite() {
                  {"loss", {"cauchy", "huber", "none"}, "cauchy"},
                  {"backend", {"vulkan", "cpu"}, "vulkan"},
                  {"polish", {"off", "on"}, "off"},
-                 {"jacobian", {"analytic", "numeric"}, "analytic"}};
+                 {"jacobian", {"analytic", "numeric"}, "analytic"},
+                 // Coarse-to-fine level widths: the default (64,128,256 at this size), the finest only, the
+                 // finest two.
+                 {"pyramid", {"auto", "256", "128,256"}, "auto"}};
     grid.skip = [](const Settings& st) -> std::string {
+      if (Get(st, "pyramid") != "auto" &&
+          (Get(st, "loss") != "cauchy" || Get(st, "backend") != "vulkan" || Get(st, "polish") != "off" ||
+           Get(st, "jacobian") != "analytic"))
+        return "pyramid levels: measured with either start and the other defaults only";
       // The polish is a skip decision of the linear start (forced by --polish); the Ceres
       // path always runs Ceres.
       if (Get(st, "polish") == "on" && Get(st, "linear_start") == "off") return "the Ceres path has no polish to skip";
@@ -113,6 +120,11 @@ Suite FitSuite() {
       f.loss = loss == "cauchy" ? fit::RobustLoss::kCauchy : loss == "huber" ? fit::RobustLoss::kHuber : fit::RobustLoss::kNone;
       f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
       f.polish = Get(c.settings, "polish") == "on";
+      if (Get(c.settings, "pyramid") != "auto") {
+        f.pyramid_widths.clear();
+        for (const std::string& w : {std::string("128"), std::string("256")})
+          if (Get(c.settings, "pyramid").find(w) != std::string::npos) f.pyramid_widths.push_back(std::stoi(w));
+      }
       if (Get(c.settings, "jacobian") == "numeric") {
         f.numeric_derivatives = true;
         f.pyramid_widths = {kWidth};  // bench_fit's baseline: one level, more iterations

@@ -186,6 +186,20 @@ Results ResultsFromJson(const nlohmann::json& j, const std::string& what) {
     r.machine.skycal_version = m.value("skycal_version", "");
     r.options = j.value("options", nlohmann::json::object());
     for (const auto& c : j.at("cases")) r.cases.push_back(CaseFromJson(c));
+    for (const auto& s : j.value("suites", nlohmann::json::array())) {
+      SuiteReport rep;
+      rep.name = s.at("name").get<std::string>();
+      rep.summary = s.value("summary", "");
+      rep.error_metric = s.value("error_metric", "");
+      rep.cases = s.value("cases", 0);
+      rep.front = s.value("pareto_front", std::vector<std::string>{});
+      rep.default_case = s.value("default_case", "");
+      rep.default_on_front = s.value("default_on_front", false);
+      rep.plots = s.value("plots", std::vector<std::string>{});
+      rep.wall_s = s.value("wall_s", 0.0);
+      r.suites.push_back(std::move(rep));
+    }
+    if (j.contains("stress")) r.stress = j["stress"];
   } catch (const nlohmann::json::exception& e) {
     throw Error(what + ": malformed results (" + e.what() + ")");
   } catch (const Error& e) {

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -74,7 +75,7 @@ struct Runner {
   std::vector<CaseResult> out;
   int k = 0;
   void operator()(const std::string& area, const std::string& input, const std::function<void(CaseResult&)>& body) {
-    out.push_back(RunCase("stress", {{"area", area}, {"input", input}}, {}, k++, -1, o, [&](CaseResult& c) {
+    auto result = RunCase("stress", {{"area", area}, {"input", input}}, {}, k++, -1, o, [&](CaseResult& c) {
       c.timed = false;
       const auto t0 = Clock::now();
       auto stamp = [&] { c.time = FromSamples({std::chrono::duration<double, std::milli>(Clock::now() - t0).count()}); };
@@ -85,7 +86,8 @@ struct Runner {
         throw;
       }
       stamp();
-    }));
+    });
+    if (result) out.push_back(std::move(*result));
   }
 };
 
@@ -399,7 +401,9 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
                                      {"bundled with x1e8", {plain, huge}}};
   int n = 0;
   for (const Input& in : inputs)
-    for (double headroom : {1e-6, 0.25, 1.0}) {
+    // 1 - 2^-12: the largest texel lands within half an FP16 ulp of 65504, the format's
+    // maximum (the pre-exposure's rounding must not carry it past, to infinity).
+    for (double headroom : {1e-6, 0.25, 1.0 - 1.0 / 4096.0, 1.0}) {
       run("export", in.name + " headroom " + Num(headroom), [&](CaseResult& c) {
         cli::ExportOptions eo;
         eo.presets = in.presets;
@@ -409,15 +413,25 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
         const nlohmann::json summary = cli::RunExportImpl(eo);
         if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the manifest");
         long long nonfinite = 0;
+        double largest = 0.0;
         for (const auto& p : summary.at("presets"))
           for (const char* t : {"rayleigh", "mie"}) {
             const ImageRGB im = ReadExrRGB(eo.out_dir + "/" + p.at("name").get<std::string>() + "/" + t + ".exr").image;
-            for (float v : im.pixels) nonfinite += !std::isfinite(v);
+            for (float v : im.pixels) {
+              nonfinite += !std::isfinite(v);
+              if (std::isfinite(v)) largest = std::max(largest, static_cast<double>(v));
+            }
           }
         if (nonfinite) NonFinite(c, std::to_string(nonfinite) + " half texels non-finite");
+        // The pre-exposure puts the largest texel at headroom x 65504: more is a rounding
+        // past the target (at headroom 1, one step more is infinity).
+        constexpr double kHalfMax = 65504.0;
+        if (largest > headroom * kHalfMax * (1.0 + 1.0 / 2048.0))
+          NonFinite(c, "largest half texel " + Num(largest) + " above the target " + Num(headroom * kHalfMax));
         c.extra = {{"pre_exposure", summary.value("pre_exposure", 0.0)},
                    {"half_underflow_texels", summary.value("half_underflow_texels", 0LL)},
-                   {"half_nonfinite_texels", nonfinite}};
+                   {"half_nonfinite_texels", nonfinite},
+                   {"largest_half_texel", largest}};
       });
     }
 }

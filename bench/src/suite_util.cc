@@ -13,13 +13,15 @@ std::string FormatG(double v, int digits) {
   return buf;
 }
 
-CaseResult RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
+std::optional<CaseResult> RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
                    const SuiteOptions& o, const std::function<void(CaseResult&)>& body) {
   CaseResult c;
   c.suite = suite;
   c.settings = settings;
   c.name = Label(settings);
   c.is_default = !defaults.empty() && settings == defaults;
+  if (o.Skips(c.name)) return std::nullopt;
+  o.Started(c);
   try {
     body(c);
   } catch (const Error& e) {
@@ -43,7 +45,8 @@ std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, cons
   const std::vector<Settings> points = grid.Expand();
   std::vector<CaseResult> out;
   for (size_t k = 0; k < points.size(); ++k)
-    out.push_back(RunCase(suite, points[k], grid.Defaults(), static_cast<int>(k), static_cast<int>(points.size()), o, body));
+    if (auto c = RunCase(suite, points[k], grid.Defaults(), static_cast<int>(k), static_cast<int>(points.size()), o, body))
+      out.push_back(std::move(*c));
   return out;
 }
 

@@ -1,6 +1,7 @@
 // What every suite does around one case (private to skycal_bench).
 #pragma once
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -10,8 +11,9 @@ namespace skycal::bench {
 
 // Runs `body` for the case at `settings` (index k of n) and returns its result: a
 // skycal::Error thrown by body becomes Outcome::kClearError with its message, any other
-// exception Outcome::kCrash. Logs one progress line and calls options.Done.
-CaseResult RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
+// exception Outcome::kCrash. Calls options.Started before and options.Done after, and logs
+// one progress line. Nothing (and nothing run) for a case in options.skip.
+std::optional<CaseResult> RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
                    const SuiteOptions& options, const std::function<void(CaseResult&)>& body);
 
 // Every case of `grid`, measured by `body`.

@@ -9,6 +9,7 @@ SuiteRegistry BuiltinSuites() {
   SuiteRegistry r;
   r.Add(RenderSuite());
   r.Add(FitSuite());
+  r.Add(FitDaySuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(ExportSuite());

@@ -40,8 +40,10 @@ void main() {
   int y = int(gl_WorkGroupID.y);
   int width = U.sizes.z;
   int height = U.sizes.w;
-  if (x >= width || y >= height) return;
 
+  // The parameters are loaded before the bounds check: after a divergent `return`,
+  // lavapipe turns uniform-block loads into per-lane loads (measured on the cloud shader,
+  // clouds_latlong.comp); loaded while every lane is active they stay scalar.
   SkyParams p;
   p.sun_dir = U.sun_dir.xyz;
   p.haziness_g = U.model.x;
@@ -56,6 +58,7 @@ void main() {
   p.lut_one_minus_cos_theta_max = U.lut_grid.x;
   p.lut_n_theta = U.sizes.y;
   p.lut_n_gamma = U.sizes.x;
+  if (x >= width || y >= height) return;
 
   vec2 lat = trig[y];
   vec2 lon = trig[height + x];

@@ -5,6 +5,7 @@
 #pragma once
 #include <filesystem>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,11 +20,19 @@ struct SuiteOptions {
   std::filesystem::path scratch;  // a directory the suite may write temporaries into
   std::function<void(const std::string&)> log;        // progress lines (may be empty)
   std::function<void(const CaseResult&)> on_case;     // called as each case finishes (may be empty)
+  // Called as each case starts, with its suite, name, settings and is_default filled in
+  // (may be empty): an isolated run's journal (isolated_run.h) records what was running
+  // when a worker died.
+  std::function<void(const CaseResult&)> on_case_start;
+  // Case names not to run (measured, or crashed, by an earlier worker of the same run).
+  std::set<std::string> skip;
 
   bool IsValid(std::string* why) const;
   int Repeats(int suite_default) const { return repeat > 0 ? repeat : suite_default; }
   void Log(const std::string& line) const { if (log) log(line); }
   void Done(const CaseResult& c) const { if (on_case) on_case(c); }
+  void Started(const CaseResult& c) const { if (on_case_start) on_case_start(c); }
+  bool Skips(const std::string& name) const { return skip.count(name) > 0; }
 };
 
 struct Suite {
