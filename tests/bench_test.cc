@@ -291,7 +291,7 @@ TEST(BenchVerb, BadInput) {
     cli::RunBenchImpl(o, BuiltinSuites());
     FAIL() << "unknown suite accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, probe, capture, export, stress, clouds)"),
+    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, probe, capture, export, stress, clouds)"),
               std::string::npos)
         << e.what();
   }

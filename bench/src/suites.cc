@@ -10,6 +10,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(RenderSuite());
   r.Add(FitSuite());
   r.Add(FitDaySuite());
+  r.Add(FitCieSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(ExportSuite());

@@ -9,6 +9,7 @@ namespace skycal::bench {
 Suite RenderSuite();   // render_suite.cc
 Suite FitSuite();      // fit_suite.cc
 Suite FitDaySuite();   // fit_day_suite.cc
+Suite FitCieSuite();   // fit_cie_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
 Suite ExportSuite();   // export_suite.cc
