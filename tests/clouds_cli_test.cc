@@ -110,3 +110,51 @@ TEST(CloudsCli, BadCloudInputNamesTheFieldAndWritesNothing) {
 
 }  // namespace
 }  // namespace skycal
+
+namespace skycal {
+namespace {
+
+// `skycal weather`: the same settings make the same texels (a map is reproducible from its
+// command line), the means asked for are met to the remap's stated 1e-4, and bad options
+// name the option and write nothing.
+TEST(WeatherVerb, SameSettingsSameMapAndTheMeansAskedFor) {
+  ScratchDir dir("weather-verb");
+  const std::string args = "weather --seed 11 --size 64 --mean-coverage 0.32 --coverage-contrast 3 --coverage-cells 8 "
+                           "--mean-precipitation 0.05 --mean-type 0.3 --json --out ";
+  const testing::ProcessResult a = Skycal(args + (dir / "a.exr")), b = Skycal(args + (dir / "b.exr"));
+  ASSERT_EQ(a.rc, 0) << a.err;
+  ASSERT_EQ(b.rc, 0) << b.err;
+  const ExrRGB ma = ReadExrRGB(dir / "a.exr"), mb = ReadExrRGB(dir / "b.exr");
+  ASSERT_EQ(ma.image.width, 64);
+  ASSERT_EQ(ma.image.height, 64);
+  EXPECT_EQ(ma.image.pixels, mb.image.pixels);
+  double mean[3] = {0, 0, 0};
+  const size_t n = ma.image.pixels.size() / 3;
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < 3; ++c) mean[c] += ma.image.pixels[i * 3 + c] / static_cast<double>(n);
+  EXPECT_NEAR(mean[0], 0.32, 1e-4);
+  EXPECT_NEAR(mean[1], 0.05, 1e-4);
+  EXPECT_NEAR(mean[2], 0.3, 1e-4);
+  const nlohmann::json j = nlohmann::json::parse(a.out);
+  EXPECT_NEAR(j["channels"]["coverage"]["mean"].get<double>(), mean[0], 1e-6);
+  // Another seed, another map.
+  ASSERT_EQ(Skycal("weather --seed 12 --size 64 --out " + (dir / "c.exr")).rc, 0);
+  EXPECT_NE(ReadExrRGB(dir / "c.exr").image.pixels, ma.image.pixels);
+}
+
+TEST(WeatherVerb, BadOptionsNameTheOptionAndWriteNothing) {
+  ScratchDir dir("weather-verb-bad");
+  const std::string out = dir / "w.exr";
+  for (const std::string& bad : {"--size 100", "--size 8 --coverage-cells 8", "--mean-coverage 1.5", "--octaves 0",
+                                 "--extent -5", "--coverage-contrast nan"}) {
+    const testing::ProcessResult r = Skycal("weather " + bad + " --out " + out);
+    EXPECT_NE(r.rc, 0) << bad;
+    const std::string option = bad.substr(0, bad.find(' ', 2));
+    EXPECT_NE(r.err.find(bad.find("coverage-cells") != std::string::npos ? "--size" : option), std::string::npos)
+        << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << bad;
+  }
+}
+
+}  // namespace
+}  // namespace skycal
