@@ -93,9 +93,13 @@ Suite CloudsSuite() {
                  {"steps", o.quick ? std::vector<std::string>{"32/64", "64/128"}
                                    : std::vector<std::string>{"16/32", "32/64", "64/128", "96/192", "128/256", "256/512"},
                   "64/128"},
-                 {"light_samples", o.quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"}};
+                 {"light_samples", o.quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"},
+                 // Metres between the 6 light samples (the cone's length / 6): the game's 120 m covers
+                 // 720 m toward the sun, less than a cumulus is deep at low sun.
+                 {"light_step", o.quick ? std::vector<std::string>{"120"} : std::vector<std::string>{"120", "240", "400"}, "120"}};
     grid.skip = [](const Settings& c) -> std::string {
-      const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") + (Get(c, "light_samples") != "6");
+      const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") +
+                              (Get(c, "light_samples") != "6") + (Get(c, "light_step") != "120");
       if (off_default > 1) return "one setting away from the game's at a time";
       const bool game_or_naive = off_default == 0 || (Get(c, "march") == "naive");
       if (Get(c, "backend") == "cpu" && !game_or_naive) return "the CPU reference is timed at the game's and the naive settings";
@@ -144,6 +148,8 @@ Suite CloudsSuite() {
       clouds::MarchOptions m = MarchFor(Get(c.settings, "march"));
       SetSteps(m, Get(c.settings, "steps"));
       SetLightSamples(m, std::stoi(Get(c.settings, "light_samples")));
+      if (Get(c.settings, "light_step") != "120")  // the cone's length scaled, the sample count kept
+        m.light_step_m = std::stod(Get(c.settings, "light_step")) * clouds::MarchOptions().light_samples / m.light_samples;
       clouds::CloudRenderRequest er = error_req, tr = time_req;
       er.march = tr.march = m;
       const clouds::CloudImage at_error_size = r.Render(scene.View(), er);
