@@ -1,5 +1,7 @@
 #include "bench_verb.h"
 
+#include "report_verb.h"
+
 #include <unistd.h>
 
 #include <chrono>
@@ -186,6 +188,7 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   }
   WriteJsonFileAtomically(out / "results.json", bench::ToJson(results));
   WriteFileAtomically(out / "results.csv", bench::ToCsv(results));
+  if (o.report) WriteVerbReport("bench", out.staging().string());
   out.Commit();
   Log("bench", "wrote " + o.out + "/results.json, results.csv" + (table.empty() ? "" : ", stress.md") + " and the plots");
 
@@ -232,8 +235,11 @@ BenchOptions ParseBenchArgs(int argc, char** argv) {
                                   "when it is an earlier `skycal bench` output");
   cl.List("--compare", &o.compare, "OLD.json NEW.json", "compare two results.json instead of running");
   cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
+  bool no_report = false;
+  cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
   cl.Parse(argc, argv);
+  o.report = !no_report;
   return o;
 }
 

@@ -19,6 +19,7 @@ struct BenchOptions {
   std::string out;                   // output directory, staged (cli/staged_directory.h)
   std::vector<std::string> compare;  // OLD.json NEW.json: compare instead of running
   double noise_floor = 0.10;         // --compare: relative noise below which a ratio is not flagged
+  bool report = true;                // write DIR/report.html (skycal report)
 
   bool IsValid(std::string* why) const;
 };

@@ -1,0 +1,145 @@
+// The HTML report's pieces and its bad input: escaping (HTML injection from a name read from
+// a file), base64 (RFC 4648's vectors), and missing or malformed inputs (clear errors naming
+// the file and the field, exit 1, nothing written). The page itself in a browser:
+// tests/report_browser_test.cc.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "run_binary.h"
+#include "skycal/core/error.h"
+#include "skycal/report/html.h"
+#include "skycal/report/report.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ScratchDir;
+using testing::WriteText;
+
+TEST(ReportHtml, EscapesMarkupAndBadUtf8) {
+  EXPECT_EQ(report::EscapeHtml("<img src=x onerror=\"a('b')\">&"),
+            "&lt;img src=x onerror=&quot;a(&#39;b&#39;)&quot;&gt;&amp;");
+  EXPECT_EQ(report::EscapeHtml("K\xC3\xB6ln \xE2\x80\x93 ok"), "K\xC3\xB6ln \xE2\x80\x93 ok");  // valid UTF-8 kept
+  EXPECT_EQ(report::EscapeHtml("a\xFF" "b"), "a\xEF\xBF\xBD" "b");                               // invalid byte
+  EXPECT_EQ(report::EscapeHtml("\xC0\xAF"), "\xEF\xBF\xBD\xEF\xBF\xBD");                          // overlong '/'
+  EXPECT_EQ(report::EscapeHtml("\xED\xA0\x80"), "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");          // a surrogate
+}
+
+TEST(ReportHtml, Base64MatchesRfc4648AndRoundTrips) {
+  const std::pair<const char*, const char*> vectors[] = {{"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},
+                                                         {"foo", "Zm9v"},  {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="},
+                                                         {"foobar", "Zm9vYmFy"}};
+  for (const auto& [plain, coded] : vectors) {
+    EXPECT_EQ(report::Base64Encode(plain), coded);
+    EXPECT_EQ(report::Base64Decode(coded), plain);
+  }
+  std::string bytes;
+  for (int i = 0; i < 256; ++i) bytes += static_cast<char>(i);
+  EXPECT_EQ(report::Base64Decode(report::Base64Encode(bytes)), bytes);
+  EXPECT_THROW(report::Base64Decode("Zm9v*mFy"), Error);
+  EXPECT_THROW(report::Base64Decode("Z"), Error);
+  EXPECT_EQ(report::DataUri("image/png", "fo"), "data:image/png;base64,Zm8=");
+}
+
+// A minimal fit directory as `skycal fit` writes it (no images: the report says so).
+void WriteMinimalFit(const fs::path& dir, const nlohmann::json& reference) {
+  fs::create_directories(dir);
+  const nlohmann::json fit = {{"haziness_g", 0.8},
+                              {"references", nlohmann::json::array({reference})},
+                              {"levels", nlohmann::json::array()},
+                              {"decisions", nlohmann::json::array()}};
+  WriteText((dir / "fit.json").string(), fit.dump());
+}
+
+std::string ErrorOf(const std::string& dir, const report::ReportOptions& o = {}) {
+  try {
+    report::WriteReport(dir, o);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ReportInput, BadInputNamesFileAndFieldAndWritesNothing) {
+  ScratchDir s("report_input");
+  // Nothing to report on.
+  EXPECT_NE(ErrorOf(s / "absent").find("not a directory"), std::string::npos);
+  fs::create_directories(s / "empty");
+  EXPECT_NE(ErrorOf(s / "empty").find("no fit.json (skycal fit), manifest.json"), std::string::npos);
+  // Not JSON.
+  fs::create_directories(s / "corrupt");
+  WriteText(s / "corrupt/fit.json", "{\"haziness_g\": 0.8, \"references\": [");
+  std::string e = ErrorOf(s / "corrupt");
+  EXPECT_NE(e.find("corrupt/fit.json"), std::string::npos) << e;
+  // A field missing, and one of the wrong type.
+  WriteMinimalFit(s.path() / "missing", {{"name", "noon"}, {"log_rmse", 0.01}});
+  e = ErrorOf(s / "missing");
+  EXPECT_NE(e.find("missing/fit.json: field 'references[0].rel_rmse': missing"), std::string::npos) << e;
+  WriteMinimalFit(s.path() / "typed", {{"name", "noon"}, {"rel_rmse", "2%"}, {"log_rmse", 0.01}});
+  e = ErrorOf(s / "typed");
+  EXPECT_NE(e.find("typed/fit.json: field 'references[0].rel_rmse': expected a number, found string"), std::string::npos) << e;
+  // An image fit.json lists but that is not there.
+  WriteMinimalFit(s.path() / "noimage", {{"name", "noon"}, {"rel_rmse", 0.01}, {"log_rmse", 0.01},
+                                         {"images", {{"reference", "fit/noon.reference.png"}, {"fit", "x"}, {"error", "y"}}}});
+  e = ErrorOf(s / "noimage");
+  EXPECT_NE(e.find("field 'references[0].images.reference': the image"), std::string::npos) << e;
+  // A PNG that is not one.
+  WriteMinimalFit(s.path() / "badpng", {{"name", "noon"}, {"rel_rmse", 0.01}, {"log_rmse", 0.01}});
+  fs::create_directories(s.path() / "badpng/fit");
+  for (const char* k : {"reference", "fit", "error"}) WriteText(s / ("badpng/fit/noon." + std::string(k) + ".png"), "GIF89a");
+  e = ErrorOf(s / "badpng");
+  EXPECT_NE(e.find("noon.reference.png: not a PNG file"), std::string::npos) << e;
+  for (const char* d : {"corrupt", "missing", "typed", "noimage", "badpng"}) {
+    EXPECT_FALSE(fs::exists(s.path() / d / "report.html")) << d;
+    for (const auto& f : fs::directory_iterator(s.path() / d)) {
+      EXPECT_EQ(f.path().filename().string().find(".tmp-"), std::string::npos) << f.path();  // no temporary left
+    }
+  }
+  // The output may not replace an input.
+  WriteMinimalFit(s.path() / "ok", {{"name", "noon"}, {"rel_rmse", 0.01}, {"log_rmse", 0.01}});
+  report::ReportOptions over;
+  over.out_path = s / "ok/fit.json";
+  e = ErrorOf(s / "ok", over);
+  EXPECT_NE(e.find("fit.json"), std::string::npos) << e;
+  EXPECT_EQ(nlohmann::json::parse(testing::Slurp(s / "ok/fit.json"))["haziness_g"], 0.8);  // untouched
+  // The control: the same directory with a valid output path works.
+  const report::ReportSummary ok = report::WriteReport(s / "ok", {});
+  EXPECT_EQ(ok.fits, 1);
+  EXPECT_TRUE(fs::exists(s.path() / "ok/report.html"));
+}
+
+TEST(ReportInput, NamesFromFilesAreEscaped) {
+  ScratchDir s("report_escape");
+  const std::string hostile = "<img src=x onerror=alert(1)>\"'&";
+  WriteMinimalFit(s.path() / "fit", {{"name", hostile}, {"rel_rmse", 0.01}, {"log_rmse", 0.01}});
+  report::WriteReport(s / "fit", {});
+  const std::string html = testing::Slurp(s / "fit/report.html");
+  EXPECT_EQ(html.find(hostile), std::string::npos);
+  EXPECT_EQ(html.find("<img src=x"), std::string::npos);
+  EXPECT_NE(html.find("&lt;img src=x onerror=alert(1)&gt;&quot;&#39;&amp;"), std::string::npos);
+}
+
+TEST(ReportCli, ExitCodeAndMessageThroughTheBinary) {
+  ScratchDir s("report_cli");
+  fs::create_directories(s / "bad");
+  WriteText(s / "bad/fit.json", "[1, 2]");
+  const auto r = testing::RunSkycal(SKYCAL_BINARY, "report " + (s / "bad"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("bad/fit.json: expected a JSON object"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(s / "bad/report.html"));
+  const auto usage = testing::RunSkycal(SKYCAL_BINARY, "report");
+  EXPECT_EQ(usage.rc, 1);
+  EXPECT_NE(usage.err.find("expected the directory to report on"), std::string::npos) << usage.err;
+  const auto depth = testing::RunSkycal(SKYCAL_BINARY, "report " + (s / "bad") + " --depth 99");
+  EXPECT_EQ(depth.rc, 1);
+  EXPECT_NE(depth.err.find("--depth"), std::string::npos) << depth.err;
+}
+
+}  // namespace
+}  // namespace skycal
