@@ -180,7 +180,7 @@ Promise.all([...document.images].map(i => i.decode().catch(() => null))).then(()
 }  // namespace
 
 std::optional<PageReport> LoadPageInChromium(const std::string& html_path, const std::string& profile_dir,
-                                             std::string* why) {
+                                             std::string* why, double scale) {
   const std::string binary = FindChromium();
   if (binary.empty()) {
     *why = "chromium is not installed (Debian package `chromium`; scripts/setup.sh installs it)";
@@ -213,14 +213,13 @@ std::optional<PageReport> LoadPageInChromium(const std::string& html_path, const
   for (const auto& i : page["images"]) {
     rep.images.push_back({i["cls"], i["alt"], i["nw"], i["nh"], i["x"], i["y"], i["w"], i["h"]});
   }
-  b.Call("Emulation.setDeviceMetricsOverride",
-         {{"width", rep.page_width}, {"height", rep.page_height}, {"deviceScaleFactor", 1}, {"mobile", false}}, session);
   const nlohmann::json shot = b.Call(
       "Page.captureScreenshot",
       {{"format", "png"},
        {"captureBeyondViewport", true},
-       {"clip", {{"x", 0}, {"y", 0}, {"width", rep.page_width}, {"height", rep.page_height}, {"scale", 1}}}},
+       {"clip", {{"x", 0}, {"y", 0}, {"width", rep.page_width}, {"height", rep.page_height}, {"scale", scale}}}},
       session, 120.0);
+  rep.screenshot_scale = scale;
   rep.screenshot_png = report::Base64Decode(shot["data"].get<std::string>());
   // Errors: console.error / console.assert, uncaught exceptions, log entries of level error
   // (failed loads, CSP and parser complaints).
@@ -241,6 +240,11 @@ std::optional<PageReport> LoadPageInChromium(const std::string& html_path, const
     // The pipe may close before the reply: the destructor reaps (or kills) the process.
   }
   return rep;
+}
+
+double InkFraction(const PageReport& page, const PageImage& im) {
+  const double s = page.screenshot_scale;
+  return InkFraction(page.screenshot_png, im.x * s, im.y * s, im.width * s, im.height * s);
 }
 
 double InkFraction(const std::string& png, double x, double y, double width, double height) {

@@ -67,12 +67,12 @@ TEST(ReportBrowser, DayExportAndBenchRenderInChromium) {
   EXPECT_GE(summary["plots"].get<int>(), 4 + 3 + 1);  // the day's 4, a convergence curve per fit, the keyframes
 
   std::string why;
-  const auto page = testing::LoadPageInChromium((kOut / "report.html").string(), (kOut / "chromium-profile").string(), &why);
+  const auto page = testing::LoadPageInChromium((kOut / "report.html").string(), (kOut / "chromium-profile").string(), &why, 0.5);
   if (!page) GTEST_SKIP() << why;
   const fs::path shot = kOut / "report_screenshot.png";
   WriteBytes(shot, page->screenshot_png);
   std::cout << "[report] screenshot: " << shot.string() << " (" << page->page_width << "x" << page->page_height
-            << " CSS px, " << page->browser << ")\n";
+            << " CSS px at scale 0.5, " << page->browser << ")\n";
   EXPECT_TRUE(page->errors.empty()) << page->errors.front();
   // Every <img> is one the report embedded (none came from the hostile name) and decodes.
   EXPECT_EQ(static_cast<int>(page->images.size()), summary["images"].get<int>() + summary["plots"].get<int>());
@@ -80,7 +80,7 @@ TEST(ReportBrowser, DayExportAndBenchRenderInChromium) {
   for (const testing::PageImage& im : page->images) {
     EXPECT_GT(im.natural_width, 0) << im.alt;
     EXPECT_GT(im.natural_height, 0) << im.alt;
-    const double ink = testing::InkFraction(page->screenshot_png, im.x, im.y, im.width, im.height);
+    const double ink = testing::InkFraction(*page, im);
     // A plot: axes, grid, labels and lines are a few % of its area (measured 3-12%); a sky image
     // is mostly non-uniform. Blank is 0.
     EXPECT_GT(ink, 0.01) << im.cls << " '" << im.alt << "' at " << im.x << "," << im.y << " is blank on the screenshot";
@@ -110,9 +110,7 @@ TEST(ReportBrowser, ControlPageFailsEveryCheck) {
   EXPECT_FALSE(page->errors.empty());
   EXPECT_EQ(page->images[0].natural_width, 0);  // the truncated PNG does not decode
   EXPECT_GT(page->images[1].natural_width, 0);
-  EXPECT_LT(testing::InkFraction(page->screenshot_png, page->images[1].x, page->images[1].y, page->images[1].width,
-                                 page->images[1].height),
-            0.001);
+  EXPECT_LT(testing::InkFraction(*page, page->images[1]), 0.001);
 }
 
 }  // namespace

@@ -84,7 +84,7 @@ void Draw(const Chart& chart, const std::string& path) {
   pls.adv(0);
   const size_t key_lines = c.series.size() + c.notes.size();
   const double bottom = std::min(0.55, 0.17 + 0.05 * static_cast<double>(key_lines));
-  pls.vpor(0.12, 0.97, bottom, 0.90);
+  pls.vpor(0.14, 0.97, bottom, 0.90);
   pls.wind(x0 - mx, x1 + mx, y0 - my, y1 + my);
   pls.col0(8);
   pls.box("g", 0.0, 0, (std::string("g") + (c.log_y ? "l" : "")).c_str(), 0.0, 0);
@@ -94,7 +94,7 @@ void Draw(const Chart& chart, const std::string& path) {
   pls.mtex("t", 1.5, 0.5, 0.5, PlText(c.title).c_str());
   pls.schr(0.0, 0.85);
   pls.mtex("b", 3.0, 0.5, 0.5, PlText(c.x_label).c_str());
-  pls.mtex("l", 5.5, 0.5, 0.5, PlText(c.y_label + (c.log_y ? ", log scale" : "")).c_str());
+  pls.mtex("l", 7.0, 0.5, 0.5, PlText(c.y_label + (c.log_y ? ", log scale" : "")).c_str());
   double line_at = 5.0;
   for (size_t k = 0; k < c.series.size(); ++k) {
     const ChartSeries& s = c.series[k];

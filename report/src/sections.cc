@@ -105,9 +105,8 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
     h += PlotImg(c, counts);
   }
   {
-    Chart c{"per-frame error against the reference (fitted sky pixels)", x_label, "error (%)", {}, false, {}};
-    c.series.push_back(series("rel RMSE", [&](const Frame& f) { return 100.0 * f.ref->rel_rmse; }));
-    c.series.push_back(series("log RMSE x 100", [&](const Frame& f) { return 100.0 * f.ref->log_rmse; }));
+    Chart c{"per-frame error against the reference (fitted sky pixels)", x_label, "rel RMSE (%)", {}, false, {}};
+    c.series.push_back(series("rel RMSE (solid-angle weighted, 3 channels)", [&](const Frame& f) { return 100.0 * f.ref->rel_rmse; }));
     h += PlotImg(c, counts);
   }
   bool clouds = false;
