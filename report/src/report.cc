@@ -22,9 +22,9 @@ h1 { font-size: 22px; } h2 { font-size: 19px; border-bottom: 1px solid #ccc; mar
 h3 { font-size: 16px; margin-top: 22px; } h4 { font-size: 14px; }
 table { border-collapse: collapse; margin: 8px 0; } td, th { border: 1px solid #ddd; padding: 3px 7px; vertical-align: top; }
 th { background: #f2f2f2; text-align: left; } table.kv td:first-child { color: #555; white-space: nowrap; }
-.triptych { display: flex; flex-wrap: wrap; gap: 10px; }
+.triptych { display: flex; gap: 10px; max-width: 1560px; } .triptych figure { flex: 1 1 0; min-width: 0; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 512px; }
-img.image { display: block; max-width: 500px; height: auto; border: 1px solid #999; }
+img.image { display: block; width: 100%; max-width: 512px; height: auto; border: 1px solid #999; }
 img.plot { display: block; width: 720px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 .plots { display: flex; flex-wrap: wrap; gap: 12px; }
 .bar { display: inline-block; width: 90px; height: 10px; vertical-align: middle;
