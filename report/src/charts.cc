@@ -62,6 +62,7 @@ void Draw(const Chart& chart, const std::string& path) {
     }
   }
   if (!std::isfinite(x0)) throw Error("chart '" + c.title + "': no finite point to draw");
+  if (std::isfinite(c.x_min) && std::isfinite(c.x_max)) x0 = std::min(x0, c.x_min), x1 = std::max(x1, c.x_max);
   if (x1 - x0 < 1e-12) x0 -= 0.5, x1 += 0.5;
   if (y1 - y0 < 1e-12 * std::max(1.0, std::abs(y0))) {
     const double pad = c.log_y ? 0.5 : std::max(std::abs(y0) * 0.1, 1e-9);

@@ -3,6 +3,7 @@
 // report embeds as an <img> data URI (text becomes glyph paths, so the page needs no fonts,
 // and each SVG keeps its own ids).
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct Chart {
   std::vector<ChartSeries> series;
   bool log_y = false;            // log10 axis (non-positive values left out)
   std::vector<std::string> notes;  // small lines under the plot
+  double x_min = NAN, x_max = NAN;  // finite: the x range always shown (plots of one day share it)
 };
 
 // Throws skycal::Error when PLplot cannot write (the message names the driver package), or

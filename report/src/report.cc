@@ -25,7 +25,7 @@ th { background: #f2f2f2; text-align: left; } table.kv td:first-child { color: #
 .triptych { display: flex; gap: 10px; max-width: 1560px; } .triptych figure { flex: 1 1 0; min-width: 0; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 512px; }
 img.image { display: block; width: 100%; max-width: 512px; height: auto; border: 1px solid #999; }
-img.plot { display: block; width: 720px; max-width: 100%; height: auto; border: 1px solid #ddd; }
+img.plot { display: block; width: 660px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 .plots { display: flex; flex-wrap: wrap; gap: 12px; }
 .bar { display: inline-block; width: 90px; height: 10px; vertical-align: middle;
        background: linear-gradient(to right, rgb(30,90,190), #fff, rgb(200,40,30)); border: 1px solid #999; }

@@ -2,6 +2,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -68,6 +69,7 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
   std::vector<double> x;
   for (size_t i = 0; i < frames.size(); ++i) x.push_back(timed ? *frames[i].time_h : static_cast<double>(i + 1));
   const std::string x_label = timed ? "time of day (h)" : "frame (in the order below; no time of day in fit.json)";
+  const double x_lo = *std::min_element(x.begin(), x.end()), x_hi = *std::max_element(x.begin(), x.end());
   auto series = [&](const std::string& label, auto value, bool line = true) {
     ChartSeries s{label, {}, {}, line && timed};
     for (size_t i = 0; i < frames.size(); ++i) {
@@ -92,21 +94,29 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
     } else {
       c.notes.push_back("no frame has a gray-probe sun (fit --probe ... --absolute): the dips of a sun behind cloud show there");
     }
+    c.x_min = x_lo;
+    c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
   {
     Chart c{"haziness g (Cornette-Shanks asymmetry of the Mie term)", x_label, "g (1)", {}, false, {}};
     c.series.push_back(series("haziness_g of the frame's fit", [&](const Frame& f) { return f.fit->haziness_g; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
   {
     Chart c{"exposure: image units per model unit", x_label, "exposure (1)", {}, true, {}};
     c.series.push_back(series("fitted exposure (1 with --absolute)", [&](const Frame& f) { return f.ref->exposure; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
   {
     Chart c{"per-frame error against the reference (fitted sky pixels)", x_label, "rel RMSE (%)", {}, false, {}};
     c.series.push_back(series("rel RMSE (solid-angle weighted, 3 channels)", [&](const Frame& f) { return 100.0 * f.ref->rel_rmse; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
   bool clouds = false;
@@ -115,6 +125,8 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
     Chart c{"cloud cover masked out of the fit", x_label, "cloudy sky pixels (%)", {}, false, {}};
     c.series.push_back(series("fit --cloud-mask: sky pixels with cloud probability >= 0.5",
                               [&](const Frame& f) { return 100.0 * opt(f.ref->cloudy_fraction); }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
   h += "</div>\n<p class=\"note\">Cloud lighting over the day: no fit here carries cloud-lighting parameters yet (the "
