@@ -64,6 +64,9 @@ class Browser {
         ::dup2(log, 2);
       }
       for (int fd = 5; fd < 1024; ++fd) ::close(fd);
+      // Chromium is not ours to sanitize: the sanitizer build's preloaded runtime and options
+      // (scripts/sanitizers/options.sh) stay with the test process.
+      for (const char* v : {"LD_PRELOAD", "ASAN_OPTIONS", "LSAN_OPTIONS", "UBSAN_OPTIONS"}) ::unsetenv(v);
       std::vector<std::string> args = {binary, "--headless", "--disable-gpu", "--remote-debugging-pipe",
                                        "--no-first-run", "--no-default-browser-check", "--hide-scrollbars",
                                        "--user-data-dir=" + profile_dir, "--enable-logging=stderr", "about:blank"};
