@@ -141,5 +141,40 @@ TEST(ReportCli, ExitCodeAndMessageThroughTheBinary) {
   EXPECT_NE(depth.err.find("--depth"), std::string::npos) << depth.err;
 }
 
+// What the report's convergence curve is drawn from: fit.json's costs per Ceres iteration
+// (Ceres' own initial and final cost at the ends, never rising: an unsuccessful step keeps
+// the cost) and per Gauss-Newton step of the linear start (one per step it counts).
+TEST(ReportFitJson, CarriesTheConvergenceCurve) {
+  ScratchDir s("report_fitjson");
+  auto r = testing::RunSkycal(SKYCAL_BINARY, "render --size 256x128 --sun-elevation 30 --sun-azimuth 10 --backend cpu --out " +
+                                                 (s / "sky.exr"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  r = testing::RunSkycal(SKYCAL_BINARY, "fit --quiet --polish --backend cpu --no-report --reference " + (s / "sky.exr") +
+                                            " --out " + (s / "fit"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_FALSE(fs::exists(s.path() / "fit/report.html"));  // --no-report
+  const nlohmann::json j = nlohmann::json::parse(testing::Slurp(s / "fit/fit.json"));
+  ASSERT_FALSE(j["levels"].empty());
+  for (const auto& l : j["levels"]) {
+    const std::vector<double> c = l["cost_per_iteration"];
+    ASSERT_EQ(c.size(), l["iterations"].get<size_t>() + 1);
+    EXPECT_DOUBLE_EQ(c.front(), l["initial_cost"].get<double>());
+    EXPECT_DOUBLE_EQ(c.back(), l["final_cost"].get<double>());
+    for (size_t i = 1; i < c.size(); ++i) EXPECT_LE(c[i], c[i - 1]) << "iteration " << i;
+  }
+  const auto& steps = j["linear_start"]["cost_per_step"];
+  ASSERT_EQ(steps.size(), j["linear_start"]["gauss_newton_steps"].get<size_t>());
+  for (const auto& st : steps) {
+    EXPECT_GT(st["cost"].get<double>(), 0.0);
+    EXPECT_TRUE(st["width"] == 128 || st["width"] == 256) << st.dump();
+  }
+  const auto& ref = j["references"][0];
+  EXPECT_EQ(ref["images"]["error"], "fit/sky.error.png");
+  for (const char* k : {"reference", "fit", "error"}) EXPECT_TRUE(fs::exists(s.path() / "fit" / ref["images"][k].get<std::string>()));
+  // The sun at the ground: the bundled preset's 128 klux x transmittance, well below it at 30 deg.
+  EXPECT_GT(ref["sun_illuminance_at_ground_lux"].get<double>(), 1e4);
+  EXPECT_LT(ref["sun_illuminance_at_ground_lux"].get<double>(), 1.28e5);
+}
+
 }  // namespace
 }  // namespace skycal
