@@ -11,6 +11,7 @@
 
 #include "run_binary.h"
 #include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/report/html.h"
 #include "skycal/report/report.h"
 #include "test_util.h"
@@ -174,6 +175,42 @@ TEST(ReportFitJson, CarriesTheConvergenceCurve) {
   // The sun at the ground: the bundled preset's 128 klux x transmittance, well below it at 30 deg.
   EXPECT_GT(ref["sun_illuminance_at_ground_lux"].get<double>(), 1e4);
   EXPECT_LT(ref["sun_illuminance_at_ground_lux"].get<double>(), 1.28e5);
+}
+
+// fit --cloud-mask on a clear render (nothing is cloud) and on the same sky with a grey
+// "cloud" painted over 80x20 pixels above the horizon (the mask must take it out).
+TEST(ReportFitJson, CloudMaskLeavesOutThePaintedCloudOnly) {
+  ScratchDir s("report_cloudmask");
+  auto r = testing::RunSkycal(SKYCAL_BINARY, "render --size 256x128 --sun-elevation 35 --sun-azimuth 60 --backend cpu --out " +
+                                                 (s / "clear.exr"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  ExrRGB sky = ReadExrRGB(s / "clear.exr");
+  const int w = sky.image.width;
+  const int x0 = 150, y0 = 20, pw = 80, ph = 20;  // sun at azimuth 60: column ~85, well away
+  for (int y = y0; y < y0 + ph; ++y) {
+    for (int x = x0; x < x0 + pw; ++x) {
+      float* p = &sky.image.pixels[3 * (static_cast<size_t>(y) * w + x)];
+      const float grey = 0.9f * (p[0] + p[1] + p[2]);  // white-grey, a little brighter than the sky
+      p[0] = p[1] = p[2] = grey;
+    }
+  }
+  WriteExrRGB(s / "cloudy.exr", sky.image, sky.attributes);
+  long long cloudy[2] = {0, 0};
+  double fraction[2] = {0, 0};
+  int k = 0;
+  for (const char* name : {"clear", "cloudy"}) {
+    r = testing::RunSkycal(SKYCAL_BINARY, std::string("fit --quiet --no-report --backend cpu --cloud-mask --reference ") +
+                                              (s / (std::string(name) + ".exr")) + " --out " + (s / (std::string("fit_") + name)));
+    ASSERT_EQ(r.rc, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(testing::Slurp(s / (std::string("fit_") + name + "/fit.json")));
+    cloudy[k] = j["references"][0]["cloud_mask"]["cloudy_pixels"];
+    fraction[k] = j["references"][0]["cloud_mask"]["fraction"];
+    EXPECT_EQ(j["references"][0]["pixels"]["user_masked"].get<long long>(), cloudy[k]);
+    ++k;
+  }
+  EXPECT_LT(fraction[0], 0.01) << "a clear render of the preset the mask expects has no cloud";
+  EXPECT_GE(cloudy[1], cloudy[0] + static_cast<long long>(0.9 * pw * ph));
+  EXPECT_LE(cloudy[1], cloudy[0] + static_cast<long long>(1.2 * pw * ph));
 }
 
 }  // namespace
