@@ -26,7 +26,7 @@ nlohmann::json RunReportImpl(const ReportVerbOptions& o) {
                     std::to_string(s.benches) + " bench run(s), " + std::to_string(s.images) + " images, " +
                     std::to_string(s.plots) + " plots)");
   return {{"out", s.path},      {"bytes", s.bytes},     {"fits", s.fits},     {"frames", s.frames},
-          {"exports", s.exports}, {"benches", s.benches}, {"images", s.images}, {"plots", s.plots},
+          {"fit_sections", s.fit_sections}, {"exports", s.exports}, {"benches", s.benches}, {"images", s.images}, {"plots", s.plots},
           {"day", s.day}};
 }
 
@@ -47,6 +47,9 @@ ReportVerbOptions ParseReportArgs(int argc, char** argv) {
   cl.Text("--title", &o.report.title, "TEXT", "the page's title (default: skycal report: <DIR's name>)");
   cl.Integer("--depth", &o.report.max_depth, 0, 8, "expected an integer in [0, 8]", "N",
              "directory levels below DIR searched for outputs (default 3)");
+  cl.Integer("--max-fit-sections", &o.report.max_fit_sections, 1, 1e6, "expected an integer >= 1", "N",
+             "fits shown in full (images, tables), evenly spaced in time (default 24);\n"
+             "every fit is in the day's plots and table");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
   cl.Parse(argc, argv);
   return o;

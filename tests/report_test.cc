@@ -115,6 +115,33 @@ TEST(ReportInput, BadInputNamesFileAndFieldAndWritesNothing) {
   EXPECT_TRUE(fs::exists(s.path() / "ok/report.html"));
 }
 
+// A time-lapse day of many fits: each is in the day's table, a few in full.
+TEST(ReportInput, ALongDayShowsEvenlySpacedFitsInFull) {
+  ScratchDir s("report_longday");
+  for (int i = 0; i < 30; ++i) {
+    const fs::path dir = s.path() / ("frame_" + std::to_string(100 + i));
+    WriteMinimalFit(dir, {{"name", "f" + std::to_string(i)}, {"rel_rmse", 0.01 + 0.001 * i}, {"log_rmse", 0.01}});
+    nlohmann::json j = nlohmann::json::parse(testing::Slurp((dir / "fit.json").string()));
+    j["time_of_day_h"] = 23.5 - 0.75 * i;  // directory order is the reverse of time order
+    WriteText((dir / "fit.json").string(), j.dump());
+  }
+  report::ReportOptions o;
+  o.max_fit_sections = 5;
+  const report::ReportSummary sum = report::WriteReport(s.path().string(), o);
+  EXPECT_EQ(sum.fits, 30);
+  EXPECT_EQ(sum.frames, 30);
+  EXPECT_EQ(sum.fit_sections, 5);
+  EXPECT_TRUE(sum.day);
+  const std::string html = testing::Slurp(s / "report.html");
+  EXPECT_NE(html.find("5 of 30 fits are shown in full"), std::string::npos);
+  // Sorted by time: the first section is the earliest frame (the last directory), the last the latest.
+  EXPECT_LT(html.find("<h2>Fit: frame_129</h2>"), html.find("<h2>Fit: frame_100</h2>"));
+  EXPECT_EQ(html.find("<h2>Fit: frame_128</h2>"), std::string::npos);  // not one of the 5
+  report::ReportOptions bad;
+  bad.max_fit_sections = 0;
+  EXPECT_NE(ErrorOf(s.path().string(), bad).find("max_fit_sections"), std::string::npos);
+}
+
 TEST(ReportInput, NamesFromFilesAreEscaped) {
   ScratchDir s("report_escape");
   const std::string hostile = "<img src=x onerror=alert(1)>\"'&";

@@ -1,5 +1,6 @@
 #include "skycal/report/report.h"
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -72,6 +73,10 @@ std::vector<NamedPath> InputsOf(const Sources& s) {
 }  // namespace
 
 bool ReportOptions::IsValid(std::string* why) const {
+  if (max_fit_sections < 1) {
+    *why = "report: max_fit_sections must be >= 1";
+    return false;
+  }
   if (max_depth < 0 || max_depth > 8) {
     *why = "report: max_depth must be in [0, 8] (directory levels searched below DIR)";
     return false;
@@ -101,12 +106,21 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
     nav += "<li><a href=\"#day\">the day: time-of-day plots</a></li>\n";
     sum.day = true;
   }
-  for (size_t i = 0; i < s.fits.size(); ++i) {
+  // Fits shown in full: all, or max_fit_sections evenly spaced (first and last included).
+  const size_t n_fits = s.fits.size(), shown = std::min(n_fits, static_cast<size_t>(o.max_fit_sections));
+  std::vector<size_t> full;
+  for (size_t k = 0; k < shown; ++k) full.push_back(shown == 1 ? 0 : (k * (n_fits - 1) + (shown - 1) / 2) / (shown - 1));
+  if (shown < n_fits) {
+    body += "<p class=\"note\">" + std::to_string(shown) + " of " + std::to_string(n_fits) +
+            " fits are shown in full below, evenly spaced; every fit is in the day's plots and table.</p>\n";
+  }
+  for (size_t i : full) {
     const std::string anchor = "fit-" + std::to_string(i + 1);
     body += FitSection(s.fits[i], anchor, &counts);
     nav += "<li><a href=\"#" + anchor + "\">fit " + EscapeHtml(s.fits[i].label) + "</a></li>\n";
-    sum.frames += static_cast<int>(s.fits[i].references.size());
   }
+  for (const FitRecord& f : s.fits) sum.frames += static_cast<int>(f.references.size());
+  sum.fit_sections = static_cast<int>(full.size());
   for (size_t i = 0; i < s.exports.size(); ++i) {
     const std::string anchor = "export-" + std::to_string(i + 1);
     body += ExportSection(s.exports[i], anchor, &counts);

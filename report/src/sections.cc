@@ -19,6 +19,13 @@ std::string E(const std::string& s) { return EscapeHtml(s); }
 std::string Percent(double fraction) { return FormatNumber(100.0 * fraction, 3) + "%"; }
 
 std::string PlotImg(const Chart& chart, PageCounts* counts) {
+  bool any = false;
+  for (const ChartSeries& s : chart.series) {
+    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+      any = any || (std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!chart.log_y || s.y[i] > 0.0));
+    }
+  }
+  if (!any) return "<p class=\"note\">" + E(chart.title) + ": no value to plot in these files.</p>\n";
   ++counts->plots;
   return "<img class=\"plot\" alt=\"" + E(chart.title) + "\" src=\"" + DataUri("image/svg+xml", ChartSvg(chart)) + "\">\n";
 }

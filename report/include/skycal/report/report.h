@@ -13,12 +13,17 @@ struct ReportOptions {
   std::string out_path;   // the HTML file; empty: DIR/report.html
   std::string title;      // empty: "skycal report: <DIR's name>"
   int max_depth = 3;      // how many directory levels below DIR are searched
+  // A time-lapse day can hold thousands of fits: at most this many get their full section
+  // (images, tables, convergence), evenly spaced in time; every fit is in the day's plots
+  // and table.
+  int max_fit_sections = 24;
   bool IsValid(std::string* why) const;
 };
 
 struct ReportSummary {
   std::string path;          // the HTML written
   int fits = 0, frames = 0;  // fit directories, references over all of them
+  int fit_sections = 0;      // fits shown in full (<= max_fit_sections)
   int exports = 0, benches = 0;
   int images = 0, plots = 0;  // embedded PNGs, PLplot charts
   bool day = false;           // the time-of-day section was written (2 or more frames)
