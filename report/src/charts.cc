@@ -94,9 +94,9 @@ void Draw(const Chart& chart, const std::string& path) {
   pls.schr(0.0, 0.95);
   pls.mtex("t", 1.5, 0.5, 0.5, PlText(c.title).c_str());
   pls.schr(0.0, 0.85);
-  pls.mtex("b", 3.0, 0.5, 0.5, PlText(c.x_label).c_str());
+  pls.mtex("b", 3.6, 0.5, 0.5, PlText(c.x_label).c_str());
   pls.mtex("l", 7.0, 0.5, 0.5, PlText(c.y_label + (c.log_y ? ", log scale" : "")).c_str());
-  double line_at = 5.0;
+  double line_at = 5.8;
   for (size_t k = 0; k < c.series.size(); ++k) {
     const ChartSeries& s = c.series[k];
     pls.col0(2 + static_cast<int>(k % kPalette));

@@ -90,7 +90,7 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
   h += "<p>One frame per fitted reference" + std::string(timed ? ", by time of day" : ", in directory order") + ".</p>\n";
   h += "<div class=\"plots\">\n";
   {
-    Chart c{"sun illuminance at the ground", x_label, "illuminance (lux; model units unless --absolute)", {}, true, {}};
+    Chart c{"sun illuminance at the ground", x_label, "lux (model units unless --absolute)", {}, true, {}};
     c.series.push_back(series("the fitted preset's sun: sun_illuminance x tint x transmittance(sun zenith)",
                               [&](const Frame& f) { return opt(f.ref->sun_lux_model); }));
     bool probe = false;
