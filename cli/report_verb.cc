@@ -62,7 +62,12 @@ int RunReport(int argc, char** argv) {
 void WriteVerbReport(const std::string& verb, const std::string& staging_dir) {
   report::ReportOptions ro;
   ro.max_depth = 0;  // the verb's own output only
-  const report::ReportSummary s = report::WriteReport(staging_dir, ro);
+  report::ReportSummary s;
+  try {
+    s = report::WriteReport(staging_dir, ro);
+  } catch (const Error& e) {
+    throw Error(std::string("report.html: ") + e.what() + " (--no-report leaves the report out)");
+  }
   Log(verb, "report.html: " + std::to_string(s.images) + " images, " + std::to_string(s.plots) + " plots, " +
                 std::to_string(s.bytes / 1024) + " KiB");
 }
