@@ -1,5 +1,7 @@
 #include "bench_verb.h"
 
+#include "report_verb.h"
+
 #include <unistd.h>
 
 #include <chrono>
@@ -290,6 +292,7 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   const bool stress = WriteStressTable(&results, out);
   WriteJsonFileAtomically(out / "results.json", bench::ToJson(results));
   WriteFileAtomically(out / "results.csv", bench::ToCsv(results));
+  if (o.report) WriteVerbReport("bench", out.staging().string());
   out.Commit();
   Log("bench", "wrote " + o.out + "/results.json, results.csv" + (stress ? ", stress.md" : "") + " and the plots");
 
@@ -342,6 +345,8 @@ BenchOptions ParseBenchArgs(int argc, char** argv) {
   cl.Text("--replot", &o.replot, "RESULTS.json",
           "redraw an earlier run's Pareto fronts and plots with this build, into --out (runs nothing)");
   cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
+  bool no_report = false;
+  cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
   bool in_process = false;
   cl.Flag("--in-process", &in_process,
@@ -355,6 +360,7 @@ BenchOptions ParseBenchArgs(int argc, char** argv) {
     const fs::path self = fs::read_symlink("/proc/self/exe", ec);
     if (!ec) o.worker_executable = self.string();  // else: in-process (no /proc)
   }
+  o.report = !no_report;
   return o;
 }
 

@@ -28,6 +28,7 @@ struct BenchOptions {
   // Worker mode (hidden options; the parent passes them): run the one suite, journaling
   // to worker_journal, with worker_scratch as its scratch directory; no results written.
   std::string worker_journal, worker_scratch;
+  bool report = true;                // write DIR/report.html (skycal report)
 
   bool IsValid(std::string* why) const;
 };

@@ -1,5 +1,7 @@
 #include "export_verb.h"
 
+#include "report_verb.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -375,6 +377,7 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
                                    {"presets", manifest_presets},
                                    {"skipped", skipped}};
   WriteJsonFileAtomically(out / "manifest.json", manifest);
+  if (o.report) WriteVerbReport("export", out.staging().string());
   out.Commit();
   for (const auto& s : skipped) Log("export", "skipped " + s["block"].get<std::string>() + ": " + s["reason"].get<std::string>());
   Log("export", "wrote " + o.out_dir + " (" + std::to_string(presets.size()) + " preset(s))");
@@ -421,8 +424,11 @@ ExportOptions ParseExportArgs(int argc, char** argv) {
             "stops for the game's own multipliers)");
   cl.Text("--backend", &backend, "NAME", "renders the sky for SH-9 and fog: vulkan (default) or cpu (double reference)");
   cl.Number("--fog-sigma-deg", &o.fog_sigma_deg, "S", "Gaussian blur of the fog lat-long, degrees in (0, 30] (default 15)");
+  bool no_report = false;
+  cl.Flag("--no-report", &no_report, "do not write GAME_DIR/report.html (skycal report)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
   cl.Parse(argc, argv);
+  o.report = !no_report;
   if (backend) o.backend = render::ParseBackend(*backend, "--backend");
   return o;
 }

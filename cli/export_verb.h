@@ -22,6 +22,7 @@ struct ExportOptions {
   double headroom = 0.25;            // largest scaled LUT value <= headroom * 65504 (FP16 max)
   render::Backend backend = render::Backend::kVulkan;  // renders the sky for SH-9 and fog
   double fog_sigma_deg = 15.0;       // Gaussian blur of the fog lat-long, degrees, (0, 30]
+  bool report = true;                // write GAME_DIR/report.html (skycal report)
   bool IsValid(std::string* why) const;
 };
 

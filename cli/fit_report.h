@@ -10,6 +10,11 @@
 
 namespace skycal::cli {
 
+// Writes DIR/<ref>.reference.png, DIR/<ref>.fit.png and DIR/<ref>.error.png (at most 512
+// wide) for each reference, the images `skycal report` embeds; returns their paths.
+std::vector<std::string> WriteFitPanels(const std::string& dir, const std::vector<fit::Reference>& refs,
+                                        const fit::FitResult& result, double error_range = 0.2);
+
 // Writes the PNG atomically. `error_range` is the relative error shown at full colour
 // (e.g. 0.2 = +-20%); masked pixels are drawn grey.
 void WriteFitReport(const std::string& png_path, const std::vector<fit::Reference>& refs, const fit::FitResult& result,

@@ -12,7 +12,9 @@
 
 #include "command_line.h"
 #include "option_values.h"
+#include "fit_cloud_mask.h"
 #include "fit_report.h"
+#include "report_verb.h"
 #include "staged_directory.h"
 #include "render_verb.h"
 #include "skycal/capture/latlong_frame.h"
@@ -24,6 +26,7 @@
 #include "skycal/fit/fit_json.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
+#include "skycal/render/irradiance.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -110,11 +113,18 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   std::filesystem::create_directories(out.staging() / "fit");
   render::Preset init = render::LoadPreset(init_path);
   std::vector<fit::Reference> refs;
+  std::vector<nlohmann::json> cloud_json;
   std::set<std::string> names;
   for (const std::string& path : o.references) {
     refs.push_back(fit::LoadReference(path, o.fit));
     if (!names.insert(refs.back().name).second) {
       throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
+    }
+    if (o.cloud_mask) {
+      const CloudMaskApplied cm = ApplyCloudMask(&refs.back(), DefaultPresetPath());
+      cloud_json.push_back(cm.ToJson());
+      Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
+                     std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
     }
     const auto& r = refs.back();
     Log("fit", r.path + ": " + std::to_string(r.radiance.width) + "x" + std::to_string(r.radiance.height) + ", sun from " +
@@ -242,8 +252,22 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                                        {"final_errors", per_ref}}}};
   render::SavePreset(result.preset, out / "preset.json", &provenance);
   WriteFitReport(out / "report.png", refs, result);
+  WriteFitPanels(out / "fit", refs, result);
+  // What the report reads beside the errors: the images, the fitted sun at the ground
+  // (model units: lux with --absolute) and the cloud mask.
+  for (size_t r = 0; r < refs.size(); ++r) {
+    nlohmann::json& j = summary["references"][r];
+    j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
+                   {"fit", "fit/" + refs[r].name + ".fit.png"},
+                   {"error", "fit/" + refs[r].name + ".error.png"}};
+    const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
+    j["sun_illuminance_at_ground_lux"] = 0.2126 * sun[0] + 0.7152 * sun[1] + 0.0722 * sun[2];
+    if (o.cloud_mask) j["cloud_mask"] = cloud_json[r];
+  }
+  if (fo.time_of_day_h) summary["time_of_day_h"] = *fo.time_of_day_h;
   summary["out"] = o.out_dir;
   WriteJsonFileAtomically(out / "fit.json", summary);
+  if (o.report) WriteVerbReport("fit", out.staging().string());
   out.Commit();
   for (const auto& r : per_ref) {
     Log("fit", r["name"].get<std::string>() + ": rel RMSE " + std::to_string(100.0 * r["rel_rmse"].get<double>()) +
@@ -312,8 +336,14 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Integer("--probe-quadrature", &f.probe_quadrature_width, -1e9, 1e9, "expected an integer width", "W",
              "lat-long width of the sky irradiance quadrature (default 128)");
   cl.Flag("--no-ground-albedo", &no_ground_albedo, "hold the ground albedo at the initial preset's value");
+  cl.Flag("--cloud-mask", &o.cloud_mask,
+          "leave cloudy pixels out (cloud probability >= 0.5: the frame's mask.cloud channel,\n"
+          "else estimated from colour against the bundled clear preset at the frame's sun)");
   cl.Text("--out", &o.out_dir, "DIR",
-          "output directory (required): preset.json (+ LUT EXRs), fit/<ref>.exr, report.png, fit.json");
+          "output directory (required): preset.json (+ LUT EXRs), fit/<ref>.exr and\n"
+          "fit/<ref>.{reference,fit,error}.png, report.png, fit.json, report.html");
+  bool no_report = false;
+  cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
 
@@ -340,6 +370,7 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   f.fit_ground_albedo = !no_ground_albedo;
   f.linear_start = !no_linear_start;
   f.verbose = !quiet;
+  o.report = !no_report;
   return c;
 }
 

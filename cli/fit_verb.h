@@ -15,6 +15,8 @@ struct FitVerbOptions {
   std::string init_preset;              // empty: the bundled default preset
   std::string out_dir;                  // created atomically (must not hold other files)
   fit::FitOptions fit;
+  bool cloud_mask = false;              // leave pixels of cloud probability >= 0.5 out (fit_cloud_mask.h)
+  bool report = true;                   // write DIR/report.html (skycal report)
   bool IsValid(std::string* why) const;
 };
 

@@ -15,6 +15,7 @@
 #include "probe_extract_verb.h"
 #include "probe_predict_verb.h"
 #include "render_verb.h"
+#include "report_verb.h"
 #include "sun_verb.h"
 #include "weather_verb.h"
 #include "skycal/core/interrupt_cleanup.h"
@@ -40,6 +41,7 @@ const std::vector<Verb>& Verbs() {
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},
       {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
       {"bench", "run time against error per setting (Pareto plots), numerical stress, --compare two runs", &skycal::cli::RunBench},
+      {"report", "one self-contained HTML report (images, plots) of fit, export and bench outputs", &skycal::cli::RunReport},
       {"sun", "the sun's position (zenith, azimuth, lat-long direction) for a place and time", &skycal::cli::RunSun},
       {"weather", "a procedural weather map for the clouds (coverage, precipitation, type) as an RGB EXR", &skycal::cli::RunWeather},
   };

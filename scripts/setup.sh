@@ -11,8 +11,11 @@ PACKAGES=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc glslang-tools spirv-tools
   nlohmann-json3-dev libgtest-dev libcli11-dev nettle-dev
   libexiv2-dev
-  # skycal bench's Pareto plots: PLplot and its cairo drivers (pngcairo, svgcairo).
+  # skycal bench's Pareto plots and skycal report's charts: PLplot and its cairo drivers
+  # (pngcairo, svgcairo).
   libplplot-dev plplot-driver-cairo
+  # The report's browser test (tests/report_browser_test.cc): headless Chromium.
+  chromium
   # scripts/fuzz.sh: clang and its runtimes (libFuzzer, ASan, UBSan; not pulled in by
   # clang under --no-install-recommends).
   clang libclang-rt-14-dev

@@ -236,6 +236,10 @@ TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
   // Plots: a PNG (its signature) and an SVG.
   EXPECT_EQ(ReadText(dir / "results/fake_pareto.png").substr(1, 3), "PNG");
   EXPECT_NE(ReadText(dir / "results/fake_pareto.svg").find("<svg"), std::string::npos);
+  // The report (skycal report of the results directory): the suite's plot embedded.
+  const std::string html = ReadText(dir / "results/report.html");
+  EXPECT_NE(html.find("<h2>Benchmark: results</h2>"), std::string::npos);
+  EXPECT_NE(html.find("alt=\"fake Pareto plot\""), std::string::npos);
   // The JSON reads back as it was written.
   const Results back = ResultsFromJson(j, "results.json");
   ASSERT_EQ(back.cases.size(), 4u);

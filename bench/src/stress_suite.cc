@@ -409,6 +409,7 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
         eo.presets = in.presets;
         eo.headroom = headroom;
         eo.backend = render::Backend::kCpu;
+        eo.report = false;  // the export's numbers are stressed, not the HTML report
         eo.out_dir = (o.scratch / ("stress_export_" + std::to_string(n++))).string();
         const nlohmann::json summary = cli::RunExportImpl(eo);
         if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the manifest");

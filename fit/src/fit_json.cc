@@ -11,6 +11,8 @@ nlohmann::json ToJson(const RenderCheckReport& r) {
 }
 
 nlohmann::json ToJson(const LinearStartSingleReport& r) {
+  nlohmann::json steps = nlohmann::json::array();
+  for (const CostStep& s : r.cost_per_step) steps.push_back({{"width", s.width}, {"cost", s.cost}});
   nlohmann::json rings = nlohmann::json::array();
   for (const RingScaleReport& s : r.loss_scale_by_sun_distance) {
     rings.push_back({{"from_deg", s.from_deg}, {"to_deg", s.to_deg}, {"scale", s.scale}});
@@ -33,6 +35,7 @@ nlohmann::json ToJson(const LinearStartSingleReport& r) {
                       {"loss_scale_floor", r.loss_scale_floor},
                       {"loss_scale_by_sun_distance", rings},
                       {"held_non_positive", r.held_non_positive},
+                      {"cost_per_step", steps},
                       {"time_s", r.time_s}};
   if (r.render_check) j["render_check"] = ToJson(*r.render_check);
   return j;
@@ -61,6 +64,7 @@ nlohmann::json ToJson(const LevelReport& l) {
           {"iterations", l.iterations},
           {"initial_cost", l.initial_cost},
           {"final_cost", l.final_cost},
+          {"cost_per_iteration", l.cost_per_iteration},
           {"termination", l.termination},
           {"renders", l.renders},
           {"probe_final_solve_iterations", l.probe_final_solve_iterations},

@@ -195,6 +195,7 @@ LevelReport SolveLevel(const std::vector<FitTerm*>& terms, const std::vector<Ref
   report.iterations = static_cast<int>(summary.iterations.size()) - 1;
   report.initial_cost = summary.initial_cost;
   report.final_cost = summary.final_cost;
+  for (const ceres::IterationSummary& it : summary.iterations) report.cost_per_iteration.push_back(it.cost);
   report.termination = ceres::TerminationTypeToString(summary.termination_type);
   report.renders = callback ? callback->renders() : 0;
   report.time_s = Seconds(t_level, Clock::now());

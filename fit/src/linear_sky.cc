@@ -38,7 +38,7 @@ constexpr int kActiveSetRounds = 20;
 
 LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& levels,
                      const std::vector<Reference>& refs, LinearSkyOptions options)
-    : state_(state), o_(std::move(options)), n_refs_(static_cast<int>(refs.size())) {
+    : state_(state), o_(std::move(options)), n_refs_(static_cast<int>(refs.size())), width_(levels.at(0)->width) {
   const auto& grid = state.preset.luts.grid;
   const int w = levels.at(0)->width, h = levels.at(0)->height;
   const bool single = refs.size() == 1;

@@ -129,6 +129,7 @@ class LinearSky {
                                const std::vector<ImageRGB>& images) const;
 
   int num_unknowns() const { return num_unknowns_; }
+  int width() const { return width_; }  // of the level it was built on
   size_t num_samples() const { return error_weight_.size(); }
 
  private:
@@ -169,6 +170,7 @@ class LinearSky {
   double held_overcast_zenith_ = 0.0;  // L_z when it is not an unknown, cd/m^2
   double start_scale_ = 1.0;           // StartScale at the state's g and exposures
   int n_refs_ = 0;
+  int width_ = 0;
 };
 
 }  // namespace skycal::fit

@@ -342,6 +342,7 @@ LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitO
   report.samples = static_cast<long long>(sky.num_samples());
   report.solves = rep.solves;
   report.gauss_newton_steps = rep.gauss_newton_steps;
+  report.cost_per_step = rep.cost_per_step;
   report.search_time_s = rep.search_time_s;
   report.robust_time_s = rep.robust_time_s;
   report.final_time_s = rep.final_time_s;

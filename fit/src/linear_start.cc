@@ -217,6 +217,7 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
     ++rep.gauss_newton_steps;
     update_exposures(*sky, sol);
     e = sky->LogErrors(sol, exposures);
+    rep.cost_per_step.push_back({sky->width(), sky->RobustCostOf(e, o.loss, scales)});
   };
   if (o.loss != RobustLoss::kNone) {
     for (double factor : {8.0, 4.0, 2.0, 1.0, 1.0}) gauss_newton_step(factor);

@@ -32,6 +32,7 @@
 #include "fit_state.h"
 #include "linear_sky.h"
 #include "skycal/fit/fit_options.h"
+#include "skycal/fit/fit_report.h"
 
 namespace skycal::fit {
 
@@ -62,6 +63,7 @@ struct LinearStartReport {
   double robust_time_s = 0.0;    // steps 2-4 on the robust level
   double final_time_s = 0.0;     // step 5 on the final level
   int gauss_newton_steps = 0;
+  std::vector<CostStep> cost_per_step;  // after each Gauss-Newton step (fit_report.h)
   int held_non_positive = 0;     // LUT entries the linear solve wanted <= 0 (held at a floor)
   std::vector<double> exposures; // model -> image factor per reference
   std::vector<double*> held;     // state parameters held at their floor (LinearSky::HeldParameters)

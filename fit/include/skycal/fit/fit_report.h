@@ -40,6 +40,7 @@ struct LevelReport {
   int parameters = 0;
   int iterations = 0;
   double initial_cost = 0.0, final_cost = 0.0;
+  std::vector<double> cost_per_iteration;  // Ceres' cost at iteration 0 (the start), 1, ...
   std::string termination;
   int renders = 0;                       // backend renders at new evaluation points
   int probe_final_solve_iterations = 0;  // the sun / ground refit after the finest level
@@ -52,6 +53,15 @@ struct RenderCheckReport {
   double max_relative_difference = 0.0;
   double threshold = 0.0;
   double time_s = 0.0;
+};
+
+// The robust log cost after one Gauss-Newton step of the linear start (the convergence
+// curve of fit.json's linear_start.cost_per_step): the level width it ran on, and the cost
+// 1/2 sum w s^2 rho((e/s)^2) with that step's loss scales (they narrow between rounds, so
+// the curve can step up where a scale changed).
+struct CostStep {
+  int width = 0;
+  double cost = 0.0;
 };
 
 // The robust loss scale of one ring of angular distance from the sun (log units).
@@ -71,6 +81,7 @@ struct LinearStartSingleReport {
   double residual_sigma_log = 0.0, loss_scale = 0.0, loss_scale_floor = 0.0;
   std::vector<RingScaleReport> loss_scale_by_sun_distance;
   int held_non_positive = 0;
+  std::vector<CostStep> cost_per_step;
   double time_s = 0.0;
   std::optional<RenderCheckReport> render_check;
 };

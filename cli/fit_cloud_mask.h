@@ -1,0 +1,26 @@
+// `fit --cloud-mask`: leave the cloudy pixels of each reference out of the sky fit (the clear
+// sky between the clouds is what the atmosphere model can match). The cloud probability is
+// the frame's `mask.cloud` channel (skycal capture writes it), else estimated here the same
+// way (capture/cloud_mask.h: colour against the clear sky of the bundled preset at the
+// frame's sun). Pixels with probability >= 0.5 become user-masked; fit.json reports the count.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/fit/reference.h"
+
+namespace skycal::cli {
+
+struct CloudMaskApplied {
+  long long cloudy_pixels = 0;  // sky pixels taken out
+  double fraction = 0.0;        // of the sky pixels before masking
+  std::string source;           // "mask.cloud channel" or "estimated against <preset>"
+  nlohmann::json ToJson() const;
+};
+
+// Reclassifies `ref` in place. Throws skycal::Error naming the reference when no sky pixel is
+// left (an overcast frame: the model has no clear sky to fit there).
+CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path);
+
+}  // namespace skycal::cli

@@ -1,0 +1,321 @@
+#include "sections.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "charts.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/report/html.h"
+
+namespace skycal::report {
+namespace {
+
+std::string E(const std::string& s) { return EscapeHtml(s); }
+
+std::string Percent(double fraction) { return FormatNumber(100.0 * fraction, 3) + "%"; }
+
+std::string PlotImg(const Chart& chart, PageCounts* counts) {
+  bool any = false;
+  for (const ChartSeries& s : chart.series) {
+    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+      any = any || (std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!chart.log_y || s.y[i] > 0.0));
+    }
+  }
+  if (!any) return "<p class=\"note\">" + E(chart.title) + ": no value to plot in these files.</p>\n";
+  ++counts->plots;
+  return "<img class=\"plot\" alt=\"" + E(chart.title) + "\" src=\"" + DataUri("image/svg+xml", ChartSvg(chart)) + "\">\n";
+}
+
+std::string Row(const std::vector<std::string>& cells, bool header = false) {
+  std::string r = "<tr>";
+  for (const std::string& c : cells) r += (header ? "<th>" : "<td>") + c + (header ? "</th>" : "</td>");
+  return r + "</tr>\n";
+}
+
+std::string SkippedList(const std::vector<std::pair<std::string, std::string>>& skipped, const std::string& what) {
+  if (skipped.empty()) return "";
+  std::string h = "<h4>" + E(what) + "</h4>\n<ul>\n";
+  for (const auto& [block, reason] : skipped) h += "<li><b>" + E(block) + "</b>: " + E(reason) + "</li>\n";
+  return h + "</ul>\n";
+}
+
+// One frame of the day: a reference of a fit.
+struct Frame {
+  const FitRecord* fit;
+  const ReferenceRecord* ref;
+  std::optional<double> time_h;
+};
+
+}  // namespace
+
+std::string EmbedPng(const std::string& path, const std::string& alt, const std::string& cls, PageCounts* counts) {
+  const std::string bytes = ReadFile(path);
+  if (bytes.size() < 8 || bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) throw Error(path + ": not a PNG file");
+  const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
+                                       cv::IMREAD_UNCHANGED);
+  if (decoded.empty()) throw Error(path + ": the PNG does not decode (truncated or corrupt)");
+  ++counts->images;
+  return "<img class=\"" + cls + "\" alt=\"" + E(alt) + "\" width=\"" + std::to_string(decoded.cols) + "\" height=\"" +
+         std::to_string(decoded.rows) + "\" src=\"" + DataUri("image/png", bytes) + "\">";
+}
+
+std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
+  std::vector<Frame> frames;
+  for (const FitRecord& f : fits) {
+    for (const ReferenceRecord& r : f.references) {
+      frames.push_back({&f, &r, f.references.size() == 1 ? f.time_of_day_h : std::nullopt});
+    }
+  }
+  if (frames.size() < 2) return "";
+  bool timed = true;
+  for (const Frame& fr : frames) timed = timed && fr.time_h.has_value();
+  std::vector<double> x;
+  for (size_t i = 0; i < frames.size(); ++i) x.push_back(timed ? *frames[i].time_h : static_cast<double>(i + 1));
+  const std::string x_label = timed ? "time of day (h)" : "frame (in the order below; no time of day in fit.json)";
+  const double x_lo = *std::min_element(x.begin(), x.end()), x_hi = *std::max_element(x.begin(), x.end());
+  auto series = [&](const std::string& label, auto value, bool line = true) {
+    ChartSeries s{label, {}, {}, line && timed};
+    for (size_t i = 0; i < frames.size(); ++i) {
+      s.x.push_back(x[i]);
+      s.y.push_back(value(frames[i]));
+    }
+    return s;
+  };
+  const auto opt = [](const std::optional<double>& v) { return v ? *v : NAN; };
+  std::string h = "<section id=\"day\">\n<h2>The day: " + std::to_string(frames.size()) + " frames</h2>\n";
+  h += "<p>One frame per fitted reference" + std::string(timed ? ", by time of day" : ", in directory order") + ".</p>\n";
+  h += "<div class=\"plots\">\n";
+  {
+    Chart c{"sun illuminance at the ground", x_label, "lux (model units unless --absolute)", {}, true, {}};
+    c.series.push_back(series("the fitted preset's sun: sun_illuminance x tint x transmittance(sun zenith)",
+                              [&](const Frame& f) { return opt(f.ref->sun_lux_model); }));
+    bool probe = false;
+    for (const Frame& f : frames) probe = probe || f.ref->probe_sun_lux.has_value();
+    if (probe) {
+      c.series.push_back(series("the gray probe's sun (0 where occluded: drawn as a gap on this log axis)",
+                                [&](const Frame& f) { return opt(f.ref->probe_sun_lux); }));
+    } else {
+      c.notes.push_back("no frame has a gray-probe sun (fit --probe ... --absolute): the dips of a sun behind cloud show there");
+    }
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  {
+    Chart c{"haziness g (Cornette-Shanks asymmetry of the Mie term)", x_label, "g (1)", {}, false, {}};
+    c.series.push_back(series("haziness_g of the frame's fit", [&](const Frame& f) { return f.fit->haziness_g; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  {
+    Chart c{"exposure: image units per model unit", x_label, "exposure (1)", {}, true, {}};
+    c.series.push_back(series("fitted exposure (1 with --absolute)", [&](const Frame& f) { return f.ref->exposure; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  {
+    Chart c{"per-frame error against the reference (fitted sky pixels)", x_label, "rel RMSE (%)", {}, false, {}};
+    c.series.push_back(series("rel RMSE (solid-angle weighted, 3 channels)", [&](const Frame& f) { return 100.0 * f.ref->rel_rmse; }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  bool clouds = false;
+  for (const Frame& f : frames) clouds = clouds || f.ref->cloudy_fraction.has_value();
+  if (clouds) {
+    Chart c{"cloud cover masked out of the fit", x_label, "cloudy sky pixels (%)", {}, false, {}};
+    c.series.push_back(series("fit --cloud-mask: sky pixels with cloud probability >= 0.5",
+                              [&](const Frame& f) { return 100.0 * opt(f.ref->cloudy_fraction); }));
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  h += "</div>\n<p class=\"note\">Cloud lighting over the day: no fit here carries cloud-lighting parameters yet (the "
+       "cloud-lighting fit is not part of this build); cloudy frames are fitted on their clear pixels.</p>\n";
+  h += "<table>\n" +
+       Row({"frame", "fit", "time of day (h)", "sun elevation (deg)", "haziness g", "exposure", "sun at ground (lux)",
+            "rel RMSE", "log RMSE"},
+           true);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const Frame& f = frames[i];
+    h += Row({std::to_string(i + 1) + ": " + E(f.ref->name), E(f.fit->label), f.time_h ? FormatNumber(*f.time_h) : "\xE2\x80\x93",
+              FormatNumber(opt(f.ref->sun_elevation_deg)), FormatNumber(f.fit->haziness_g), FormatNumber(f.ref->exposure),
+              FormatNumber(opt(f.ref->sun_lux_model)), Percent(f.ref->rel_rmse), FormatNumber(f.ref->log_rmse)});
+  }
+  return h + "</table>\n</section>\n";
+}
+
+std::string FitSection(const FitRecord& f, const std::string& anchor, PageCounts* counts) {
+  std::string h = "<section id=\"" + anchor + "\">\n<h2>Fit: " + E(f.label) + "</h2>\n";
+  h += "<table class=\"kv\">\n";
+  h += Row({"file", E(f.label + "/fit.json")});
+  if (f.time_of_day_h) h += Row({"time of day", FormatNumber(*f.time_of_day_h) + " h"});
+  h += Row({"model / backend / loss", E(f.model) + " / " + E(f.backend) + " / " + E(f.loss)});
+  h += Row({"haziness g", FormatNumber(f.haziness_g) + " (1)"});
+  h += Row({"fit time", FormatNumber(f.time_s, 3) + " s"});
+  h += Row({"Ceres iterations / termination",
+            f.termination.empty() ? std::string("not run (the linear start's result stands; see the decisions)")
+                                  : std::to_string(f.iterations) + " / " + E(f.termination)});
+  h += "</table>\n";
+  for (const ReferenceRecord& r : f.references) {
+    h += "<h3>Reference " + E(r.name) + "</h3>\n";
+    if (!r.image_reference.empty() && !r.image_fit.empty() && !r.image_error.empty()) {
+      h += "<div class=\"triptych\">\n";
+      h += "<figure>" + EmbedPng(r.image_reference, "reference " + r.name, "image", counts) +
+           "<figcaption>reference (OCIO view, the sky pixels' automatic exposure)</figcaption></figure>\n";
+      h += "<figure>" + EmbedPng(r.image_fit, "fit of " + r.name, "image", counts) +
+           "<figcaption>fit (same view and exposure)</figcaption></figure>\n";
+      h += "<figure>" + EmbedPng(r.image_error, "error of " + r.name, "image", counts) +
+           "<figcaption>(fit &minus; reference) / reference, luminance <span class=\"bar\"></span> &minus;20% &hellip; "
+           "+20%; grey: not fitted</figcaption></figure>\n</div>\n";
+    } else {
+      h += "<p class=\"note\">No per-reference images in this fit directory (fit/" + E(r.name) +
+           ".reference.png ...); written by skycal fit from this version on.</p>\n";
+    }
+    h += "<table class=\"kv\">\n";
+    h += Row({"rel RMSE", Percent(r.rel_rmse) + " (solid-angle weighted, fitted sky pixels, 3 channels)"});
+    h += Row({"log RMSE", FormatNumber(r.log_rmse) + " (natural log)"});
+    h += Row({"exposure", FormatNumber(r.exposure) + " (image units per model cd/m&sup2;)"});
+    if (r.sun_elevation_deg) h += Row({"sun elevation", FormatNumber(*r.sun_elevation_deg) + " deg"});
+    if (r.sun_lux_model) h += Row({"sun at the ground (fitted preset)", FormatNumber(*r.sun_lux_model) + " lux (model units)"});
+    if (r.probe_sun_visible) {
+      h += Row({"gray probe's sun", std::string(*r.probe_sun_visible ? "visible" : "occluded") +
+                                        (r.probe_sun_fraction ? ", sun share " + FormatNumber(*r.probe_sun_fraction, 3) : "") +
+                                        (r.probe_sun_lux ? ", " + FormatNumber(*r.probe_sun_lux) + " lux" : "")});
+    }
+    if (r.cloudy_fraction) h += Row({"masked as cloud", Percent(*r.cloudy_fraction) + " of the sky pixels"});
+    std::string px;
+    for (const auto& [k, v] : r.pixels) px += (px.empty() ? "" : ", ") + E(k) + " " + std::to_string(v);
+    if (!px.empty()) h += Row({"pixels", px});
+    h += "</table>\n";
+  }
+  if (f.references.front().image_reference.empty() && !f.sheet_png.empty()) {
+    h += "<figure>" + EmbedPng(f.sheet_png, "report.png of " + f.label, "image", counts) +
+         "<figcaption>report.png: reference | fit | error per reference</figcaption></figure>\n";
+  }
+  if (!f.convergence.empty()) {
+    Chart c{"convergence: cost per step / iteration, by stage", "step (stages one after another)",
+            "cost (1/2 sum of robust log residuals)", {}, true, {}};
+    double at = 0.0;
+    for (const CostCurve& cc : f.convergence) {
+      ChartSeries s{cc.label, {}, {}, true};
+      for (double v : cc.cost) {
+        s.x.push_back(at);
+        s.y.push_back(v);
+        at += 1.0;
+      }
+      c.series.push_back(std::move(s));
+    }
+    c.notes.push_back("costs of different stages use different levels and loss scales: compare within a stage");
+    h += "<h3>Convergence</h3>\n<div class=\"plots\">" + PlotImg(c, counts) + "</div>\n";
+  }
+  if (!f.parameters.empty()) {
+    h += "<h3>Fitted preset parameters (preset.json)</h3>\n<table>\n" + Row({"parameter", "value", "unit", "range", "meaning"}, true);
+    for (const ParameterRow& p : f.parameters) h += Row({E(p.name), E(p.value), E(p.unit), E(p.range), E(p.description)});
+    h += "</table>\n<p class=\"note\">The LUTs (cd/m&sup2;&middot;sr) are the EXRs beside preset.json.</p>\n";
+  }
+  if (!f.decisions.empty()) {
+    h += "<h3>Decisions (what the fit did not evaluate, and what that saved)</h3>\n<table>\n" +
+         Row({"what", "why", "saved (ms)", "basis", "rel RMSE change", "basis"}, true);
+    for (const DecisionRecord& d : f.decisions) {
+      h += Row({E(d.what), E(d.why), FormatNumber(d.saved_ms, 3), E(d.saved_ms_basis),
+                d.rel_rmse_change ? Percent(*d.rel_rmse_change) : "\xE2\x80\x93", E(d.rel_rmse_change_basis)});
+    }
+    h += "</table>\n";
+  }
+  h += SkippedList(f.skipped, "Skipped");
+  if (!f.warnings.empty()) {
+    h += "<h4>Warnings</h4>\n<ul class=\"warn\">\n";
+    for (const std::string& w : f.warnings) h += "<li>" + E(w) + "</li>\n";
+    h += "</ul>\n";
+  }
+  return h + "</section>\n";
+}
+
+std::string ExportSection(const ExportRecord& e, const std::string& anchor, PageCounts* counts) {
+  std::string h = "<section id=\"" + anchor + "\">\n<h2>Game tables: " + E(e.label) + "</h2>\n<table class=\"kv\">\n";
+  h += Row({"file", E(e.label + "/manifest.json")});
+  std::string names;
+  for (const std::string& p : e.presets) names += (names.empty() ? "" : ", ") + E(p);
+  h += Row({"presets", names});
+  h += Row({"pre-exposure", FormatNumber(e.pre_exposure) + " (LUT texels = model LUT (cd/m&sup2;&middot;sr) &times; this; FP16)"});
+  h += "</table>\n";
+  if (!e.keys.empty()) {
+    const auto value = [](const nlohmann::json& row, const std::string& col) {
+      const auto it = row.find(col);
+      return it != row.end() && it->is_number() ? it->get<double>() : NAN;
+    };
+    if (e.keys.size() >= 2) {
+      h += "<div class=\"plots\">\n";
+      Chart c{"keyframes: sun illuminance at the ground", "time of day (h)", "sun_illuminance_lux (lux)", {}, true, {}};
+      ChartSeries s{"sun_illuminance_lux", {}, {}, true};
+      ChartSeries g{"haziness_g", {}, {}, true};
+      for (const nlohmann::json& row : e.keys) {
+        s.x.push_back(value(row, "time_of_day_h"));
+        s.y.push_back(value(row, "sun_illuminance_lux"));
+        g.x.push_back(value(row, "time_of_day_h"));
+        g.y.push_back(value(row, "haziness_g"));
+      }
+      bool any_sun = false;
+      for (double v : s.y) any_sun = any_sun || (std::isfinite(v) && v > 0.0);
+      if (any_sun) {
+        c.series.push_back(s);
+        h += PlotImg(c, counts);
+      }
+      Chart cg{"keyframes: haziness g", "time of day (h)", "haziness_g (1)", {g}, false, {}};
+      h += PlotImg(cg, counts);
+      h += "</div>\n";
+    }
+    h += "<h3>Keyframes (keyframes.json)</h3>\n<div class=\"scroll\"><table>\n";
+    std::vector<std::string> head;
+    for (const std::string& c : e.columns) {
+      const auto u = e.units.find(c);
+      head.push_back(E(c) + (u != e.units.end() && u->is_string() ? "<br><small>" + E(u->get<std::string>()) + "</small>" : ""));
+    }
+    h += Row(head, true);
+    for (const nlohmann::json& row : e.keys) {
+      std::vector<std::string> cells;
+      for (const std::string& c : e.columns) {
+        const auto it = row.find(c);
+        if (it == row.end() || it->is_null()) cells.push_back("");
+        else if (it->is_number()) cells.push_back(FormatNumber(it->get<double>()));
+        else if (it->is_string()) cells.push_back(E(it->get<std::string>()));
+        else cells.push_back(E(it->dump()));
+      }
+      h += Row(cells);
+    }
+    h += "</table></div>\n";
+  }
+  h += SkippedList(e.skipped, "Skipped by the export");
+  return h + "</section>\n";
+}
+
+std::string BenchSection(const BenchRecord& b, const std::string& anchor, PageCounts* counts) {
+  std::string h = "<section id=\"" + anchor + "\">\n<h2>Benchmark: " + E(b.label) + "</h2>\n<table class=\"kv\">\n";
+  h += Row({"file", E(b.label + "/results.json")});
+  h += Row({"machine", E(b.machine)});
+  h += Row({"commit / date", E(b.commit) + " / " + E(b.date)});
+  h += "</table>\n<table>\n" + Row({"suite", "what", "cases", "on the Pareto front", "default", "wall time (s)"}, true);
+  for (const BenchSuiteRecord& s : b.suites) {
+    h += Row({E(s.name), E(s.summary), std::to_string(s.cases), std::to_string(s.front),
+              s.default_case.empty() ? "\xE2\x80\x93" : E(s.default_case) + (s.default_on_front ? " (on the front)" : " (dominated)"),
+              FormatNumber(s.wall_s, 3)});
+  }
+  h += "</table>\n<div class=\"plots\">\n";
+  for (const BenchSuiteRecord& s : b.suites) {
+    if (s.plot_path.empty()) continue;
+    h += "<figure>" + EmbedPng(s.plot_path, s.name + " Pareto plot", "plot", counts) + "<figcaption>" + E(s.name) +
+         ": run time against error (PLplot, written by skycal bench)</figcaption></figure>\n";
+  }
+  h += "</div>\n";
+  if (!b.stress_md.empty()) h += "<h3>Stress (stress.md)</h3>\n<pre>" + E(b.stress_md) + "</pre>\n";
+  return h + "</section>\n";
+}
+
+}  // namespace skycal::report

@@ -1,0 +1,292 @@
+#include "sources.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "json_fields.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/report/html.h"
+
+namespace skycal::report {
+namespace fs = std::filesystem;
+namespace {
+
+std::string Label(const fs::path& root, const fs::path& dir);
+
+}  // namespace
+
+namespace {
+
+std::string Label(const fs::path& root, const fs::path& dir) {
+  const fs::path rel = dir.lexically_relative(root);
+  return rel.empty() || rel == "." ? DisplayName(root) : rel.string();
+}
+
+// An image the fit listed (or that lies where the fit writes it): absolute path, or "" when
+// it was not listed and is absent. A listed image that is missing is an error.
+std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, const std::string& kind,
+                      const std::string& name) {
+  if (images) {
+    const JsonAt f = images->Child(kind);
+    const fs::path p = dir / f.String();
+    if (!fs::is_regular_file(p)) throw Error(f.Where() + ": the image '" + p.string() + "' does not exist");
+    return p.string();
+  }
+  const fs::path p = dir / "fit" / (name + "." + kind + ".png");
+  return fs::is_regular_file(p) ? p.string() : std::string();
+}
+
+ReferenceRecord ReadReference(const fs::path& dir, const JsonAt& r) {
+  ReferenceRecord rec;
+  rec.name = r.String("name");
+  rec.rel_rmse = r.Number("rel_rmse");
+  rec.log_rmse = r.Number("log_rmse");
+  rec.exposure = r.OptionalNumber("exposure").value_or(1.0);
+  rec.sun_elevation_deg = r.OptionalNumber("sun_elevation_deg");
+  rec.sun_lux_model = r.OptionalNumber("sun_illuminance_at_ground_lux");
+  if (const auto sun = r.Optional("sun")) {
+    rec.probe_sun_visible = sun->Child("visible").Boolean();
+    rec.probe_sun_fraction = sun->OptionalNumber("fraction");
+    rec.probe_sun_lux = sun->OptionalNumber("illuminance_lux");
+  }
+  if (const auto cm = r.Optional("cloud_mask")) rec.cloudy_fraction = cm->Number("fraction");
+  if (const auto px = r.Optional("pixels")) {
+    px->RequireObject();
+    for (const auto& [k, v] : px->value.items()) rec.pixels.emplace_back(k, static_cast<long long>(px->Number(k)));
+  }
+  const auto images = r.Optional("images");
+  rec.image_reference = ImagePath(dir, images, "reference", rec.name);
+  rec.image_fit = ImagePath(dir, images, "fit", rec.name);
+  rec.image_error = ImagePath(dir, images, "error", rec.name);
+  return rec;
+}
+
+// The convergence curves: the linear start's Gauss-Newton steps (grouped by level width),
+// a day's joint steps, and each Ceres level's iterations.
+std::vector<CostCurve> ReadConvergence(const JsonAt& doc) {
+  std::vector<CostCurve> curves;
+  if (const auto ls = doc.Optional("linear_start")) {
+    if (const auto steps = ls->Optional("cost_per_step")) {
+      for (size_t i = 0; i < steps->Size(); ++i) {
+        const JsonAt s = steps->Index(i);
+        const std::string label = "linear start, " + FormatNumber(s.Number("width")) + " wide (Gauss-Newton steps)";
+        if (curves.empty() || curves.back().label != label) curves.push_back({label, {}});
+        curves.back().cost.push_back(s.Number("cost"));
+      }
+    }
+    const std::vector<double> joint = ls->Numbers("joint_robust_cost_per_step");
+    if (!joint.empty()) curves.push_back({"linear start, the day's joint steps", joint});
+  }
+  if (const auto levels = doc.Optional("levels")) {
+    for (size_t i = 0; i < levels->Size(); ++i) {
+      const JsonAt l = levels->Index(i);
+      std::string size = "level " + std::to_string(i);
+      if (const auto sz = l.Optional("size"); sz && sz->Size() == 2) {
+        size = FormatNumber(sz->Index(0).Number()) + "x" + FormatNumber(sz->Index(1).Number());
+      }
+      CostCurve c{"Ceres " + size + " (iterations)", l.Numbers("cost_per_iteration")};
+      if (c.cost.empty()) {  // fit.json from before cost_per_iteration: the two ends
+        c.cost = {l.Number("initial_cost"), l.Number("final_cost")};
+        c.label += ", start and end only";
+      }
+      curves.push_back(std::move(c));
+    }
+  }
+  return curves;
+}
+
+std::vector<ParameterRow> ReadParameters(const std::string& preset_path) {
+  std::vector<ParameterRow> rows;
+  const nlohmann::json doc = ReadJsonObject(preset_path);
+  const JsonAt root{doc, preset_path, ""};
+  const JsonAt params = root.Child("parameters");
+  params.RequireObject();
+  for (const auto& [name, v] : params.value.items()) {
+    const JsonAt p = params.Child(name);
+    ParameterRow row;
+    row.name = name;
+    row.unit = p.OptionalString("unit").value_or("");
+    row.description = p.OptionalString("description").value_or("");
+    const JsonAt value = p.Child("value");
+    if (value.value.is_array()) {
+      for (size_t i = 0; i < value.Size(); ++i) row.value += (i ? ", " : "") + FormatNumber(value.Index(i).Number());
+    } else {
+      row.value = FormatNumber(value.Number());
+    }
+    const auto lo = p.OptionalNumber("min"), hi = p.OptionalNumber("max");
+    if (lo && hi) row.range = FormatNumber(*lo) + " \xE2\x80\x93 " + FormatNumber(*hi);
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+std::vector<std::pair<std::string, std::string>> ReadSkipped(const JsonAt& doc) {
+  std::vector<std::pair<std::string, std::string>> out;
+  if (const auto s = doc.Optional("skipped")) {
+    for (size_t i = 0; i < s->Size(); ++i) out.emplace_back(s->Index(i).String("block"), s->Index(i).String("reason"));
+  }
+  return out;
+}
+
+FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
+  FitRecord f;
+  f.dir = dir.string();
+  f.label = Label(root, dir);
+  f.json_path = (dir / "fit.json").string();
+  const nlohmann::json doc = ReadJsonObject(f.json_path);
+  const JsonAt j{doc, f.json_path, ""};
+  const JsonAt refs = j.Child("references");
+  if (refs.Size() == 0) throw Error(refs.Where() + ": expected at least one reference");
+  for (size_t i = 0; i < refs.Size(); ++i) f.references.push_back(ReadReference(dir, refs.Index(i)));
+  f.haziness_g = j.Number("haziness_g");
+  f.time_s = j.OptionalNumber("time_s").value_or(NAN);
+  f.iterations = static_cast<int>(j.OptionalNumber("iterations").value_or(0));
+  f.termination = j.OptionalString("termination").value_or("");
+  f.time_of_day_h = j.OptionalNumber("time_of_day_h");
+  if (const auto o = j.Optional("options")) {
+    f.model = o->OptionalString("model").value_or("");
+    f.backend = o->OptionalString("backend").value_or("");
+    f.loss = o->OptionalString("loss").value_or("");
+  }
+  if (const auto d = j.Optional("decisions")) {
+    for (size_t i = 0; i < d->Size(); ++i) {
+      const JsonAt e = d->Index(i);
+      DecisionRecord r;
+      r.what = e.String("what");
+      r.why = e.String("why");
+      r.saved_ms = e.Number("saved_ms");
+      r.saved_ms_basis = e.OptionalString("saved_ms_basis").value_or("");
+      r.rel_rmse_change = e.OptionalNumber("rel_rmse_change");
+      r.rel_rmse_change_basis = e.OptionalString("rel_rmse_change_basis").value_or("");
+      f.decisions.push_back(std::move(r));
+    }
+  }
+  f.skipped = ReadSkipped(j);
+  if (const auto w = j.Optional("warnings")) {
+    for (size_t i = 0; i < w->Size(); ++i) f.warnings.push_back(w->Index(i).String());
+  }
+  f.convergence = ReadConvergence(j);
+  if (fs::is_regular_file(dir / "preset.json")) f.parameters = ReadParameters((dir / "preset.json").string());
+  if (fs::is_regular_file(dir / "report.png")) f.sheet_png = (dir / "report.png").string();
+  return f;
+}
+
+ExportRecord ReadExport(const fs::path& root, const fs::path& dir) {
+  ExportRecord e;
+  e.dir = dir.string();
+  e.label = Label(root, dir);
+  e.json_path = (dir / "manifest.json").string();
+  const nlohmann::json doc = ReadJsonObject(e.json_path);
+  const JsonAt j{doc, e.json_path, ""};
+  e.pre_exposure = j.Number("pre_exposure");
+  const JsonAt presets = j.Child("presets");
+  for (size_t i = 0; i < presets.Size(); ++i) e.presets.push_back(presets.Index(i).String("name"));
+  e.skipped = ReadSkipped(j);
+  const fs::path kf = dir / "keyframes.json";
+  if (fs::is_regular_file(kf)) {
+    const nlohmann::json kdoc = ReadJsonObject(kf.string());
+    const JsonAt k{kdoc, kf.string(), ""};
+    const JsonAt cols = k.Child("columns");
+    for (size_t i = 0; i < cols.Size(); ++i) e.columns.push_back(cols.Index(i).String());
+    if (const auto u = k.Optional("units")) {
+      u->RequireObject();
+      e.units = u->value;
+    }
+    const JsonAt keys = k.Child("keys");
+    for (size_t i = 0; i < keys.Size(); ++i) {
+      const JsonAt row = keys.Index(i);
+      row.RequireObject();
+      row.Number("time_of_day_h");
+      e.keys.push_back(row.value);
+    }
+  }
+  return e;
+}
+
+BenchRecord ReadBench(const fs::path& root, const fs::path& dir) {
+  BenchRecord b;
+  b.dir = dir.string();
+  b.label = Label(root, dir);
+  b.json_path = (dir / "results.json").string();
+  const nlohmann::json doc = ReadJsonObject(b.json_path);
+  const JsonAt j{doc, b.json_path, ""};
+  if (const auto m = j.Optional("machine")) {
+    b.machine = m->OptionalString("cpu_model").value_or("") + ", " + FormatNumber(m->OptionalNumber("cores").value_or(NAN)) +
+                " cores, " + m->OptionalString("vulkan_device").value_or("");
+    b.commit = m->OptionalString("commit").value_or("");
+    b.date = m->OptionalString("date_utc").value_or("");
+  }
+  const JsonAt suites = j.Child("suites");
+  for (size_t i = 0; i < suites.Size(); ++i) {
+    const JsonAt s = suites.Index(i);
+    BenchSuiteRecord r;
+    r.name = s.String("name");
+    r.summary = s.OptionalString("summary").value_or("");
+    r.cases = static_cast<int>(s.Number("cases"));
+    if (const auto f = s.Optional("pareto_front")) r.front = static_cast<int>(f->Size());
+    r.default_case = s.OptionalString("default_case").value_or("");
+    if (const auto d = s.Optional("default_on_front")) r.default_on_front = d->Boolean();
+    r.wall_s = s.OptionalNumber("wall_s").value_or(NAN);
+    if (const auto plots = s.Optional("plots")) {
+      // The PNG (a third of the SVG's size: the page stays small enough to mail).
+      for (size_t k = 0; k < plots->Size(); ++k) {
+        const std::string name = plots->Index(k).String();
+        if (name.size() > 4 && name.substr(name.size() - 4) == ".png") {
+          const fs::path p = dir / name;
+          if (!fs::is_regular_file(p)) throw Error(plots->Index(k).Where() + ": the plot '" + p.string() + "' does not exist");
+          r.plot_path = p.string();
+        }
+      }
+    }
+    b.suites.push_back(std::move(r));
+  }
+  if (fs::is_regular_file(dir / "stress.md")) b.stress_md = ReadFile((dir / "stress.md").string());
+  return b;
+}
+
+void Walk(const fs::path& root, const fs::path& dir, int depth, int max_depth, Sources* s) {
+  if (fs::is_regular_file(dir / "fit.json")) s->fits.push_back(ReadFit(root, dir));
+  if (fs::is_regular_file(dir / "manifest.json")) s->exports.push_back(ReadExport(root, dir));
+  if (fs::is_regular_file(dir / "results.json")) s->benches.push_back(ReadBench(root, dir));
+  if (depth >= max_depth) return;
+  std::vector<fs::path> children;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.empty() || name[0] == '.') continue;  // staging directories, temporaries
+    if (e.is_directory(ec) && !e.is_symlink(ec)) children.push_back(e.path());
+  }
+  std::sort(children.begin(), children.end());
+  for (const fs::path& c : children) Walk(root, c, depth + 1, max_depth, s);
+}
+
+}  // namespace
+
+std::string DisplayName(const fs::path& dir) {
+  std::string name = dir.filename().string();
+  const size_t tmp = name.find(".tmp-");
+  if (name.size() > 1 && name[0] == '.' && tmp != std::string::npos) name = name.substr(1, tmp - 1);
+  return name;
+}
+
+Sources FindSources(const std::string& root_dir, int max_depth) {
+  const fs::path root = fs::absolute(root_dir).lexically_normal();
+  std::error_code ec;
+  if (!fs::is_directory(root, ec)) throw Error(root_dir + ": not a directory (expected a skycal fit, export or bench output)");
+  Sources s;
+  Walk(root, root, 0, max_depth, &s);
+  if (s.empty()) {
+    throw Error(root_dir + ": no fit.json (skycal fit), manifest.json (skycal export) or results.json (skycal bench) in it or " +
+                std::to_string(max_depth) + " levels below");
+  }
+  const bool all_timed =
+      std::all_of(s.fits.begin(), s.fits.end(), [](const FitRecord& f) { return f.time_of_day_h.has_value(); });
+  if (all_timed) {
+    std::stable_sort(s.fits.begin(), s.fits.end(),
+                     [](const FitRecord& a, const FitRecord& b) { return *a.time_of_day_h < *b.time_of_day_h; });
+  }
+  return s;
+}
+
+}  // namespace skycal::report
