@@ -16,11 +16,6 @@ namespace {
 
 double SrgbToLinear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
-uint8_t Code8(const BracketImage& img, size_t i) {
-  const unsigned v = img.rgb[i];
-  return static_cast<uint8_t>(img.bits == 16 ? std::min(255u, (v + 128u) / 257u) : std::min(255u, v));
-}
-
 // Debevec's solver sees only the sampled pixels, so pick them rather than a blind grid: a
 // dense grid of candidates, keep those well exposed (in every channel) in at least two
 // brackets (a pixel black or clipped in all but one bracket adds an unknown and no
@@ -258,6 +253,23 @@ std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& image
   nlohmann::json cal;
   // Pixels: Debevec a few picked ones, Robertson a stride-subsampled grid.
   std::vector<size_t> pixel_index;
+  if (o.response == ResponseModel::kWeighted) {
+    std::vector<double> ln_k(n);
+    for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
+    curve.assign(256 * 3, 0.0f);
+    std::vector<nlohmann::json> per_channel(3);
+    ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
+      for (int c = c0; c < c1; ++c) {
+        const std::vector<double> g = RecoverWeightedLogResponse(images, ln_k, c, o, &per_channel[c]);
+        for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(std::exp(g[z] - g[255]));
+      }
+    });
+    cal = {{"method", "weighted"}, {"solver", "skycal (noise-weighted log response)"}, {"channels", per_channel}};
+    cal["decreasing_steps"] = NormaliseResponse(&curve, 256);
+    cal["time_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (report) (*report)["calibration"] = cal;
+    return curve;
+  }
   if (o.response == ResponseModel::kDebevec) {
     int candidates = 0, informative = 0;
     pixel_index = SelectDebevecSamples(images, o, &candidates, &informative);
