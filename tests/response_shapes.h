@@ -70,9 +70,10 @@ inline std::vector<ResponseShape> UnseenResponseShapes() {
   };
 }
 
-// A curve whose slope is zero at white (gamma 2.6, then the contrast S with a = 1.5): codes
-// 252..255 span 13% of the sensor range, so no recovery can place full scale (the gauge)
-// from the codes; the bench reports it apart from the target shapes.
+// A curve whose slope is zero at white (gamma 2.6, then the contrast S with a = 1.5, the
+// family of synthetic_brackets.h's filmic curve): codes 252..255 span 13% of the sensor
+// range, so the top code's value (the gauge) is an extrapolation; the same in every channel,
+// that error is one global scale and divides out (bench/results/capture_response.md).
 inline ResponseShape FlatShoulderShape() {
   return {"flat shoulder (gamma 2.6 + contrast S)", {GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5)}};
 }

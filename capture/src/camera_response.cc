@@ -111,39 +111,14 @@ std::vector<double> SolveNormal(const cv::Mat& H, const cv::Mat& rhs, const char
 // Debevec & Malik: minimise sum w(Z_pj)^2 [g(Z_pj) - ln E_p - ln k_j]^2 + smoothness
 // (AddSmoothness), g(128) = 0, over well-exposed samples only (w = 0 elsewhere). Each ln E_p
 // touches only its own <= n rows, so it is eliminated in closed form (Schur complement)
-// and the system is 256 x 256 whatever the sample count. A 1e-6 ridge on ln E keeps a
-// sample without a well-exposed bracket from making it singular.
+// and the system is 256 x 256 whatever the sample count (AddSamplesEliminatingLnE); a
+// sample without a well-exposed bracket adds nothing.
 std::vector<double> SolveDebevec(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
                                  const WeightTable& data_w, const WeightTable& smooth_w, double lambda) {
-  const size_t samples = codes.size() / n;
   cv::Mat H = cv::Mat::zeros(256, 256, CV_64F), rhs = cv::Mat::zeros(256, 1, CV_64F);
-  std::vector<int> zs;
-  std::vector<double> hs;
-  for (size_t p = 0; p < samples; ++p) {
-    double D = 1e-12, rE = 0.0;
-    zs.clear();
-    hs.clear();
-    for (size_t j = 0; j < n; ++j) {
-      const int z = codes[p * n + j];
-      const double w = data_w.w[z], a = w * w;
-      if (!(a > 0.0)) continue;
-      H.at<double>(z, z) += a;
-      rhs.at<double>(z, 0) += a * ln_k[j];
-      D += a;
-      rE -= a * ln_k[j];
-      const auto it = std::find(zs.begin(), zs.end(), z);
-      if (it == zs.end()) {
-        zs.push_back(z);
-        hs.push_back(-a);
-      } else {
-        hs[it - zs.begin()] -= a;
-      }
-    }
-    for (size_t u = 0; u < zs.size(); ++u) {
-      rhs.at<double>(zs[u], 0) -= hs[u] * rE / D;
-      for (size_t v = 0; v < zs.size(); ++v) H.at<double>(zs[u], zs[v]) -= hs[u] * hs[v] / D;
-    }
-  }
+  std::vector<double> a(256);
+  for (int z = 0; z < 256; ++z) a[z] = double(data_w.w[z]) * data_w.w[z];
+  AddSamplesEliminatingLnE(codes, n, ln_k, a, H.ptr<double>(), rhs.ptr<double>());
   H.at<double>(128, 128) += 1.0;
   AddSmoothness(&H, smooth_w, lambda);
   return SolveNormal(H, rhs, "Debevec");
@@ -211,6 +186,41 @@ std::vector<double> SolveRobertson(const std::vector<uint8_t>& codes, size_t n, 
 }
 
 }  // namespace
+
+void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
+                              const std::vector<double>& a, double* H, double* rhs) {
+  const size_t samples = codes.size() / n;
+  std::vector<int> zs;
+  std::vector<double> hs;
+  for (size_t p = 0; p < samples; ++p) {
+    // Rows sqrt(a) (g(z_j) - ln E - ln k_j); ln E touches only these, so it is eliminated:
+    // H -= h h^T / D, rhs -= h r_E / D (h: the g-ln E block, D: the ln E diagonal).
+    double D = 0.0, rE = 0.0;
+    zs.clear();
+    hs.clear();
+    for (size_t j = 0; j < n; ++j) {
+      const int z = codes[p * n + j];
+      const double w = a[z];
+      if (!(w > 0.0)) continue;
+      H[z * 256 + z] += w;
+      rhs[z] += w * ln_k[j];
+      D += w;
+      rE -= w * ln_k[j];
+      const auto it = std::find(zs.begin(), zs.end(), z);
+      if (it == zs.end()) {
+        zs.push_back(z);
+        hs.push_back(-w);
+      } else {
+        hs[it - zs.begin()] -= w;
+      }
+    }
+    if (zs.empty()) continue;
+    for (size_t u = 0; u < zs.size(); ++u) {
+      rhs[zs[u]] -= hs[u] * rE / D;
+      for (size_t v = 0; v < zs.size(); ++v) H[zs[u] * 256 + zs[v]] -= hs[u] * hs[v] / D;
+    }
+  }
+}
 
 WeightTable MakeWeights(const MergeOptions& o, int max_code, bool thresholded) {
   WeightTable t;

@@ -39,6 +39,13 @@ std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& image
                                    const std::vector<double>& relative_exposure, const MergeOptions& options,
                                    nlohmann::json* report);
 
+// Adds samples' equations a(z) [g(z_pj) - ln E_p - ln k_j]^2 (codes[p * n + j], weight a per
+// code, 0 = unused) to the normal equations of the 256 g's, each ln E_p eliminated in closed
+// form (Schur complement), so the system stays 256 x 256 whatever the sample count. H: 256 x
+// 256 doubles (symmetric, so either storage order), rhs: 256.
+void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
+                              const std::vector<double>& a, double* H, double* rhs);
+
 // ResponseModel::kWeighted for channel c (weighted_response.cc): g(z) = ln f(z) per 8-bit
 // code, up to a constant; ln_k per image (sorted as for RecoverResponse). Fills *report.
 std::vector<double> RecoverWeightedLogResponse(const std::vector<const BracketImage*>& images,

@@ -61,38 +61,9 @@ std::vector<size_t> SelectSamples(const std::vector<const BracketImage*>& images
 // lambda^2 on every second difference, g(pin) = 0 (the gauge, fixed again later).
 Eigen::VectorXd Solve(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
                       const std::vector<double>& a, double lambda, int pin) {
-  const size_t samples = codes.size() / n;
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(256, 256);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(256);
-  std::vector<int> zs;
-  std::vector<double> hs;
-  for (size_t p = 0; p < samples; ++p) {
-    // Rows a_j (g(z_j) - lnE - ln k_j): eliminate lnE (Schur complement), as SolveDebevec.
-    double D = 0.0, rE = 0.0;
-    zs.clear();
-    hs.clear();
-    for (size_t j = 0; j < n; ++j) {
-      const int z = codes[p * n + j];
-      const double w = a[z];
-      if (!(w > 0.0)) continue;
-      H(z, z) += w;
-      rhs(z) += w * ln_k[j];
-      D += w;
-      rE -= w * ln_k[j];
-      const auto it = std::find(zs.begin(), zs.end(), z);
-      if (it == zs.end()) {
-        zs.push_back(z);
-        hs.push_back(-w);
-      } else {
-        hs[it - zs.begin()] -= w;
-      }
-    }
-    if (zs.empty()) continue;
-    for (size_t u = 0; u < zs.size(); ++u) {
-      rhs(zs[u]) -= hs[u] * rE / D;
-      for (size_t v = 0; v < zs.size(); ++v) H(zs[u], zs[v]) -= hs[u] * hs[v] / D;
-    }
-  }
+  AddSamplesEliminatingLnE(codes, n, ln_k, a, H.data(), rhs.data());
   const double l2 = lambda * lambda;
   const double coef[3] = {1.0, -2.0, 1.0};
   for (int z = 0; z + 3 <= 256; ++z)
