@@ -329,7 +329,8 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
           "EXIF put frames of a time-lapse on one scale)");
   cl.Text("--response", &response, "NAME",
           "camera response: debevec (default, recovered), weighted (recovered, noise-weighted:\n"
-          "README \"Response recovery on unseen curves\"), robertson, linear, srgb");
+          "README \"Capture: lat-long brackets and camera-response recovery\"),\n"
+          "robertson, linear, srgb");
   cl.Text("--lens", &lens, "NAME",
           "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
           "stereographic or kannala-brandt");
