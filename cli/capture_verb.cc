@@ -38,9 +38,43 @@ ImageRGB PlaneAsImage(const std::vector<float>& plane, int w, int h) {
 
 }  // namespace
 
+std::array<double, 3> CaptureOptions::CameraRotationDeg() const {
+  if (camera_ypr_deg) return *camera_ypr_deg;
+  if (lens.model == capture::LensModel::kLatLong) return {0.0, 0.0, 0.0};
+  return {0.0, 90.0, 0.0};
+}
+
 bool CaptureOptions::IsValid(std::string* why) const {
   if (brackets.empty() == rig_path.empty()) {
     *why = "give either --brackets IMG... (one camera) or --rig RIG.json";
+    return false;
+  }
+  // Lens flags that contradict the input: refused, never silently dropped.
+  std::vector<std::string> lens_flags;
+  if (lens_fov_given) lens_flags.push_back("--lens-fov-deg");
+  if (lens_center_given) lens_flags.push_back("--lens-center");
+  if (lens_radius_given) lens_flags.push_back("--lens-radius");
+  if (kb_given) lens_flags.push_back("--kb-k");
+  if (vignetting_given) lens_flags.push_back("--vignetting");
+  auto joined = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& f : v) s += (s.empty() ? "" : ", ") + f;
+    return s;
+  };
+  if (!rig_path.empty() && (lens_model_given || !lens_flags.empty() || camera_ypr_deg)) {
+    *why = "--rig: the rig file gives each camera's lens and rotation; drop --lens, --camera-rotation and the "
+           "other lens flags";
+    return false;
+  }
+  if (lens.model == capture::LensModel::kLatLong && !lens_flags.empty()) {
+    *why = "--lens latlong: " + joined(lens_flags) +
+           " describe a fisheye's image circle; a lat-long input has none (it spans 360 x 180 degrees, its "
+           "centre and radius follow from its size). Drop them, or give the fisheye model with --lens";
+    return false;
+  }
+  if (kb_given && lens.model != capture::LensModel::kKannalaBrandt) {
+    *why = std::string("--kb-k: Kannala-Brandt coefficients need --lens kannala-brandt (got --lens ") +
+           capture::LensModelName(lens.model) + ")";
     return false;
   }
   if (!brackets.empty() && brackets.size() < 2) {
@@ -123,7 +157,10 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
     if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
     if (cam.lens.model == capture::LensModel::kLatLong) cam.lens = capture::LatLongLens(cam.width, cam.height);
     if (!cam.lens.IsValid(&why, cam.width, cam.height)) throw Error("lens: " + why);
-    cam.rotation = capture::RotationFromYawPitchRollDeg(o.camera_ypr_deg[0], o.camera_ypr_deg[1], o.camera_ypr_deg[2]);
+    const std::array<double, 3> ypr = o.CameraRotationDeg();
+    cam.rotation = capture::RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
+    if (cam.lens.model == capture::LensModel::kLatLong && !o.camera_ypr_deg)
+      Log("capture", "--lens latlong: camera rotation = identity (the input is already a world lat-long)");
     cam.name = "camera";
     measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
     images.push_back(std::move(merged.radiance));
@@ -247,6 +284,10 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   attrs.floats["skycalExposureScale"] = static_cast<float>(exposure_scale);
   attrs.strings["skycalSources"] = sources.dump();
   attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(capture::LensModelName(o.lens.model)) : "rig " + o.rig_path;
+  if (o.rig_path.empty()) {
+    const std::array<double, 3> ypr = o.CameraRotationDeg();
+    attrs.v3fs["skycalCameraRotationDeg"] = {static_cast<float>(ypr[0]), static_cast<float>(ypr[1]), static_cast<float>(ypr[2])};
+  }
   attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
   attrs.strings["skycalVersion"] = kSkycalVersion;
   WriteExrRGBWithPlanes(o.out, frame, planes, attrs);
@@ -270,7 +311,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
 CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   VerbCommandLine cl(
       "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
-      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|robertson|linear|srgb]\n"
+      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|weighted|robertson|linear|srgb]\n"
       "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
       "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
       "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
@@ -286,7 +327,10 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Text("--exposure-times", &exposure_times, "T,...",
           "seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from\n"
           "EXIF put frames of a time-lapse on one scale)");
-  cl.Text("--response", &response, "NAME", "camera response: debevec (default, recovered), robertson, linear, srgb");
+  cl.Text("--response", &response, "NAME",
+          "camera response: debevec (default, recovered), weighted (recovered, noise-weighted:\n"
+          "README \"Capture: lat-long brackets and camera-response recovery\"),\n"
+          "robertson, linear, srgb");
   cl.Text("--lens", &lens, "NAME",
           "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
           "stereographic or kannala-brandt");
@@ -297,7 +341,8 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Text("--vignetting", &vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
   cl.Text("--camera-rotation", &rotation, "Y,P,R",
           "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
-          "degrees (default 0,90,0: looking straight up)");
+          "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"
+          "panorama is already the world's lat-long)");
   cl.Text("--rig", &o.rig_path, "RIG.json",
           "several cameras (format: capture/include/skycal/capture/rig.h; each camera's\n"
           "image is an HDR EXR, e.g. merged by an earlier capture of that camera with\n"
@@ -322,8 +367,12 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
     auto m = capture::LensModelFromName(*lens);
     if (!m) throw Error("--lens: unknown model '" + *lens + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
     o.lens.model = *m;
+    o.lens_model_given = true;
   }
-  if (lens_fov) o.lens.fov_deg = *lens_fov;
+  if (lens_fov) {
+    o.lens.fov_deg = *lens_fov;
+    o.lens_fov_given = true;
+  }
   if (lens_center) {
     const auto v = ParseNumberList(*lens_center, "--lens-center");
     if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
@@ -339,16 +388,18 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
     const auto v = ParseNumberList(*kb_k, "--kb-k");
     if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
     for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
+    o.kb_given = true;
   }
   if (vignetting) {
     const auto v = ParseNumberList(*vignetting, "--vignetting");
     if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
     for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
+    o.vignetting_given = true;
   }
   if (rotation) {
     const auto v = ParseNumberList(*rotation, "--camera-rotation");
     if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
-    o.camera_ypr_deg = {v[0], v[1], v[2]};
+    o.camera_ypr_deg = std::array<double, 3>{v[0], v[1], v[2]};
   }
   if (size) {
     const auto wh = ParseSize(*size, "--size");

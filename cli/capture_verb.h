@@ -21,8 +21,15 @@ struct CaptureOptions {
   capture::MergeOptions merge;
   std::string rig_path;                     // alternative: a rig file whose cameras name HDR EXRs
   capture::LensParams lens;                 // single camera
-  bool lens_center_given = false, lens_radius_given = false;
-  std::array<double, 3> camera_ypr_deg{0.0, 90.0, 0.0};  // yaw, pitch, roll; default: looking up
+  // Which lens flags the user gave: a lat-long input has no optical axis, field of view,
+  // image circle or radial distortion, so giving any of these with --lens latlong (or any
+  // lens flag with --rig) is refused as contradictory rather than silently ignored.
+  bool lens_model_given = false, lens_center_given = false, lens_radius_given = false;
+  bool lens_fov_given = false, kb_given = false, vignetting_given = false;
+  // yaw, pitch, roll in degrees; unset: the identity for --lens latlong (the panorama is
+  // already in the world's lat-long), 0,90,0 (looking straight up) for the fisheyes.
+  std::optional<std::array<double, 3>> camera_ypr_deg;
+  std::array<double, 3> CameraRotationDeg() const;  // the one used (defaults above)
   std::string input_colorspace = "lin_rec709";
   std::string time_iso;                     // with lat/lon: the sun by NREL SPA
   std::optional<double> latitude_deg, longitude_deg;

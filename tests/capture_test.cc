@@ -11,6 +11,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
+#include "run_binary.h"
 #include "synthetic_brackets.h"
 #include "synthetic_fisheye.h"
 #include "test_util.h"
@@ -52,7 +53,7 @@ cli::CaptureOptions BaseOptions(const Scene& s, const std::string& out) {
   o.merge.response = capture::ResponseModel::kSrgb;
   o.lens.model = capture::LensModel::kEquisolid;
   o.lens.fov_deg = 180.0;
-  o.camera_ypr_deg = {0.0, 90.0, 0.0};
+  o.camera_ypr_deg = std::array<double, 3>{0.0, 90.0, 0.0};
   o.width = 512;
   o.height = 256;
   o.out = out;
@@ -157,6 +158,72 @@ TEST(Capture, BadInputIsRefusedAndNothingIsWritten) {
   o.latitude_deg = 95.0;
   o.longitude_deg = 10.0;
   expect(o, "latitude");
+}
+
+// Lat-long brackets (an equirectangular camera, or a panorama already stitched) through the
+// binary: with --lens latlong and no --camera-rotation the frame is the input's own lat-long
+// (the old default, the fisheye's 0,90,0, turned it 90 degrees: ~80% error); contradictory
+// lens flags are refused, naming them, with nothing written.
+TEST(Capture, LatLongBracketsKeepTheirOrientationThroughTheBinary) {
+  testing::ScratchDir dir("capture-latlong");
+  std::string source;
+  const ImageRGB scene = synthetic::LoadBracketScene(256, 128, &source);
+  synthetic::BracketSpec spec;
+  spec.curve = synthetic::CameraCurve::kSrgb;
+  const synthetic::SyntheticBrackets b = synthetic::MakeSyntheticBrackets(scene, spec);
+  const std::vector<std::string> paths = synthetic::WriteBracketsPng(b, dir.path().string());
+  std::string args = "capture --brackets";
+  for (const auto& p : paths) args += " " + p;
+  args += " --exposure-times ";
+  for (size_t i = 0; i < spec.exposure_times_s.size(); ++i) args += (i ? "," : "") + std::to_string(spec.exposure_times_s[i]);
+  args += " --response srgb --lens latlong --size 256x128";
+  const double scale = (spec.iso / 100.0) / (spec.f_number * spec.f_number);  // PNGs: the merge divides by t only
+  // Median relative error of a written frame against the scene, pixels well measured only.
+  auto median_error = [&](const std::string& path) {
+    const ExrRGB frame = ReadExrRGB(path);
+    EXPECT_EQ(frame.image.width, 256);
+    std::vector<double> rel;
+    for (size_t p = 0; p < b.truth_well.size(); ++p) {
+      if (!b.truth_well[p]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const double truth = b.truth.pixels[3 * p + c] * scale;
+        rel.push_back(std::fabs(frame.image.pixels[3 * p + c] - truth) / truth);
+      }
+    }
+    EXPECT_GT(rel.size(), 3u * 256 * 128 / 2);
+    return synthetic::Quantile(rel, 0.5);
+  };
+  const std::string out = dir / "frame.exr";
+  const auto r = testing::RunSkycal(SKYCAL_BINARY, args + " --out " + out);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("camera rotation = identity"), std::string::npos) << r.err;
+  const double err_default = median_error(out);
+  std::printf("[measured] latlong default rotation: median rel error %.4f\n", err_default);
+  // sRGB decode of noisy 8-bit codes and the unwrap's bilinear resampling at the same size.
+  EXPECT_LT(err_default, 0.03);
+  // Control: the old default (looking up) turns the panorama, and the error shows it.
+  const std::string turned = dir / "turned.exr";
+  ASSERT_EQ(testing::RunSkycal(SKYCAL_BINARY, args + " --camera-rotation 0,90,0 --out " + turned).rc, 0);
+  const double err_turned = median_error(turned);
+  std::printf("[measured] latlong with --camera-rotation 0,90,0: median rel error %.4f\n", err_turned);
+  EXPECT_GT(err_turned, 10.0 * err_default);
+  // Contradictions: refused (exit 1) naming the flag, nothing written.
+  const int before = dir.CountEntries();
+  for (const auto& [extra, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"--lens-fov-deg 180", "--lens-fov-deg"},
+           {"--lens-center 10,10 --lens-radius 50", "--lens-center, --lens-radius"},
+           {"--vignetting 0.1,0,0", "--vignetting"},
+           {"--kb-k 0,0,0,0", "--kb-k"}}) {
+    const auto bad = testing::RunSkycal(SKYCAL_BINARY, args + " " + extra + " --out " + (dir / "bad.exr"));
+    EXPECT_EQ(bad.rc, 1) << extra;
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("lat-long input has none"), std::string::npos) << bad.err;
+  }
+  const auto kb = testing::RunSkycal(SKYCAL_BINARY, "capture --brackets " + paths[0] + " " + paths[1] +
+                                                        " --exposure-times 1,2 --kb-k 0,0,0,0 --out " + (dir / "bad.exr"));
+  EXPECT_EQ(kb.rc, 1);
+  EXPECT_NE(kb.err.find("need --lens kannala-brandt"), std::string::npos) << kb.err;
+  EXPECT_EQ(dir.CountEntries(), before);
 }
 
 }  // namespace

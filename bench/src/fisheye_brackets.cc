@@ -32,7 +32,7 @@ cli::CaptureOptions FisheyeCaptureOptions(const std::vector<std::string>& bracke
   co.merge.response = capture::ParseResponseModel(response, "response");
   co.lens.model = capture::LensModel::kEquisolid;
   co.lens.fov_deg = 180.0;
-  co.camera_ypr_deg = {0.0, 90.0, 0.0};
+  co.camera_ypr_deg = std::array<double, 3>{0.0, 90.0, 0.0};
   co.width = width;
   co.height = width / 2;
   co.out = out;

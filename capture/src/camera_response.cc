@@ -16,11 +16,6 @@ namespace {
 
 double SrgbToLinear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
 
-uint8_t Code8(const BracketImage& img, size_t i) {
-  const unsigned v = img.rgb[i];
-  return static_cast<uint8_t>(img.bits == 16 ? std::min(255u, (v + 128u) / 257u) : std::min(255u, v));
-}
-
 // Debevec's solver sees only the sampled pixels, so pick them rather than a blind grid: a
 // dense grid of candidates, keep those well exposed (in every channel) in at least two
 // brackets (a pixel black or clipped in all but one bracket adds an unknown and no
@@ -116,39 +111,14 @@ std::vector<double> SolveNormal(const cv::Mat& H, const cv::Mat& rhs, const char
 // Debevec & Malik: minimise sum w(Z_pj)^2 [g(Z_pj) - ln E_p - ln k_j]^2 + smoothness
 // (AddSmoothness), g(128) = 0, over well-exposed samples only (w = 0 elsewhere). Each ln E_p
 // touches only its own <= n rows, so it is eliminated in closed form (Schur complement)
-// and the system is 256 x 256 whatever the sample count. A 1e-6 ridge on ln E keeps a
-// sample without a well-exposed bracket from making it singular.
+// and the system is 256 x 256 whatever the sample count (AddSamplesEliminatingLnE); a
+// sample without a well-exposed bracket adds nothing.
 std::vector<double> SolveDebevec(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
                                  const WeightTable& data_w, const WeightTable& smooth_w, double lambda) {
-  const size_t samples = codes.size() / n;
   cv::Mat H = cv::Mat::zeros(256, 256, CV_64F), rhs = cv::Mat::zeros(256, 1, CV_64F);
-  std::vector<int> zs;
-  std::vector<double> hs;
-  for (size_t p = 0; p < samples; ++p) {
-    double D = 1e-12, rE = 0.0;
-    zs.clear();
-    hs.clear();
-    for (size_t j = 0; j < n; ++j) {
-      const int z = codes[p * n + j];
-      const double w = data_w.w[z], a = w * w;
-      if (!(a > 0.0)) continue;
-      H.at<double>(z, z) += a;
-      rhs.at<double>(z, 0) += a * ln_k[j];
-      D += a;
-      rE -= a * ln_k[j];
-      const auto it = std::find(zs.begin(), zs.end(), z);
-      if (it == zs.end()) {
-        zs.push_back(z);
-        hs.push_back(-a);
-      } else {
-        hs[it - zs.begin()] -= a;
-      }
-    }
-    for (size_t u = 0; u < zs.size(); ++u) {
-      rhs.at<double>(zs[u], 0) -= hs[u] * rE / D;
-      for (size_t v = 0; v < zs.size(); ++v) H.at<double>(zs[u], zs[v]) -= hs[u] * hs[v] / D;
-    }
-  }
+  std::vector<double> a(256);
+  for (int z = 0; z < 256; ++z) a[z] = double(data_w.w[z]) * data_w.w[z];
+  AddSamplesEliminatingLnE(codes, n, ln_k, a, H.ptr<double>(), rhs.ptr<double>());
   H.at<double>(128, 128) += 1.0;
   AddSmoothness(&H, smooth_w, lambda);
   return SolveNormal(H, rhs, "Debevec");
@@ -217,6 +187,41 @@ std::vector<double> SolveRobertson(const std::vector<uint8_t>& codes, size_t n, 
 
 }  // namespace
 
+void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
+                              const std::vector<double>& a, double* H, double* rhs) {
+  const size_t samples = codes.size() / n;
+  std::vector<int> zs;
+  std::vector<double> hs;
+  for (size_t p = 0; p < samples; ++p) {
+    // Rows sqrt(a) (g(z_j) - ln E - ln k_j); ln E touches only these, so it is eliminated:
+    // H -= h h^T / D, rhs -= h r_E / D (h: the g-ln E block, D: the ln E diagonal).
+    double D = 0.0, rE = 0.0;
+    zs.clear();
+    hs.clear();
+    for (size_t j = 0; j < n; ++j) {
+      const int z = codes[p * n + j];
+      const double w = a[z];
+      if (!(w > 0.0)) continue;
+      H[z * 256 + z] += w;
+      rhs[z] += w * ln_k[j];
+      D += w;
+      rE -= w * ln_k[j];
+      const auto it = std::find(zs.begin(), zs.end(), z);
+      if (it == zs.end()) {
+        zs.push_back(z);
+        hs.push_back(-w);
+      } else {
+        hs[it - zs.begin()] -= w;
+      }
+    }
+    if (zs.empty()) continue;
+    for (size_t u = 0; u < zs.size(); ++u) {
+      rhs[zs[u]] -= hs[u] * rE / D;
+      for (size_t v = 0; v < zs.size(); ++v) H[zs[u] * 256 + zs[v]] -= hs[u] * hs[v] / D;
+    }
+  }
+}
+
 WeightTable MakeWeights(const MergeOptions& o, int max_code, bool thresholded) {
   WeightTable t;
   t.w.resize(static_cast<size_t>(max_code) + 1);
@@ -258,6 +263,23 @@ std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& image
   nlohmann::json cal;
   // Pixels: Debevec a few picked ones, Robertson a stride-subsampled grid.
   std::vector<size_t> pixel_index;
+  if (o.response == ResponseModel::kWeighted) {
+    std::vector<double> ln_k(n);
+    for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
+    curve.assign(256 * 3, 0.0f);
+    std::vector<nlohmann::json> per_channel(3);
+    ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
+      for (int c = c0; c < c1; ++c) {
+        const std::vector<double> g = RecoverWeightedLogResponse(images, ln_k, c, o, &per_channel[c]);
+        for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(std::exp(g[z] - g[255]));
+      }
+    });
+    cal = {{"method", "weighted"}, {"solver", "skycal (noise-weighted log response)"}, {"channels", per_channel}};
+    cal["decreasing_steps"] = NormaliseResponse(&curve, 256);
+    cal["time_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (report) (*report)["calibration"] = cal;
+    return curve;
+  }
   if (o.response == ResponseModel::kDebevec) {
     int candidates = 0, informative = 0;
     pixel_index = SelectDebevecSamples(images, o, &candidates, &informative);

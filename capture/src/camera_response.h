@@ -1,6 +1,8 @@
 // Camera response curves for the merge (internal to skycal_capture): analytic ones and
 // recovery from brackets with OpenCV's photo module.
 #pragma once
+#include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +10,12 @@
 #include "skycal/capture/hdr_merge.h"
 
 namespace skycal::capture::detail {
+
+// A bracket's code at buffer index i on the 8-bit scale (16-bit codes rounded).
+inline uint8_t Code8(const BracketImage& img, size_t i) {
+  const unsigned v = img.rgb[i];
+  return static_cast<uint8_t>(img.bits == 16 ? std::min(255u, (v + 128u) / 257u) : std::min(255u, v));
+}
 
 // Well-exposedness weights per code (MergeOptions::weight); with `thresholded`, 0 at or
 // below low_code and at or above high_code, > 0 strictly between (the "well exposed" codes).
@@ -30,6 +38,19 @@ std::vector<float> AnalyticResponse(ResponseModel model, int levels);
 std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
                                    const std::vector<double>& relative_exposure, const MergeOptions& options,
                                    nlohmann::json* report);
+
+// Adds samples' equations a(z) [g(z_pj) - ln E_p - ln k_j]^2 (codes[p * n + j], weight a per
+// code, 0 = unused) to the normal equations of the 256 g's, each ln E_p eliminated in closed
+// form (Schur complement), so the system stays 256 x 256 whatever the sample count. H: 256 x
+// 256 doubles (symmetric, so either storage order), rhs: 256.
+void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
+                              const std::vector<double>& a, double* H, double* rhs);
+
+// ResponseModel::kWeighted for channel c (weighted_response.cc): g(z) = ln f(z) per 8-bit
+// code, up to a constant; ln_k per image (sorted as for RecoverResponse). Fills *report.
+std::vector<double> RecoverWeightedLogResponse(const std::vector<const BracketImage*>& images,
+                                               const std::vector<double>& ln_k, int c, const MergeOptions& options,
+                                               nlohmann::json* report);
 
 // Fills non-finite entries from their neighbours, clamps negatives to 0 and scales each
 // channel so the top code is 1. Returns the number of decreasing steps (all channels).

@@ -38,6 +38,7 @@ struct Tally {
 
 const char* ResponseModelName(ResponseModel m) {
   switch (m) {
+    case ResponseModel::kWeighted: return "weighted";
     case ResponseModel::kDebevec: return "debevec";
     case ResponseModel::kRobertson: return "robertson";
     case ResponseModel::kLinear: return "linear";
@@ -47,9 +48,9 @@ const char* ResponseModelName(ResponseModel m) {
 }
 
 ResponseModel ParseResponseModel(const std::string& name, const std::string& what) {
-  for (ResponseModel m : {ResponseModel::kDebevec, ResponseModel::kRobertson, ResponseModel::kLinear, ResponseModel::kSrgb})
+  for (ResponseModel m : {ResponseModel::kWeighted, ResponseModel::kDebevec, ResponseModel::kRobertson, ResponseModel::kLinear, ResponseModel::kSrgb})
     if (name == ResponseModelName(m)) return m;
-  throw Error(what + ": unknown response model '" + name + "' (expected debevec, robertson, linear or srgb)");
+  throw Error(what + ": unknown response model '" + name + "' (expected weighted, debevec, robertson, linear or srgb)");
 }
 
 bool MergeOptions::IsValid(std::string* why) const {
@@ -59,6 +60,12 @@ bool MergeOptions::IsValid(std::string* why) const {
   };
   if (samples < 2) return fail("samples: need >= 2 pixel locations for the response calibration, got " + std::to_string(samples));
   if (!(lambda > 0.0) || !std::isfinite(lambda)) return fail("lambda: need a finite smoothness weight > 0, got " + Num(lambda));
+  if (weighted_samples < 2) return fail("weighted_samples: need >= 2, got " + std::to_string(weighted_samples));
+  if (!(weighted_lambda > 0.0) || !std::isfinite(weighted_lambda))
+    return fail("weighted_lambda: need a finite smoothness weight > 0, got " + Num(weighted_lambda));
+  if (weighted_iterations < 0 || weighted_iterations > 20) return fail("weighted_iterations: need 0..20");
+  if (!(weighted_low_code >= 1 && weighted_low_code + 8 <= weighted_high_code && weighted_high_code <= 254))
+    return fail("weighted_low_code/weighted_high_code: need 1 <= low, low + 8 <= high <= 254 (8-bit codes)");
   if (robertson_max_iterations < 1) return fail("robertson_max_iterations: need >= 1");
   if (!(robertson_threshold > 0.0)) return fail("robertson_threshold: need > 0");
   if (calibration_max_pixels < 0) return fail("calibration_max_pixels: need >= 0 (0 = all)");
@@ -81,6 +88,10 @@ nlohmann::json MergeOptionsToJson(const MergeOptions& o) {
           {"fixed_curve_levels", o.response_curve.size() / 3},
           {"samples", o.samples},
           {"lambda", o.lambda},
+          {"weighted_samples", o.weighted_samples},
+          {"weighted_lambda", o.weighted_lambda},
+          {"weighted_iterations", o.weighted_iterations},
+          {"weighted_codes", {o.weighted_low_code, o.weighted_high_code}},
           {"robertson_max_iterations", o.robertson_max_iterations},
           {"robertson_threshold", o.robertson_threshold},
           {"calibration_max_pixels", o.calibration_max_pixels},

@@ -29,12 +29,14 @@ namespace skycal::capture {
 
 // How code values map to linear sensor values.
 enum class ResponseModel {
+  kWeighted,   // recovered from the brackets: Debevec & Malik's log least squares over thousands of
+               // samples with inverse-noise-variance weights (capture/src/weighted_response.cc)
   kDebevec,    // recovered from the brackets: Debevec & Malik 1997 least squares on sampled pixels
   kRobertson,  // recovered from the brackets: Robertson et al. 2003 iteration on (subsampled) pixels
   kLinear,     // code / max code (raw developed to linear TIFF/PNG)
   kSrgb,       // inverse sRGB transfer function (IEC 61966-2-1), e.g. camera JPEGs
 };
-const char* ResponseModelName(ResponseModel m);  // "debevec", "robertson", "linear", "srgb"
+const char* ResponseModelName(ResponseModel m);  // "weighted", "debevec", "robertson", "linear", "srgb"
 // Parses the names above; throws skycal::Error naming `what` (e.g. "--response") otherwise.
 ResponseModel ParseResponseModel(const std::string& name, const std::string& what);
 
@@ -81,6 +83,16 @@ struct MergeOptions {
   // 8% to under 3%; the error of the overall scale (a gauge, see response_curve) stayed
   // under 10% (8.8% vs 7.5% at worst).
   double lambda = 100.0;
+  // kWeighted: pixel samples per channel, smoothness (the data term is in chi-square units
+  // of 1 DN of code noise, so this does not scale with the sample count), reweighting
+  // passes and the codes fitted (the curve past them is extrapolated log-linearly).
+  int weighted_samples = 8000;
+  // 3e5 and 5 passes: the best worst case over lambda 1e3..3e6, 2..5 passes, 8000..60000
+  // samples on the bench's 4 shapes x 3 bracket sets (bench/results/capture_response.md).
+  double weighted_lambda = 3e5;
+  int weighted_iterations = 5;
+  int weighted_low_code = 3;
+  int weighted_high_code = 252;
   int robertson_max_iterations = 50;     // from a linear start it converges in ~25-35 (measured)
   double robertson_threshold = 0.001;    // Robertson: stop when the curve's mean |change of ln| per code is below
                                          // this (with opencv_calibration: OpenCV's criterion, default 0.01)

@@ -1,0 +1,179 @@
+// Camera responses the merge code has never seen, for response-recovery tests and the
+// bench (bench/bench_response.cc): brackets of a real sky made through them with photon,
+// read and DN noise and clipping (synthetic_brackets.h's camera, another tone curve), the
+// merge through the true curve (the "known-response merge") as the floor to compare against.
+//
+// Every curve maps linear sensor value x in [0, 1] (after white balance: every channel
+// clips at 1) to a normalised code v in [0, 1], increasing, 0 -> 0 and 1 -> 1: the top code
+// is full scale in every channel, the convention a recovered curve's gauge relies on
+// (hdr_merge.h, MergeResult::response_curve).
+#pragma once
+#include <array>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "synthetic_brackets.h"
+
+namespace skycal::synthetic {
+
+using ToneCurve = std::function<double(double)>;
+
+struct ResponseShape {
+  std::string name;
+  std::array<ToneCurve, 3> encode;  // R, G, B: x in [0, 1] -> v in [0, 1]
+};
+
+// S-curve on a log axis: a logistic in log2 x (slope a per stop, centre c stops), rescaled so
+// that x = 1 gives 1 (x -> 0 gives 0).
+inline ToneCurve LogisticInStops(double a, double c) {
+  return [a, c](double x) {
+    if (x <= 0.0) return 0.0;
+    auto s = [&](double u) { return 1.0 / (1.0 + std::exp(-a * (std::log2(u) - c))); };
+    return s(x) / s(1.0);
+  };
+}
+
+// A film-like curve with a toe and a shoulder: John Hable's filmic operator (the Uncharted 2
+// curve, GDC 2010: a rational function with shoulder strength, linear strength and angle,
+// toe strength, numerator and denominator), white point w, then a display gamma.
+inline ToneCurve FilmToeShoulder(double w, double gamma) {
+  auto h = [](double u) {
+    const double A = 0.15, B = 0.50, C = 0.10, D = 0.20, E = 0.02, F = 0.30;
+    return (u * (A * u + C * B) + D * E) / (u * (A * u + B) + D * F) - E / F;
+  };
+  return [h, w, gamma](double x) { return std::pow(std::max(0.0, h(x * w) / h(w)), 1.0 / gamma); };
+}
+
+// A power law with a smooth video-style knee: tanh(b x^(1/g)) / tanh(b).
+inline ToneCurve GammaKnee(double g, double b) {
+  return [g, b](double x) { return std::tanh(b * std::pow(std::max(x, 0.0), 1.0 / g)) / std::tanh(b); };
+}
+
+// A display gamma followed by the contrast S y^a / (y^a + (1-y)^a).
+inline ToneCurve GammaContrast(double g, double a) {
+  return [g, a](double x) {
+    const double y = std::pow(std::clamp(x, 0.0, 1.0), 1.0 / g), p = std::pow(y, a), q = std::pow(1.0 - y, a);
+    return p / (p + q);
+  };
+}
+
+inline std::vector<ResponseShape> UnseenResponseShapes() {
+  return {
+      {"log-S (logistic in stops)", {LogisticInStops(0.85, -2.3), LogisticInStops(0.85, -2.3), LogisticInStops(0.85, -2.3)}},
+      {"film toe+shoulder (Hable)", {FilmToeShoulder(11.2, 2.2), FilmToeShoulder(11.2, 2.2), FilmToeShoulder(11.2, 2.2)}},
+      {"gamma 1.8 + knee", {GammaKnee(1.8, 1.3), GammaKnee(1.8, 1.3), GammaKnee(1.8, 1.3)}},
+      {"per-channel (3 shapes)", {FilmToeShoulder(6.0, 2.0), LogisticInStops(1.0, -2.0), GammaKnee(2.4, 1.6)}},
+  };
+}
+
+// A curve whose slope is zero at white (gamma 2.6, then the contrast S with a = 1.5, the
+// family of synthetic_brackets.h's filmic curve): codes 252..255 span 13% of the sensor
+// range, so the top code's value (the gauge) is an extrapolation; the same in every channel,
+// that error is one global scale and divides out (bench/results/capture_response.md).
+inline ResponseShape FlatShoulderShape() {
+  return {"flat shoulder (gamma 2.6 + contrast S)", {GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5)}};
+}
+
+struct ShapeBracketSpec {
+  int brackets = 5;
+  double ev_step = 2.0;         // stops between consecutive brackets
+  double dn_noise = 0.6;        // Gaussian noise in 8-bit code units, after the tone curve
+  double full_well_e = 10000.0; // photon noise as synthetic_brackets.h's camera
+  double read_noise_e = 3.0;
+  unsigned seed = 1;
+};
+
+// The inverse of an increasing curve on [0, 1] by bisection.
+inline double InvertCurve(const ToneCurve& f, double v) {
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (f(mid) < v ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// 8-bit brackets of `scene` through `shape`: times 1/60 s * 2^(ev (i - (n-1)/2)), f/8 ISO 100,
+// the gain putting the scene's median luminance at 0.18 of full scale in the middle bracket.
+// truth_response is the true curve at each code (what a known-response merge uses).
+inline SyntheticBrackets MakeShapeBrackets(const ImageRGB& scene, const ResponseShape& shape, const ShapeBracketSpec& spec) {
+  BracketSpec base;
+  base.exposure_times_s.clear();
+  for (int i = 0; i < spec.brackets; ++i)
+    base.exposure_times_s.push_back(std::exp2(spec.ev_step * (i - 0.5 * (spec.brackets - 1))) / 60.0);
+  base.noise = false;
+  base.curve = CameraCurve::kLinear;
+  SyntheticBrackets out = MakeSyntheticBrackets(scene, base);  // truth, gain, exposures; codes redone below
+  const int n = spec.brackets;
+  std::vector<double> k(n);
+  for (int i = 0; i < n; ++i) k[i] = base.exposure_times_s[i] * (base.iso / 100.0) / (base.f_number * base.f_number);
+  std::vector<std::thread> pool;
+  for (int i = 0; i < n; ++i) {
+    pool.emplace_back([&, i] {
+      capture::Bracket& b = out.brackets[i];
+      std::mt19937 rng(spec.seed * 7919u + static_cast<unsigned>(i));
+      std::normal_distribution<double> gauss(0.0, 1.0);
+      for (size_t s = 0; s < scene.pixels.size(); ++s) {
+        double x = out.gain * scene.pixels[s] * k[i];
+        const double e = std::min(x, 2.0) * spec.full_well_e;
+        x = (e + std::sqrt(e) * gauss(rng) + spec.read_noise_e * gauss(rng)) / spec.full_well_e;
+        const double v = shape.encode[s % 3](std::clamp(x, 0.0, 1.0)) * 255.0 + spec.dn_noise * gauss(rng);
+        b.image.rgb[s] = static_cast<uint16_t>(std::clamp<long>(std::lround(v), 0, 255));
+      }
+    });
+  }
+  for (auto& t : pool) t.join();
+  for (int z = 0; z <= 255; ++z)
+    for (int c = 0; c < 3; ++c) out.truth_response[static_cast<size_t>(z) * 3 + c] = static_cast<float>(InvertCurve(shape.encode[c], z / 255.0));
+  // Truth mask: every channel's noise-free code well exposed (2%..98%) in at least one bracket.
+  out.truth_well_pixels = 0;
+  const size_t pixels = static_cast<size_t>(scene.width) * scene.height;
+  for (size_t p = 0; p < pixels; ++p) {
+    bool all = true;
+    for (int c = 0; c < 3 && all; ++c) {
+      bool any = false;
+      for (int i = 0; i < n && !any; ++i) {
+        const long z = std::lround(shape.encode[c](std::min(1.0, out.gain * scene.pixels[3 * p + c] * k[i])) * 255.0);
+        any = z > 5 && z < 250;
+      }
+      all = any;
+    }
+    out.truth_well[p] = all;
+    out.truth_well_pixels += all;
+  }
+  return out;
+}
+
+// Median and p90 relative error of a merge over the truth mask after one global scale (the
+// median ratio of all channels together: a recovered curve's overall scale is a gauge, but
+// the channels' balance is not, given the top-code convention above).
+struct ShapeMergeError {
+  double median = 0.0, p90 = 0.0, scale = 1.0;
+  std::array<double, 3> channel{1.0, 1.0, 1.0};  // median ratio per channel / scale: the balance error
+};
+inline ShapeMergeError EvaluateShapeMerge(const ImageRGB& merged, const SyntheticBrackets& s) {
+  std::vector<double> ratio;
+  const size_t pixels = s.truth_well.size();
+  for (size_t p = 0; p < pixels; ++p)
+    if (s.truth_well[p])
+      for (int c = 0; c < 3; ++c) ratio.push_back(merged.pixels[3 * p + c] / s.truth.pixels[3 * p + c]);
+  ShapeMergeError e;
+  e.scale = Quantile(ratio, 0.5);
+  std::vector<double> rel;
+  rel.reserve(ratio.size());
+  for (double r : ratio) rel.push_back(std::fabs(r / e.scale - 1.0));
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> rc;
+    for (size_t i = c; i < ratio.size(); i += 3) rc.push_back(ratio[i] / e.scale);
+    e.channel[c] = Quantile(rc, 0.5);
+  }
+  e.median = Quantile(rel, 0.5);
+  e.p90 = Quantile(rel, 0.9);
+  return e;
+}
+
+}  // namespace skycal::synthetic
