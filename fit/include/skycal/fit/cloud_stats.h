@@ -49,8 +49,9 @@ struct CloudStatsOptions {
   // leaves below half of it adds zero residuals at that point.
   double min_bin_sr = 0.01;
   // The lighting parameters fitted (clouds.* names of CloudParameterSpecs()); every other
-  // field is held at the initial value. The default set is what the statistics separate in
-  // bench/results/cloud_stats_seed_pairs.md; the silver-lining lobe (phase_g2, phase_blend:
+  // field is held at the initial value. The default set: the fields with a distinct signature
+  // in the bins (recovered exactly with known shapes; with unknown shapes from ONE reference
+  // 13-100% off, bench/results/cloud_stats_seed_pairs.md says why); the silver-lining lobe (phase_g2, phase_blend:
   // with unknown shapes, few cloud pixels lie within ~20 deg of the sun and the
   // three-parameter phase is not separable from the sun-angle bins: errors of 30-250% when
   // fitted), albedo (an overall scale with the sun and the exposure), powder_view_fade, rain_absorption (no rain in a fair-weather photo),
