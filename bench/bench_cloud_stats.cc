@@ -6,7 +6,8 @@
 // bench/results/cloud_stats_seed_pairs.md (+ .json); the control pair fits with the
 // reference's own seeds (known shapes).
 //
-// Usage: bench_cloud_stats [PAIRS (default 6)] [OUT_STEM] [RENDER_WIDTH (default 256)]
+// Usage: bench_cloud_stats [PAIRS (default 6)] [OUT_STEM] [RENDER_WIDTH (default 256)] [REFERENCES_PER_FIT (default 1)]
+//   further references of a fit use noise/weather seeds (1 + k + 10 j, 11 + k + 10 j)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -53,10 +54,13 @@ int main(int argc, char** argv) {
     options.render_width = std::max(16, std::atoi(argv[3]));
     options.render_height = options.render_width / 2;
   }
+  // References per fit (the same lighting over several skies: the reference side's shape
+  // noise averages out); more than 1 skips the control.
+  const int refs_per_fit = argc > 4 ? std::max(1, std::atoi(argv[4])) : 1;
   nlohmann::json runs = nlohmann::json::array();
   std::vector<std::vector<double>> errors(kStart.size());  // per parameter, over the unknown-shape pairs
   std::ostringstream rows;
-  for (int k = 0; k <= pairs; ++k) {
+  for (int k = refs_per_fit > 1 ? 1 : 0; k <= pairs; ++k) {
     const bool control = k == 0;  // the known-shapes control: model seeds = reference seeds
     const bench::CloudStatsSeeds ref_seeds{static_cast<uint64_t>(1 + k), static_cast<uint64_t>(11 + k)};
     const bench::CloudStatsSeeds model_seeds =
@@ -75,7 +79,13 @@ int main(int argc, char** argv) {
     // The control renders the model once, at the reference's own wind time: the same shapes.
     fit::CloudStatsOptions run_options = options;
     if (control) run_options.model_renders = 1;
-    const fit::CloudStatsResult res = fit::FitCloudStats({scene.reference}, model, *renderer, run_options);
+    std::vector<fit::CloudStatsReference> refs = {scene.reference};
+    for (int j = 1; j < refs_per_fit; ++j) {
+      const bench::CloudStatsSeeds more{static_cast<uint64_t>(1 + k + 10 * j), static_cast<uint64_t>(11 + k + 10 * j)};
+      refs.push_back(
+          bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, more, model_seeds, 25.0, 30.0, options, *renderer, cache).reference);
+    }
+    const fit::CloudStatsResult res = fit::FitCloudStats(refs, model, *renderer, run_options);
     nlohmann::json run = {{"control_known_shapes", control},
                           {"reference_seeds", {ref_seeds.noise, ref_seeds.weather}},
                           {"model_seeds", {model_seeds.noise, model_seeds.weather}},
@@ -113,6 +123,7 @@ int main(int argc, char** argv) {
   }
   std::ostringstream md;
   md << "# Cloud lighting from statistics, unknown shapes: seed pairs\n\n"
+     << "References per fit: " << refs_per_fit << ".\n\n"
      << "`build/bench/bench_cloud_stats " << pairs << "` (fit/include/skycal/fit/cloud_stats.h, default options: "
      << options.render_width << "x" << options.render_height << " renders, bins sun angle 0-20-45-90-180 deg x elevation "
      << "2-15-35-90 deg x opacity thin/thick, quantiles 0.25-0.5-0.75 of log radiance per channel and the thick "
