@@ -12,6 +12,7 @@
 #include "export_verb.h"
 #include "fit_verb.h"
 #include "import_verb.h"
+#include "mask_verb.h"
 #include "probe_extract_verb.h"
 #include "probe_predict_verb.h"
 #include "render_verb.h"
@@ -38,6 +39,7 @@ const std::vector<Verb>& Verbs() {
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
+      {"mask", "find what is not sky in a reference frame (buildings, trees, terrain): a mask for fit --mask", &skycal::cli::RunMask},
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},
       {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
       {"bench", "run time against error per setting (Pareto plots), numerical stress, --compare two runs", &skycal::cli::RunBench},

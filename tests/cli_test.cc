@@ -186,6 +186,8 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                "--probe-quadrature", "--no-ground-albedo", "--out", "--json"}},
       {"import", {"--in", "--out", "--source-convention", "--sun-dir", "--detect-sun", "--min-sun-contrast", "--half",
                   "--json"}},
+      {"mask", {"--reference", "--out", "--horizon-deg", "--darkness", "--texture", "--ground-band-deg", "--dilate",
+                "--no-grabcut", "--json"}},
       {"probe-extract", {"--image", "--circle", "--camera-rotation", "--albedo", "--clip-level", "--out", "--json"}},
       {"probe-predict", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--albedo", "--normals",
                          "--sky-width", "--backend", "--ground", "--vulkan-validation", "--json"}},

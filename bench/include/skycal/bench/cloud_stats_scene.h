@@ -1,0 +1,74 @@
+// The synthetic unknown-shapes scene of the cloud statistics fit (issue 11, regime 2),
+// shared by its test (tests/cloud_stats_test.cc) and its seed-pair benchmark
+// (bench/bench_cloud_stats.cc): the bundled default_cloudy preset, a reference rendered with
+// one noise seed and weather-map seed, and a model scene with another pair of seeds and
+// the same weather statistics (default_cloudy's procedural map: mean coverage 0.32,
+// contrast 3, 8 cells). Header-only: the test does not link the bench library.
+#pragma once
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/core/latlong.h"
+#include "skycal/fit/cloud_stats.h"
+#include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
+
+namespace skycal::bench {
+
+struct CloudStatsSeeds {
+  uint64_t noise = 1, weather = 11;
+};
+
+struct CloudStatsSyntheticScene {
+  render::Preset preset;
+  clouds::CloudParams truth;
+  clouds::CloudNoise noise;        // the model's shapes
+  clouds::WeatherMap weather;
+  fit::CloudStatsReference reference;
+};
+
+inline clouds::WeatherMap CloudStatsWeather(uint64_t seed, double extent_m) {
+  clouds::WeatherNoiseOptions w;
+  w.mean_coverage = 0.32;
+  w.coverage_contrast = 3.0;
+  w.coverage_cells = 8;
+  return clouds::NoiseWeatherMap(seed, 256, extent_m, w);
+}
+
+// The reference is rendered with `ref_seeds` and the true parameters through `renderer`;
+// the model scene carries `model_seeds`. Noise is cached in `cache_dir`.
+inline CloudStatsSyntheticScene MakeCloudStatsScene(const std::string& source_dir, CloudStatsSeeds ref_seeds,
+                                                    CloudStatsSeeds model_seeds, double sun_elevation_deg,
+                                                    double sun_azimuth_deg, const fit::CloudStatsOptions& options,
+                                                    clouds::CloudRenderer& renderer, const std::string& cache_dir) {
+  CloudStatsSyntheticScene s;
+  s.preset = render::LoadPreset(source_dir + "/datasets/presets/default_cloudy.json");
+  s.truth = clouds::ParseCloudSectionText(s.preset.clouds_json, "default_cloudy.json");
+  s.noise = clouds::LoadOrGenerateCloudNoise(model_seeds.noise, cache_dir);
+  s.weather = CloudStatsWeather(model_seeds.weather, s.truth.weather_extent_m);
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(sun_elevation_deg, sun_azimuth_deg);
+  render::RenderRequest sky_req;
+  sky_req.sun_dir = sun;
+  sky_req.width = options.render_width;
+  sky_req.height = options.render_height;
+  sky_req.sun_disc = false;
+  auto& ref = s.reference;
+  ref.name = "synthetic";
+  ref.sun_dir = sun;
+  ref.clear_sky = render::CreateRenderer(render::Backend::kCpu)->Render(s.preset, sky_req);
+  const clouds::CloudNoise ref_noise = clouds::LoadOrGenerateCloudNoise(ref_seeds.noise, cache_dir);
+  const clouds::WeatherMap ref_weather = CloudStatsWeather(ref_seeds.weather, s.truth.weather_extent_m);
+  fit::CloudStatsScene ref_scene{&s.preset, s.truth, &ref_noise, &ref_weather};
+  const fit::CloudStatsRender r = fit::RenderForCloudStats(ref, ref_scene, s.truth, renderer, options);
+  ref.radiance = r.composite;
+  ref.opacity = r.opacity;
+  return s;
+}
+
+}  // namespace skycal::bench

@@ -1,0 +1,150 @@
+// The cloud lighting fit where the cloud SHAPES are unknown (issue 11, regime 2: what a
+// photograph is). Noise cannot reproduce a photo's clouds pixel by pixel, so the objective
+// compares statistics that do not need them: per bin of (angle from the sun, elevation,
+// opacity class), weighted quantiles of the log radiance of cloud pixels, per channel, of
+// the photo and of a render with the model's own shapes. The bins carry the lighting's
+// signatures: the silver lining toward the sun (phase lobes), dark bases and bright tops
+// (extinction, ambient), powder darkening away from the sun at thin edges (powder).
+//
+// The render is the composite L = L_sky T + L_cloud through a clouds::CloudRenderer (Vulkan
+// by default; the CPU reference works too), each pixel weighted by its opacity class, the
+// photo's pixels by its cloud opacity (capture's cloud probability for a photograph, 1 - T
+// of the reference render for a synthetic test). Quantiles are interpolated along the
+// weighted CDF, so they are continuous in the parameters (values and weights move, the
+// interpolation never jumps); derivatives are central differences through the renderer
+// (cloud_stats_term.h says why not Jets).
+//
+// This header keeps Ceres and Vulkan out: the cost and the FitTerm are in fit/src.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
+#include "skycal/core/image.h"
+#include "skycal/render/preset.h"
+
+namespace skycal::fit {
+
+struct CloudStatsOptions {
+  // Bin edges (deg). Angle from the sun: the silver lining lives in the first bins.
+  std::vector<double> sun_angle_edges_deg = {0.0, 20.0, 45.0, 90.0, 180.0};
+  std::vector<double> elevation_edges_deg = {2.0, 15.0, 35.0, 90.0};
+  std::vector<double> quantiles = {0.25, 0.5, 0.75};
+  // The model's statistics pool this many renders, the wind moved by model_time_step_s
+  // between them (other shapes from the same weather statistics): a photograph is one draw
+  // of a cloud population, the model's side need not be, and pooling halves its share of
+  // the shape noise in the statistics.
+  int model_renders = 2;
+  double model_time_step_s = 1800.0;  // s (10 m/s of wind: 18 km, half the draw distance)
+  // Weight of the residual per (sun angle, elevation) bin matching the thick share of cloud
+  // weight, thick / (thin + thick): the opacity distribution, which extinction sets.
+  double opacity_share_weight = 1.0;
+  // Opacity classes, smooth in the opacity a (1 - T): thick = smoothstep(thick_lo, thick_hi, a),
+  // thin = smoothstep(thin_lo, thin_hi, a) (1 - thick). Thin edges carry the powder term.
+  double thin_lo = 0.1, thin_hi = 0.35, thick_lo = 0.55, thick_hi = 0.9;
+  // A bin joins the objective when the reference's weight in it reaches this solid angle
+  // (sr; 0.01 sr is ~16 pixels of a 256x128 lat-long at mid elevations); a bin the render
+  // leaves below half of it adds zero residuals at that point.
+  double min_bin_sr = 0.01;
+  // The lighting parameters fitted (clouds.* names of CloudParameterSpecs()); every other
+  // field is held at the initial value. The default set: the fields with a distinct signature
+  // in the bins (recovered exactly with known shapes; with unknown shapes from ONE reference
+  // 13-100% off, bench/results/cloud_stats_seed_pairs.md says why); the silver-lining lobe (phase_g2, phase_blend:
+  // with unknown shapes, few cloud pixels lie within ~20 deg of the sun and the
+  // three-parameter phase is not separable from the sun-angle bins: errors of 30-250% when
+  // fitted), albedo (an overall scale with the sun and the exposure), powder_view_fade, rain_absorption (no rain in a fair-weather photo),
+  // ambient_height_bias and ground_bounce (traded against ambient_strength), the
+  // multiple-scattering octaves and atmosphere_blend are held, and cloud_stats says so.
+  std::vector<std::string> fitted = {"extinction", "phase_g1", "powder_strength", "ambient_strength"};
+  // Central-difference step per parameter, as a fraction of its (max - min) range.
+  double relative_step = 2e-3;
+  int max_iterations = 25;
+  int render_width = 256, render_height = 128;  // pixels of the model's render per reference
+  clouds::MarchOptions march;
+  bool IsValid(std::string* why) const;
+};
+
+// One reference: the photo (or a synthetic render) with what is known about it.
+struct CloudStatsReference {
+  std::string name;
+  ImageRGB radiance;                  // lat-long, cd/m^2 (model units: divide by the exposure first)
+  std::vector<float> opacity;         // per pixel in [0, 1]: cloud opacity (cloud probability of a photo)
+  std::vector<float> sky;             // per pixel: < 0.5 excludes (not sky); empty: every pixel above the horizon
+  std::array<double, 3> sun_dir{};    // toward the sun, unit
+  ImageRGB clear_sky;                 // the model's clear sky at the render size (L_sky of the composite)
+  double cloud_time_s = 0.0;          // the model render's wind time
+};
+
+// What the model renders with: the preset's light, the starting cloud parameters, noise and
+// weather map (the render's own shapes: any seed).
+struct CloudStatsScene {
+  const render::Preset* preset = nullptr;
+  clouds::CloudParams initial;
+  const clouds::CloudNoise* noise = nullptr;
+  const clouds::WeatherMap* weather = nullptr;
+};
+
+// Statistics of one image: per bin (sun angle x elevation x opacity class) the weight
+// (solid angle x class membership, sr) and the weighted quantiles of log radiance per channel.
+struct CloudStatistics {
+  int sun_bins = 0, elevation_bins = 0;
+  static constexpr int kOpacityClasses = 2;  // 0 thin, 1 thick
+  std::vector<double> weight;                // [bin]
+  std::vector<double> log_quantile;          // [bin][channel][quantile]
+  // thick / (thin + thick) weight per (sun angle, elevation) bin: [sun * elevation_bins + elevation]
+  std::vector<double> thick_share;
+  int Bin(int sun, int elevation, int opacity_class) const {
+    return (sun * elevation_bins + elevation) * kOpacityClasses + opacity_class;
+  }
+};
+// `opacity` and `sky` as in CloudStatsReference; pixels with a non-positive or non-finite
+// channel are left out. Throws skycal::Error on size mismatches.
+CloudStatistics ComputeCloudStatistics(const ImageRGB& radiance, const std::vector<float>& opacity,
+                                       const std::vector<float>& sky, const std::array<double, 3>& sun_dir,
+                                       const CloudStatsOptions& options);
+// The same over the pooled pixels of several images of one size (the model's renders).
+CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& radiance,
+                                       const std::vector<const std::vector<float>*>& opacity,
+                                       const std::vector<float>& sky, const std::array<double, 3>& sun_dir,
+                                       const CloudStatsOptions& options);
+
+struct CloudStatsParameter {
+  std::string name, unit;
+  double initial = 0.0, value = 0.0;
+  bool held = false;
+  std::string why_held;  // empty when fitted
+};
+
+struct CloudStatsResult {
+  clouds::CloudParams params;                 // the fitted set
+  std::vector<CloudStatsParameter> parameters;  // every lighting field, fitted or held
+  std::vector<CloudStatistics> reference_stats, initial_stats, final_stats;  // per reference
+  double initial_cost = 0.0, final_cost = 0.0;  // 1/2 sum of squared residuals
+  int iterations = 0;
+  long long renders = 0;
+  long long residuals = 0;
+  double time_s = 0.0;
+  // Singular values of the residual Jacobian at the solution (columns scaled to the
+  // parameters' ranges), largest first: a small ratio names what the bins cannot separate.
+  std::vector<double> singular_values;
+  std::string termination;
+};
+
+// Fits the lighting of `scene.initial` so the model's statistics match the references'.
+// Throws skycal::Error on invalid options, sizes or parameters (naming the field).
+CloudStatsResult FitCloudStats(const std::vector<CloudStatsReference>& refs, const CloudStatsScene& scene,
+                               clouds::CloudRenderer& renderer, const CloudStatsOptions& options);
+
+// The composite L = L_sky T + L_cloud the statistics see, rendered for one reference.
+struct CloudStatsRender {
+  ImageRGB composite;
+  std::vector<float> opacity;  // 1 - T
+};
+// `time_offset_s` is added to the reference's cloud_time_s.
+CloudStatsRender RenderForCloudStats(const CloudStatsReference& ref, const CloudStatsScene& scene,
+                                     const clouds::CloudParams& params, clouds::CloudRenderer& renderer,
+                                     const CloudStatsOptions& options, double time_offset_s = 0.0);
+
+}  // namespace skycal::fit

@@ -1,0 +1,313 @@
+// Statistics of cloud pixels and the objective built from them (cloud_stats.h,
+// cloud_stats_objective.h).
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "cloud_stats_objective.h"
+#include "skycal/clouds/composite.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+
+namespace skycal::fit {
+namespace {
+
+double Smoothstep(double lo, double hi, double v) {
+  const double t = std::clamp((v - lo) / (hi - lo), 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+bool Increasing(const std::vector<double>& v) {
+  for (size_t i = 1; i < v.size(); ++i)
+    if (!(v[i] > v[i - 1])) return false;
+  return v.size() >= 2 && std::isfinite(v.front()) && std::isfinite(v.back());
+}
+
+int FindBin(const std::vector<double>& edges, double v) {
+  if (v < edges.front() || v > edges.back()) return -1;
+  const auto it = std::upper_bound(edges.begin(), edges.end(), v);
+  return std::min(static_cast<int>(it - edges.begin()) - 1, static_cast<int>(edges.size()) - 2);
+}
+
+// Weighted quantile along the interpolated CDF: sample i sits at cumulative weight
+// c_i = sum_{j<i} w_j + w_i / 2 (sorted by value); the quantile at q W interpolates linearly
+// between neighbouring samples. Continuous in the values and in the weights.
+double WeightedQuantile(std::vector<std::pair<double, double>>& vw, double q) {
+  std::sort(vw.begin(), vw.end());
+  double total = 0.0;
+  for (const auto& p : vw) total += p.second;
+  const double target = q * total;
+  double c_prev = 0.0, v_prev = vw.front().first, acc = 0.0;
+  bool first = true;
+  for (const auto& [v, w] : vw) {
+    const double c = acc + 0.5 * w;
+    acc += w;
+    if (c >= target) {
+      if (first || c <= c_prev) return v;
+      return v_prev + (v - v_prev) * (target - c_prev) / (c - c_prev);
+    }
+    c_prev = c;
+    v_prev = v;
+    first = false;
+  }
+  return vw.back().first;
+}
+
+}  // namespace
+
+bool CloudStatsOptions::IsValid(std::string* why) const {
+  if (!Increasing(sun_angle_edges_deg) || sun_angle_edges_deg.front() < 0.0 || sun_angle_edges_deg.back() > 180.0) {
+    *why = "cloud stats: sun_angle_edges_deg must increase within [0, 180] deg (at least 2 edges)";
+    return false;
+  }
+  if (!Increasing(elevation_edges_deg) || elevation_edges_deg.front() < -90.0 || elevation_edges_deg.back() > 90.0) {
+    *why = "cloud stats: elevation_edges_deg must increase within [-90, 90] deg (at least 2 edges)";
+    return false;
+  }
+  if (quantiles.empty() || !std::all_of(quantiles.begin(), quantiles.end(), [](double q) { return q > 0.0 && q < 1.0; })) {
+    *why = "cloud stats: quantiles must be non-empty, each in (0, 1)";
+    return false;
+  }
+  if (!(0.0 <= thin_lo && thin_lo < thin_hi && thin_hi <= 1.0 && 0.0 <= thick_lo && thick_lo < thick_hi &&
+        thick_hi <= 1.0)) {
+    *why = "cloud stats: expected 0 <= thin_lo < thin_hi <= 1 and 0 <= thick_lo < thick_hi <= 1 (opacity)";
+    return false;
+  }
+  if (!(min_bin_sr > 0.0 && min_bin_sr < 4.0 * M_PI)) {
+    *why = "cloud stats: min_bin_sr = " + std::to_string(min_bin_sr) + " (expected (0, 4 pi) sr)";
+    return false;
+  }
+  if (!(relative_step > 0.0 && relative_step <= 0.1)) {
+    *why = "cloud stats: relative_step = " + std::to_string(relative_step) + " (expected (0, 0.1])";
+    return false;
+  }
+  if (max_iterations < 0 || max_iterations > 1000) {
+    *why = "cloud stats: max_iterations = " + std::to_string(max_iterations) + " (expected [0, 1000])";
+    return false;
+  }
+  if (render_width < 8 || render_height < 4 || render_width > 4096 || render_height > 2048) {
+    *why = "cloud stats: render size " + std::to_string(render_width) + "x" + std::to_string(render_height) +
+           " (expected 8x4 ... 4096x2048 pixels)";
+    return false;
+  }
+  if (model_renders < 1 || model_renders > 16) {
+    *why = "cloud stats: model_renders = " + std::to_string(model_renders) + " (expected an integer in [1, 16])";
+    return false;
+  }
+  if (!(std::isfinite(model_time_step_s) && std::abs(model_time_step_s) <= 1e6)) {
+    *why = "cloud stats: model_time_step_s = " + std::to_string(model_time_step_s) + " (expected |s| <= 1e6)";
+    return false;
+  }
+  if (!(opacity_share_weight >= 0.0 && opacity_share_weight <= 1e3)) {
+    *why = "cloud stats: opacity_share_weight = " + std::to_string(opacity_share_weight) + " (expected [0, 1000])";
+    return false;
+  }
+  if (fitted.empty()) {
+    *why = "cloud stats: no parameter to fit (fitted is empty)";
+    return false;
+  }
+  return march.IsValid(why);
+}
+
+CloudStatistics ComputeCloudStatistics(const ImageRGB& img, const std::vector<float>& opacity,
+                                       const std::vector<float>& sky, const std::array<double, 3>& sun,
+                                       const CloudStatsOptions& o) {
+  return ComputeCloudStatistics(std::vector<const ImageRGB*>{&img}, std::vector<const std::vector<float>*>{&opacity}, sky,
+                                sun, o);
+}
+
+CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& images,
+                                       const std::vector<const std::vector<float>*>& opacities,
+                                       const std::vector<float>& sky, const std::array<double, 3>& sun,
+                                       const CloudStatsOptions& o) {
+  if (images.empty() || images.size() != opacities.size()) throw Error("cloud stats: expected one opacity per image");
+  CloudStatistics s;
+  s.sun_bins = static_cast<int>(o.sun_angle_edges_deg.size()) - 1;
+  s.elevation_bins = static_cast<int>(o.elevation_edges_deg.size()) - 1;
+  const int bins = s.sun_bins * s.elevation_bins * CloudStatistics::kOpacityClasses;
+  const int nq = static_cast<int>(o.quantiles.size());
+  s.weight.assign(bins, 0.0);
+  s.log_quantile.assign(static_cast<size_t>(bins) * 3 * nq, 0.0);
+  s.thick_share.assign(static_cast<size_t>(s.sun_bins) * s.elevation_bins, 0.0);
+  std::vector<std::vector<std::pair<double, double>>> samples(static_cast<size_t>(bins) * 3);
+  const double deg = 180.0 / M_PI;
+  for (size_t image = 0; image < images.size(); ++image) {
+  const ImageRGB& img = *images[image];
+  const std::vector<float>& opacity = *opacities[image];
+  const size_t n = static_cast<size_t>(img.width) * img.height;
+  if (opacity.size() != n || (!sky.empty() && sky.size() != n))
+    throw Error("cloud stats: the opacity (" + std::to_string(opacity.size()) + ") and sky mask (" +
+                std::to_string(sky.size()) + ") must have one value per pixel of the " + std::to_string(img.width) +
+                "x" + std::to_string(img.height) + " image");
+  for (int y = 0; y < img.height; ++y) {
+    const int eb = FindBin(o.elevation_edges_deg, latlong::Latitude(y, img.height) * deg);
+    if (eb < 0) continue;
+    for (int x = 0; x < img.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * img.width + x;
+      if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
+      const double a = opacity[i];
+      const double thick = Smoothstep(o.thick_lo, o.thick_hi, a);
+      const double thin = Smoothstep(o.thin_lo, o.thin_hi, a) * (1.0 - thick);
+      if (thick <= 0.0 && thin <= 0.0) continue;
+      const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
+      if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
+      const auto v = latlong::PixelDirection(x, y, img.width, img.height);
+      const double c = std::clamp(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], -1.0, 1.0);
+      const int sb = FindBin(o.sun_angle_edges_deg, std::acos(c) * deg);
+      if (sb < 0) continue;
+      const double omega = latlong::PixelSolidAngle(x, y, img.width, img.height);
+      const double class_weight[2] = {thin, thick};
+      for (int k = 0; k < 2; ++k) {
+        if (class_weight[k] <= 0.0) continue;
+        const int bin = s.Bin(sb, eb, k);
+        const double w = omega * class_weight[k];
+        s.weight[bin] += w;
+        for (int ch = 0; ch < 3; ++ch) samples[static_cast<size_t>(bin) * 3 + ch].emplace_back(std::log(img.pixels[3 * i + ch]), w);
+      }
+    }
+  }
+  }
+  for (int sb = 0; sb < s.sun_bins; ++sb)
+    for (int eb = 0; eb < s.elevation_bins; ++eb) {
+      const double thin = s.weight[s.Bin(sb, eb, 0)], thick = s.weight[s.Bin(sb, eb, 1)];
+      s.thick_share[static_cast<size_t>(sb) * s.elevation_bins + eb] = thin + thick > 0.0 ? thick / (thin + thick) : 0.0;
+    }
+  for (int bin = 0; bin < bins; ++bin)
+    for (int ch = 0; ch < 3; ++ch) {
+      auto& vw = samples[static_cast<size_t>(bin) * 3 + ch];
+      if (vw.empty()) continue;
+      for (int q = 0; q < nq; ++q)
+        s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + q] = WeightedQuantile(vw, o.quantiles[q]);
+    }
+  return s;
+}
+
+CloudStatsRender RenderForCloudStats(const CloudStatsReference& ref, const CloudStatsScene& scene,
+                                     const clouds::CloudParams& params, clouds::CloudRenderer& renderer,
+                                     const CloudStatsOptions& o, double time_offset_s) {
+  if (ref.clear_sky.width != o.render_width || ref.clear_sky.height != o.render_height)
+    throw Error("cloud stats: reference '" + ref.name + "': the clear sky is " + std::to_string(ref.clear_sky.width) +
+                "x" + std::to_string(ref.clear_sky.height) + ", expected the render size " +
+                std::to_string(o.render_width) + "x" + std::to_string(o.render_height));
+  clouds::CloudScene cs{scene.preset, &params, scene.noise, scene.weather};
+  clouds::CloudRenderRequest req;
+  req.sun_dir = ref.sun_dir;
+  req.width = o.render_width;
+  req.height = o.render_height;
+  req.time_s = ref.cloud_time_s + time_offset_s;
+  req.march = o.march;
+  const clouds::CloudImage clouds_img = renderer.Render(cs, req);
+  CloudStatsRender out;
+  out.composite = clouds::CompositeClouds(ref.clear_sky, clouds_img);
+  out.opacity.resize(clouds_img.transmittance.size());
+  for (size_t i = 0; i < out.opacity.size(); ++i) out.opacity[i] = 1.0f - clouds_img.transmittance[i];
+  return out;
+}
+
+CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>& refs, const CloudStatsScene& scene,
+                                         clouds::CloudRenderer& renderer, const CloudStatsOptions& options)
+    : refs_(refs), scene_(scene), renderer_(renderer), options_(options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw Error(why);
+  if (!scene.preset || !scene.noise || !scene.weather) throw Error("cloud stats: the scene needs a preset, noise and a weather map");
+  if (refs.empty()) throw Error("cloud stats: no reference");
+  clouds::ValidateCloudParams(scene.initial, "cloud stats: initial parameters");
+  clouds::CloudParams init = scene.initial;
+  for (const std::string& name : options.fitted) {
+    const auto& specs = clouds::CloudParameterSpecs();
+    const auto it = std::find_if(specs.begin(), specs.end(), [&](const auto& s) { return name == s.name; });
+    if (it == specs.end() || it->kind != clouds::CloudParamSpec::kReal)
+      throw Error("cloud stats: fitted parameter 'clouds." + name + "' is not a real-valued cloud field");
+    const double v = *it->field(init);
+    free_.push_back({name, it->field, it->min, it->max, std::max(std::abs(v), 1e-3 * (it->max - it->min))});
+  }
+  for (const auto& r : refs) {
+    ref_stats_.push_back(ComputeCloudStatistics(r.radiance, r.opacity, r.sky, r.sun_dir, options));
+    std::vector<int> active;
+    for (int b = 0; b < static_cast<int>(ref_stats_.back().weight.size()); ++b)
+      if (ref_stats_.back().weight[b] >= options.min_bin_sr) active.push_back(b);
+    if (active.empty())
+      throw Error("cloud stats: reference '" + r.name + "' has no bin with at least " +
+                  std::to_string(options.min_bin_sr) + " sr of cloud (no cloud pixels to fit)");
+    num_residuals_ += static_cast<int>(active.size()) * 3 * static_cast<int>(options.quantiles.size());
+    active_bins_.push_back(std::move(active));
+    std::vector<int> shares;
+    const CloudStatistics& st = ref_stats_.back();
+    for (int sb = 0; sb < st.sun_bins; ++sb)
+      for (int eb = 0; eb < st.elevation_bins; ++eb)
+        if (options.opacity_share_weight > 0.0 && st.weight[st.Bin(sb, eb, 0)] + st.weight[st.Bin(sb, eb, 1)] >= options.min_bin_sr)
+          shares.push_back(sb * st.elevation_bins + eb);
+    num_residuals_ += static_cast<int>(shares.size());
+    active_shares_.push_back(std::move(shares));
+  }
+}
+
+std::vector<double> CloudStatsObjective::InitialX() const {
+  clouds::CloudParams p = scene_.initial;
+  std::vector<double> x;
+  for (const Free& f : free_) x.push_back(*f.field(p) / f.scale);
+  return x;
+}
+
+double CloudStatsObjective::StepX(int i, double x) const {
+  const Free& f = free_[i];
+  double h = options_.relative_step * (f.max - f.min) / f.scale;
+  // Stay inside the bounds: a one-sided excursion past them would render an invalid preset.
+  h = std::min(h, 0.25 * (UpperX(i) - LowerX(i)));
+  (void)x;
+  return h;
+}
+
+clouds::CloudParams CloudStatsObjective::ParamsAt(const double* x) const {
+  clouds::CloudParams p = scene_.initial;
+  for (size_t i = 0; i < free_.size(); ++i)
+    *free_[i].field(p) = std::clamp(x[i] * free_[i].scale, free_[i].min, free_[i].max);
+  return p;
+}
+
+bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vector<CloudStatistics>* stats) const {
+  const clouds::CloudParams p = ParamsAt(x);
+  const int nq = static_cast<int>(options_.quantiles.size());
+  int k = 0;
+  if (stats) stats->clear();
+  for (size_t r = 0; r < refs_.size(); ++r) {
+    std::vector<CloudStatsRender> renders(options_.model_renders);
+    try {
+      for (int m = 0; m < options_.model_renders; ++m)
+        renders[m] = RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s);
+    } catch (const Error&) {
+      return false;
+    }
+    renders_ += options_.model_renders;
+    std::vector<const ImageRGB*> images;
+    std::vector<const std::vector<float>*> opacities;
+    for (const auto& rr : renders) {
+      images.push_back(&rr.composite);
+      opacities.push_back(&rr.opacity);
+    }
+    const CloudStatistics model = ComputeCloudStatistics(images, opacities, {}, refs_[r].sun_dir, options_);
+    const CloudStatistics& ref = ref_stats_[r];
+    const double total = std::accumulate(ref.weight.begin(), ref.weight.end(), 0.0);
+    for (int bin : active_bins_[r]) {
+      // Each bin counts by its share of the reference's cloud (sqrt: residuals are squared).
+      const double w = std::sqrt(ref.weight[bin] / total);
+      const bool present = model.weight[bin] >= 0.5 * options_.min_bin_sr * options_.model_renders;
+      for (int ch = 0; ch < 3; ++ch)
+        for (int q = 0; q < nq; ++q) {
+          const size_t i = (static_cast<size_t>(bin) * 3 + ch) * nq + q;
+          residuals[k++] = present ? w * (model.log_quantile[i] - ref.log_quantile[i]) : 0.0;
+        }
+    }
+    for (int b : active_shares_[r]) {
+      const int sb = b / ref.elevation_bins, eb = b % ref.elevation_bins;
+      const double w = std::sqrt((ref.weight[ref.Bin(sb, eb, 0)] + ref.weight[ref.Bin(sb, eb, 1)]) / total);
+      residuals[k++] = options_.opacity_share_weight * w * (model.thick_share[b] - ref.thick_share[b]);
+    }
+    if (stats) stats->push_back(model);
+  }
+  for (int i = 0; i < k; ++i)
+    if (!std::isfinite(residuals[i])) return false;
+  return true;
+}
+
+}  // namespace skycal::fit

@@ -1,0 +1,57 @@
+// The unknown-shapes cloud objective as a plain function of the fitted parameters:
+// x (the free lighting fields, each divided by its scale) -> renders -> statistics ->
+// residuals. The Ceres cost (cloud_stats_term.h) and FitCloudStats share it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "skycal/fit/cloud_stats.h"
+
+namespace skycal::fit {
+
+class CloudStatsObjective {
+ public:
+  // Throws skycal::Error naming an unknown or non-lighting field in options.fitted, a
+  // reference whose sizes disagree, or a reference with no bin above options.min_bin_sr.
+  CloudStatsObjective(const std::vector<CloudStatsReference>& refs, const CloudStatsScene& scene,
+                      clouds::CloudRenderer& renderer, const CloudStatsOptions& options);
+
+  int num_parameters() const { return static_cast<int>(free_.size()); }
+  int num_residuals() const { return num_residuals_; }
+  // The starting point, bounds and scale of each free parameter (x = value / scale).
+  std::vector<double> InitialX() const;
+  double LowerX(int i) const { return free_[i].min / free_[i].scale; }
+  double UpperX(int i) const { return free_[i].max / free_[i].scale; }
+  const std::string& Name(int i) const { return free_[i].name; }
+  double Scale(int i) const { return free_[i].scale; }
+  // Central-difference step in x for parameter i.
+  double StepX(int i, double x) const;
+
+  clouds::CloudParams ParamsAt(const double* x) const;
+  // Renders every reference at x; fills `residuals` (num_residuals()) and, when given, the
+  // model's statistics per reference. Returns false when a render fails (Ceres then tries
+  // a shorter step).
+  bool Evaluate(const double* x, double* residuals, std::vector<CloudStatistics>* stats = nullptr) const;
+
+  const std::vector<CloudStatistics>& reference_stats() const { return ref_stats_; }
+  long long renders() const { return renders_; }
+
+ private:
+  struct Free {
+    std::string name;
+    double* (*field)(clouds::CloudParams&);
+    double min, max, scale;
+  };
+  const std::vector<CloudStatsReference>& refs_;
+  CloudStatsScene scene_;
+  clouds::CloudRenderer& renderer_;
+  CloudStatsOptions options_;
+  std::vector<Free> free_;
+  std::vector<CloudStatistics> ref_stats_;
+  std::vector<std::vector<int>> active_bins_;  // per reference: bins with enough reference weight
+  std::vector<std::vector<int>> active_shares_;  // per reference: (sun, elevation) bins with a thick-share residual
+  int num_residuals_ = 0;
+  mutable long long renders_ = 0;
+};
+
+}  // namespace skycal::fit

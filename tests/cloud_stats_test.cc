@@ -1,0 +1,252 @@
+// The unknown-shapes cloud lighting objective (fit/include/skycal/fit/cloud_stats.h): the
+// statistics' identities, bad input, and the honest recovery test: a reference rendered
+// with one noise seed and weather map, the fit rendering with different seeds, from a
+// perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+#include "skycal/fit/cloud_stats.h"
+
+#include <ceres/problem.h>
+
+#include "cloud_stats_term.h"
+
+namespace skycal::fit {
+namespace {
+
+const std::string kRoot = SKYCAL_SOURCE_DIR;
+
+TEST(CloudStats, QuantilesOfKnownPopulations) {
+  CloudStatsOptions o;
+  const int w = 64, h = 32;
+  ImageRGB img(w, h);
+  std::vector<float> opacity(static_cast<size_t>(w) * h, 0.0f);
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(60.0, 0.0);
+  double omega = 0.0;
+  // Rows 4..9 (elevation ~ 33..57 deg... each row its own), columns 0..31 at radiance 2,
+  // 32..63 at radiance 8; opacity 1 (thick class weight 1). One elevation bin may hold
+  // both halves; its median must sit midway in log (equal weights: the interpolated CDF).
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const float v = x < 32 ? 2.0f : 8.0f;
+      img.pixels[3 * i] = img.pixels[3 * i + 1] = img.pixels[3 * i + 2] = v;
+      opacity[i] = 1.0f;
+    }
+  const CloudStatistics s = ComputeCloudStatistics(img, opacity, {}, sun, o);
+  // Total thick weight = the solid angle of the rows within the elevation edges [2, 90].
+  for (int y = 0; y < h; ++y) {
+    const double el = latlong::Latitude(y, h) * 180.0 / M_PI;
+    if (el < 2.0) continue;
+    for (int x = 0; x < w; ++x) omega += latlong::PixelSolidAngle(x, y, w, h);
+  }
+  double total = 0.0;
+  for (double wt : s.weight) total += wt;
+  EXPECT_NEAR(total, omega, 1e-9 * omega);
+  // Every quantile lies within [ln 2, ln 8]; every bin holding only one value has it at
+  // every quantile; the uniform opacity puts nothing in the thin class.
+  int mixed = 0;
+  const int nq = static_cast<int>(o.quantiles.size());
+  for (int sb = 0; sb < s.sun_bins; ++sb)
+    for (int eb = 0; eb < s.elevation_bins; ++eb) {
+      EXPECT_EQ(s.weight[s.Bin(sb, eb, 0)], 0.0);
+      const int bin = s.Bin(sb, eb, 1);
+      if (s.weight[bin] == 0.0) continue;
+      const double lo = s.log_quantile[(static_cast<size_t>(bin) * 3) * nq];
+      const double hi = s.log_quantile[(static_cast<size_t>(bin) * 3) * nq + nq - 1];
+      EXPECT_GE(lo, std::log(2.0) - 1e-6);  // float logs
+      EXPECT_LE(hi, std::log(8.0) + 1e-6);
+      mixed += hi - lo > 1.0;
+    }
+  EXPECT_GT(mixed, 0);
+}
+
+TEST(CloudStats, MedianOfTwoEqualHalvesIsTheirLogMidpoint) {
+  CloudStatsOptions o;
+  o.sun_angle_edges_deg = {0.0, 180.0};
+  o.elevation_edges_deg = {-90.0, 90.0};
+  o.quantiles = {0.5};
+  // Two pixels of equal solid angle (the same row), radiance 1 and e^2.
+  const int w = 16, h = 8;
+  ImageRGB img(w, h);
+  std::vector<float> opacity(static_cast<size_t>(w) * h, 0.0f);
+  for (int x : {3, 7}) {
+    const size_t i = static_cast<size_t>(2) * w + x;
+    const float v = x == 3 ? 1.0f : static_cast<float>(std::exp(2.0));
+    img.pixels[3 * i] = img.pixels[3 * i + 1] = img.pixels[3 * i + 2] = v;
+    opacity[i] = 1.0f;
+  }
+  const CloudStatistics s = ComputeCloudStatistics(img, opacity, {}, {0.0, 1.0, 0.0}, o);
+  EXPECT_NEAR(s.log_quantile[static_cast<size_t>(s.Bin(0, 0, 1)) * 3], 1.0, 1e-6);
+  // A sky mask removes a pixel: the median is then that of the other alone.
+  std::vector<float> sky(static_cast<size_t>(w) * h, 1.0f);
+  sky[static_cast<size_t>(2) * w + 7] = 0.0f;
+  const CloudStatistics masked = ComputeCloudStatistics(img, opacity, sky, {0.0, 1.0, 0.0}, o);
+  EXPECT_NEAR(masked.log_quantile[static_cast<size_t>(masked.Bin(0, 0, 1)) * 3], 0.0, 1e-6);
+}
+
+TEST(CloudStats, BadOptionsAndReferencesAreNamed) {
+  std::string why;
+  CloudStatsOptions o;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.quantiles = {0.5, 1.0};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("quantiles"), std::string::npos);
+  o = {};
+  o.render_width = 2;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("render size"), std::string::npos);
+  EXPECT_THROW(ComputeCloudStatistics(ImageRGB(8, 4), std::vector<float>(3), {}, {0, 1, 0}, {}), Error);
+}
+
+struct Fixture {
+  std::unique_ptr<clouds::CloudRenderer> renderer;
+  std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
+  Fixture() {
+    try {
+      renderer = clouds::CreateVulkanCloudRenderer(false);
+    } catch (const Error&) {
+      renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
+    }
+  }
+  // The test scene: sun 25 deg up at azimuth 30, renders of 64x32 (the benchmark's 128x64
+  // costs ~4x as much per render).
+  bench::CloudStatsSyntheticScene Scene(bench::CloudStatsSeeds ref, bench::CloudStatsSeeds model, CloudStatsOptions* o) {
+    o->render_width = 64;
+    o->render_height = 32;
+    return bench::MakeCloudStatsScene(kRoot, ref, model, 25.0, 30.0, *o, *renderer, cache);
+  }
+};
+
+TEST(CloudStats, UnknownFieldAndCloudlessReferenceAreRefused) {
+  Fixture f;
+  CloudStatsOptions o;
+  auto scene = f.Scene({1, 11}, {1, 11}, &o);
+  const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  CloudStatsOptions bad = o;
+  bad.fitted = {"extinction", "phase_gg"};
+  try {
+    FitCloudStats({scene.reference}, model, *f.renderer, bad);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("clouds.phase_gg"), std::string::npos) << e.what();
+  }
+  CloudStatsReference clear = scene.reference;
+  std::fill(clear.opacity.begin(), clear.opacity.end(), 0.0f);
+  try {
+    FitCloudStats({clear}, model, *f.renderer, o);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no cloud pixels"), std::string::npos) << e.what();
+  }
+}
+
+// The FitTerm a caller plugs into FitSkyWithTerms: held parameters reported with their
+// reasons, nothing added on coarse levels, one block of the free parameters with the
+// objective's residuals on the finest.
+TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
+  Fixture f;
+  CloudStatsOptions o;
+  auto scene = f.Scene({1, 11}, {1, 11}, &o);
+  const std::vector<CloudStatsReference> refs = {scene.reference};
+  const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  auto term = MakeCloudStatsTerm(refs, model, *f.renderer, o);
+  std::vector<SkipNote> skipped;
+  std::vector<FitDecision> decisions;
+  term->ReportSkips(&skipped, &decisions);
+  bool g2 = false;
+  for (const auto& n : skipped) g2 |= n.block == "clouds.phase_g2" && n.reason.find("held: ") == 0;
+  EXPECT_TRUE(g2);
+  EXPECT_EQ(skipped.size(), 12u);  // 16 lighting fields, 4 fitted
+  FitState state;
+  LevelContext level;
+  ceres::Problem problem;
+  EXPECT_EQ(term->AddTo(problem, state, level), 0);
+  level.finest = true;
+  const long long n = term->AddTo(problem, state, level);
+  EXPECT_GT(n, 0);
+  EXPECT_EQ(problem.NumParameterBlocks(), 1);
+  EXPECT_EQ(problem.NumParameters(), 4);
+  EXPECT_EQ(problem.NumResiduals(), n);
+  EXPECT_EQ(term->result().params.extinction_per_m, scene.truth.extinction_per_m);
+}
+
+// The start of every recovery: the truth x (extinction 1.3, g1 0.7, powder 0.7, ambient
+// 1.3), as in bench_cloud_stats.
+clouds::CloudParams Perturbed(const clouds::CloudParams& truth) {
+  clouds::CloudParams start = truth;
+  start.extinction_per_m *= 1.3;
+  start.phase_g1 *= 0.7;
+  start.powder_strength *= 0.7;
+  start.ambient_strength *= 1.3;
+  return start;
+}
+
+struct Errors {
+  double extinction, g1, powder, ambient;
+};
+Errors RelErrors(const clouds::CloudParams& p, const clouds::CloudParams& t) {
+  auto rel = [](double v, double truth) { return std::abs(v - truth) / truth; };
+  const Errors e{rel(p.extinction_per_m, t.extinction_per_m), rel(p.phase_g1, t.phase_g1),
+                 rel(p.powder_strength, t.powder_strength), rel(p.ambient_strength, t.ambient_strength)};
+  std::cout << "[cloud stats] rel errors: extinction " << e.extinction << " g1 " << e.g1 << " powder " << e.powder
+            << " ambient " << e.ambient << "\n";
+  return e;
+}
+
+// Known shapes (the model renders the reference's own seeds, once): the statistics are then
+// identical at the truth, and the fit must land on it; the start is 30% off, so a fit that
+// did not move fails.
+TEST(CloudStats, KnownShapesControlRecoversTheTruth) {
+  Fixture f;
+  CloudStatsOptions o;
+  o.model_renders = 1;
+  o.max_iterations = 6;  // CI time (the sanitizer build is ~10x slower); measured to suffice below
+  auto scene = f.Scene({1, 11}, {1, 11}, &o);
+  const CloudStatsScene model{&scene.preset, Perturbed(scene.truth), &scene.noise, &scene.weather};
+  const CloudStatsResult r = FitCloudStats({scene.reference}, model, *f.renderer, o);
+  std::cout << "[cloud stats] " << r.termination << ", " << r.renders << " renders, " << r.time_s << " s\n";
+  const Errors e = RelErrors(r.params, scene.truth);
+  // 2%: the statistics are identical at the truth; measured at 64x32 after 6 iterations:
+  // extinction 4e-4, g1 0.0104, ambient 0.0019 (converged: 8e-6, 0.0096, 0.0013; the bench's
+  // control at 128x64: all < 0.05%). Powder 15%: at 64x32 it is the least determined
+  // parameter (few thin-edge pixels; the cost is 9e-5 from 0.08 with powder 10.1% off, and
+  // stays at 9.9% when converged); at 128x64 the control recovers it exactly.
+  EXPECT_LT(e.extinction, 0.02);
+  EXPECT_LT(e.g1, 0.02);
+  EXPECT_LT(e.powder, 0.15);
+  EXPECT_LT(e.ambient, 0.02);
+  // Held parameters say why.
+  int held = 0;
+  for (const auto& q : r.parameters)
+    if (q.held) {
+      ++held;
+      EXPECT_FALSE(q.why_held.empty()) << q.name;
+    }
+  EXPECT_EQ(held, static_cast<int>(r.parameters.size()) - 4);
+}
+
+// Unknown shapes (other noise and weather seeds): the objective at the truth is below the
+// objective at the perturbed start (the statistics point toward the truth; measured 0.377
+// vs 0.486). Not a recovery bound: from one reference the fit lands 13-100% off over seed
+// pairs (bench/results/cloud_stats_seed_pairs.md), a tolerance that would test nothing.
+TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
+  Fixture f;
+  CloudStatsOptions o;
+  o.max_iterations = 0;
+  auto scene = f.Scene({1, 11}, {101, 211}, &o);
+  const CloudStatsScene at_truth{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  const CloudStatsScene at_start{&scene.preset, Perturbed(scene.truth), &scene.noise, &scene.weather};
+  const double cost_truth = FitCloudStats({scene.reference}, at_truth, *f.renderer, o).initial_cost;
+  const double cost_start = FitCloudStats({scene.reference}, at_start, *f.renderer, o).initial_cost;
+  std::cout << "[cloud stats] cost at the truth " << cost_truth << ", at the start " << cost_start << "\n";
+  EXPECT_LT(cost_truth, cost_start);
+}
+
+}  // namespace
+}  // namespace skycal::fit
