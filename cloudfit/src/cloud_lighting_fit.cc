@@ -271,6 +271,19 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
   auto* term = dynamic_cast<CloudLightingTerm*>(term_owner.get());
   out.sky = fit::FitSkyWithTerms(masked, init, fo, renderer, probes, {term_owner.get()});
 
+  // The final solve of the cloud block with exact Jacobians on the exported sky (after
+  // the gauge move: exposure x LUT is what the sky fit fixes, the sun's illuminance is not
+  // scaled with it, so the clouds' light is final only now).
+  {
+    render::RenderRequest req;
+    req.sun_dir = ref.sun_dir;
+    req.width = ref.radiance.width;
+    req.height = ref.radiance.height;
+    req.sun_disc = false;
+    model.SetSky(out.sky.preset, render::CreateRenderer(render::Backend::kCpu)->Render(out.sky.preset, req),
+                 out.sky.references[0].exposure);
+    term->Finish(SolveCloudBlock(&model, term->lighting().data(), term->conditioning(), o));
+  }
   rep.fitted = true;
   rep.cloud_pixels = static_cast<long long>(pixels.size());
   rep.samples = static_cast<int>(model.samples().size());

@@ -88,14 +88,27 @@ void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& 
   cached_theta_.clear();
 }
 
+void CloudSampleModel::FreezeJacobianAt(const double* theta) {
+  std::vector<double> values(residuals()), jac(residuals() * kCloudLightingParameters);
+  const auto t0 = Clock::now();
+  if (!JetValues(theta, values.data(), jac.data())) {
+    throw Error("cloud lighting fit: the composite is not positive and finite at the joint polish's start");
+  }
+  ++jacobians;
+  jacobian_time_s += Seconds(t0);
+  frozen_ = std::move(jac);
+}
+
 bool CloudSampleModel::Evaluate(const double* theta, double* log_model, double* jacobian) {
-  if (jacobian) {
+  if (jacobian && !frozen_.empty()) {
+    std::copy(frozen_.begin(), frozen_.end(), jacobian);
+  } else if (jacobian) {
     const auto t0 = Clock::now();
     if (!JetValues(theta, log_model, jacobian)) return false;
     ++jacobians;
     jacobian_time_s += Seconds(t0);
   }
-  if (source_ == CloudValueSource::kCpuDouble) return jacobian ? true : DoubleValues(theta, log_model);
+  if (source_ == CloudValueSource::kCpuDouble) return jacobian && frozen_.empty() ? true : DoubleValues(theta, log_model);
   return RenderValues(theta, log_model);
 }
 

@@ -55,6 +55,13 @@ class CloudSampleModel {
   // not positive and finite (the trial point leaves the model's domain).
   bool Evaluate(const double* theta, double* log_model, double* jacobian);
 
+  // Frozen Jacobian (the joint polish): the Jacobian is evaluated once at `theta` and
+  // returned for every later request until Unfreeze; values stay fresh. A chord step for
+  // the cloud block, so each joint iteration costs one render, not one Jet march per
+  // sample; the exact-Jacobian solve that follows on the final sky finishes the block.
+  void FreezeJacobianAt(const double* theta);
+  void Unfreeze() { frozen_.clear(); }
+
   const std::vector<CloudSample>& samples() const { return samples_; }
   size_t residuals() const { return 3 * samples_.size(); }
   double exposure() const { return exposure_; }
@@ -81,6 +88,7 @@ class CloudSampleModel {
   // The last rendered point and its composite (Ceres asks for the residuals and then the
   // Jacobian at the same point: one render serves both).
   std::vector<double> cached_theta_, cached_log_;
+  std::vector<double> frozen_;  // the frozen Jacobian (row-major), empty when not frozen
 };
 
 }  // namespace skycal::cloudfit

@@ -32,18 +32,19 @@ long long CloudLightingTerm::AddTo(ceres::Problem& problem, fit::FitState& state
     conditioning_time_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     conditioned_ = true;
   }
+  model_->FreezeJacobianAt(theta_.data());
   AddCloudBlock(&problem, model_, theta_.data(), conditioning_);
   return static_cast<long long>(model_->residuals());
 }
 
-int CloudLightingTerm::AfterSolve(fit::FitState& state, const fit::LevelContext& level) {
-  if (!level.finest) return 0;
-  RefreshSky(state, level.refs->at(0));
-  const ceres::Solver::Summary s = SolveCloudBlock(model_, theta_.data(), conditioning_, options_);
-  const int it = static_cast<int>(s.iterations.size()) - 1;
-  iterations_ += it;
+int CloudLightingTerm::AfterSolve(fit::FitState& /*state*/, const fit::LevelContext& level) {
+  if (level.finest) model_->Unfreeze();
+  return 0;
+}
+
+void CloudLightingTerm::Finish(const ceres::Solver::Summary& s) {
+  iterations_ += static_cast<int>(s.iterations.size()) - 1;
   termination_ = ceres::TerminationTypeToString(s.termination_type);
-  return it;
 }
 
 void CloudLightingTerm::ReportSkips(std::vector<fit::SkipNote>* skipped, std::vector<fit::FitDecision>* decisions) const {

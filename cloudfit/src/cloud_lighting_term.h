@@ -1,11 +1,13 @@
 // The known-shapes cloud term as a FitTerm (fit/src/fit_term.h): it joins the finest level
 // of the sky fit's Ceres problem with one parameter block (the 14 lighting parameters) and
 // the sampled cloud pixels' residuals. The sky under the clouds and the light the clouds
-// receive (sun, SH-9 ambient, ground) come from the sky state when the level starts and
-// again after its solve, when the term finishes its block alone to the recovery
-// tolerances with the sky held (the joint solve stops at the sky polish's looser
-// tolerance). Coarse levels: no cloud residuals (the clouds' pixels are fitted at the
-// reference's own size, the sky's coarse levels only place the LUT).
+// receive (sun, SH-9 ambient, ground) come from the sky state when the level starts. In
+// that joint polish the cloud block's Jacobian is frozen at the level's start (values
+// fresh from the render each iteration: one render per iteration instead of a Jet march
+// per sample); FitSkyAndClouds then finishes the block with exact Jacobians on the final
+// sky, after the fit's gauge move (the sun's illuminance is not scaled with the LUT, so
+// the clouds' sun-to-ambient balance is only final after it). Coarse levels: no cloud
+// residuals (the clouds' pixels are fitted at the reference's own size).
 #pragma once
 #include <string>
 #include <vector>
@@ -24,9 +26,11 @@ class CloudLightingTerm final : public fit::FitTerm {
   int AfterSolve(fit::FitState& state, const fit::LevelContext& level) override;
   void ReportSkips(std::vector<fit::SkipNote>* skipped, std::vector<fit::FitDecision>* decisions) const override;
 
-  const CloudLighting& lighting() const { return theta_; }
+  CloudLighting& lighting() { return theta_; }
   const CloudLighting& initial() const { return initial_; }
   const Conditioning& conditioning() const { return conditioning_; }
+  // The final exact-Jacobian solve's summary (run by FitSkyAndClouds).
+  void Finish(const ceres::Solver::Summary& s);
   int iterations() const { return iterations_; }
   double conditioning_time_s() const { return conditioning_time_s_; }
   std::string termination() const { return termination_; }
