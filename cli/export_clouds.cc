@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+
 #include "skycal/cloudfit/cloud_lighting_params.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/weather_map.h"
@@ -11,16 +12,13 @@
 
 namespace skycal::cli {
 namespace fs = std::filesystem;
-namespace {
 
-std::string Number(double v) {
+std::string CsvNumber(double v) {
   std::ostringstream ss;
   ss.precision(9);
   ss << v;
   return ss.str();
 }
-
-}  // namespace
 
 void ExportPresetClouds(const render::Preset& p, const std::string& preset_path, const fs::path& out_root,
                         nlohmann::json* files) {
@@ -70,9 +68,9 @@ void ExportCloudKeyframes(const std::vector<const render::Preset*>& keyed, const
     const clouds::CloudParams params = clouds::ParseCloudSectionText(p->clouds_json, "preset '" + p->name + "'");
     const cloudfit::CloudLighting l = cloudfit::GetCloudLighting(params);
     nlohmann::json row = {{"time_of_day_h", p->time_of_day_h}, {"preset", p->name}};
-    csv += Number(p->time_of_day_h) + "," + p->name;
+    csv += CsvNumber(p->time_of_day_h) + "," + p->name;
     for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
-      csv += "," + Number(l[k]);
+      csv += "," + CsvNumber(l[k]);
       row[cloudfit::CloudLightingNames()[k]] = l[k];
     }
     csv += "\n";

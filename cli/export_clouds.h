@@ -15,6 +15,9 @@
 
 namespace skycal::cli {
 
+// A number for the keyframe CSVs: 9 significant digits (every float survives the round trip).
+std::string CsvNumber(double v);
+
 // Writes the preset's cloud files under out_root/<preset.name>/ and records them in
 // `files` ("clouds", "weather_map"); nothing without a clouds section. Throws skycal::Error
 // naming the preset file and field on a bad section or weather map.

@@ -113,13 +113,6 @@ struct SunProducts {
 constexpr double kHalfMax = 65504.0;
 constexpr double kHalfMinNormal = 6.103515625e-05;
 
-std::string CsvNumber(double v) {
-  std::ostringstream ss;
-  ss.precision(9);
-  ss << v;
-  return ss.str();
-}
-
 }  // namespace
 
 bool ExportOptions::IsValid(std::string* why) const {

@@ -97,18 +97,30 @@ void CloudSampleModel::FreezeJacobianAt(const double* theta) {
   ++jacobians;
   jacobian_time_s += Seconds(t0);
   frozen_ = std::move(jac);
+  frozen_values_ = std::move(values);
+  frozen_theta_.assign(theta, theta + kCloudLightingParameters);
 }
 
 bool CloudSampleModel::Evaluate(const double* theta, double* log_model, double* jacobian) {
-  if (jacobian && !frozen_.empty()) {
-    std::copy(frozen_.begin(), frozen_.end(), jacobian);
-  } else if (jacobian) {
+  if (!frozen_.empty()) {
+    const size_t n = residuals();
+    for (size_t i = 0; i < n; ++i) {
+      double v = frozen_values_[i];
+      for (int j = 0; j < kCloudLightingParameters; ++j) {
+        v += frozen_[i * kCloudLightingParameters + j] * (theta[j] - frozen_theta_[j]);
+      }
+      log_model[i] = v;
+    }
+    if (jacobian) std::copy(frozen_.begin(), frozen_.end(), jacobian);
+    return true;
+  }
+  if (jacobian) {
     const auto t0 = Clock::now();
     if (!JetValues(theta, log_model, jacobian)) return false;
     ++jacobians;
     jacobian_time_s += Seconds(t0);
   }
-  if (source_ == CloudValueSource::kCpuDouble) return jacobian && frozen_.empty() ? true : DoubleValues(theta, log_model);
+  if (source_ == CloudValueSource::kCpuDouble) return jacobian ? true : DoubleValues(theta, log_model);
   return RenderValues(theta, log_model);
 }
 

@@ -2,10 +2,10 @@
 // of the sky fit's Ceres problem with one parameter block (the 14 lighting parameters) and
 // the sampled cloud pixels' residuals. The sky under the clouds and the light the clouds
 // receive (sun, SH-9 ambient, ground) come from the sky state when the level starts. In
-// that joint polish the cloud block's Jacobian is frozen at the level's start (values
-// fresh from the render each iteration: one render per iteration instead of a Jet march
-// per sample); FitSkyAndClouds then finishes the block with exact Jacobians on the final
-// sky, after the fit's gauge move (the sun's illuminance is not scaled with the LUT, so
+// that joint polish the cloud block is linearised at the level's start (one Jet march per
+// sample, no render per iteration: CloudSampleModel::FreezeJacobianAt);
+// FitSkyAndClouds then finishes the block through the renderer with exact Jacobians on
+// the final sky, after the fit's gauge move (the sun's illuminance is not scaled with the LUT, so
 // the clouds' sun-to-ambient balance is only final after it). Coarse levels: no cloud
 // residuals (the clouds' pixels are fitted at the reference's own size).
 #pragma once
