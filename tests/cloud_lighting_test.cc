@@ -57,15 +57,7 @@ struct Scene {
     r.sun_disc = false;
     return render::CreateRenderer(render::Backend::kCpu)->Render(sky, r);
   }
-  clouds::CloudRenderRequest Request() const {
-    clouds::CloudRenderRequest r;
-    r.sun_dir = sun;
-    r.width = width;
-    r.height = height;
-    r.time_s = shapes.time_s;
-    r.march = shapes.march;
-    return r;
-  }
+  clouds::CloudRenderRequest Request() const { return RequestFor(sun, width, height, shapes); }
 };
 
 // The model at every cloud pixel above the horizon with the double values (central

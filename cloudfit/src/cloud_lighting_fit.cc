@@ -19,17 +19,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
 
-clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
-                                      const KnownCloudShapes& shapes) {
-  clouds::CloudRenderRequest r;
-  r.sun_dir = sun_dir;
-  r.width = width;
-  r.height = height;
-  r.time_s = shapes.time_s;
-  r.march = shapes.march;
-  return r;
-}
-
 void CheckShapes(const KnownCloudShapes& s) {
   if (!s.noise || !s.weather) throw Error("cloud lighting fit: the known shapes need the noise and the weather map");
   clouds::ValidateCloudParams(s.params, "cloud preset");

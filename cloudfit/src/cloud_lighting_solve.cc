@@ -21,6 +21,17 @@ class Progress final : public ceres::IterationCallback {
 
 }  // namespace
 
+clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
+                                      const KnownCloudShapes& shapes) {
+  clouds::CloudRenderRequest r;
+  r.sun_dir = sun_dir;
+  r.width = width;
+  r.height = height;
+  r.time_s = shapes.time_s;
+  r.march = shapes.march;
+  return r;
+}
+
 std::vector<size_t> CloudPixels(const std::vector<char>& usable, const std::vector<float>& transmittance,
                                 double threshold) {
   if (usable.size() != transmittance.size()) throw Error("cloud lighting fit: mask and cloud render differ in size");

@@ -13,6 +13,11 @@
 
 namespace skycal::cloudfit {
 
+// The cloud render of a frame of the reference's size with the known shapes' wind time
+// and march.
+clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
+                                      const KnownCloudShapes& shapes);
+
 // Cloud pixels: `usable` (per pixel) and transmittance below the threshold.
 std::vector<size_t> CloudPixels(const std::vector<char>& usable, const std::vector<float>& transmittance,
                                 double threshold);
