@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "command_line.h"
+#include "export_clouds.h"
 #include "export_sun.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
@@ -114,13 +115,6 @@ struct SunProducts {
 constexpr double kHalfMax = 65504.0;
 constexpr double kHalfMinNormal = 6.103515625e-05;
 
-std::string CsvNumber(double v) {
-  std::ostringstream ss;
-  ss.precision(9);
-  ss << v;
-  return ss.str();
-}
-
 }  // namespace
 
 bool ExportOptions::IsValid(std::string* why) const {
@@ -207,6 +201,7 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
     ta.strings["skycalLut"] = "sun_transmittance";
     WriteExrRGB(out / (p.name + "/sun_transmittance.exr"), tr, ta, ExrPixelType::kHalf);
     files["sun_transmittance"] = p.name + "/sun_transmittance.exr";
+    ExportPresetClouds(p, o.presets[i], out.staging(), &files);  // clouds.json + weather.exr (export_clouds.h)
     nlohmann::json sun_json, sh_json, fog_json;
     if (!sp.sun.known) {
       skipped.push_back({{"block", "sun, SH-9 and fog of preset '" + p.name + "'"},
@@ -369,6 +364,7 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
     }
     WriteFileAtomically(out / "keyframes.csv", csv);
     WriteJsonFileAtomically(out / "keyframes.json", {{"columns", header}, {"units", units}, {"keys", rows}});
+    ExportCloudKeyframes(keyed, out.staging(), &skipped);  // cloud_keyframes.csv/.json (export_clouds.h)
   }
   const nlohmann::json manifest = {{"tool", std::string("skycal ") + kSkycalVersion},
                                    {"pre_exposure", scale},
@@ -395,7 +391,9 @@ ExportOptions ParseExportArgs(int argc, char** argv) {
       "in each EXR's `preExposure` attribute: the game divides by it, or folds it into its exposure),\n"
       "and, when the presets carry a time of day (fit --time, or the reference's skycalTimeOfDay),\n"
       "GAME_DIR/keyframes.csv and keyframes.json: one row per key sorted by time, one column per\n"
-      "parameter.",
+      "parameter. Presets with a clouds section (fit --clouds) add GAME_DIR/<preset>/clouds.json and\n"
+      "weather.exr, and the timed ones GAME_DIR/cloud_keyframes.csv/.json: one row per time of day,\n"
+      "one column per cloud lighting parameter, its unit in the header (\"extinction [1/m]\").",
       "  skycal export --preset P.json [--preset P2.json ...] --out GAME_DIR [--headroom H]\n"
       "                [--backend vulkan|cpu] [--fog-sigma-deg S] [--json]",
       "Sun-dependent outputs, for each preset whose provenance names its sun direction (fit writes\n"

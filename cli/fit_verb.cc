@@ -90,15 +90,16 @@ bool FitVerbOptions::IsValid(std::string* why) const {
 }
 
 namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po);
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co);
 }  // namespace
 
-nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}); }
+nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}, FitCloudOptions{}); }
 
 namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po) {
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  if (!co.IsValid(&why)) throw Error(why);
   const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
   std::vector<NamedPath> read = PresetInputs("--init", init_path);
   for (const std::string& r : o.references) read.push_back({"--reference", r});
@@ -109,9 +110,11 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     p.replace_extension(".probe.json");
     read.push_back({"--reference " + r + "'s probe samples", p.string()});
   }
+  for (const NamedPath& p : FitCloudInputs(co)) read.push_back(p);
   StagedDirectory out(o.out_dir, "--out", "fit", read);  // fails early on an unusable --out
   std::filesystem::create_directories(out.staging() / "fit");
   render::Preset init = render::LoadPreset(init_path);
+  const std::unique_ptr<LoadedCloudShapes> cloud_shapes = LoadFitCloudShapes(co);  // a bad section fails early
   std::vector<fit::Reference> refs;
   std::vector<nlohmann::json> cloud_json;
   std::set<std::string> names;
@@ -139,7 +142,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
   auto renderer = render::CreateRenderer(fo.backend);
   Log("fit", "objective backend: " + renderer->Describe());
-  fit::FitResult result = fit::FitSky(refs, init, fo, *renderer, probe_ptrs);
+  cloudfit::SkyCloudFit joint = RunSkyCloudFit(co, refs, init, fo, *renderer, probe_ptrs, cloud_shapes.get());
+  fit::FitResult& result = joint.sky;
   result.preset.name = fs::path(o.out_dir).filename().string();
   if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
 
@@ -244,6 +248,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   summary["references"] = per_ref;
   summary["warnings"] = warnings;
   summary["options"] = resolved;
+  summary["clouds"] = CloudReportJson(co, joint.clouds);
+  if (cloud_shapes) AttachFittedClouds(joint.clouds, *cloud_shapes, out / "preset.json", &result.preset);
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
                                        {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
@@ -283,7 +289,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   VerbCommandLine cl("fit", "skycal fit: fit the sky model to HDR reference skies",
                      "  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]\n"
                      "             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]\n"
-                     "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]");
+                     "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
+                     "             [--clouds auto|on|off] [--cloud-preset P.json] [--cloud-time S]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
@@ -344,6 +351,17 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
           "fit/<ref>.{reference,fit,error}.png, report.png, fit.json, report.html");
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
+  cl.Text("--clouds", &c.clouds.mode, "MODE",
+          "auto (default), on or off: fit the cloud lighting too (one reference).\n"
+          "auto: on when the reference's cloud mask finds >= 1% cloud pixels and\n"
+          "--cloud-preset gives the shapes; a clear reference never marches clouds");
+  cl.Text("--cloud-preset", &c.clouds.preset, "PRESET.json",
+          "the known cloud shapes: a preset whose clouds section (shape fields, start\n"
+          "lighting) and weather map rendered the reference (e.g. default_cloudy.json)");
+  cl.Number("--cloud-time", &c.clouds.time_s, "S", "wind time of the reference's clouds, seconds (default 0)");
+  cl.Integer("--cloud-samples", &c.clouds.samples, -1e9, 1e9, "expected an integer", "N",
+             "cloud pixels in the Jet Jacobian (default 256; all when fewer)");
+  cl.Repeatable("--cloud-hold", &c.clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
 
@@ -377,7 +395,7 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
 int RunFit(int argc, char** argv) {
   return RunVerb("fit", WantsJson(argc, argv), [&]() {
     const FitCommandLine c = ParseFitArgs(argc, argv);
-    return RunFitWithProbes(c.options, c.probes);
+    return RunFitWithProbes(c.options, c.probes, c.clouds);
   });
 }
 

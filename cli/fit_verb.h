@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fit_clouds.h"
 #include "skycal/fit/fit_options.h"
 
 namespace skycal::cli {
@@ -31,6 +32,7 @@ struct FitProbeOptions {
 struct FitCommandLine {
   FitVerbOptions options;
   FitProbeOptions probes;
+  FitCloudOptions clouds;  // --clouds, --cloud-preset, --cloud-time ... (fit_clouds.h)
 };
 
 nlohmann::json RunFitImpl(const FitVerbOptions& options);

@@ -1,0 +1,161 @@
+#include "fit_clouds.h"
+
+#include <cmath>
+
+#include "render_clouds.h"
+#include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+
+bool FitCloudOptions::IsValid(std::string* why) const {
+  try {
+    const cloudfit::CloudMode m = cloudfit::ParseCloudMode(mode, "--clouds");
+    if (m == cloudfit::CloudMode::kOff && !preset.empty()) {
+      *why = "--cloud-preset has no effect with --clouds off";
+      return false;
+    }
+  } catch (const Error& e) {
+    *why = e.what();
+    return false;
+  }
+  if (!std::isfinite(time_s) || std::abs(time_s) > 1.0e7) {
+    *why = "--cloud-time " + FormatNumber(time_s) + " (expected seconds, finite, within 1e7)";
+    return false;
+  }
+  cloudfit::CloudLightingOptions co;
+  co.samples = samples;
+  co.hold = hold;
+  if (!co.IsValid(why)) {
+    if (why->starts_with("cloud samples")) *why = "--cloud-samples: " + *why;
+    return false;
+  }
+  return true;
+}
+
+std::vector<NamedPath> FitCloudInputs(const FitCloudOptions& o) {
+  if (o.preset.empty()) return {};
+  return PresetInputs("--cloud-preset", o.preset);
+}
+
+std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) {
+  if (o.preset.empty()) return nullptr;
+  const render::Preset p = render::LoadPreset(o.preset);
+  if (p.clouds_json.empty()) throw Error(o.preset + ": --cloud-preset: the preset has no 'clouds' section");
+  CloudOptions co;
+  co.enabled = true;
+  co.time_s = o.time_s;
+  CloudInputsLoaded in = LoadCloudInputs(co, p, o.preset);  // names the file and field on a bad section
+  auto out = std::make_unique<LoadedCloudShapes>();
+  out->origin = in.params_origin;
+  out->weather_origin = in.weather_origin;
+  out->noise = std::move(in.noise);
+  out->weather = std::move(in.weather);
+  out->shapes.params = in.params;
+  out->shapes.noise = &out->noise;
+  out->shapes.weather = &out->weather;
+  out->shapes.time_s = o.time_s;
+  return out;
+}
+
+cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector<fit::Reference>& refs,
+                                     const render::Preset& init, const fit::FitOptions& fo, render::SkyRenderer& renderer,
+                                     const std::vector<const fit::ProbeSamples*>& probes, const LoadedCloudShapes* shapes) {
+  const cloudfit::CloudMode mode = cloudfit::ParseCloudMode(o.mode, "--clouds");
+  cloudfit::CloudDecision d;
+  if (mode == cloudfit::CloudMode::kAuto && !shapes) {
+    // No shapes: nothing could be marched, so the mask is not even computed (a clear-sky
+    // fit pays nothing for the clouds feature).
+    d.why = "--clouds auto: no cloud shapes given (--cloud-preset): clouds off without looking (the cloud mask "
+            "was not computed); their pixels, if any, count in the sky terms";
+  } else {
+    d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);
+  }
+  Log("fit", "clouds: " + d.why);
+  cloudfit::CloudLightingOptions co;
+  co.samples = o.samples;
+  co.hold = o.hold;
+  co.verbose = fo.verbose;
+  std::unique_ptr<clouds::CloudRenderer> cloud_renderer;
+  if (d.march) {
+    // The values come from the cloud renderer of the sky's backend: Vulkan (the game's
+    // path) by default, the double CPU model with --backend cpu.
+    cloud_renderer = fo.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
+                                                            : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
+    Log("fit", "clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
+  }
+  cloudfit::SkyCloudFit f =
+      cloudfit::FitSkyAndClouds(refs, init, fo, renderer, probes, d, cloudfit::CloudTermKind::kKnownShapes,
+                                shapes ? &shapes->shapes : nullptr, co, cloud_renderer.get());
+  if (d.march) {
+    f.clouds.decision = d.why;
+    f.sky.decisions.push_back({"cloud mask for --clouds " + o.mode, d.why, 0.0,
+                               "none: the mask cost " + FormatNumber(1000.0 * d.time_s) + " ms", std::nullopt, ""});
+  }
+  return f;
+}
+
+namespace {
+nlohmann::json Errors(const cloudfit::PixelErrors& e) {
+  return {{"pixels", e.pixels}, {"rel_rmse", e.rel_rmse}, {"log_rmse", e.log_rmse}};
+}
+nlohmann::json Finite(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+}  // namespace
+
+nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLightingReport& r) {
+  nlohmann::json params = nlohmann::json::object();
+  for (const cloudfit::CloudParamReport& p : r.parameters) {
+    nlohmann::json j = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
+    if (p.held) j["why"] = p.why;
+    if (r.fitted) {
+      j["sensitivity"] = Finite(p.sensitivity);
+      j["predicted_relative_error"] = Finite(p.predicted_relative_error);
+      j["separability"] = Finite(p.separability);
+      j["most_collinear_with"] = p.most_collinear_with;
+      j["collinear_cosine"] = Finite(p.collinear_cosine);
+    }
+    params[p.name] = j;
+  }
+  nlohmann::json j = {{"mode", o.mode},
+                      {"fitted", r.fitted},
+                      {"decision", r.decision},
+                      {"term", "known shapes (per-pixel composite residuals)"},
+                      {"cloud_preset", o.preset},
+                      {"cloud_time_s", o.time_s},
+                      {"cloud_fraction", r.cloud_fraction},
+                      {"parameters", params}};
+  if (!r.fitted) return j;
+  j["notes"] = {
+      {"sensitivity", "RMS over sampled pixel channels of d ln(composite) / d ln(parameter) (or per 1% of its range "
+                      "when the parameter is near 0), at the start"},
+      {"predicted_relative_error", "sigma sqrt(diag((J^T J)^-1)) with sigma = 2% pixel noise over the samples, free set"},
+      {"separability", "1 / sqrt(variance inflation) among all observed parameters: 1 independent, 0 collinear"},
+      {"singular_values", "of the column-normalised Jacobian (d ln composite / d ln parameter), descending"}};
+  j["singular_values"] = r.singular_values;
+  j["singular_values_free"] = r.singular_values_free;
+  j["cloud_pixels"] = {{"count", r.cloud_pixels}, {"samples", r.samples},
+                       {"initial", Errors(r.cloud_initial)}, {"final", Errors(r.cloud_final)}};
+  j["clear_pixels"] = Errors(r.clear);
+  j["solve"] = {{"iterations", r.iterations},        {"termination", r.termination},
+                {"renders", r.renders},              {"jacobians", r.jacobians},
+                {"value_source", r.value_source},    {"render_time_s", r.render_time_s},
+                {"jacobian_time_s", r.jacobian_time_s}, {"conditioning_time_s", r.conditioning_time_s},
+                {"time_s", r.time_s}};
+  return j;
+}
+
+void AttachFittedClouds(const cloudfit::CloudLightingReport& r, const LoadedCloudShapes& shapes,
+                        const fs::path& preset_json, render::Preset* preset) {
+  if (!r.fitted) return;
+  clouds::CloudParams p = r.fitted_params;
+  const std::string weather_name = preset_json.stem().string() + ".weather.exr";
+  clouds::SaveWeatherMap(shapes.weather, (preset_json.parent_path() / weather_name).string());
+  p.weather_map = weather_name;
+  preset->clouds_json = clouds::CloudSectionToJson(p).dump();
+}
+
+}  // namespace skycal::cli

@@ -1,0 +1,214 @@
+#include "cloud_lighting_samples.h"
+
+#include <ceres/jet.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "skycal/core/error.h"
+
+namespace skycal::cloudfit {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
+
+using JetL = ceres::Jet<double, kCloudLightingParameters>;
+using CloudModelJ = clouds::CloudModel<JetL, clouds::CpuCloudTextures>;
+
+// The shade's lighting fields in CloudLightingNames() order (cloud_lighting_params.cc):
+// the one place that maps the fitted block onto the model's CloudShadeParams.
+template <typename Shade, typename S>
+void SetShadeLighting(const S* t, Shade* s) {
+  s->extinction = t[0];
+  s->albedo = t[1];
+  s->g1 = t[2];
+  s->g2 = t[3];
+  s->phase_blend = t[4];
+  s->powder_strength = t[5];
+  s->powder_view_fade = t[6];
+  s->rain_absorption = t[7];
+  s->ambient_strength = t[8];
+  s->ambient_height_bias = t[9];
+  s->ground_bounce = t[10];
+  s->ms_a = t[11];
+  s->ms_b = t[12];
+  s->ms_c = t[13];
+}
+
+// Runs f(i) for i in [0, n) over `threads` workers (interleaved: neighbouring samples cost
+// alike, so the workers finish together).
+template <typename F>
+void ParallelFor(size_t n, int threads, F f) {
+  const int t = std::max(1, std::min<int>(threads, static_cast<int>(n)));
+  std::vector<std::thread> pool;
+  auto work = [&](int first) {
+    for (size_t i = first; i < n; i += t) f(i);
+  };
+  for (int k = 1; k < t; ++k) pool.emplace_back(work, k);
+  work(0);
+  for (auto& th : pool) th.join();
+}
+
+}  // namespace
+
+CloudSampleModel::CloudSampleModel(CloudSampleScene scene, std::vector<CloudSample> samples, CloudValueSource source,
+                                   clouds::CloudRenderer* renderer, int threads)
+    : scene_(std::move(scene)),
+      samples_(std::move(samples)),
+      source_(source),
+      renderer_(renderer),
+      threads_(std::max(1, threads)),
+      textures_(*scene_.noise, *scene_.weather) {
+  if (samples_.empty()) throw Error("cloud lighting fit: no cloud pixels to fit");
+  if (source_ == CloudValueSource::kRenderer && !renderer_) throw Error("cloud lighting fit: no renderer for the values");
+  const clouds::LatLongTrig trig = clouds::MakeLatLongTrig(scene_.request.width, scene_.request.height);
+  for (const CloudSample& s : samples_) {
+    if (s.x < 0 || s.y < 0 || s.x >= scene_.request.width || s.y >= scene_.request.height) {
+      throw Error("cloud lighting fit: sample pixel outside the frame");
+    }
+    const double cl = trig.cos_lat[s.y];
+    views_.push_back({trig.sin_lon[s.x] * cl, trig.sin_lat[s.y], trig.cos_lon[s.x] * cl});
+  }
+  shade_ = clouds::ResolveCloudShade({&scene_.sky_preset, &scene_.params, scene_.noise, scene_.weather}, scene_.request);
+}
+
+void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& sky_image, double exposure) {
+  if (sky_image.width != scene_.request.width || sky_image.height != scene_.request.height) {
+    throw Error("cloud lighting fit: the sky image is not the reference's size");
+  }
+  scene_.sky_preset = sky_preset;
+  shade_ = clouds::ResolveCloudShade({&scene_.sky_preset, &scene_.params, scene_.noise, scene_.weather}, scene_.request);
+  exposure_ = exposure;
+  for (CloudSample& s : samples_) {
+    const size_t i = static_cast<size_t>(s.y) * sky_image.width + s.x;
+    for (int c = 0; c < 3; ++c) s.sky[c] = sky_image.pixels[3 * i + c];
+  }
+  cached_theta_.clear();
+}
+
+void CloudSampleModel::FreezeJacobianAt(const double* theta) {
+  std::vector<double> values(residuals()), jac(residuals() * kCloudLightingParameters);
+  const auto t0 = Clock::now();
+  if (!JetValues(theta, values.data(), jac.data())) {
+    throw Error("cloud lighting fit: the composite is not positive and finite at the joint polish's start");
+  }
+  ++jacobians;
+  jacobian_time_s += Seconds(t0);
+  frozen_ = std::move(jac);
+  frozen_values_ = std::move(values);
+  frozen_theta_.assign(theta, theta + kCloudLightingParameters);
+}
+
+bool CloudSampleModel::Evaluate(const double* theta, double* log_model, double* jacobian) {
+  if (!frozen_.empty()) {
+    const size_t n = residuals();
+    for (size_t i = 0; i < n; ++i) {
+      double v = frozen_values_[i];
+      for (int j = 0; j < kCloudLightingParameters; ++j) {
+        v += frozen_[i * kCloudLightingParameters + j] * (theta[j] - frozen_theta_[j]);
+      }
+      log_model[i] = v;
+    }
+    if (jacobian) std::copy(frozen_.begin(), frozen_.end(), jacobian);
+    return true;
+  }
+  if (jacobian) {
+    const auto t0 = Clock::now();
+    if (!JetValues(theta, log_model, jacobian)) return false;
+    ++jacobians;
+    jacobian_time_s += Seconds(t0);
+  }
+  if (source_ == CloudValueSource::kCpuDouble) return jacobian ? true : DoubleValues(theta, log_model);
+  return RenderValues(theta, log_model);
+}
+
+bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
+  const size_t n3 = residuals();
+  if (cached_theta_.size() == kCloudLightingParameters &&
+      std::equal(cached_theta_.begin(), cached_theta_.end(), theta)) {
+    std::copy(cached_log_.begin(), cached_log_.end(), log_model);
+    return true;
+  }
+  const auto t0 = Clock::now();
+  clouds::CloudParams params = scene_.params;
+  CloudLighting l{};
+  std::copy(theta, theta + kCloudLightingParameters, l.begin());
+  SetCloudLighting(l, &params);
+  const clouds::CloudImage img =
+      renderer_->Render({&scene_.sky_preset, &params, scene_.noise, scene_.weather}, scene_.request);
+  ++renders;
+  render_time_s += Seconds(t0);
+  cached_log_.assign(n3, 0.0);
+  bool ok = true;
+  for (size_t k = 0; k < samples_.size(); ++k) {
+    const CloudSample& s = samples_[k];
+    const size_t i = static_cast<size_t>(s.y) * scene_.request.width + s.x;
+    const double t = img.transmittance[i];
+    for (int c = 0; c < 3; ++c) {
+      const double m = exposure_ * (s.sky[c] * t + img.radiance.pixels[3 * i + c]);
+      ok = ok && std::isfinite(m) && m > 0.0;
+      cached_log_[3 * k + c] = ok ? std::log(m) : 0.0;
+    }
+  }
+  if (!ok) {
+    cached_theta_.clear();
+    return false;
+  }
+  cached_theta_.assign(theta, theta + kCloudLightingParameters);
+  std::copy(cached_log_.begin(), cached_log_.end(), log_model);
+  return true;
+}
+
+bool CloudSampleModel::DoubleValues(const double* theta, double* log_model) const {
+  clouds::CloudShadeD shade = shade_;
+  SetShadeLighting(theta, &shade);
+  std::vector<char> ok(samples_.size(), 1);
+  ParallelFor(samples_.size(), threads_, [&](size_t k) {
+    clouds::CloudModelD m(textures_);
+    const auto& v = views_[k];
+    const auto r = m.cloud_march(glsl::Vec3<double>(v[0], v[1], v[2]), shade);
+    const double rad[3] = {r.radiance.x, r.radiance.y, r.radiance.z};
+    for (int c = 0; c < 3; ++c) {
+      const double mv = exposure_ * (samples_[k].sky[c] * r.transmittance + rad[c]);
+      if (!(std::isfinite(mv) && mv > 0.0)) ok[k] = 0;
+      log_model[3 * k + c] = ok[k] ? std::log(mv) : 0.0;
+    }
+  });
+  for (char o : ok) {
+    if (!o) return false;
+  }
+  return true;
+}
+
+bool CloudSampleModel::JetValues(const double* theta, double* log_model, double* jacobian) const {
+  auto shade = clouds::CastCloudShade<CloudModelJ::CloudShadeParams>(shade_);
+  JetL t[kCloudLightingParameters];
+  for (int k = 0; k < kCloudLightingParameters; ++k) t[k] = JetL(theta[k], k);
+  SetShadeLighting(t, &shade);
+  std::vector<char> ok(samples_.size(), 1);
+  ParallelFor(samples_.size(), threads_, [&](size_t k) {
+    CloudModelJ m(textures_);
+    const auto& v = views_[k];
+    const auto r = m.cloud_march(glsl::Vec3<JetL>(JetL(v[0]), JetL(v[1]), JetL(v[2])), shade);
+    const JetL rad[3] = {r.radiance.x, r.radiance.y, r.radiance.z};
+    for (int c = 0; c < 3; ++c) {
+      const JetL mv = exposure_ * (samples_[k].sky[c] * r.transmittance + rad[c]);
+      if (!(std::isfinite(mv.a) && mv.a > 0.0)) {
+        ok[k] = 0;
+        continue;
+      }
+      const JetL lg = log(mv);
+      const size_t row = 3 * k + c;
+      log_model[row] = lg.a;
+      for (int j = 0; j < kCloudLightingParameters; ++j) jacobian[row * kCloudLightingParameters + j] = lg.v[j];
+    }
+  });
+  for (char o : ok) {
+    if (!o) return false;
+  }
+  return true;
+}
+
+}  // namespace skycal::cloudfit

@@ -1,0 +1,175 @@
+#include "cloud_lighting_solve.h"
+
+#include <cmath>
+#include <iostream>
+
+#include "cloud_lighting_cost.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+
+namespace skycal::cloudfit {
+namespace {
+
+// Progress on stderr (stdout may carry --json).
+class Progress final : public ceres::IterationCallback {
+ public:
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    std::cerr << "[fit] clouds iteration " << s.iteration << "  cost " << s.cost << "  |step| " << s.step_norm << std::endl;
+    return ceres::SOLVER_CONTINUE;
+  }
+};
+
+}  // namespace
+
+clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
+                                      const KnownCloudShapes& shapes) {
+  clouds::CloudRenderRequest r;
+  r.sun_dir = sun_dir;
+  r.width = width;
+  r.height = height;
+  r.time_s = shapes.time_s;
+  r.march = shapes.march;
+  return r;
+}
+
+std::vector<size_t> CloudPixels(const std::vector<char>& usable, const std::vector<float>& transmittance,
+                                double threshold) {
+  if (usable.size() != transmittance.size()) throw Error("cloud lighting fit: mask and cloud render differ in size");
+  std::vector<size_t> out;
+  for (size_t i = 0; i < usable.size(); ++i) {
+    if (usable[i] && transmittance[i] < threshold) out.push_back(i);
+  }
+  return out;
+}
+
+std::vector<CloudSample> ChooseSamples(const std::vector<size_t>& pixels, const ImageRGB& reference, int count) {
+  std::vector<CloudSample> out;
+  const size_t n = std::min(pixels.size(), static_cast<size_t>(std::max(count, 1)));
+  double total = 0.0;
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = pixels[k * pixels.size() / n];
+    CloudSample s;
+    s.x = static_cast<int>(i % reference.width);
+    s.y = static_cast<int>(i / reference.width);
+    s.weight = latlong::PixelSolidAngle(s.x, s.y, reference.width, reference.height);
+    total += s.weight;
+    for (int c = 0; c < 3; ++c) s.reference[c] = reference.pixels[3 * i + c];
+    out.push_back(s);
+  }
+  for (CloudSample& s : out) s.weight /= total;
+  return out;
+}
+
+Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, const CloudLightingOptions& o) {
+  std::vector<double> values(model->residuals()), jac(model->residuals() * kCloudLightingParameters);
+  if (!model->Evaluate(theta.data(), values.data(), jac.data())) {
+    throw Error("cloud lighting fit: the composite is not positive and finite at the starting lighting");
+  }
+  ConditioningOptions co;
+  co.noise = o.noise_level;
+  co.max_relative_error = o.max_predicted_error;
+  co.auto_hold = o.auto_hold;
+  co.user_held.assign(kCloudLightingParameters, false);
+  for (const std::string& h : o.hold) co.user_held[CloudLightingIndex(h)] = true;
+  return AnalyseConditioning(jac, theta, co);
+}
+
+void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* theta, const Conditioning& c) {
+  problem->AddResidualBlock(new CloudLightingCost(model), nullptr, theta);
+  std::vector<int> held;
+  for (int k = 0; k < kCloudLightingParameters; ++k) {
+    const clouds::CloudParamSpec& s = CloudLightingSpec(k);
+    problem->SetParameterLowerBound(theta, k, s.min);
+    problem->SetParameterUpperBound(theta, k, s.max);
+    if (c.parameters[k].held) held.push_back(k);
+  }
+  if (held.size() == static_cast<size_t>(kCloudLightingParameters)) {
+    problem->SetParameterBlockConstant(theta);
+  } else if (!held.empty()) {
+    problem->SetManifold(theta, new ceres::SubsetManifold(kCloudLightingParameters, held));
+  }
+}
+
+ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
+                                       const CloudLightingOptions& o) {
+  ceres::Problem problem;
+  AddCloudBlock(&problem, model, theta, c);
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;  // 14 parameters, ~3,000 rows
+  so.max_num_iterations = o.max_iterations;
+  // The recovery targets are 1% on parameters whose effect on the image can be ~1e-3 in
+  // log units, so the cost's tail matters (function tolerance 1e-8); a step below 1e-6 of
+  // the parameters is below what float values (the Vulkan render) resolve: stop there.
+  so.function_tolerance = 1e-8;
+  so.gradient_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-6;
+  so.logging_type = ceres::SILENT;
+  Progress progress;
+  if (o.verbose) so.callbacks.push_back(&progress);
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (summary.termination_type == ceres::FAILURE) throw Error("cloud lighting fit: Ceres failed: " + summary.message);
+  return summary;
+}
+
+ImageRGB Composite(const ImageRGB& sky_exposed, const clouds::CloudImage& cloud, double exposure) {
+  const ImageRGB& sky = sky_exposed;
+  if (sky.width != cloud.radiance.width || sky.height != cloud.radiance.height) {
+    throw Error("cloud lighting fit: sky and cloud images differ in size");
+  }
+  ImageRGB out(sky.width, sky.height);
+  for (size_t i = 0; i < cloud.transmittance.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      out.pixels[3 * i + c] = static_cast<float>(
+          sky.pixels[3 * i + c] * static_cast<double>(cloud.transmittance[i]) + exposure * cloud.radiance.pixels[3 * i + c]);
+    }
+  }
+  return out;
+}
+
+PixelErrors CompositeErrors(const std::vector<size_t>& pixels, const ImageRGB& reference, const ImageRGB& composite) {
+  PixelErrors e;
+  double rel = 0.0, lg = 0.0, w = 0.0;
+  for (size_t i : pixels) {
+    const int x = static_cast<int>(i % reference.width), y = static_cast<int>(i / reference.width);
+    const double omega = latlong::PixelSolidAngle(x, y, reference.width, reference.height);
+    for (int c = 0; c < 3; ++c) {
+      const double r = reference.pixels[3 * i + c], f = composite.pixels[3 * i + c];
+      rel += omega * ((f - r) / r) * ((f - r) / r);
+      const double d = f > 0.0 ? std::log(f / r) : 50.0;
+      lg += omega * d * d;
+    }
+    w += 3.0 * omega;
+    ++e.pixels;
+  }
+  if (w > 0.0) {
+    e.rel_rmse = std::sqrt(rel / w);
+    e.log_rmse = std::sqrt(lg / w);
+  }
+  return e;
+}
+
+void ReportParameters(const CloudLighting& initial, const CloudLighting& final_theta, const Conditioning& c,
+                      CloudLightingReport* report) {
+  report->parameters.clear();
+  for (int k = 0; k < kCloudLightingParameters; ++k) {
+    const ParameterConditioning& pc = c.parameters[k];
+    CloudParamReport p;
+    p.name = CloudLightingNames()[k];
+    p.unit = CloudLightingSpec(k).unit;
+    p.value = final_theta[k];
+    p.initial = initial[k];
+    p.held = pc.held;
+    p.why = pc.why;
+    p.sensitivity = pc.sensitivity;
+    p.predicted_relative_error = pc.predicted_relative_error;
+    p.separability = pc.separability;
+    p.most_collinear_with = pc.most_collinear >= 0 ? CloudLightingNames()[pc.most_collinear] : "";
+    p.collinear_cosine = pc.collinear_cosine;
+    report->parameters.push_back(p);
+  }
+  report->singular_values = c.singular_values;
+  report->singular_values_free = c.singular_values_free;
+}
+
+}  // namespace skycal::cloudfit

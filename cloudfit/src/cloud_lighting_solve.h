@@ -1,0 +1,47 @@
+// The pieces both entry points share: choosing the cloud pixels and their samples, the
+// conditioning at a point, the cloud block's bounds and held entries in a Ceres problem,
+// a solve of the cloud block alone, and the report.
+#pragma once
+#include <ceres/ceres.h>
+
+#include <string>
+#include <vector>
+
+#include "cloud_lighting_conditioning.h"
+#include "cloud_lighting_samples.h"
+#include "skycal/cloudfit/cloud_lighting_fit.h"
+
+namespace skycal::cloudfit {
+
+// The cloud render of a frame of the reference's size with the known shapes' wind time
+// and march.
+clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
+                                      const KnownCloudShapes& shapes);
+
+// Cloud pixels: `usable` (per pixel) and transmittance below the threshold.
+std::vector<size_t> CloudPixels(const std::vector<char>& usable, const std::vector<float>& transmittance,
+                                double threshold);
+// Up to `count` of them spread evenly through the list (row-major: every region of the
+// cloud field is represented), weighted by solid angle (weights sum to 1).
+std::vector<CloudSample> ChooseSamples(const std::vector<size_t>& pixels, const ImageRGB& reference, int count);
+
+// The conditioning at theta (one Jacobian evaluation, unweighted rows).
+Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, const CloudLightingOptions& o);
+
+// Adds the cloud block (bounds from the spec table; held entries constant) to `problem`.
+void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* theta, const Conditioning& c);
+
+// Solves the cloud block alone (the sky fixed); returns the Ceres summary.
+ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
+                                       const CloudLightingOptions& o);
+
+// Errors of a composite against the reference at `pixels` (solid-angle weighted).
+PixelErrors CompositeErrors(const std::vector<size_t>& pixels, const ImageRGB& reference, const ImageRGB& composite);
+// sky_exposed x T + exposure x L_cloud (the sky already multiplied by the exposure).
+ImageRGB Composite(const ImageRGB& sky_exposed, const clouds::CloudImage& cloud, double exposure);
+
+// Fills the parameter table and conditioning of `report`.
+void ReportParameters(const CloudLighting& initial, const CloudLighting& final_theta, const Conditioning& c,
+                      CloudLightingReport* report);
+
+}  // namespace skycal::cloudfit

@@ -1,0 +1,137 @@
+// `skycal fit --clouds` and `skycal export` through the binary (issue 11): a clear reference
+// never marches clouds and holds every cloud parameter; --clouds on on a clear reference
+// and a cloud preset with an out-of-bounds field fail with a clear message and write
+// nothing; a cloudy reference rendered with the bundled cloudy preset's shapes and
+// lighting is fitted (its lighting recovered, the preset gains the fitted clouds section)
+// and exported as cloud keyframes with units in the header.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
+
+#include "run_binary.h"
+#include "skycal/core/json_file.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+namespace fs = std::filesystem;
+using testing::ScratchDir;
+
+const std::string kPresets = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/";
+const std::string kCloudy = kPresets + "default_cloudy.json";
+
+testing::ProcessResult Skycal(const std::string& args) {
+  const std::string cache = (fs::temp_directory_path() / "skycal-clouds-cli-test-cache").string();
+  return testing::RunSkycal(SKYCAL_BINARY, args, "XDG_CACHE_HOME=" + cache);
+}
+
+// 64x32 references from the bundled cloudy preset, with and without its clouds.
+std::string Reference(const ScratchDir& dir, bool clouds) {
+  const std::string out = dir / (clouds ? "cloudy.exr" : "clear.exr");
+  const auto r = Skycal("render --preset " + kCloudy + " --sun-elevation 30 --sun-azimuth 40 --size 64x32 " +
+                        (clouds ? "--clouds " : "") + "--out " + out);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  return out;
+}
+
+TEST(CloudLightingCli, ClearReferenceNeverMarchesAndHoldsEveryCloudParameter) {
+  ScratchDir dir("cloudfit-cli-clear");
+  const std::string ref = Reference(dir, false);
+  const std::string out = dir / "fit";
+  const auto r = Skycal("fit --reference " + ref + " --cloud-preset " + kCloudy + " --quiet --out " + out);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json c = ReadJsonFile(out + "/fit.json")["clouds"];
+  EXPECT_EQ(c["mode"], "auto");
+  EXPECT_FALSE(c["fitted"].get<bool>());
+  EXPECT_NE(c["decision"].get<std::string>().find("clear"), std::string::npos) << c["decision"];
+  EXPECT_FALSE(c.contains("solve"));  // no render, no Jet march
+  ASSERT_EQ(c["parameters"].size(), 14u);
+  for (const auto& [name, p] : c["parameters"].items()) {
+    EXPECT_TRUE(p["held"].get<bool>()) << name;
+    EXPECT_EQ(p["value"], p["initial"]) << name;
+  }
+}
+
+TEST(CloudLightingCli, CloudsOnWithoutCloudPixelsFailsAndWritesNothing) {
+  ScratchDir dir("cloudfit-cli-on-clear");
+  const std::string ref = Reference(dir, false);
+  const std::string out = dir / "fit";
+  const auto r = Skycal("fit --reference " + ref + " --clouds on --cloud-preset " + kCloudy + " --quiet --out " + out);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("no cloud pixels"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(ref), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CloudLightingCli, OutOfBoundsCloudPresetFieldIsNamed) {
+  ScratchDir dir("cloudfit-cli-bounds");
+  for (const char* f : {"mie", "rayleigh", "sun_transmittance", "weather"}) {
+    fs::copy_file(kPresets + "default_cloudy." + f + ".exr", dir / (std::string("default_cloudy.") + f + ".exr"));
+  }
+  nlohmann::json j = ReadJsonFile(kCloudy);
+  j["clouds"]["extinction"] = 5.0;  // bounds [0, 1] 1/m
+  const std::string preset = dir / "default_cloudy.json";
+  testing::WriteText(preset, j.dump(1));
+  const std::string ref = Reference(dir, true);
+  const std::string out = dir / "fit";
+  const auto r = Skycal("fit --reference " + ref + " --clouds on --cloud-preset " + preset + " --quiet --out " + out);
+  EXPECT_NE(r.rc, 0);
+  EXPECT_NE(r.err.find("clouds.extinction"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// The reference's sky and clouds are the bundled cloudy preset's, so with --init on that
+// preset and --absolute the truth is the preset's lighting: the separable parameters come
+// back within 3%, the held ones stay exactly at it. 3%, not the 1% of the recovery test:
+// at 64x32 the sky fit itself leaves ~1.3% rel RMSE (the LUT against a 64-pixel-wide
+// render), which the sky behind the clouds and their light carry into the cloud block
+// (measured: ms_a 2.6% off); at 512x256 the same command recovers every free parameter
+// within 0.06% (bench/results/fit_clouds.txt).
+TEST(CloudLightingCli, CloudyReferenceFitsAndExportsCloudKeyframes) {
+  ScratchDir dir("cloudfit-cli-cloudy");
+  const std::string ref = Reference(dir, true);
+  const std::string out = dir / "fit";
+  const auto r = Skycal("fit --reference " + ref + " --clouds on --cloud-preset " + kCloudy + " --init " + kCloudy +
+                        " --absolute --time 14 --cloud-samples 96 --quiet --out " + out);
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json c = ReadJsonFile(out + "/fit.json")["clouds"];
+  ASSERT_TRUE(c["fitted"].get<bool>());
+  EXPECT_GT(c["cloud_pixels"]["count"].get<int>(), 50);
+  EXPECT_EQ(c["parameters"]["extinction"]["unit"], "1/m");
+  int free = 0;
+  for (const auto& [name, p] : c["parameters"].items()) {
+    const double v = p["value"].get<double>(), v0 = p["initial"].get<double>();
+    if (p["held"].get<bool>()) {
+      EXPECT_EQ(v, v0) << name;
+      EXPECT_FALSE(p["why"].get<std::string>().empty()) << name;
+    } else {
+      ++free;
+      EXPECT_NEAR(v / v0, 1.0, 0.03) << name;
+    }
+  }
+  EXPECT_GE(free, 2);
+  EXPECT_EQ(c["singular_values"].size(), 13u);  // rain_absorption unobserved: no rain in the bundled map
+  const nlohmann::json preset = ReadJsonFile(out + "/preset.json");
+  ASSERT_TRUE(preset.contains("clouds"));
+  EXPECT_TRUE(fs::exists(out + "/preset.weather.exr"));
+
+  const std::string game = dir / "game";
+  const auto e = Skycal("export --preset " + out + "/preset.json --backend cpu --out " + game);
+  ASSERT_EQ(e.rc, 0) << e.err;
+  std::ifstream csv(game + "/cloud_keyframes.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  EXPECT_EQ(header.rfind("time_of_day_h,preset,extinction [1/m],scattering_albedo [1],", 0), 0u) << header;
+  EXPECT_EQ(row.rfind("14,fit,", 0), 0u) << row;
+  const nlohmann::json keys = ReadJsonFile(game + "/cloud_keyframes.json");
+  EXPECT_NEAR(keys["keys"][0]["extinction"].get<double>(), c["parameters"]["extinction"]["value"].get<double>(), 1e-9);
+  EXPECT_TRUE(fs::exists(game + "/fit/clouds.json"));
+  EXPECT_TRUE(fs::exists(game + "/fit/weather.exr"));
+}
+
+}  // namespace
+}  // namespace skycal
