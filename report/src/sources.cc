@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include <nlohmann/json.hpp>
+
 #include "json_fields.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
@@ -25,11 +27,26 @@ std::string Label(const fs::path& root, const fs::path& dir) {
 
 // An image the fit listed (or that lies where the fit writes it): absolute path, or "" when
 // it was not listed and is absent. A listed image that is missing is an error.
+// A file name is any bytes, fit.json's strings are UTF-8: the writer replaced bytes that are
+// not UTF-8 by U+FFFD (nlohmann's error_handler_t::replace). The file in p's directory whose
+// name, replaced the same way, reads as p's name; p itself when there is none.
+fs::path MatchReplacedName(const fs::path& p) {
+  auto replaced = [](const std::string& n) {
+    return nlohmann::json(n).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  };
+  const std::string want = replaced(p.filename().string());
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(p.parent_path(), ec))
+    if (replaced(e.path().filename().string()) == want) return e.path();
+  return p;
+}
+
 std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, const std::string& kind,
                       const std::string& name) {
   if (images) {
     const JsonAt f = images->Child(kind);
-    const fs::path p = dir / f.String();
+    fs::path p = dir / f.String();
+    if (!fs::is_regular_file(p)) p = MatchReplacedName(p);
     if (!fs::is_regular_file(p)) throw Error(f.Where() + ": the image '" + p.string() + "' does not exist");
     return p.string();
   }
