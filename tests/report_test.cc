@@ -240,5 +240,30 @@ TEST(ReportFitJson, CloudMaskLeavesOutThePaintedCloudOnly) {
   EXPECT_LE(cloudy[1], cloudy[0] + static_cast<long long>(1.2 * pw * ph));
 }
 
+// fit --clouds: the fit's `clouds` object becomes a table per fit (value, initial, unit, held and
+// why); a held parameter's reason is shown (escaped); a wrongly typed field is named.
+TEST(ReportInput, CloudLightingTableFromFitJson) {
+  ScratchDir s("report_clouds");
+  WriteMinimalFit(s.path() / "fit", {{"name", "noon"}, {"rel_rmse", 0.01}, {"log_rmse", 0.01}});
+  nlohmann::json j = nlohmann::json::parse(testing::Slurp((s / "fit/fit.json")));
+  j["clouds"] = {{"fitted", true},
+                 {"decision", "--clouds on: 656 of 4094 fitted sky pixels are cloud"},
+                 {"cloud_pixels", {{"initial", {{"log_rmse", 0.25}}}, {"final", {{"log_rmse", 0.125}}}}},
+                 {"parameters",
+                  {{"extinction", {{"value", 0.0625}, {"unit", "1/m"}, {"initial", 0.05}, {"held", false}}},
+                   {"powder_strength", {{"value", 0.4}, {"unit", "1"}, {"initial", 0.4}, {"held", true},
+                                        {"why", "inseparable: collinear with <extinction>"}}}}}};
+  WriteText((s / "fit/fit.json"), j.dump());
+  report::WriteReport(s / "fit", {});
+  const std::string html = testing::Slurp(s / "fit/report.html");
+  EXPECT_NE(html.find("Cloud lighting (fit --clouds)"), std::string::npos);
+  EXPECT_NE(html.find("<td>extinction</td><td>0.0625</td><td>0.05</td><td>1/m</td><td>fitted</td>"), std::string::npos);
+  EXPECT_NE(html.find("collinear with &lt;extinction&gt;"), std::string::npos);
+  EXPECT_NE(html.find("log RMSE 0.25 at the start, 0.125 fitted"), std::string::npos);
+  j["clouds"]["parameters"]["extinction"]["value"] = "fast";
+  WriteText((s / "fit/fit.json"), j.dump());
+  EXPECT_NE(ErrorOf(s / "fit").find("clouds.parameters.extinction.value"), std::string::npos) << ErrorOf(s / "fit");
+}
+
 }  // namespace
 }  // namespace skycal

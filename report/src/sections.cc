@@ -136,8 +136,9 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
     c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
-  h += "</div>\n<p class=\"note\">Cloud lighting over the day: no fit here carries cloud-lighting parameters yet (the "
-       "cloud-lighting fit is not part of this build); cloudy frames are fitted on their clear pixels.</p>\n";
+  h += "</div>\n<p class=\"note\">Cloud lighting over the day: not plotted yet; each fit made with "
+       "<code>fit --clouds</code> lists its cloud-lighting parameters in its own section. Frames fitted with "
+       "<code>--cloud-mask</code> are fitted on their clear pixels.</p>\n";
   h += "<table>\n" +
        Row({"frame", "fit", "time of day (h)", "sun elevation (deg)", "haziness g", "exposure", "sun at ground (lux)",
             "rel RMSE", "log RMSE"},
@@ -219,6 +220,17 @@ std::string FitSection(const FitRecord& f, const std::string& anchor, PageCounts
     h += "<h3>Fitted preset parameters (preset.json)</h3>\n<table>\n" + Row({"parameter", "value", "unit", "range", "meaning"}, true);
     for (const ParameterRow& p : f.parameters) h += Row({E(p.name), E(p.value), E(p.unit), E(p.range), E(p.description)});
     h += "</table>\n<p class=\"note\">The LUTs (cd/m&sup2;&middot;sr) are the EXRs beside preset.json.</p>\n";
+  }
+  if (!f.cloud_parameters.empty()) {
+    h += "<h3>Cloud lighting (fit --clouds)</h3>\n<p>" + E(f.clouds_decision.empty() ? std::string("-") : f.clouds_decision);
+    if (f.cloud_pixels_log_rmse_initial && f.cloud_pixels_log_rmse_final)
+      h += " Cloud pixels' log RMSE " + FormatNumber(*f.cloud_pixels_log_rmse_initial) + " at the start, " +
+           FormatNumber(*f.cloud_pixels_log_rmse_final) + " fitted.";
+    h += "</p>\n<table>\n" + Row({"parameter", "value", "initial", "unit", "held: why"}, true);
+    for (const FitRecord::CloudParameter& p : f.cloud_parameters)
+      h += Row({E(p.name), FormatNumber(p.value), FormatNumber(p.initial), E(p.unit),
+                p.held ? E(p.why.empty() ? std::string("held") : p.why) : std::string(f.clouds_fitted ? "fitted" : "-")});
+    h += "</table>\n";
   }
   if (!f.decisions.empty()) {
     h += "<h3>Decisions (what the fit did not evaluate, and what that saved)</h3>\n<table>\n" +

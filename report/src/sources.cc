@@ -184,6 +184,29 @@ FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
     for (size_t i = 0; i < w->Size(); ++i) f.warnings.push_back(w->Index(i).String());
   }
   f.convergence = ReadConvergence(j);
+  if (const auto c = j.Optional("clouds")) {
+    if (const auto b = c->Optional("fitted")) f.clouds_fitted = b->Boolean();
+    f.clouds_decision = c->OptionalString("decision").value_or("");
+    if (const auto px = c->Optional("cloud_pixels")) {
+      if (const auto i = px->Optional("initial")) f.cloud_pixels_log_rmse_initial = i->OptionalNumber("log_rmse");
+      if (const auto e = px->Optional("final")) f.cloud_pixels_log_rmse_final = e->OptionalNumber("log_rmse");
+    }
+    if (const auto params = c->Optional("parameters")) {
+      params->RequireObject();
+      for (const auto& item : params->value.items()) {
+        const std::string name = item.key();
+        const JsonAt q = params->Child(name);
+        FitRecord::CloudParameter cp;
+        cp.name = name;
+        cp.unit = q.OptionalString("unit").value_or("");
+        cp.value = q.Number("value");
+        cp.initial = q.OptionalNumber("initial").value_or(NAN);
+        if (const auto b = q.Optional("held")) cp.held = b->Boolean();
+        cp.why = q.OptionalString("why").value_or("");
+        f.cloud_parameters.push_back(std::move(cp));
+      }
+    }
+  }
   if (fs::is_regular_file(dir / "preset.json")) f.parameters = ReadParameters((dir / "preset.json").string());
   if (fs::is_regular_file(dir / "report.png")) f.sheet_png = (dir / "report.png").string();
   return f;

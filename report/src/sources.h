@@ -56,6 +56,17 @@ struct FitRecord {
   std::vector<CostCurve> convergence;
   std::vector<ParameterRow> parameters;  // from preset.json (empty when absent)
   std::string sheet_png;  // report.png, embedded when the per-reference images are absent
+  // fit.json's `clouds` object (fit --clouds): the decision, and per cloud-lighting
+  // parameter value / initial / unit / held and why; empty when the fit had none.
+  struct CloudParameter {
+    std::string name, unit, why;
+    double value = 0.0, initial = 0.0;
+    bool held = false;
+  };
+  bool clouds_fitted = false;
+  std::string clouds_decision;
+  std::optional<double> cloud_pixels_log_rmse_initial, cloud_pixels_log_rmse_final;
+  std::vector<CloudParameter> cloud_parameters;
 };
 
 struct ExportRecord {
