@@ -1,0 +1,319 @@
+#include "batch_engines.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+#include "verb_common.h"
+
+extern char** environ;
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string DescribeWaitStatus(int status) {
+  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+  return "status " + std::to_string(status);
+}
+
+// Starts `args` (args[0] a path) with stdout and stderr appended to `log` (or, with an
+// empty log, a pipe returned in *out_fd). Throws naming what failed.
+pid_t Spawn(const std::vector<std::string>& args, const std::string& log, int* out_fd) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  int pipe_fds[2] = {-1, -1};
+  if (log.empty()) {
+    if (::pipe(pipe_fds) != 0) throw Error("cannot create a pipe for " + args[0]);
+    posix_spawn_file_actions_adddup2(&fa, pipe_fds[1], 1);
+    posix_spawn_file_actions_addclose(&fa, pipe_fds[0]);
+    posix_spawn_file_actions_addclose(&fa, pipe_fds[1]);
+  } else {
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  }
+  pid_t pid = 0;
+  const int rc = posix_spawnp(&pid, args[0].c_str(), &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (log.empty()) ::close(pipe_fds[1]);
+  if (rc != 0) {
+    if (log.empty()) ::close(pipe_fds[0]);
+    throw Error("cannot start " + args[0] + " (" + std::strerror(rc) + ")");
+  }
+  if (out_fd) *out_fd = pipe_fds[0];
+  return pid;
+}
+
+struct Captured {
+  int status = 0;
+  std::string out;  // stdout (stderr goes to ours)
+};
+
+Captured RunCapture(const std::vector<std::string>& args) {
+  int fd = -1;
+  const pid_t pid = Spawn(args, "", &fd);
+  Captured c;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) c.out.append(buf, static_cast<size_t>(n));
+  ::close(fd);
+  ::waitpid(pid, &c.status, 0);
+  return c;
+}
+
+// `name` on $PATH, else empty.
+std::string FindOnPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::stringstream ss(path ? path : "");
+  for (std::string dir; std::getline(ss, dir, ':');) {
+    if (dir.empty()) continue;
+    const fs::path p = fs::path(dir) / name;
+    if (::access(p.c_str(), X_OK) == 0) return p.string();
+  }
+  return "";
+}
+
+// One log line when the counts change (or every minute).
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(int at_start) : at_start_(at_start), t0_(Clock::now()), last_print_(t0_) {}
+  void Update(const BatchProgress& p, const std::string& what) {
+    const auto now = Clock::now();
+    if (p.done == last_.done && p.failed == last_.failed && what == last_what_ && now - last_print_ < std::chrono::minutes(1)) {
+      return;
+    }
+    const double s = std::chrono::duration<double>(now - t0_).count();
+    const int fitted = p.done - at_start_;
+    std::ostringstream line;
+    line << p.done << "/" << p.total << " frames done, " << p.failed << " failed; " << what << "; " << static_cast<int>(s)
+         << " s";
+    if (fitted > 0 && s > 0) line << ", " << fitted / s << " frames/s";
+    Log("batch", line.str());
+    last_ = p;
+    last_what_ = what;
+    last_print_ = now;
+  }
+
+ private:
+  int at_start_;
+  Clock::time_point t0_, last_print_;
+  BatchProgress last_{-1, -1, -1};
+  std::string last_what_;
+};
+
+std::string LogPath(const std::string& out_dir, const std::string& name) {
+  return (fs::path(out_dir) / "logs" / name).string();
+}
+
+}  // namespace
+
+std::string SelfExecutable() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw Error("cannot find the running skycal binary (/proc/self/exe: " + ec.message() + ")");
+  return p.string();
+}
+
+nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan, int jobs) {
+  const std::vector<int> pending = PendingChunks(out_dir, plan);
+  const std::string exe = SelfExecutable();
+  const std::string out_abs = fs::absolute(out_dir).string();
+  ProgressPrinter progress(CountBatchProgress(out_dir, plan).done);
+  std::map<pid_t, int> running;  // pid -> chunk
+  nlohmann::json exits = nlohmann::json::array();
+  size_t next = 0;
+  while (next < pending.size() || !running.empty()) {
+    while (next < pending.size() && static_cast<int>(running.size()) < jobs) {
+      const int c = pending[next++];
+      const pid_t pid = Spawn({exe, "batch", "--worker-chunk", std::to_string(c), "--out", out_abs},
+                              LogPath(out_dir, "chunk-" + std::to_string(c) + ".log"), nullptr);
+      running[pid] = c;
+    }
+    for (auto it = running.begin(); it != running.end();) {
+      int status = 0;
+      const pid_t r = ::waitpid(it->first, &status, WNOHANG);
+      if (r == it->first) {
+        exits.push_back({{"chunk", it->second}, {"status", DescribeWaitStatus(status)}});
+        if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+          Log("batch", "chunk " + std::to_string(it->second) + ": " + DescribeWaitStatus(status) + " (log: " +
+                           LogPath(out_dir, "chunk-" + std::to_string(it->second) + ".log") + ")");
+        }
+        it = running.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    progress.Update(CountBatchProgress(out_dir, plan),
+                    std::to_string(running.size()) + " chunks running, " + std::to_string(pending.size() - next) + " waiting");
+    if (!running.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+  return {{"engine", "local"}, {"jobs", jobs}, {"chunks", pending.size()}, {"exits", exits}};
+}
+
+namespace {
+
+// Parses `scontrol show job ID` (one record per array task, blank-line separated) into
+// {ArrayTaskId or JobId -> {JobState, ExitCode, Reason}}.
+nlohmann::json ParseScontrol(const std::string& text) {
+  nlohmann::json tasks = nlohmann::json::array();
+  std::stringstream records(text);
+  std::string rec, line;
+  nlohmann::json cur = nlohmann::json::object();
+  auto flush = [&] {
+    if (!cur.empty()) tasks.push_back(cur);
+    cur = nlohmann::json::object();
+  };
+  while (std::getline(records, line)) {
+    if (line.find_first_not_of(" \t") == std::string::npos) {
+      flush();
+      continue;
+    }
+    std::stringstream words(line);
+    for (std::string w; words >> w;) {
+      const auto eq = w.find('=');
+      if (eq == std::string::npos) continue;
+      const std::string k = w.substr(0, eq);
+      if (k == "JobId" || k == "ArrayJobId" || k == "ArrayTaskId" || k == "JobState" || k == "Reason" || k == "ExitCode") {
+        cur[k] = w.substr(eq + 1);
+      }
+    }
+  }
+  flush();
+  return tasks;
+}
+
+std::string FirstToken(std::string s) {
+  const auto end = s.find_first_of(";\n\r ");
+  return end == std::string::npos ? s : s.substr(0, end);
+}
+
+}  // namespace
+
+nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& o) {
+  const std::string sbatch = FindOnPath("sbatch");
+  if (sbatch.empty()) {
+    throw Error("--engine slurm: sbatch not found on PATH (install the Slurm client, Debian's slurm-client, and point "
+                "SLURM_CONF at the cluster's slurm.conf; or use --engine local)");
+  }
+  const std::string squeue = FindOnPath("squeue"), scontrol = FindOnPath("scontrol");
+  if (squeue.empty() || scontrol.empty()) {
+    throw Error("--engine slurm: squeue or scontrol not found on PATH beside " + sbatch + " (the Slurm client)");
+  }
+  const std::vector<int> pending = PendingChunks(out_dir, plan);
+  const std::string out_abs = fs::absolute(out_dir).string();
+  const std::string exe = SelfExecutable();
+  const fs::path sdir = fs::path(out_abs) / "slurm";
+  fs::create_directories(sdir);
+  auto script = [&](const std::string& name, const std::string& body) {
+    const std::string p = (sdir / name).string();
+    WriteFileAtomically(p, "#!/bin/sh\n# written by skycal batch: one " + body);
+    ::chmod(p.c_str(), 0755);
+    return p;
+  };
+  auto quote = [](const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  const std::string chunk_sh =
+      script("chunk.sh", "chunk of the batch (the array task id is the chunk)\nexec " + quote(exe) +
+                             " batch --worker-chunk \"$SLURM_ARRAY_TASK_ID\" --out " + quote(out_abs) + "\n");
+  const std::string reduce_sh =
+      script("reduce.sh", "reduce of the batch\nexec " + quote(exe) + " batch --reduce --out " + quote(out_abs) + "\n");
+  std::string array;
+  for (int c : pending) array += (array.empty() ? "" : ",") + std::to_string(c);
+
+  nlohmann::json result = {{"engine", "slurm"}, {"chunks", pending.size()}};
+  std::string array_id;
+  std::vector<std::string> watch;
+  if (!pending.empty()) {
+    std::vector<std::string> args = {sbatch, "--parsable", "--job-name=skycal-batch", "--array=" + array,
+                                     "--chdir=" + out_abs, "--output=" + LogPath(out_abs, "chunk-%a.log")};
+    args.insert(args.end(), o.slurm_options.begin(), o.slurm_options.end());
+    args.push_back(chunk_sh);
+    const Captured c = RunCapture(args);
+    array_id = FirstToken(c.out);
+    if (c.status != 0 || array_id.empty()) {
+      throw Error("--engine slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) + "; its message is above)");
+    }
+    watch.push_back(array_id);
+    Log("batch", "submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
+  }
+  std::vector<std::string> rargs = {sbatch, "--parsable", "--job-name=skycal-reduce", "--chdir=" + out_abs,
+                                    "--output=" + LogPath(out_abs, "reduce.log")};
+  if (!array_id.empty()) {
+    rargs.push_back("--dependency=afterok:" + array_id);
+    rargs.push_back("--kill-on-invalid-dep=yes");
+  }
+  rargs.insert(rargs.end(), o.slurm_options.begin(), o.slurm_options.end());
+  rargs.push_back(reduce_sh);
+  const Captured rc = RunCapture(rargs);
+  const std::string reduce_id = FirstToken(rc.out);
+  if (rc.status != 0 || reduce_id.empty()) {
+    if (!array_id.empty()) RunCapture({FindOnPath("scancel"), array_id});
+    throw Error("--engine slurm: sbatch refused the reduce job (" + DescribeWaitStatus(rc.status) +
+                "; its message is above); the chunk array " + array_id + " was cancelled");
+  }
+  watch.push_back(reduce_id);
+  Log("batch", "submitted the reduce: job " + reduce_id + (array_id.empty() ? "" : " (afterok:" + array_id + ")"));
+  WriteJsonFileAtomically((sdir / "jobs.json").string(), {{"array_job", array_id}, {"reduce_job", reduce_id}, {"chunks", pending}});
+  result["array_job"] = array_id;
+  result["reduce_job"] = reduce_id;
+
+  std::string ids;
+  for (const auto& w : watch) ids += (ids.empty() ? "" : ",") + w;
+  ProgressPrinter progress(CountBatchProgress(out_dir, plan).done);
+  const auto t0 = Clock::now();
+  for (;;) {
+    const Captured q = RunCapture({squeue, "-h", "-j", ids, "-o", "%i %T"});
+    std::map<std::string, int> states;
+    std::stringstream lines(q.out);
+    int jobs_listed = 0;
+    for (std::string id, state; lines >> id >> state;) {
+      ++states[state];
+      ++jobs_listed;
+    }
+    if (jobs_listed == 0) break;  // every job has left the queue (or squeue no longer knows the ids)
+    std::string what = "slurm:";
+    for (const auto& [s, n] : states) what += " " + std::to_string(n) + " " + s;
+    progress.Update(CountBatchProgress(out_dir, plan), what);
+    std::this_thread::sleep_for(std::chrono::duration<double>(o.poll_s));
+  }
+  result["queue_s"] = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (!array_id.empty()) {
+    const Captured s = RunCapture({scontrol, "show", "job", array_id});
+    result["tasks"] = ParseScontrol(s.out);
+    for (const auto& t : result["tasks"]) {
+      if (t.value("JobState", "") != "COMPLETED") {
+        Log("batch", "chunk " + t.value("ArrayTaskId", "?") + " (job " + t.value("JobId", "?") + "): " +
+                         t.value("JobState", "?") + ", exit " + t.value("ExitCode", "?") + " (log: " +
+                         LogPath(out_abs, "chunk-" + t.value("ArrayTaskId", "?") + ".log") + ")");
+      }
+    }
+  }
+  const Captured r = RunCapture({scontrol, "show", "job", reduce_id});
+  const nlohmann::json rt = ParseScontrol(r.out);
+  result["reduce_state"] = rt.empty() ? "unknown (no longer listed by scontrol)" : rt[0].value("JobState", "?");
+  if (!rt.empty() && rt[0].contains("Reason")) result["reduce_reason"] = rt[0]["Reason"];
+  return result;
+}
+
+}  // namespace skycal::cli
