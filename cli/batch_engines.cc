@@ -207,16 +207,20 @@ std::string FirstToken(std::string s) {
 
 }  // namespace
 
-nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& o) {
+void RequireSlurmClient() {
   const std::string sbatch = FindOnPath("sbatch");
   if (sbatch.empty()) {
     throw Error("--engine slurm: sbatch not found on PATH (install the Slurm client, Debian's slurm-client, and point "
                 "SLURM_CONF at the cluster's slurm.conf; or use --engine local)");
   }
-  const std::string squeue = FindOnPath("squeue"), scontrol = FindOnPath("scontrol");
-  if (squeue.empty() || scontrol.empty()) {
+  if (FindOnPath("squeue").empty() || FindOnPath("scontrol").empty()) {
     throw Error("--engine slurm: squeue or scontrol not found on PATH beside " + sbatch + " (the Slurm client)");
   }
+}
+
+nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& o) {
+  RequireSlurmClient();
+  const std::string sbatch = FindOnPath("sbatch"), squeue = FindOnPath("squeue"), scontrol = FindOnPath("scontrol");
   const std::vector<int> pending = PendingChunks(out_dir, plan);
   const std::string out_abs = fs::absolute(out_dir).string();
   const std::string exe = SelfExecutable();

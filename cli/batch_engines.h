@@ -23,6 +23,9 @@ nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan,
 // reduce_state}. Throws when sbatch is missing or refuses the job.
 nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& options);
 
+// Throws, naming what is missing, unless sbatch, squeue and scontrol are on PATH.
+void RequireSlurmClient();
+
 // The running binary's absolute path (/proc/self/exe).
 std::string SelfExecutable();
 

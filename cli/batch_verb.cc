@@ -149,6 +149,7 @@ nlohmann::json RunBatchImpl(const BatchOptions& o) {
   if (o.reduce_only) return RunBatchReduce(o.out_dir);
 
   const auto t0 = std::chrono::steady_clock::now();
+  if (o.engine == BatchEngine::kSlurm) RequireSlurmClient();  // before --out is touched
   BatchPlan plan;
   plan.frames = ScanBatchFrames(ExpandReferenceGlob(o.references_glob));
   plan.chunks = ChunkFrames(static_cast<int>(plan.frames.size()), o.frames_per_job);
