@@ -12,23 +12,12 @@
 # usage: batch_slurm_test.sh SKYCAL_BINARY
 set -euo pipefail
 SKYCAL=$1
-PATH=$PATH:/usr/sbin:/sbin
-skip() { echo "SKIP: $*"; exit 77; }
-[ "$(id -u)" -eq 0 ] || skip "not root: this single-node cluster runs slurmctld/slurmd as SlurmUser=root and munged with a root-owned key"
-for b in munged slurmctld slurmd sbatch squeue scontrol; do
-  command -v "$b" >/dev/null || skip "$b not installed (Debian: slurm-wlm munge; scripts/setup.sh installs them)"
-done
-
+source "$(dirname "$0")/slurm_cluster.sh"
+why=$(slurm_cluster_check) || { echo "SKIP: $why"; exit 77; }
 T=$(mktemp -d /tmp/skycal-slurm-test.XXXXXX)
-chmod 0755 "$T"
-PIDS=()
 cleanup() {
   local rc=$?
-  for p in "${PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
-  for p in "${PIDS[@]}"; do
-    for _ in $(seq 50); do kill -0 "$p" 2>/dev/null || break; sleep 0.1; done
-    kill -9 "$p" 2>/dev/null || true
-  done
+  slurm_cluster_stop
   if [ $rc -ne 0 ]; then
     echo "--- slurmctld.log"; tail -n 30 "$T/slurmctld.log" 2>/dev/null || true
     echo "--- slurmd.log"; tail -n 30 "$T/slurmd.log" 2>/dev/null || true
@@ -37,64 +26,9 @@ cleanup() {
   exit $rc
 }
 trap cleanup EXIT INT TERM
-
-# munge: a private 0600 key, its socket in a 0755 directory.
-mkdir -p "$T/munge" && chmod 0755 "$T/munge"
-head -c 1024 /dev/urandom > "$T/munge/munge.key" && chmod 0600 "$T/munge/munge.key"
-munged -F --key-file="$T/munge/munge.key" --socket="$T/munge/munge.socket" --pid-file="$T/munge/munged.pid" \
-  --log-file="$T/munge/munged.log" --seed-file="$T/munge/munged.seed" --num-threads=2 >"$T/munged.out" 2>&1 &
-PIDS+=($!)
-
-# Two free TCP ports (other sessions may run this test at the same time).
-read -r CTLD_PORT SLURMD_PORT < <(python3 -c '
-import socket
-s=[socket.socket() for _ in range(2)]
-for x in s: x.bind(("127.0.0.1",0))
-print(*[x.getsockname()[1] for x in s])')
-HOST=$(hostname -s)
-mkdir -p "$T/state" "$T/spool"
-export SLURM_CONF="$T/slurm.conf"
-cat > "$SLURM_CONF" <<CONF
-ClusterName=skycaltest
-SlurmctldHost=$HOST(127.0.0.1)
-SlurmctldPort=$CTLD_PORT
-SlurmdPort=$SLURMD_PORT
-SlurmUser=root
-SlurmdUser=root
-AuthType=auth/munge
-CredType=cred/munge
-AuthInfo=socket=$T/munge/munge.socket
-StateSaveLocation=$T/state
-SlurmdSpoolDir=$T/spool
-SlurmctldPidFile=$T/slurmctld.pid
-SlurmdPidFile=$T/slurmd.pid
-SlurmctldLogFile=$T/slurmctld.log
-SlurmdLogFile=$T/slurmd.log
-ProctrackType=proctrack/linuxproc
-TaskPlugin=task/none
-SelectType=select/cons_tres
-SelectTypeParameters=CR_Core
-AccountingStorageType=accounting_storage/none
-JobCompType=jobcomp/filetxt
-JobCompLoc=$T/jobcomp.txt
-SchedulerParameters=batch_sched_delay=0
-DependencyParameters=kill_invalid_depend
-MailProg=/bin/true
-ReturnToService=2
-MinJobAge=600
-NodeName=$HOST NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
-PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP
-CONF
-slurmctld -D -i >"$T/slurmctld.out" 2>&1 &
-PIDS+=($!)
-slurmd -D >"$T/slurmd.out" 2>&1 &
-PIDS+=($!)
-for i in $(seq 100); do
-  sinfo -h -o %t 2>/dev/null | grep -q idle && break
-  [ "$i" -eq 100 ] && { echo "FAIL: the node never became idle"; sinfo || true; exit 1; }
-  sleep 0.2
-done
-echo "cluster up: $(sinfo -h -o '%P %t %D')"
+t0=$(date +%s.%N)
+slurm_cluster_start "$T" || { echo "FAIL: the cluster did not start"; exit 1; }
+echo "cluster up in $(python3 -c "print(round($(date +%s.%N) - $t0, 2))") s: $(sinfo -h -o '%P %t %D')"
 
 # A 4-frame day: sun along an arc, times out of file-name order.
 mkdir -p "$T/day"
