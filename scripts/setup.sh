@@ -12,8 +12,8 @@ PACKAGES=(
   nlohmann-json3-dev libgtest-dev libcli11-dev nettle-dev
   libexiv2-dev
   # skycal batch --engine slurm and its test (tests/batch_slurm_test.sh): a single-node Slurm
-  # cluster and its authentication.
-  slurm-wlm munge
+  # cluster and its authentication; python3 for its free ports and JSON checks.
+  slurm-wlm munge python3
   # skycal bench's Pareto plots: PLplot and its cairo drivers (pngcairo, svgcairo).
   libplplot-dev plplot-driver-cairo
   # scripts/fuzz.sh: clang and its runtimes (libFuzzer, ASan, UBSan; not pulled in by
