@@ -226,6 +226,21 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
   const std::string exe = SelfExecutable();
   const fs::path sdir = fs::path(out_abs) / "slurm";
   fs::create_directories(sdir);
+  if (std::error_code ec; fs::exists(sdir / "jobs.json", ec)) {  // an earlier submission still queued?
+    const nlohmann::json earlier = ReadJsonFile((sdir / "jobs.json").string());
+    std::string ids;
+    for (const char* k : {"array_job", "reduce_job"}) {
+      const std::string id = earlier.value(k, std::string());
+      if (!id.empty()) ids += (ids.empty() ? "" : ",") + id;
+    }
+    if (!ids.empty()) {
+      const Captured q = RunCapture({squeue, "-h", "-j", ids, "-o", "%i %T"});
+      if (q.status == 0 && q.out.find_first_not_of(" \n") != std::string::npos) {
+        throw Error("--out " + out_dir + ": its earlier Slurm jobs (" + ids + ") are still in the queue:\n" + q.out +
+                    "wait for them (or scancel them), then run again with --resume");
+      }
+    }
+  }
   auto script = [&](const std::string& name, const std::string& body) {
     const std::string p = (sdir / name).string();
     WriteFileAtomically(p, "#!/bin/sh\n# written by skycal batch: one " + body);

@@ -1,6 +1,9 @@
 #include "batch_plan.h"
 
+#include <fcntl.h>
 #include <glob.h>
+#include <sys/file.h>
+#include <unistd.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -18,6 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kPlanFile = "batch_plan.json";
+constexpr const char* kLockFile = ".batch.lock";
 const char* const kHow = "; choose another --out, or delete it yourself if it is yours to delete";
 
 nlohmann::json FrameToJson(const BatchFrame& f) {
@@ -197,7 +201,35 @@ BatchPlan LoadBatchPlan(const std::string& out_dir) {
   return plan;
 }
 
-void PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bool resume) {
+BatchLock::~BatchLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+namespace {
+
+BatchLock LockBatchDirectory(const fs::path& dir, const std::string& shown) {
+  const std::string path = (dir / kLockFile).string();
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT, 0644);  // inherited by the workers on purpose
+  if (fd < 0) throw Error(shown + ": cannot create " + path);
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    throw Error(shown + ": another skycal batch (or the workers of one that was stopped) is still running on it (" +
+                path + " is locked): wait for it, or stop its processes");
+  }
+  return BatchLock(fd);
+}
+
+bool EmptyButLock(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (e.path().filename() != kLockFile) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+BatchLock PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bool resume) {
   const fs::path dir = fs::absolute(out_dir).lexically_normal();
   const std::string shown = "--out " + out_dir;
   std::error_code ec;
@@ -219,7 +251,7 @@ void PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bo
         throw Error(shown + ": already holds this batch (" + std::to_string(p.done) + " of " + std::to_string(p.total) +
                     " frames done): pass --resume to fit only the missing or failed frames, or choose another --out");
       }
-    } else if (!fs::is_empty(dir, ec)) {
+    } else if (!EmptyButLock(dir)) {
       throw Error(shown + ": directory exists and is not a skycal batch directory (no " + kPlanFile +
                   "): refusing to write into it" + kHow);
     }
@@ -230,11 +262,13 @@ void PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bo
     fs::create_directory(dir, ec);
     if (ec) throw Error(shown + ": cannot create the directory (" + ec.message() + ")");
   }
+  BatchLock lock = LockBatchDirectory(dir, shown);
   for (const char* sub : {"state", "frames", "logs"}) {
     fs::create_directories(dir / sub, ec);
     if (ec) throw Error(shown + ": cannot create " + sub + "/ (" + ec.message() + ")");
   }
   WriteJsonFileAtomically((dir / kPlanFile).string(), BatchPlanToJson(plan));
+  return lock;
 }
 
 std::string FrameStatePath(const std::string& out_dir, const std::string& frame) {

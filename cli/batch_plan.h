@@ -51,11 +51,28 @@ struct BatchPlan {
 nlohmann::json BatchPlanToJson(const BatchPlan& plan);
 BatchPlan LoadBatchPlan(const std::string& out_dir);  // throws naming batch_plan.json
 
+// An exclusive flock(2) on <out_dir>/.batch.lock, held while alive. The descriptor is
+// inherited by the local engine's workers (not close-on-exec), so a driver killed alone
+// leaves the lock with its still-running workers and a second batch on the same --out is
+// refused until they finish.
+class BatchLock {
+ public:
+  explicit BatchLock(int fd) : fd_(fd) {}
+  ~BatchLock();
+  BatchLock(const BatchLock&) = delete;
+  BatchLock& operator=(const BatchLock&) = delete;
+  BatchLock(BatchLock&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
+
+ private:
+  int fd_;
+};
+
 // Creates `out_dir` (its parent must exist) or checks that it holds this batch's state:
 // another batch's (a different identity) or a directory that is no batch directory is
 // refused; this batch's own state is refused without `resume` (nothing is redone by
-// accident). Then writes the plan (atomically) and the state/, frames/, logs/ folders.
-void PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bool resume);
+// accident); a batch still running there is refused. Then writes the plan (atomically)
+// and the state/, frames/, logs/ folders. The returned lock must outlive the run.
+BatchLock PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bool resume);
 
 std::string FrameStatePath(const std::string& out_dir, const std::string& frame);
 std::string FrameFitDir(const std::string& out_dir, const std::string& frame);

@@ -155,7 +155,7 @@ nlohmann::json RunBatchImpl(const BatchOptions& o) {
   plan.chunks = ChunkFrames(static_cast<int>(plan.frames.size()), o.frames_per_job);
   plan.argv = WorkerArgv(o);
   plan.identity = Identity(o, plan.frames);
-  PrepareBatchDirectory(o.out_dir, plan, o.resume);
+  const BatchLock lock = PrepareBatchDirectory(o.out_dir, plan, o.resume);
   std::error_code ec;
   fs::remove(fs::path(o.out_dir) / "batch.json", ec);  // this run's reduce writes it anew
   const BatchProgress start = CountBatchProgress(o.out_dir, plan);

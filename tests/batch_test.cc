@@ -6,7 +6,9 @@
 // sbatch missing) exits 1 with a message naming what is wrong and writes nothing.
 // The Slurm engine: tests/batch_slurm_test.sh.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -92,6 +94,18 @@ TEST(Batch, LocalDayWarmStartsReduceAndResume) {
   EXPECT_NE(resumed.err.find("4 done earlier, 0 chunks to run"), std::string::npos) << resumed.err;
   EXPECT_EQ(nlohmann::json::parse(resumed.out)["run"]["frames_fitted"], 0);
   EXPECT_EQ(testing::Slurp(dir / "out/state/f3.json"), state0);
+
+  // A batch still running there (its lock held, as a running driver or its workers hold it).
+  {
+    const int fd = ::open((dir / "out/.batch.lock").c_str(), O_RDWR);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    const auto busy = Skycal(BatchArgs(dir, "out") + " --frames-per-job 2 --resume");
+    ::close(fd);
+    EXPECT_EQ(busy.rc, 1);
+    EXPECT_NE(busy.err.find("another skycal batch (or the workers of one that was stopped) is still running on it"),
+              std::string::npos) << busy.err;
+  }
 
   // Another batch's state: other options, or other frames.
   const auto foreign = Skycal(BatchArgs(dir, "out") + " --frames-per-job 2 --loss-scale 0.1 --resume");
