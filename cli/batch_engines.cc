@@ -140,6 +140,7 @@ nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan,
   std::map<pid_t, int> running;  // pid -> chunk
   nlohmann::json exits = nlohmann::json::array();
   size_t next = 0;
+  auto last_count = Clock::now();
   while (next < pending.size() || !running.empty()) {
     while (next < pending.size() && static_cast<int>(running.size()) < jobs) {
       const int c = pending[next++];
@@ -161,9 +162,13 @@ nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan,
         ++it;
       }
     }
-    progress.Update(CountBatchProgress(out_dir, plan),
-                    std::to_string(running.size()) + " chunks running, " + std::to_string(pending.size() - next) + " waiting");
-    if (!running.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    // The states are re-read every 2 s (a day of thousands of frames is thousands of files).
+    if (Clock::now() - last_count > std::chrono::seconds(2) || running.empty()) {
+      progress.Update(CountBatchProgress(out_dir, plan),
+                      std::to_string(running.size()) + " chunks running, " + std::to_string(pending.size() - next) + " waiting");
+      last_count = Clock::now();
+    }
+    if (!running.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return {{"engine", "local"}, {"jobs", jobs}, {"chunks", pending.size()}, {"exits", exits}};
 }

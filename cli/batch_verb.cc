@@ -182,7 +182,12 @@ nlohmann::json RunBatchImpl(const BatchOptions& o) {
     engine = RunSlurmEngine(o.out_dir, plan, o);
     const BatchProgress p = CountBatchProgress(o.out_dir, plan);
     const fs::path bj = fs::path(o.out_dir) / "batch.json";
-    if (p.done != p.total || !fs::exists(bj, ec)) {
+    if (p.done == p.total && !fs::exists(bj, ec)) {
+      throw Error("every frame is fitted but the reduce job " + engine.value("reduce_job", std::string("?")) + " ended " +
+                  engine.value("reduce_state", std::string("?")) + " without batch.json: see " +
+                  (fs::path(o.out_dir) / "logs/reduce.log").string() + "; run again with --resume to reduce again");
+    }
+    if (p.done != p.total) {
       throw Error(std::to_string(p.total - p.done) + " of " + std::to_string(p.total) + " frames are not fitted; the reduce job " +
                   engine.value("reduce_job", std::string("?")) + " is " + engine.value("reduce_state", std::string("?")) +
                   (engine.contains("reduce_reason") ? " (" + engine["reduce_reason"].get<std::string>() + ")" : std::string()) +
