@@ -1,4 +1,5 @@
-// The engines of `skycal batch`: where the chunks run. Both start skycal itself (the
+// The engines of `skycal batch`: where the chunks run (batch_local_engine.cc,
+// batch_slurm_engine.cc; their process helpers in batch_process.h). Both start skycal itself (the
 // running binary, /proc/self/exe) as `skycal batch --worker-chunk K --out DIR`.
 #pragma once
 #include <string>

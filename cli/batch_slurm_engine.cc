@@ -1,177 +1,25 @@
+// The Slurm engine of `skycal batch`: an sbatch array over the chunks and an afterok reduce.
 #include "batch_engines.h"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <sstream>
 #include <thread>
 
+#include "batch_process.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "verb_common.h"
 
-extern char** environ;
-
 namespace skycal::cli {
 namespace fs = std::filesystem;
-namespace {
-
 using Clock = std::chrono::steady_clock;
-
-std::string DescribeWaitStatus(int status) {
-  if (WIFEXITED(status)) return "exit code " + std::to_string(WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
-  return "status " + std::to_string(status);
-}
-
-// Starts `args` (args[0] a path) with stdout and stderr appended to `log` (or, with an
-// empty log, a pipe returned in *out_fd). Throws naming what failed.
-pid_t Spawn(const std::vector<std::string>& args, const std::string& log, int* out_fd) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  int pipe_fds[2] = {-1, -1};
-  if (log.empty()) {
-    if (::pipe(pipe_fds) != 0) throw Error("cannot create a pipe for " + args[0]);
-    posix_spawn_file_actions_adddup2(&fa, pipe_fds[1], 1);
-    posix_spawn_file_actions_addclose(&fa, pipe_fds[0]);
-    posix_spawn_file_actions_addclose(&fa, pipe_fds[1]);
-  } else {
-    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  }
-  pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, args[0].c_str(), &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (log.empty()) ::close(pipe_fds[1]);
-  if (rc != 0) {
-    if (log.empty()) ::close(pipe_fds[0]);
-    throw Error("cannot start " + args[0] + " (" + std::strerror(rc) + ")");
-  }
-  if (out_fd) *out_fd = pipe_fds[0];
-  return pid;
-}
-
-struct Captured {
-  int status = 0;
-  std::string out;  // stdout (stderr goes to ours)
-};
-
-Captured RunCapture(const std::vector<std::string>& args) {
-  int fd = -1;
-  const pid_t pid = Spawn(args, "", &fd);
-  Captured c;
-  char buf[4096];
-  for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) > 0;) c.out.append(buf, static_cast<size_t>(n));
-  ::close(fd);
-  ::waitpid(pid, &c.status, 0);
-  return c;
-}
-
-// `name` on $PATH, else empty.
-std::string FindOnPath(const std::string& name) {
-  const char* path = std::getenv("PATH");
-  std::stringstream ss(path ? path : "");
-  for (std::string dir; std::getline(ss, dir, ':');) {
-    if (dir.empty()) continue;
-    const fs::path p = fs::path(dir) / name;
-    if (::access(p.c_str(), X_OK) == 0) return p.string();
-  }
-  return "";
-}
-
-// One log line when the counts change (or every minute).
-class ProgressPrinter {
- public:
-  explicit ProgressPrinter(int at_start) : at_start_(at_start), t0_(Clock::now()), last_print_(t0_) {}
-  void Update(const BatchProgress& p, const std::string& what) {
-    const auto now = Clock::now();
-    if (p.done == last_.done && p.failed == last_.failed && what == last_what_ && now - last_print_ < std::chrono::minutes(1)) {
-      return;
-    }
-    const double s = std::chrono::duration<double>(now - t0_).count();
-    const int fitted = p.done - at_start_;
-    std::ostringstream line;
-    line << p.done << "/" << p.total << " frames done, " << p.failed << " failed; " << what << "; " << static_cast<int>(s)
-         << " s";
-    if (fitted > 0 && s > 0) line << ", " << fitted / s << " frames/s";
-    Log("batch", line.str());
-    last_ = p;
-    last_what_ = what;
-    last_print_ = now;
-  }
-
- private:
-  int at_start_;
-  Clock::time_point t0_, last_print_;
-  BatchProgress last_{-1, -1, -1};
-  std::string last_what_;
-};
-
-std::string LogPath(const std::string& out_dir, const std::string& name) {
-  return (fs::path(out_dir) / "logs" / name).string();
-}
-
-}  // namespace
-
-std::string SelfExecutable() {
-  std::error_code ec;
-  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) throw Error("cannot find the running skycal binary (/proc/self/exe: " + ec.message() + ")");
-  return p.string();
-}
-
-nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan, int jobs) {
-  const std::vector<int> pending = PendingChunks(out_dir, plan);
-  const std::string exe = SelfExecutable();
-  const std::string out_abs = fs::absolute(out_dir).string();
-  ProgressPrinter progress(CountBatchProgress(out_dir, plan).done);
-  std::map<pid_t, int> running;  // pid -> chunk
-  nlohmann::json exits = nlohmann::json::array();
-  size_t next = 0;
-  auto last_count = Clock::now();
-  while (next < pending.size() || !running.empty()) {
-    while (next < pending.size() && static_cast<int>(running.size()) < jobs) {
-      const int c = pending[next++];
-      const pid_t pid = Spawn({exe, "batch", "--worker-chunk", std::to_string(c), "--out", out_abs},
-                              LogPath(out_dir, "chunk-" + std::to_string(c) + ".log"), nullptr);
-      running[pid] = c;
-    }
-    for (auto it = running.begin(); it != running.end();) {
-      int status = 0;
-      const pid_t r = ::waitpid(it->first, &status, WNOHANG);
-      if (r == it->first) {
-        exits.push_back({{"chunk", it->second}, {"status", DescribeWaitStatus(status)}});
-        if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
-          Log("batch", "chunk " + std::to_string(it->second) + ": " + DescribeWaitStatus(status) + " (log: " +
-                           LogPath(out_dir, "chunk-" + std::to_string(it->second) + ".log") + ")");
-        }
-        it = running.erase(it);
-      } else {
-        ++it;
-      }
-    }
-    // The states are re-read every 2 s (a day of thousands of frames is thousands of files).
-    if (Clock::now() - last_count > std::chrono::seconds(2) || running.empty()) {
-      progress.Update(CountBatchProgress(out_dir, plan),
-                      std::to_string(running.size()) + " chunks running, " + std::to_string(pending.size() - next) + " waiting");
-      last_count = Clock::now();
-    }
-    if (!running.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  return {{"engine", "local"}, {"jobs", jobs}, {"chunks", pending.size()}, {"exits", exits}};
-}
 
 namespace {
 
@@ -263,7 +111,10 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
   const std::string reduce_sh =
       script("reduce.sh", "reduce of the batch\nexec " + quote(exe) + " batch --reduce --out " + quote(out_abs) + "\n");
   std::string array;
-  for (int c : pending) array += (array.empty() ? "" : ",") + std::to_string(c);
+  for (int c : pending) {  // appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "," + string
+    if (!array.empty()) array += ',';
+    array += std::to_string(c);
+  }
 
   nlohmann::json result = {{"engine", "slurm"}, {"chunks", pending.size()}};
   std::string array_id;
@@ -317,7 +168,12 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
     }
     if (jobs_listed == 0) break;  // every job has left the queue (or squeue no longer knows the ids)
     std::string what = "slurm:";
-    for (const auto& [s, n] : states) what += " " + std::to_string(n) + " " + s;
+    for (const auto& [s, n] : states) {
+      what += ' ';
+      what += std::to_string(n);
+      what += ' ';
+      what += s;
+    }
     progress.Update(CountBatchProgress(out_dir, plan), what);
     std::this_thread::sleep_for(std::chrono::duration<double>(o.poll_s));
   }
@@ -339,5 +195,6 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
   if (!rt.empty() && rt[0].contains("Reason")) result["reduce_reason"] = rt[0]["Reason"];
   return result;
 }
+
 
 }  // namespace skycal::cli
