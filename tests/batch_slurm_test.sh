@@ -12,6 +12,10 @@
 # usage: batch_slurm_test.sh SKYCAL_BINARY
 set -euo pipefail
 SKYCAL=$1
+# Under scripts/sanitize.sh every process gets the sanitizer runtime by LD_PRELOAD: munged,
+# the Slurm daemons and tools must run without it (their own leaks are not ours); skycal
+# is instrumented itself and keeps ASAN_OPTIONS (sbatch passes the environment to the jobs).
+unset LD_PRELOAD
 source "$(dirname "$0")/slurm_cluster.sh"
 why=$(slurm_cluster_check) || { echo "SKIP: $why"; exit 77; }
 T=$(mktemp -d /tmp/skycal-slurm-test.XXXXXX)
