@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "command_line.h"
+#include "fit_option_args.h"
 #include "option_values.h"
 #include "fit_cloud_mask.h"
 #include "fit_report.h"
@@ -69,10 +70,6 @@ std::vector<std::optional<fit::ProbeSamples>> ProbesFor(const FitProbeOptions& o
     }
   }
   return out;
-}
-
-const char* LossName(fit::RobustLoss l) {
-  return l == fit::RobustLoss::kCauchy ? "cauchy" : (l == fit::RobustLoss::kHuber ? "huber" : "none");
 }
 
 }  // namespace
@@ -231,19 +228,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     for (const auto& w : ref.warnings) warnings.push_back(w);
   }
   for (const auto& w : result.warnings) warnings.push_back(w);
-  const nlohmann::json resolved = {
-      {"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
-      {"absolute", fo.absolute},               {"sun_cone_deg", fo.sun_cone_deg},
-      {"clip_fraction", fo.clip_fraction},     {"mask", fo.mask_path},
-      {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
-      {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
-      {"smoothness", fo.smoothness},
-      {"linear_start", fo.linear_start},       {"linear_width", fo.linear_width},
-      {"polish", fo.polish},
-      {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
-      {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
-      {"fit_ground_albedo", fo.fit_ground_albedo},
-      {"numeric_derivatives", fo.numeric_derivatives}};
+  const nlohmann::json resolved = ResolvedFitOptionsJson(fo);
   nlohmann::json summary = fit::FitSummaryJson(result);
   summary["references"] = per_ref;
   summary["warnings"] = warnings;
@@ -294,55 +279,24 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
-  std::optional<std::string> model, backend, sun_dir, loss, pyramid;
+  std::optional<std::string> sun_dir;
   std::optional<double> el, az;
-  bool no_haziness = false, no_ground_albedo = false, no_linear_start = false, quiet = false, json = false;
+  FitOptionArgs fa;
+  bool json = false;
   cl.Repeatable("--reference", &o.references, "F.exr", "lat-long EXR (project convention); repeat for a day of references");
-  cl.Text("--model", &model, "NAME", "ffxv-iso (default: + isotropic LUT) or ffxv (the talk's two terms)");
-  cl.Text("--backend", &backend, "NAME", "vulkan (default: the objective renders through the compute shaders) or cpu");
   cl.Text("--sun-dir", &sun_dir, "X,Y,Z",
           "sun direction for every reference (else the EXR's sunDirection\n"
           "attribute, else detected in the image, with a warning)");
   cl.Number("--sun-elevation", &el, "DEG", "alternative to --sun-dir, with --sun-azimuth: degrees in [-90, 90]");
   cl.Number("--sun-azimuth", &az, "DEG", "lat-long longitude of the sun, degrees (0 -> +Z, 90 -> +X)");
-  cl.Text("--mask", &f.mask_path, "MASK.exr", "user mask, same size as the references: R < 0.5 excludes a pixel");
-  cl.Text("--init", &o.init_preset, "PRESET.json", "starting preset (default: the bundled default_clear preset)");
-  cl.Flag("--absolute", &f.absolute, "references are calibrated (cd/m^2): the exposure is not fitted");
-  cl.Number("--sun-cone", &f.sun_cone_deg, "DEG", "mask this cone around the sun (default 3)");
-  cl.Number("--clip-fraction", &f.clip_fraction, "F",
-            "with a clipping plateau in a reference, pixels >= F x the clip level are masked (default 0.98)");
-  cl.Text("--loss", &loss, "NAME", "cauchy (default), huber or none: robust loss on log residuals");
-  cl.Number("--loss-scale", &f.loss_scale, "S",
-            "floor of the robust loss scale, natural-log units (default 0.05, ~5%);\n"
-            "the fit widens it to 2.385 x the MAD-sigma of its least-squares residuals");
-  cl.Flag("--no-linear-start", &no_linear_start,
-          "skip the linear start (variable projection over g): coarse-to-fine\n"
-          "Ceres from the initial preset (the slower path of earlier versions)");
-  cl.Integer("--linear-width", &f.linear_width, -1e9, 1e9, "expected an integer width", "W",
-             "level width of the linear start's g search (default 128)");
-  cl.Flag("--polish", &f.polish,
-          "always polish the linear start with Ceres through the backend\n"
-          "(it runs anyway with probe samples or a failed render check)");
-  cl.Text("--pyramid", &pyramid, "W1,W2,...", "coarse-to-fine level widths (default 64,128,... up to min(width, 512))");
-  cl.Integer("--max-iterations", &f.max_iterations_per_level, -1e9, 1e9, "expected an integer", "N",
-             "per pyramid level (default 50)");
-  cl.Number("--smoothness", &f.smoothness, "L", "second-difference prior on the LUT change along sun zenith (default 1e-6)");
-  cl.Number("--prior-weight", &f.prior_weight, "L", "pull toward the initial LUT (default 1e-8)");
   cl.Number("--time", &f.time_of_day_h, "HOURS", "time of day of the reference(s), recorded for `skycal export`");
-  cl.Flag("--no-haziness", &no_haziness, "hold g at its initial value");
-  cl.Flag("--numeric-derivatives", &f.numeric_derivatives, "central-difference Jacobians (the benchmark's baseline)");
-  cl.Flag("--quiet", &quiet, "no per-iteration progress");
+  RegisterFitOptionArgs(cl, &fa, &f, &o.init_preset);
   cl.Repeatable("--probe", &c.probes.probes, "STEM=S.json",
                 "probe samples (skycal probe-extract) for the reference named STEM\n"
                 "(repeatable; default: <reference without .exr>.probe.json when present):\n"
                 "the ball's samples join the fit as residuals; the sun's RGB illuminance\n"
                 "(per reference) and the ground albedo become fitted parameters");
   cl.Flag("--require-probe", &c.probes.require_probe, "error unless every reference has probe samples");
-  cl.Number("--probe-weight", &f.probe_weight, "L",
-            "the probe residuals of a reference weigh L times its sky pixels (default 0.1)");
-  cl.Integer("--probe-quadrature", &f.probe_quadrature_width, -1e9, 1e9, "expected an integer width", "W",
-             "lat-long width of the sky irradiance quadrature (default 128)");
-  cl.Flag("--no-ground-albedo", &no_ground_albedo, "hold the ground albedo at the initial preset's value");
   cl.Flag("--cloud-mask", &o.cloud_mask,
           "leave cloudy pixels out (cloud probability >= 0.5: the frame's mask.cloud channel,\n"
           "else estimated from colour against the bundled clear preset at the frame's sun)");
@@ -365,29 +319,12 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
 
-  if (model) f.variant = render::ParseModelVariant(*model, "--model");
-  if (backend) f.backend = render::ParseBackend(*backend, "--backend");
+  ApplyFitOptionArgs(fa, &f);
   if (sun_dir && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
   if (el.has_value() != az.has_value()) throw Error("--sun-elevation and --sun-azimuth go together");
   if (el && (*el < -90.0 || *el > 90.0)) throw Error("--sun-elevation: expected degrees in [-90, 90]");
   if (el) f.sun_dir = latlong::DirectionFromElevationAzimuthDeg(*el, *az);
   if (sun_dir) f.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
-  if (loss) {
-    if (*loss == "cauchy") f.loss = fit::RobustLoss::kCauchy;
-    else if (*loss == "huber") f.loss = fit::RobustLoss::kHuber;
-    else if (*loss == "none") f.loss = fit::RobustLoss::kNone;
-    else throw Error("--loss: unknown loss '" + *loss + "' (expected cauchy, huber or none)");
-  }
-  if (pyramid) {
-    for (double w : ParseNumberList(*pyramid, "--pyramid")) {
-      if (w != std::floor(w) || std::abs(w) > 1e9) throw Error("--pyramid: expected integer widths");
-      f.pyramid_widths.push_back(static_cast<int>(w));
-    }
-  }
-  f.fit_haziness = !no_haziness;
-  f.fit_ground_albedo = !no_ground_albedo;
-  f.linear_start = !no_linear_start;
-  f.verbose = !quiet;
   o.report = !no_report;
   return c;
 }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bake_verb.h"
+#include "batch_verb.h"
 #include "bench_verb.h"
 #include "capture_verb.h"
 #include "ceiling_verb.h"
@@ -38,6 +39,7 @@ const std::vector<Verb>& Verbs() {
       {"capture", "exposure brackets (fisheye or rig) to a calibrated lat-long reference frame", &skycal::cli::RunCapture},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
+      {"batch", "fit a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
       {"mask", "find what is not sky in a reference frame (buildings, trees, terrain): a mask for fit --mask", &skycal::cli::RunMask},
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},

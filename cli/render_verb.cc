@@ -43,6 +43,10 @@ bool RenderOptions::IsValid(std::string* why) const {
            ": expected a 2:1 lat-long (width = 2 x height), as fit and import read";
     return false;
   }
+  if (time_of_day_h && !(*time_of_day_h >= 0.0 && *time_of_day_h < 24.0)) {
+    *why = "--time-of-day: expected hours in [0, 24)";
+    return false;
+  }
   if (out_exr.empty() || !EndsWith(out_exr, ".exr")) {
     *why = "--out: expected an output path ending in .exr";
     return false;
@@ -151,6 +155,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   const auto t_done = Clock::now();
   frame.sun_direction = sun;
   frame.extra.strings["skycalPreset"] = preset_path;
+  if (o.time_of_day_h) frame.extra.floats["skycalTimeOfDay"] = static_cast<float>(*o.time_of_day_h);
   frame.extra.strings["skycalModel"] = render::ToString(preset.variant);
   frame.extra.strings["skycalBackend"] = render::ToString(o.backend);
   frame.extra.strings["skycalUnits"] = "cd/m^2 per channel, scene-linear Rec.709";
@@ -220,6 +225,9 @@ RenderOptions ParseRenderArgs(int argc, char** argv) {
   cl.Number("--sun-elevation", &o.sun_elevation_deg, "DEG", "sun elevation above the horizon, degrees in [-90, 90]");
   cl.Number("--sun-azimuth", &o.sun_azimuth_deg, "DEG", "sun azimuth = lat-long longitude, degrees (0 -> +Z, 90 -> +X)");
   cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "alternative: vector toward the sun (+Y up), normalised");
+  cl.Number("--time-of-day", &o.time_of_day_h, "HOURS",
+            "local time of the frame, hours in [0, 24): written as the skycalTimeOfDay\n"
+            "attribute (fit records it; batch orders a day's frames by it)");
   cl.Text("--size", &size, "WxH", "image size in pixels, a 2:1 lat-long (W = 2H), at most 32768x16384 (default 1024x512)");
   cl.Text("--backend", &backend, "NAME", "vulkan (default; the game's compute shaders) or cpu (double reference)");
   cl.Text("--ground", &ground, "lit|zero", "below the horizon: albedo-lit constant ground (default) or black");

@@ -28,6 +28,7 @@ struct RenderOptions {
   double png_exposure_ev = std::numeric_limits<double>::quiet_NaN();  // NaN: automatic
   bool vulkan_validation = false;
   CloudOptions clouds;                           // --clouds and its options
+  std::optional<double> time_of_day_h;           // hours in [0, 24): the skycalTimeOfDay attribute (fit, batch)
 
   bool IsValid(std::string* why) const;
   std::array<double, 3> SunDirection() const;  // unit vector (valid options only)

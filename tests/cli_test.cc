@@ -170,10 +170,16 @@ TEST(Cli, OptionSyntaxAndStrictness) {
 // (all of them, so an option added without help text or dropped from the parser shows here).
 TEST(Cli, HelpListsEveryRegisteredOption) {
   const std::map<std::string, std::vector<std::string>> options = {
-      {"render", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--size", "--backend", "--ground",
+      {"render", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--time-of-day", "--size", "--backend", "--ground",
                   "--no-sun-disc", "--half", "--out", "--png", "--exposure", "--vulkan-validation", "--json"}},
       {"bake", {"--out", "--name", "--haziness", "--model", "--n-theta", "--n-gamma", "--mie-scattering",
                 "--rayleigh-scale-height", "--mie-scale-height", "--observer-altitude", "--json"}},
+      {"batch", {"--references", "--out", "--frames-per-job", "--engine", "--jobs", "--resume", "--cold-start",
+                 "--day-frames", "--poll", "--slurm-option", "--model", "--backend", "--mask", "--init", "--absolute",
+                 "--sun-cone", "--clip-fraction", "--loss", "--loss-scale", "--no-linear-start", "--linear-width",
+                 "--polish", "--pyramid", "--max-iterations", "--smoothness", "--prior-weight", "--no-haziness",
+                 "--numeric-derivatives", "--quiet", "--probe-weight", "--probe-quadrature", "--no-ground-albedo",
+                 "--worker-chunk", "--reduce", "--json"}},
       {"ceiling", {"--reference", "--init", "--model", "--sun-cone", "--mask", "--json"}},
       {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-fov-deg", "--lens-center",
                    "--lens-radius", "--kb-k", "--vignetting", "--camera-rotation", "--rig", "--input-colorspace",

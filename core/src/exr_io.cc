@@ -330,6 +330,29 @@ ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, i
   return result;
 }
 
+ExrHeaderInfo ReadExrHeader(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  LimitOpenExrAllocations();
+  CheckAttributeSizes(path);
+  ExrHeaderInfo info;
+  try {
+    const auto [w, h] = CheckReadableLayout(path);
+    Imf::InputFile file(path.c_str());
+    for (const char* c : kChannels) {
+      if (!file.header().channels().findChannel(c)) throw Error(path + ": channel '" + c + "' missing (expected R, G, B)");
+    }
+    info.width = w;
+    info.height = h;
+    info.attributes = CollectAttributes(file.header());
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path + ": not a readable OpenEXR image (" + e.what() + ")");
+  }
+  return info;
+}
+
 void CheckImageSize(long long width, long long height, const std::string& what) {
   if (width < 1 || height < 1) {
     throw Error(what + ": " + std::to_string(width) + " x " + std::to_string(height) + " pixels: expected a positive size");

@@ -63,6 +63,15 @@ ExrRGB ReadExrRGB(const std::string& path);
 // check throws skycal::Error to refuse.
 ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size);
 
+// The header alone: the data window's size and the attributes, no pixel read (a batch
+// checks thousands of frames' sizes, sun directions and times before fitting any). Same
+// errors and limits as ReadExrRGB, R/G/B channels included.
+struct ExrHeaderInfo {
+  int width = 0, height = 0;
+  ExrAttributes attributes;
+};
+ExrHeaderInfo ReadExrHeader(const std::string& path);
+
 // Extra single-channel float planes (e.g. masks) written after R, G, B, each
 // width * height floats, row-major. Same atomicity and errors as WriteExrRGB.
 struct ExrPlane {

@@ -1,0 +1,197 @@
+#include "batch_worker.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "export_verb.h"
+#include "fit_verb.h"
+#include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string Hostname() {
+  char host[256] = {0};
+  ::gethostname(host, sizeof host - 1);
+  return host;
+}
+
+// The reduce's day-fit frames: `m` indices evenly spaced over `n` (all when m is 0 or >= n).
+std::vector<int> DaySubsample(int n, int m) {
+  std::vector<int> idx;
+  if (m <= 0 || m >= n) {
+    for (int i = 0; i < n; ++i) idx.push_back(i);
+    return idx;
+  }
+  for (int k = 0; k < m; ++k) {
+    const int i = m == 1 ? 0 : static_cast<int>(std::lround(static_cast<double>(k) * (n - 1) / (m - 1)));
+    if (idx.empty() || idx.back() != i) idx.push_back(i);
+  }
+  return idx;
+}
+
+}  // namespace
+
+nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
+  const BatchPlan plan = LoadBatchPlan(out_dir);
+  if (chunk < 0 || chunk >= static_cast<int>(plan.chunks.size())) {
+    throw Error("--worker-chunk " + std::to_string(chunk) + ": the plan in " + out_dir + " has " +
+                std::to_string(plan.chunks.size()) + " chunks");
+  }
+  const BatchOptions o = ParseBatchArgs(plan.argv);
+  const auto& members = plan.chunks[chunk];
+  Log("batch", "chunk " + std::to_string(chunk) + ": " + std::to_string(members.size()) + " frames on " + Hostname() +
+                   " (pid " + std::to_string(::getpid()) + ")");
+  std::string warm;  // the previous fitted frame's preset
+  nlohmann::json failed = nlohmann::json::array();
+  int fitted = 0;
+  for (size_t k = 0; k < members.size(); ++k) {
+    const BatchFrame& f = plan.frames[members[k]];
+    const std::string fit_dir = FrameFitDir(out_dir, f.name);
+    if (FrameDone(out_dir, f.name)) {
+      warm = (fs::path(fit_dir) / "preset.json").string();
+      Log("batch", f.name + ": done earlier, kept");
+      continue;
+    }
+    std::error_code ec;
+    fs::remove(FrameStatePath(out_dir, f.name), ec);  // a failed attempt's state: this one replaces it
+    FitVerbOptions fo;
+    fo.references = {f.path};
+    const bool use_warm = !o.cold_start && !warm.empty();
+    fo.init_preset = use_warm ? warm : o.init_preset;
+    fo.out_dir = fit_dir;
+    fo.fit = o.fit;
+    nlohmann::json state = {{"frame", f.name},
+                            {"path", f.path},
+                            {"chunk", chunk},
+                            {"time_of_day_h", f.time_of_day_h},
+                            {"sun_elevation_deg", latlong::ElevationDeg(f.sun_dir)},
+                            {"warm_start_from", use_warm ? nlohmann::json(fs::path(warm).parent_path().filename().string())
+                                                         : nlohmann::json()},
+                            {"host", Hostname()}};
+    Log("batch", "frame " + std::to_string(k + 1) + "/" + std::to_string(members.size()) + " of chunk " +
+                     std::to_string(chunk) + ": " + f.name + " (" + std::to_string(f.time_of_day_h) + " h, " +
+                     (use_warm ? "warm start from " + state["warm_start_from"].get<std::string>() : std::string("cold start")) +
+                     ")");
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      const nlohmann::json s = RunFitImpl(fo);
+      const nlohmann::json& r = s.at("references").at(0);
+      state["status"] = "ok";
+      state["rel_rmse"] = r.at("rel_rmse");
+      state["log_rmse"] = r.at("log_rmse");
+      state["exposure"] = r.at("exposure");
+      state["haziness_g"] = s.at("haziness_g");
+      state["fit_time_s"] = s.at("time_s");
+      state["iterations"] = s.at("iterations");
+      warm = (fs::path(fit_dir) / "preset.json").string();
+      ++fitted;
+    } catch (const std::exception& e) {
+      state["status"] = "failed";
+      state["message"] = e.what();
+      failed.push_back({{"frame", f.name}, {"message", e.what()}});
+      Log("batch", f.name + ": failed: " + e.what());
+    }
+    state["wall_s"] = Seconds(t0, std::chrono::steady_clock::now());
+    WriteJsonFileAtomically(FrameStatePath(out_dir, f.name), state);
+  }
+  return {{"chunk", chunk}, {"fitted", fitted}, {"failed", failed}};
+}
+
+std::string DescribeUnfinishedFrames(const std::string& out_dir, const BatchPlan& plan, int limit) {
+  std::string s;
+  int n = 0;
+  for (const BatchFrame& f : plan.frames) {
+    if (FrameDone(out_dir, f.name)) continue;
+    if (n++ >= limit) continue;
+    const auto st = ReadFrameState(out_dir, f.name);
+    s += "\n  " + f.name + ": " +
+         (st && st->contains("message") ? st->at("message").get<std::string>()
+                                        : std::string("no result (its chunk did not finish it)"));
+  }
+  if (n > limit) s += "\n  ... and " + std::to_string(n - limit) + " more";
+  return s;
+}
+
+nlohmann::json RunBatchReduce(const std::string& out_dir) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const BatchPlan plan = LoadBatchPlan(out_dir);
+  const BatchOptions o = ParseBatchArgs(plan.argv);
+  const BatchProgress p = CountBatchProgress(out_dir, plan);
+  if (p.done != p.total) {
+    throw Error("reduce: " + std::to_string(p.total - p.done) + " of " + std::to_string(p.total) +
+                " frames are not fitted:" + DescribeUnfinishedFrames(out_dir, plan, 10) +
+                "\nrun `skycal batch --resume` with the same options to fit them");
+  }
+  nlohmann::json frames = nlohmann::json::array();
+  double warm_s = 0, cold_s = 0;
+  int warm_n = 0, cold_n = 0;
+  for (const BatchFrame& f : plan.frames) {
+    nlohmann::json s = *ReadFrameState(out_dir, f.name);
+    s["fit_dir"] = "frames/" + f.name;
+    const bool warm = !s.value("warm_start_from", nlohmann::json()).is_null();
+    (warm ? warm_s : cold_s) += s.value("fit_time_s", 0.0);
+    (warm ? warm_n : cold_n) += 1;
+    frames.push_back(s);
+  }
+  // The day: one multi-reference fit over evenly spaced frames (every LUT row between the
+  // lowest and highest sun, with the smoothness prior along sun zenith).
+  const std::vector<int> day_idx = DaySubsample(static_cast<int>(plan.frames.size()), o.day_frames);
+  FitVerbOptions day;
+  for (int i : day_idx) day.references.push_back(plan.frames[i].path);
+  day.init_preset = o.init_preset;
+  day.out_dir = (fs::path(out_dir) / "day").string();
+  day.fit = o.fit;
+  Log("batch", "reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
+                   " frames -> " + day.out_dir);
+  const nlohmann::json day_summary = RunFitImpl(day);
+  // The keyframe tables: one key per frame, from each frame's own preset.
+  ExportOptions ex;
+  for (const BatchFrame& f : plan.frames) ex.presets.push_back((fs::path(FrameFitDir(out_dir, f.name)) / "preset.json").string());
+  ex.out_dir = (fs::path(out_dir) / "tables").string();
+  ex.backend = o.fit.backend;
+  Log("batch", "reduce: keyframe tables of " + std::to_string(ex.presets.size()) + " frames -> " + ex.out_dir);
+  const nlohmann::json tables = RunExportImpl(ex);
+
+  // ---- REPORT (issue 13, part 2) -------------------------------------------------------
+  // The merger connects `skycal report` here: write <out_dir>/report.html from this batch
+  // directory (batch.json's frames: time of day, sun elevation, exposure, haziness_g,
+  // rel_rmse; day/fit.json; tables/). Nothing is written here until then.
+  // ---------------------------------------------------------------------------------------
+
+  nlohmann::json day_refs = nlohmann::json::array();
+  for (const auto& r : day_summary.at("references")) {
+    day_refs.push_back({{"name", r.at("name")}, {"rel_rmse", r.at("rel_rmse")}, {"log_rmse", r.at("log_rmse")}});
+  }
+  nlohmann::json batch = {
+      {"ok", true},
+      {"out", out_dir},
+      {"frames", frames},
+      {"counts", {{"frames", plan.frames.size()}, {"chunks", plan.chunks.size()}, {"frames_per_job", o.frames_per_job}}},
+      {"fit_time_s",
+       {{"warm_started_frames", warm_n},
+        {"warm_mean", warm_n ? warm_s / warm_n : 0.0},
+        {"cold_started_frames", cold_n},
+        {"cold_mean", cold_n ? cold_s / cold_n : 0.0},
+        {"note", "each frame's fit time (fit.json time_s), seconds; warm = started from the previous frame's preset"}}},
+      {"day", {{"dir", "day"}, {"frames", day_idx.size()}, {"haziness_g", day_summary.at("haziness_g")},
+               {"time_s", day_summary.at("time_s")}, {"references", day_refs}}},
+      {"tables", {{"dir", "tables"}, {"summary", tables}}},
+      {"reduce_s", Seconds(t0, std::chrono::steady_clock::now())}};
+  WriteJsonFileAtomically((fs::path(out_dir) / "batch.json").string(), batch);
+  Log("batch", "reduce: wrote " + (fs::path(out_dir) / "batch.json").string());
+  return batch;
+}
+
+}  // namespace skycal::cli
