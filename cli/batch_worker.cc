@@ -8,6 +8,7 @@
 
 #include "export_verb.h"
 #include "fit_verb.h"
+#include "report_verb.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
@@ -67,6 +68,7 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
     std::error_code ec;
     fs::remove(FrameStatePath(out_dir, f.name), ec);  // a failed attempt's state: this one replaces it
     FitVerbOptions fo;
+    fo.report = false;  // the batch's report covers every frame (a page per frame would cost ~0.1 s each)
     fo.references = {f.path};
     const bool use_warm = !o.cold_start && !warm.empty();
     fo.init_preset = use_warm ? warm : o.init_preset;
@@ -153,6 +155,7 @@ nlohmann::json RunBatchReduce(const std::string& out_dir) {
   day.init_preset = o.init_preset;
   day.out_dir = (fs::path(out_dir) / "day").string();
   day.fit = o.fit;
+  day.report = false;  // part of the batch's report
   Log("batch", "reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
                    " frames -> " + day.out_dir);
   const nlohmann::json day_summary = RunFitImpl(day);
@@ -161,14 +164,10 @@ nlohmann::json RunBatchReduce(const std::string& out_dir) {
   for (const BatchFrame& f : plan.frames) ex.presets.push_back((fs::path(FrameFitDir(out_dir, f.name)) / "preset.json").string());
   ex.out_dir = (fs::path(out_dir) / "tables").string();
   ex.backend = o.fit.backend;
+  ex.report = false;  // part of the batch's report
   Log("batch", "reduce: keyframe tables of " + std::to_string(ex.presets.size()) + " frames -> " + ex.out_dir);
   const nlohmann::json tables = RunExportImpl(ex);
 
-  // ---- REPORT (issue 13, part 2) -------------------------------------------------------
-  // The merger connects `skycal report` here: write <out_dir>/report.html from this batch
-  // directory (batch.json's frames: time of day, sun elevation, exposure, haziness_g,
-  // rel_rmse; day/fit.json; tables/). Nothing is written here until then.
-  // ---------------------------------------------------------------------------------------
 
   nlohmann::json day_refs = nlohmann::json::array();
   for (const auto& r : day_summary.at("references")) {
@@ -191,6 +190,10 @@ nlohmann::json RunBatchReduce(const std::string& out_dir) {
       {"reduce_s", Seconds(t0, std::chrono::steady_clock::now())}};
   WriteJsonFileAtomically((fs::path(out_dir) / "batch.json").string(), batch);
   Log("batch", "reduce: wrote " + (fs::path(out_dir) / "batch.json").string());
+  // The day's HTML report (skycal report): every frame's fit (frames/<name>/, the day's
+  // time-of-day plots), the day fit (day/) and the keyframe tables (tables/); written
+  // through a temporary file like every report.
+  WriteVerbReport("batch", out_dir, 2);
   return batch;
 }
 

@@ -58,7 +58,7 @@ nlohmann::json Compare(const BenchOptions& o) {
     Log("bench", "regression: " + std::to_string(c.slower) + " case(s) slower beyond the noise, " +
                      std::to_string(c.error_worse) + " with a larger error, " + std::to_string(c.outcome_worse) +
                      " with a worse outcome (exit 1)");
-    j["failed"] = true;
+    j["verb_failed"] = true;
   }
   return j;
 }

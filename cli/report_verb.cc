@@ -59,9 +59,9 @@ int RunReport(int argc, char** argv) {
   return RunVerb("report", WantsJson(argc, argv), [&]() { return RunReportImpl(ParseReportArgs(argc, argv)); });
 }
 
-void WriteVerbReport(const std::string& verb, const std::string& staging_dir) {
+void WriteVerbReport(const std::string& verb, const std::string& staging_dir, int max_depth) {
   report::ReportOptions ro;
-  ro.max_depth = 0;  // the verb's own output only
+  ro.max_depth = max_depth;
   report::ReportSummary s;
   try {
     s = report::WriteReport(staging_dir, ro);

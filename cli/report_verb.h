@@ -21,8 +21,10 @@ nlohmann::json RunReportImpl(const ReportVerbOptions& options);
 ReportVerbOptions ParseReportArgs(int argc, char** argv);
 int RunReport(int argc, char** argv);
 
-// For the verbs that write a report into their output directory (fit, export, bench):
-// writes STAGING/report.html, logging where; `verb` prefixes the log line.
-void WriteVerbReport(const std::string& verb, const std::string& staging_dir);
+// For the verbs that write a report into their output directory (fit, export, bench, batch):
+// writes STAGING/report.html, logging where; `verb` prefixes the log line. `max_depth`:
+// directory levels below STAGING searched (0: the verb's own output only; batch: 2, its
+// frames/<name>/ fits).
+void WriteVerbReport(const std::string& verb, const std::string& staging_dir, int max_depth = 0);
 
 }  // namespace skycal::cli

@@ -18,7 +18,7 @@ void Log(const std::string& verb, const std::string& message);
 // JSON on stdout when `json` is set, maps skycal::Error and other exceptions to a message
 // on stderr and exit code 1. With --json a failure also prints {"ok": false, "error": ...}.
 // A HelpRequested from parsing (command_line.h) prints the help on stdout: exit 0. A summary
-// with "failed": true (the verb ran and found a failure it reports in the summary, e.g.
+// with "verb_failed": true (the verb ran and found a failure it reports in the summary, e.g.
 // `bench --compare` finding a regression) is printed with "ok": false and exits 1.
 int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::json()>& body);
 

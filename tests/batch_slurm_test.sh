@@ -26,7 +26,7 @@ cleanup() {
     echo "--- slurmctld.log"; tail -n 30 "$T/slurmctld.log" 2>/dev/null || true
     echo "--- slurmd.log"; tail -n 30 "$T/slurmd.log" 2>/dev/null || true
   fi
-  rm -rf "$T"
+  [ -n "${SKYCAL_KEEP_SLURM_TEST:-}" ] || rm -rf "$T"
   exit $rc
 }
 trap cleanup EXIT INT TERM

@@ -349,7 +349,7 @@ TEST(BenchVerb, CompareReadsTwoResultsFiles) {
   EXPECT_EQ(j["slower"], 1);
   EXPECT_TRUE(j["regressed"].get<bool>());
   EXPECT_EQ(j["cases"][0]["verdict"], "SLOWER");
-  EXPECT_TRUE(j.value("failed", false));
+  EXPECT_TRUE(j.value("verb_failed", false));
   // The verb's exit code: 1 on a regression (the summary still printed), 0 on a run against itself.
   EXPECT_EQ(cli::RunVerb("bench", false, [&] { return cli::RunBenchImpl(o, FakeRegistry()); }), 1);
   cli::BenchOptions same = o;
