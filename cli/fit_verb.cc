@@ -326,6 +326,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   if (el) f.sun_dir = latlong::DirectionFromElevationAzimuthDeg(*el, *az);
   if (sun_dir) f.sun_dir = ParseVec3(*sun_dir, "--sun-dir");
   o.report = !no_report;
+  // --cloud-mask takes the cloud pixels out of the fit; --clouds on fits them.
+  if (o.cloud_mask && c.clouds.mode == "on")
+    throw Error("--cloud-mask leaves the cloud pixels out and --clouds on fits their lighting: give one of them");
   return c;
 }
 

@@ -66,6 +66,17 @@ TEST(CloudLightingCli, CloudsOnWithoutCloudPixelsFailsAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST(CloudLightingCli, CloudMaskAndCloudsOnAreRefusedTogether) {
+  ScratchDir dir("cloudfit-cli-mask-and-on");
+  const std::string ref = Reference(dir, true);
+  const std::string out = dir / "fit";
+  const auto r = Skycal("fit --reference " + ref + " --clouds on --cloud-mask --cloud-preset " + kCloudy + " --quiet --out " + out);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--cloud-mask"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--clouds on"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(CloudLightingCli, OutOfBoundsCloudPresetFieldIsNamed) {
   ScratchDir dir("cloudfit-cli-bounds");
   for (const char* f : {"mie", "rayleigh", "sun_transmittance", "weather"}) {
