@@ -260,6 +260,19 @@ TEST(ReportInput, CloudLightingTableFromFitJson) {
   EXPECT_NE(html.find("<td>extinction</td><td>0.0625</td><td>0.05</td><td>1/m</td><td>fitted</td>"), std::string::npos);
   EXPECT_NE(html.find("collinear with &lt;extinction&gt;"), std::string::npos);
   EXPECT_NE(html.find("log RMSE 0.25 at the start, 0.125 fitted"), std::string::npos);
+  // A day of two such fits: the cloud lighting over the day is plotted (fitted / start).
+  fs::create_directories(s / "day");
+  for (int k = 0; k < 2; ++k) {
+    const fs::path d = s.path() / "day" / ("frame" + std::to_string(k));
+    WriteMinimalFit(d, {{"name", "f" + std::to_string(k)}, {"rel_rmse", 0.01}, {"log_rmse", 0.01}});
+    nlohmann::json dj = j;
+    dj["time_of_day_h"] = 9.0 + k;
+    dj["references"] = nlohmann::json::parse(testing::Slurp((d / "fit.json").string()))["references"];
+    WriteText((d / "fit.json").string(), dj.dump());
+  }
+  report::WriteReport(s / "day", {});
+  const std::string day = testing::Slurp(s / "day/report.html");
+  EXPECT_NE(day.find("alt=\"cloud lighting (fit --clouds): fitted value / start value\""), std::string::npos);
   j["clouds"]["parameters"]["extinction"]["value"] = "fast";
   WriteText((s / "fit/fit.json"), j.dump());
   EXPECT_NE(ErrorOf(s / "fit").find("clouds.parameters.extinction.value"), std::string::npos) << ErrorOf(s / "fit");

@@ -136,9 +136,30 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
     c.x_max = x_hi;
     h += PlotImg(c, counts);
   }
-  h += "</div>\n<p class=\"note\">Cloud lighting over the day: not plotted yet; each fit made with "
-       "<code>fit --clouds</code> lists its cloud-lighting parameters in its own section. Frames fitted with "
-       "<code>--cloud-mask</code> are fitted on their clear pixels.</p>\n";
+  // Cloud lighting over the day: each parameter some frame fitted (fit --clouds), as its
+  // value over the start's (one chart: the parameters' units differ); frames without it are gaps.
+  std::vector<std::string> fitted_cloud;
+  for (const Frame& f : frames)
+    for (const FitRecord::CloudParameter& p : f.fit->cloud_parameters)
+      if (f.fit->clouds_fitted && !p.held && std::find(fitted_cloud.begin(), fitted_cloud.end(), p.name) == fitted_cloud.end())
+        fitted_cloud.push_back(p.name);
+  if (!fitted_cloud.empty()) {
+    Chart c{"cloud lighting (fit --clouds): fitted value / start value", x_label, "ratio (1)", {}, false, {}};
+    for (const std::string& name : fitted_cloud) {
+      c.series.push_back(series(name, [&](const Frame& f) {
+        for (const FitRecord::CloudParameter& p : f.fit->cloud_parameters)
+          if (p.name == name && f.fit->clouds_fitted && !p.held && p.initial != 0.0) return p.value / p.initial;
+        return static_cast<double>(NAN);
+      }));
+    }
+    c.x_min = x_lo;
+    c.x_max = x_hi;
+    h += PlotImg(c, counts);
+  }
+  h += "</div>\n<p class=\"note\">" +
+       std::string(fitted_cloud.empty() ? "Cloud lighting over the day: no frame here was fitted with <code>fit --clouds</code>. "
+                                        : "Each fit's cloud-lighting values, units and held parameters are in its own section. ") +
+       "Frames fitted with <code>--cloud-mask</code> are fitted on their clear pixels.</p>\n";
   h += "<table>\n" +
        Row({"frame", "fit", "time of day (h)", "sun elevation (deg)", "haziness g", "exposure", "sun at ground (lux)",
             "rel RMSE", "log RMSE"},
