@@ -45,9 +45,7 @@ Suite FitCieSuite() {
       type_numbers.push_back(static_cast<int>(t + 1));
     }
     const render::Preset start = render::LoadPreset(DefaultPresetPath());
-    std::map<std::string, std::unique_ptr<render::SkyRenderer>> renderers;
-    renderers["cpu"] = render::CreateRenderer(render::Backend::kCpu);
-    renderers["vulkan"] = render::CreateRenderer(render::Backend::kVulkan);
+    auto renderers = SkyRenderersByBackend();
     return RunGrid("fit-cie", grid, o, [&](CaseResult& c) {
       fit::FitOptions f = base;
       f.variant = render::ParseModelVariant(Get(c.settings, "model"), "model");

@@ -59,9 +59,7 @@ Suite FitDaySuite() {
     std::map<std::string, std::vector<fit::Reference>> days;
     for (const std::string& n : grid.axes[0].values) days[n] = WriteDay(o, std::stoi(n), width, base);
     const render::Preset start = render::LoadPreset(DefaultPresetPath());
-    std::map<std::string, std::unique_ptr<render::SkyRenderer>> renderers;
-    renderers["cpu"] = render::CreateRenderer(render::Backend::kCpu);
-    renderers["vulkan"] = render::CreateRenderer(render::Backend::kVulkan);
+    auto renderers = SkyRenderersByBackend();
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     return RunGrid("fit-day", grid, o, [&](CaseResult& c) {
       fit::FitOptions f = base;

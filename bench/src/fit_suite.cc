@@ -109,9 +109,7 @@ Suite FitSuite() {
     base.verbose = false;
     const std::vector<FitReference> refs = WriteReferences(o, base);
     const render::Preset start = render::LoadPreset(DefaultPresetPath());
-    std::map<std::string, std::unique_ptr<render::SkyRenderer>> renderers;
-    renderers["cpu"] = render::CreateRenderer(render::Backend::kCpu);
-    renderers["vulkan"] = render::CreateRenderer(render::Backend::kVulkan);
+    auto renderers = SkyRenderersByBackend();
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     return RunGrid("fit", grid, o, [&](CaseResult& c) {
       fit::FitOptions f = base;

@@ -30,9 +30,7 @@ Suite RenderSuite() {
     req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(35.0, 20.0);
     req.sun_disc = false;
     req.ground = render::GroundMode::kZero;
-    std::map<std::string, std::unique_ptr<render::SkyRenderer>> renderers;
-    renderers["cpu"] = render::CreateRenderer(render::Backend::kCpu);
-    renderers["vulkan"] = render::CreateRenderer(render::Backend::kVulkan);
+    auto renderers = SkyRenderersByBackend();
     render::RenderRequest ref_req = req;
     ref_req.width = o.quick ? 2048 : 4096;
     ref_req.height = ref_req.width / 2;

@@ -40,6 +40,13 @@ std::optional<CaseResult> RunCase(const std::string& suite, const Settings& sett
   return c;
 }
 
+std::map<std::string, std::unique_ptr<render::SkyRenderer>> SkyRenderersByBackend() {
+  std::map<std::string, std::unique_ptr<render::SkyRenderer>> r;
+  r["cpu"] = render::CreateRenderer(render::Backend::kCpu);
+  r["vulkan"] = render::CreateRenderer(render::Backend::kVulkan);
+  return r;
+}
+
 std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, const SuiteOptions& o,
                                 const std::function<void(CaseResult&)>& body) {
   const std::vector<Settings> points = grid.Expand();

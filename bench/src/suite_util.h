@@ -1,11 +1,14 @@
 // What every suite does around one case (private to skycal_bench).
 #pragma once
 #include <functional>
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "skycal/bench/suite.h"
+#include "skycal/render/renderer.h"
 
 namespace skycal::bench {
 
@@ -21,5 +24,8 @@ std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, cons
                                 const std::function<void(CaseResult&)>& body);
 
 std::string FormatG(double v, int digits = 3);  // %.*g
+
+// One sky renderer per backend, keyed by the `backend` axis' values ("cpu", "vulkan").
+std::map<std::string, std::unique_ptr<render::SkyRenderer>> SkyRenderersByBackend();
 
 }  // namespace skycal::bench
