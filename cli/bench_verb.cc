@@ -155,18 +155,25 @@ nlohmann::json Replot(const BenchOptions& o, const bench::SuiteRegistry& registr
   return summary;
 }
 
+// A suite's options from the verb's (sizes, repeats, the log) with its scratch directory;
+// throws skycal::Error when invalid.
+bench::SuiteOptions SuiteOptionsFor(const BenchOptions& o, const fs::path& scratch) {
+  bench::SuiteOptions so;
+  so.quick = o.quick;
+  so.repeat = o.repeat;
+  so.scratch = scratch;
+  so.log = [](const std::string& line) { Log("bench", line); };
+  std::string why;
+  if (!so.IsValid(&why)) throw Error(why);
+  return so;
+}
+
 // The worker's side of an isolated run: the one suite, journaled; the parent collects.
 nlohmann::json RunWorker(const BenchOptions& o, const bench::SuiteRegistry& registry) {
   const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
   if (suites.size() != 1) throw Error("--worker-journal: expected exactly one --suite");
-  bench::SuiteOptions so;
-  so.quick = o.quick;
-  so.repeat = o.repeat;
-  so.scratch = o.worker_scratch;
-  so.log = [](const std::string& line) { Log("bench", line); };
+  bench::SuiteOptions so = SuiteOptionsFor(o, o.worker_scratch);
   bench::AttachJournal(so, o.worker_journal);
-  std::string why;
-  if (!so.IsValid(&why)) throw Error(why);
   suites[0]->run(so);
   return {{"worker", true}};
 }
@@ -266,14 +273,8 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   Log("bench", "machine: " + results.machine.cpu_model + ", " + std::to_string(results.machine.cores) + " cores, " +
                    results.machine.vulkan_device + "; commit " + results.machine.commit);
   for (const bench::Suite* suite : suites) {
-    bench::SuiteOptions so;
-    so.quick = o.quick;
-    so.repeat = o.repeat;
-    so.scratch = scratch / suite->name;
-    so.log = [](const std::string& line) { Log("bench", line); };
-    fs::create_directories(so.scratch);
-    std::string suite_why;
-    if (!so.IsValid(&suite_why)) throw Error(suite_why);
+    fs::create_directories(scratch / suite->name);
+    const bench::SuiteOptions so = SuiteOptionsFor(o, scratch / suite->name);
     const auto t0 = std::chrono::steady_clock::now();
     Log("bench", "suite " + suite->name + ": " + suite->summary + (o.quick ? " (--quick)" : ""));
     std::vector<bench::CaseResult> cases = RunSuite(o, *suite, so);
