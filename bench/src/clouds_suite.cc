@@ -32,6 +32,9 @@
 namespace skycal::bench {
 namespace {
 
+// The light_step axis value of the game's default march (MarchOptions::light_step_m), in m.
+const std::string kDefaultLightStep = std::to_string(static_cast<int>(clouds::MarchOptions().light_step_m));
+
 // The march settings of the `march` axis: the game's, the naive march, or the game's with
 // one optimisation off.
 clouds::MarchOptions MarchFor(const std::string& name) {
@@ -55,7 +58,7 @@ void SetSteps(clouds::MarchOptions& m, const std::string& steps) {
   m.steps_horizon = std::stoi(steps.substr(slash + 1));
 }
 
-// Light samples with the cone's length kept (samples x step = the game's 6 x 120 m).
+// Light samples with the cone's length kept (samples x step = the game's 6 x 240 m).
 void SetLightSamples(clouds::MarchOptions& m, int samples) {
   const clouds::MarchOptions game;
   m.light_step_m = game.light_step_m * game.light_samples / samples;
@@ -94,12 +97,13 @@ Suite CloudsSuite() {
                                    : std::vector<std::string>{"16/32", "32/64", "64/128", "96/192", "128/256", "256/512"},
                   "64/128"},
                  {"light_samples", o.quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"},
-                 // Metres between the 6 light samples (the cone's length / 6): the game's 120 m covers
-                 // 720 m toward the sun, less than a cumulus is deep at low sun.
-                 {"light_step", o.quick ? std::vector<std::string>{"120"} : std::vector<std::string>{"120", "240", "400"}, "120"}};
+                 // Metres between the 6 light samples (the cone's length / 6): 120 m covers only
+                 // 720 m toward the sun, less than a cumulus is deep at low sun (the old default).
+                 {"light_step", o.quick ? std::vector<std::string>{kDefaultLightStep} : std::vector<std::string>{"120", "240", "400"},
+                  kDefaultLightStep}};
     grid.skip = [](const Settings& c) -> std::string {
       const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") +
-                              (Get(c, "light_samples") != "6") + (Get(c, "light_step") != "120");
+                              (Get(c, "light_samples") != "6") + (Get(c, "light_step") != kDefaultLightStep);
       if (off_default > 1) return "one setting away from the game's at a time";
       const bool game_or_naive = off_default == 0 || (Get(c, "march") == "naive");
       if (Get(c, "backend") == "cpu" && !game_or_naive) return "the CPU reference is timed at the game's and the naive settings";
@@ -148,7 +152,7 @@ Suite CloudsSuite() {
       clouds::MarchOptions m = MarchFor(Get(c.settings, "march"));
       SetSteps(m, Get(c.settings, "steps"));
       SetLightSamples(m, std::stoi(Get(c.settings, "light_samples")));
-      if (Get(c.settings, "light_step") != "120")  // the cone's length scaled, the sample count kept
+      if (Get(c.settings, "light_step") != kDefaultLightStep)  // the cone's length scaled, the sample count kept
         m.light_step_m = std::stod(Get(c.settings, "light_step")) * clouds::MarchOptions().light_samples / m.light_samples;
       clouds::CloudRenderRequest er = error_req, tr = time_req;
       er.march = tr.march = m;
