@@ -16,7 +16,10 @@ harnesses=("$@")
 [ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line weather_map)
 
 bash scripts/setup.sh --deps-only
+# -gline-tables-only: crash stacks keep file and line at a fraction of -g's compile time.
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" \
   -DSKYCAL_SANITIZE=address,undefined -DSKYCAL_BUILD_FUZZERS=ON \
   -DSKYCAL_BUILD_TESTS=OFF -DSKYCAL_BUILD_BENCH=OFF >/dev/null
 cmake --build build-fuzz -j2 --target skycal_fuzzers
