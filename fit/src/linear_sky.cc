@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <cstdlib>
 
@@ -150,7 +152,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   }
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
-  start_scale_ = StartScale(exposures, MiePhases(state.g));
+  start_scale_ = StartScale(exposures, *MiePhases(state.g));
 }
 
 double LinearSky::StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const {
@@ -175,13 +177,20 @@ double LinearSky::StartScale(const std::vector<double>& exposures, const std::ve
 
 double LinearSky::Floor(int j) const { return kFloorFraction * start_scale_ * initial_[j]; }
 
-std::vector<double> LinearSky::MiePhases(double g) const {
+std::shared_ptr<const std::vector<double>> LinearSky::MiePhases(double g) const {
+  {
+    std::lock_guard<std::mutex> lock(phase_cache_->mutex);
+    if (phase_cache_->phases && phase_cache_->g == g) return phase_cache_->phases;
+  }
   NoLut none;
   ModelD m(none);
-  std::vector<double> out;
-  out.reserve(error_weight_.size() / 3);
+  auto out = std::make_shared<std::vector<double>>();
+  out->reserve(error_weight_.size() / 3);
   for (const Row& row : rows_)
-    for (const Pixel& px : row.pixels) out.push_back(m.phase_cornette_shanks(px.mu, px.one_minus_mu, g));
+    for (const Pixel& px : row.pixels) out->push_back(m.phase_cornette_shanks(px.mu, px.one_minus_mu, g));
+  std::lock_guard<std::mutex> lock(phase_cache_->mutex);
+  phase_cache_->g = g;
+  phase_cache_->phases = out;
   return out;
 }
 
@@ -200,7 +209,8 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
                                    const std::vector<double>& robust_weights,
                                    const LinearSkySolution* linearize_at, bool with_cost) const {
   const double w_o = state_.preset.overcast_weight;
-  const std::vector<double> phase_m = MiePhases(g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(g);
+  const std::vector<double>& phase_m = *phases;
   // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
   // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once. Rows
   // are split between threads, each with its own triplets and right-hand side.
@@ -477,7 +487,8 @@ double LinearSky::RobustCostOf(const std::vector<double>& e, RobustLoss loss, co
 }
 
 std::vector<double> LinearSky::ModelValues(const LinearSkySolution& s, const std::vector<double>& exposures) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(s.g);
+  const std::vector<double>& phase_m = *phases;
   std::vector<double> out(error_weight_.size(), 0.0);
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
@@ -490,7 +501,8 @@ std::vector<double> LinearSky::ModelValues(const LinearSkySolution& s, const std
 }
 
 std::vector<double> LinearSky::LogErrors(const LinearSkySolution& s, const std::vector<double>& exposures) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(s.g);
+  const std::vector<double>& phase_m = *phases;
   std::vector<double> out(error_weight_.size(), 0.0);
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
@@ -506,26 +518,27 @@ std::vector<double> LinearSky::LogErrors(const LinearSkySolution& s, const std::
   return out;
 }
 
-double LinearSky::BestExposure(const LinearSkySolution& s, size_t r, const std::vector<double>& robust_weights) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
-  double num = 0.0, den = 0.0;
-  size_t pixel_index = 0;
+std::vector<double> LinearSky::BestExposures(const LinearSkySolution& s, const std::vector<double>& robust_weights) const {
+  const std::shared_ptr<const std::vector<double>> phase_m = MiePhases(s.g);
+  std::vector<double> num(n_refs_, 0.0), den(n_refs_, 0.0);
   for (const Row& row : rows_) {
-    if (row.ref == r) {
-      for (size_t p = 0; p < row.pixels.size(); ++p) {
-        const Pixel& px = row.pixels[p];
-        for (int c = 0; c < 3; ++c) {
-          const size_t smp = row.first_sample + 3 * p + c;
-          const double w = error_weight_[smp] * (robust_weights.empty() ? 1.0 : robust_weights[smp]);
-          const double q = Model(row, px, c, phase_m[pixel_index + p], s) / px.ref[c];
-          num += w * q;
-          den += w * q * q;
-        }
+    const size_t pixel_index = row.first_sample / 3;
+    for (size_t p = 0; p < row.pixels.size(); ++p) {
+      const Pixel& px = row.pixels[p];
+      for (int c = 0; c < 3; ++c) {
+        const size_t smp = row.first_sample + 3 * p + c;
+        const double w = error_weight_[smp] * (robust_weights.empty() ? 1.0 : robust_weights[smp]);
+        const double q = Model(row, px, c, (*phase_m)[pixel_index + p], s) / px.ref[c];
+        num[row.ref] += w * q;
+        den[row.ref] += w * q * q;
       }
     }
-    pixel_index += row.pixels.size();
   }
-  return den > 0.0 && num > 0.0 ? num / den : 1.0;
+  std::vector<double> out(n_refs_, 1.0);
+  for (int r = 0; r < n_refs_; ++r) {
+    if (den[r] > 0.0 && num[r] > 0.0) out[r] = num[r] / den[r];
+  }
+  return out;
 }
 
 std::vector<double*> LinearSky::HeldParameters(const LinearSkySolution& s, FitState* state) const {
