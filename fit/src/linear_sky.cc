@@ -221,6 +221,14 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   };
   auto accumulate = [&](size_t row_begin, size_t row_end, Part* part) {
     part->rhs = Eigen::VectorXd::Zero(num_unknowns_);
+    // Reserved: growing ~10^6 triplets (a day) re-allocated and page-faulted ~10% of the
+    // day's linear stage (perf).
+    size_t count = 0;
+    for (size_t ri = row_begin; ri < row_end; ++ri) {
+      const size_t kk = rows_[ri].nodes.size() + (lz_index_ >= 0 ? 1 : 0);
+      count += 3 * kk * kk;
+    }
+    part->triplets.reserve(count);
     for (size_t ri = row_begin; ri < row_end; ++ri) {
       const Row& row = rows_[ri];
       const size_t pixel_index = row.first_sample / 3;
@@ -280,6 +288,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     parts[1].rhs = Eigen::VectorXd::Zero(num_unknowns_);
   }
   std::vector<Eigen::Triplet<double>> triplets = std::move(parts[0].triplets);
+  triplets.reserve(triplets.size() + parts[1].triplets.size() + 10 * static_cast<size_t>(num_unknowns_));
   triplets.insert(triplets.end(), parts[1].triplets.begin(), parts[1].triplets.end());
   Eigen::VectorXd rhs = parts[0].rhs + parts[1].rhs;
   // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
