@@ -39,6 +39,8 @@ constexpr double kDaySettled = 0.05;  // a step gaining less than 5% of the cost
 // ended at 10% worst rel RMSE; decimated without the final steps at 100x, 1.1%; with
 // them the same start and result as every pixel throughout (0.114%) at 0.6x the CPU time.
 constexpr int kDayStartStride = 2;
+// References of a day that search g in their starts (the rest hold the median of theirs).
+constexpr size_t kDayGSearchReferences = 6;
 
 std::vector<RingScaleReport> RingScaleReports(const RingLossScales& r) {
   std::vector<RingScaleReport> out;
@@ -115,43 +117,64 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   single_options.verbose = false;
   single_options.polish = true;
   single_options.linear_threads = 1;  // the references themselves run two at a time
+  // g is shared by the day: searched only by kDayGSearchReferences references spread over
+  // the sun angles (the first phase), the others start at their median (held).
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t r = 0; r < n; ++r) order.emplace_back(SunRowPosition(grid, refs[r].sun_dir), r);
+  std::sort(order.begin(), order.end());
+  std::vector<size_t> searching, holding;
+  {
+    const size_t k = std::min(n, kDayGSearchReferences);
+    std::vector<bool> picked(n, false);
+    for (size_t i = 0; i < k; ++i) picked[order[std::min(n - 1, (2 * i + 1) * n / (2 * k))].second] = true;
+    for (size_t r = 0; r < n; ++r) (picked[r] ? searching : holding).push_back(r);
+  }
+  FitOptions holding_options = single_options;
+  holding_options.fit_haziness = false;
+  double day_g = state->g;
   auto run = [&](size_t r) {
     try {
+      const bool search_g = o.fit_haziness && std::find(searching.begin(), searching.end(), r) != searching.end();
       FitState& st = singles[r];
       st = FitState::FromPreset(state->preset, state->preset.variant, 1);
       st.initial_log_lut = state->initial_log_lut;
       st.log_lut = state->initial_log_lut;
+      st.g = day_g;
       const double pos = SunRowPosition(grid, refs[r].sun_dir);
       const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
       st.tied_rows = {r0, r0 + 1};
       std::vector<bool> rows(grid.n_theta, false);
       rows[r0] = rows[r0 + 1] = true;
-      // No render check of its own (the day's joint solution is checked) and a coarser
-      // level (kDayStartDivisor): this start only seeds the joint steps at the finest width.
-      outcomes[r] = RunLinearStageSingle({refs[r]}, single_options, true, rows, fit_overcast, false, finest_width,
-                                         kDayStartStride, nullptr, &st, &reports[r]);
+      // No render check of its own (the day's joint solution is checked), decimated
+      // (kDayStartStride): this start only seeds the joint steps.
+      outcomes[r] = RunLinearStageSingle({refs[r]}, search_g ? single_options : holding_options, true, rows,
+                                         fit_overcast, false, finest_width, kDayStartStride, nullptr, &st, &reports[r]);
     } catch (const std::exception& e) {
       errors[r] = refs[r].name + ": " + e.what();
     }
   };
-  // Two workers; the renderer is used by one at a time (its render check).
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t r = next++; r < n; r = next++) run(r);
-  };
-  {
+  // Two workers per phase.
+  auto run_all = [&](const std::vector<size_t>& which) {
+    std::atomic<size_t> next{0};
+    auto worker = [&] {
+      for (size_t i = next++; i < which.size(); i = next++) run(which[i]);
+    };
     std::thread second(worker);
     worker();
     second.join();
+    for (const std::string& e : errors) {
+      if (!e.empty()) throw Error("fit: linear start of " + e);
+    }
+  };
+  run_all(searching);
+  if (o.fit_haziness) {
+    std::vector<double> searched;
+    for (size_t r : searching) searched.push_back(singles[r].g);
+    std::nth_element(searched.begin(), searched.begin() + searched.size() / 2, searched.end());
+    day_g = searched[searched.size() / 2];
   }
-  for (const std::string& e : errors) {
-    if (!e.empty()) throw Error("fit: linear start of " + e);
-  }
+  run_all(holding);
   // Combine: log change per (table, column, channel) at each reference's row position.
-  std::vector<std::pair<double, size_t>> order;
-  for (size_t r = 0; r < n; ++r) order.emplace_back(SunRowPosition(grid, refs[r].sun_dir), r);
-  std::sort(order.begin(), order.end());
-  std::vector<double> gs;
   for (int t = 0; t < state->tables; ++t)
     for (int col = 0; col < grid.n_gamma; ++col)
       for (int ch = 0; ch < 3; ++ch) {
@@ -177,13 +200,11 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   LinearStageOutcome out;
   out.ran = true;
   for (size_t r = 0; r < n; ++r) {
-    gs.push_back(singles[r].g);
     out.ring_scales_per_reference.push_back(outcomes[r].ring_scales.value_or(RingLossScales{}));
     out.loss_scale = std::max(out.loss_scale, outcomes[r].loss_scale);
     for (const auto& tc : outcomes[r].observed_columns) out.observed_columns.insert(tc);
   }
-  std::nth_element(gs.begin(), gs.begin() + gs.size() / 2, gs.end());
-  if (o.fit_haziness) state->g = gs[gs.size() / 2];
+  state->g = day_g;
   if (fit_overcast) {
     double sum = 0.0;
     for (const FitState& st : singles) sum += st.log_overcast_zenith;
