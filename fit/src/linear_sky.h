@@ -154,8 +154,17 @@ class LinearSky {
     struct Node { int table; int col; int unknown_ch0; double weight; };  // unknown of channel c: unknown_ch0 + c
     std::vector<Node> nodes;
   };
+  // A solution's values along one row: per channel and table the LUT blended over the
+  // row's nodes (the bilinear weights are the row's), and L_z. The model at a pixel is then
+  // (1 - w_o) sum_t phase_t lut[c][t] + w_o lz shape: three products instead of a pass
+  // over the row's up to 12 nodes.
+  struct RowValues {
+    double lut[3][3] = {};  // [channel][table]
+    double lz = 0.0;
+  };
+  RowValues Blend(const Row& row, const LinearSkySolution& s) const;
   // M / exposure at a pixel for channel ch, given the Mie phase there.
-  double Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const;
+  double Model(const Row& row, const Pixel& px, int ch, double phase_m, const RowValues& v) const;
   // Per pixel, rows in order; the last g's are kept (a day's joint steps and a search's
   // repeated solves at one g compute them once).
   std::shared_ptr<const std::vector<double>> MiePhases(double g) const;
