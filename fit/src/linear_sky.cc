@@ -391,6 +391,10 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   LinearSkySolution sol;
   sol.g = g;
   Eigen::VectorXd x;
+  // The rounds change only the diagonal: the fill-reducing ordering is computed once (the
+  // day's first joint step takes 5 rounds).
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool analysed = false;
   for (int round = 0; round < kActiveSetRounds; ++round) {
     Eigen::SparseMatrix<double> sys = normal;
     Eigen::VectorXd rb = rhs;
@@ -407,7 +411,11 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     Eigen::VectorXd d(num_unknowns_);
     for (int j = 0; j < num_unknowns_; ++j) d[j] = 1.0 / std::sqrt(std::max(sys.coeff(j, j), 1e-300));
     const Eigen::SparseMatrix<double> scaled = d.asDiagonal() * sys * d.asDiagonal();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(scaled);
+    if (!analysed) {
+      ldlt.analyzePattern(scaled);
+      analysed = true;
+    }
+    ldlt.factorize(scaled);
     if (ldlt.info() != Eigen::Success) throw Error("linear sky solve: the normal equations are not positive definite");
     x = d.asDiagonal() * ldlt.solve(d.asDiagonal() * rb);
     // Hold entries that went below their floor; release held entries the objective
