@@ -334,21 +334,21 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
   lo.threads = o.linear_threads;
   // A sparse reference (a mask leaving a few rows) keeps every pixel: the decimation
   // could drop whole rows, or all of them.
-  const bool sparse = [&] {
-    size_t valid = 0;
-    for (const FitLevel* lv : level_ptrs.front())
-      for (double w : lv->weight) valid += w > 0.0;
-    return 3 * valid < static_cast<size_t>(kMinDecimatedSamples) * 4 * std::max(1, decimate) * std::max(1, decimate);
-  }();
+  size_t valid_samples = 0;  // pixels x channels of the robust level
+  for (const FitLevel* lv : level_ptrs.front())
+    for (double w : lv->weight) valid_samples += w > 0.0 ? 3 : 0;
+  // A decimation by k keeps it only when at least kMinDecimatedSamples remain.
+  auto keeps_enough = [&](int k) { return valid_samples >= static_cast<size_t>(kMinDecimatedSamples) * k * k; };
   LinearSkyOptions robust_options = lo;
-  robust_options.stride = decimate > 1 && !sparse ? decimate : 1;
+  robust_options.stride = decimate > 1 && keeps_enough(decimate) ? decimate : 1;
   std::vector<std::unique_ptr<LinearSky>> skies;
   skies.push_back(std::make_unique<LinearSky>(*state, level_ptrs.front(), refs, robust_options));
   if (level_ptrs.size() > 1 || robust_options.stride > 1) {
     skies.push_back(std::make_unique<LinearSky>(*state, level_ptrs.back(), refs, lo));
   }
   LinearSkyOptions search_options = lo;
-  search_options.stride = sparse ? 1 : decimate > 1 ? 2 * decimate : std::max(1, robust_width / linear_width);
+  const int search_stride = decimate > 1 ? 2 * robust_options.stride : std::max(1, robust_width / linear_width);
+  search_options.stride = keeps_enough(search_stride) ? search_stride : robust_options.stride;
   const LinearSky search(*state, level_ptrs.front(), refs, search_options);
   const LinearSky& sky = *skies.back();
   const LinearSky& robust = *skies.front();
