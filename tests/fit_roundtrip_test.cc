@@ -1,6 +1,7 @@
 // Synthetic round trips: render known parameters, fit from a perturbed start, compare.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -104,6 +105,43 @@ TEST(FitRoundTrip, NoiseAndOutliersAreHandledByTheRobustLoss) {
   // rho' = 1/1000 (its pull ~1/16 of a pixel 5% off); 0.5% leaves 3x margin.
   EXPECT_LT(e.rel_rmse, 0.005);
   EXPECT_NEAR(r.preset.haziness_g, truth.haziness_g, 0.02);
+}
+
+// The day's linear start (fit/src/linear_stage.h): g is searched by six references spread
+// over the sun angles and held at the median of theirs by the others; the day still
+// recovers g and fits every frame. 9 frames of 64x32: fast.
+TEST(FitRoundTrip, DayStartSearchesGOnSixReferencesAndHoldsItOnTheRest) {
+  testing::ScratchDir dir("fit-day-g");
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  const render::Preset truth = Truth(ModelVariant::kFfxv);
+  fit::FitOptions o = Options(ModelVariant::kFfxv, render::Backend::kCpu);
+  std::vector<fit::Reference> refs;
+  const double elevations[] = {3, 8, 14, 21, 29, 38, 48, 59, 71};
+  for (int i = 0; i < 9; ++i) {
+    refs.push_back(fit::LoadReference(
+        WriteReference(dir, "ref" + std::to_string(i), truth, elevations[i], 20.0 * i - 80.0, 64), o));
+  }
+  const fit::FitResult r = fit::FitSky(refs, Perturbed(truth, 5, 0.2, 0.05), o, *cpu);
+  ASSERT_TRUE(r.linear_start.day.has_value());
+  const auto& starts = r.linear_start.day->references;
+  ASSERT_EQ(starts.size(), 9u);
+  // A g search costs two solves per scan node (9 nodes) and more for its golden sections:
+  // the six searching starts take >= 18 solves more than the held ones.
+  int fewest = 1 << 30;
+  for (const auto& [name, single] : starts) fewest = std::min(fewest, single.solves);
+  int searched = 0, held = 0;
+  for (const auto& [name, single] : starts) {
+    searched += single.solves >= fewest + 18;
+    held += single.solves == fewest;
+    // A held start carries the day's g (a searched one its own).
+    if (single.solves == fewest) EXPECT_EQ(single.haziness_g, r.linear_start.day->haziness_g) << name;
+  }
+  EXPECT_EQ(searched, 6);
+  EXPECT_EQ(held, 3);
+  // Tolerances: the frames are the truth's own renders (the ceiling is 0); 64x32 leaves
+  // ~10 pixels per LUT column near the sun, so g is found to ~1e-2, each frame to ~0.1%.
+  EXPECT_NEAR(r.preset.haziness_g, truth.haziness_g, 0.02);
+  for (const auto& f : r.references) EXPECT_LT(f.errors.rel_rmse, 2e-3);
 }
 
 TEST(FitRoundTrip, SyntheticDayRecoversTheObservedLut) {

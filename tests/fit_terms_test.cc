@@ -14,11 +14,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "fit_decisions.h"
 #include "fit_term.h"
+#include "pyramid.h"
 #include "run_binary.h"
 #include "sky_fit_terms.h"
 #include "skycal/core/json_file.h"
 #include "skycal/fit/reference.h"
+#include "skycal/fit/sky_fit.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 #include "test_util.h"
@@ -71,7 +74,10 @@ TEST(FitTerms, CeresPathThroughTermsGivesTheLutOfBefore) {
     ASSERT_EQ(j["levels"].size(), 1u);
     EXPECT_EQ(j["levels"][0]["iterations"].get<int>(), 16);
     ExpectDigest(p.luts.rayleigh, 105259095.55361749, 6009495313564.7607, "polish rayleigh");
-    ExpectDigest(p.luts.mie, 9630228.1488923319, 102797095723.63971, "polish mie");
+    // Re-taken when LinearSky summed a row's normal matrix by feature moments (issue 9,
+    // the day's speed): the same sums in another order moved the Mie table by 2e-10 and
+    // 7e-10 relative (the other tables and g unchanged at 1e-12).
+    ExpectDigest(p.luts.mie, 9630228.150845457, 102797095794.87816, "polish mie");
     ExpectDigest(p.luts.isotropic, 2729036.7442824771, 2178182921.4094958, "polish isotropic");
     EXPECT_NEAR(p.haziness_g / 0.7990323238413235, 1.0, 1e-12);
   }
@@ -213,6 +219,57 @@ TEST(FitTerms, OvercastHeldInFfxvIsoAndFittedInFfxv) {
   const nlohmann::json two = fit("ffxv");
   EXPECT_FALSE(has_decision(two, held));
   for (const auto& s : two["skipped"]) EXPECT_NE(s["block"], "overcast_zenith_luminance") << s;
+}
+
+}  // namespace
+}  // namespace skycal
+
+namespace skycal {
+namespace {
+
+// Issue 9, skip decisions: the coarse levels' saving is estimated from this run when this
+// run solved the finest level (--polish): that level's measured time x the skipped levels'
+// share of its samples; without the polish the bench estimate (bench_fit --decisions).
+TEST(FitTerms, CoarseLevelsSavedIsEstimatedFromThisRunWhenThePolishRan) {
+  // The arithmetic: 64 and 128 of 256 wide hold 1/16 + 1/4 of its samples.
+  fit::FitDecision bench;
+  bench.what = "coarse";
+  bench.saved_ms = 689.0;
+  const fit::FitDecision d = fit::SkippedLevelsFromThisRun(bench, {64, 128}, 256, 1.0);
+  EXPECT_NEAR(d.saved_ms, 312.5, 1e-9);
+  EXPECT_EQ(d.saved_ms_basis.rfind("estimated from this run", 0), 0u) << d.saved_ms_basis;
+  EXPECT_NE(d.saved_ms_basis.find("689 ms"), std::string::npos) << d.saved_ms_basis;  // the cross-check
+
+  ScratchDir dir("fit-terms-coarse-saved");
+  const auto r = Skycal("render --sun-elevation 25 --sun-azimuth 40 --size 128x64 --backend cpu --out " +
+                        (dir / "sky.exr"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  fit::FitOptions o;
+  o.verbose = false;
+  o.backend = render::Backend::kCpu;
+  const fit::Reference ref = fit::LoadReference(dir / "sky.exr", o);
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  auto coarse = [](const fit::FitResult& result) {
+    for (const fit::FitDecision& d : result.decisions) {
+      if (d.what.rfind("coarse pyramid levels", 0) == 0) return d;
+    }
+    ADD_FAILURE() << "no coarse-level decision";
+    return fit::FitDecision{};
+  };
+  const fit::FitResult plain = fit::FitSky({ref}, render::LoadPreset(kDefaultPreset), o, *cpu);
+  EXPECT_TRUE(plain.levels.empty());
+  EXPECT_EQ(coarse(plain).saved_ms_basis.rfind("estimated from bench_fit", 0), 0u) << coarse(plain).saved_ms_basis;
+  o.polish = true;
+  const fit::FitResult polished = fit::FitSky({ref}, render::LoadPreset(kDefaultPreset), o, *cpu);
+  ASSERT_EQ(polished.levels.size(), 1u);
+  const fit::FitDecision c = coarse(polished);
+  EXPECT_EQ(c.saved_ms_basis.rfind("estimated from this run", 0), 0u) << c.saved_ms_basis;
+  // 128 wide: the automatic pyramid's coarser levels, each (w / 128)^2 of the samples.
+  double share = 0.0;
+  const std::vector<int> widths = fit::AutomaticPyramid(128);
+  for (size_t i = 0; i + 1 < widths.size(); ++i) share += (widths[i] / 128.0) * (widths[i] / 128.0);
+  ASSERT_GT(share, 0.0);
+  EXPECT_NEAR(c.saved_ms, 1e3 * polished.levels.back().time_s * share, 1e-9 * c.saved_ms);
 }
 
 }  // namespace

@@ -77,6 +77,24 @@ FitDecision DecisionFromBench(std::string what, std::string why, const BenchDeci
   return d;
 }
 
+FitDecision SkippedLevelsFromThisRun(FitDecision from_bench, const std::vector<int>& skipped_widths, int finest_width,
+                                     double finest_level_s) {
+  double share = 0.0;
+  for (int w : skipped_widths) {
+    const double f = static_cast<double>(w) / finest_width;
+    share += f * f;
+  }
+  FitDecision d = std::move(from_bench);
+  const std::string bench_estimate = Number(d.saved_ms) + " ms";
+  d.saved_ms = 1e3 * finest_level_s * share;
+  d.saved_ms_basis = "estimated from this run: the finest level (" + std::to_string(finest_width) + " wide) took " +
+                     Number(1e3 * finest_level_s) + " ms; the skipped levels hold " + Number(share) +
+                     " of its samples (sum of (width / " + std::to_string(finest_width) +
+                     ")^2), at equal iterations per level. Cross-check, bench_fit --decisions scaled to this fit: " +
+                     bench_estimate;
+  return d;
+}
+
 FitDecision NoCostDecision(std::string what, std::string why, std::string basis) {
   FitDecision d;
   d.what = std::move(what);

@@ -37,6 +37,15 @@ void AddPixelDecisions(const std::vector<Reference>& refs, int finest_width, dou
 FitDecision DecisionFromBench(std::string what, std::string why, const BenchDecisionCost& bench,
                               const std::string& bench_row, long long samples);
 
+// Coarse pyramid levels not solved, when this run solved the finest level (the polish ran):
+// saved = the finest level's measured time x sum over the skipped widths of (w / finest)^2
+// (each level's share of the finest level's samples; Ceres' time per iteration scales with
+// the samples, and the iterations are taken as equal per level). The bench estimate
+// `from_bench` stays in the basis as the cross-check; what, why and the error change are
+// kept from it.
+FitDecision SkippedLevelsFromThisRun(FitDecision from_bench, const std::vector<int>& skipped_widths, int finest_width,
+                                     double finest_level_s);
+
 // A decision that saves nothing measurable (nothing would be evaluated), error unchanged.
 FitDecision NoCostDecision(std::string what, std::string why, std::string basis);
 

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <cstdlib>
 
@@ -150,7 +152,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   }
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
-  start_scale_ = StartScale(exposures, MiePhases(state.g));
+  start_scale_ = StartScale(exposures, *MiePhases(state.g));
 }
 
 double LinearSky::StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const {
@@ -159,10 +161,11 @@ double LinearSky::StartScale(const std::vector<double>& exposures, const std::ve
   double num = 0.0, den = 0.0;
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
+    const RowValues v = Blend(row, start);
     for (size_t p = 0; p < row.pixels.size(); ++p) {
       const Pixel& px = row.pixels[p];
       for (int c = 0; c < 3; ++c) {
-        const double q = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], start) / px.ref[c];
+        const double q = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], v) / px.ref[c];
         const double w = error_weight_[row.first_sample + 3 * p + c];
         num += w * q;
         den += w * q * q;
@@ -175,32 +178,43 @@ double LinearSky::StartScale(const std::vector<double>& exposures, const std::ve
 
 double LinearSky::Floor(int j) const { return kFloorFraction * start_scale_ * initial_[j]; }
 
-std::vector<double> LinearSky::MiePhases(double g) const {
+std::shared_ptr<const std::vector<double>> LinearSky::MiePhases(double g) const {
+  {
+    std::lock_guard<std::mutex> lock(phase_cache_->mutex);
+    if (phase_cache_->phases && phase_cache_->g == g) return phase_cache_->phases;
+  }
   NoLut none;
   ModelD m(none);
-  std::vector<double> out;
-  out.reserve(error_weight_.size() / 3);
+  auto out = std::make_shared<std::vector<double>>();
+  out->reserve(error_weight_.size() / 3);
   for (const Row& row : rows_)
-    for (const Pixel& px : row.pixels) out.push_back(m.phase_cornette_shanks(px.mu, px.one_minus_mu, g));
+    for (const Pixel& px : row.pixels) out->push_back(m.phase_cornette_shanks(px.mu, px.one_minus_mu, g));
+  std::lock_guard<std::mutex> lock(phase_cache_->mutex);
+  phase_cache_->g = g;
+  phase_cache_->phases = out;
   return out;
 }
 
-double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const {
+LinearSky::RowValues LinearSky::Blend(const Row& row, const LinearSkySolution& s) const {
+  RowValues v;
+  for (const Row::Node& n : row.nodes)
+    for (int c = 0; c < 3; ++c) v.lut[c][n.table] += n.weight * s.values[n.unknown_ch0 + c];
+  v.lz = lz_index_ >= 0 ? s.values[lz_index_] : held_overcast_zenith_;
+  return v;
+}
+
+double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m, const RowValues& v) const {
   const double w_o = state_.preset.overcast_weight;
-  double lut = 0.0;
-  for (const Row::Node& n : row.nodes) {
-    const double phase = n.table == 0 ? px.phase_r : n.table == 1 ? phase_m : kIsotropicPhase;
-    lut += n.weight * phase * s.values[n.unknown_ch0 + ch];
-  }
-  const double lz = lz_index_ >= 0 ? s.values[lz_index_] : held_overcast_zenith_;
-  return (1.0 - w_o) * lut + w_o * lz * row.overcast_shape;
+  const double lut = px.phase_r * v.lut[ch][0] + phase_m * v.lut[ch][1] + kIsotropicPhase * v.lut[ch][2];
+  return (1.0 - w_o) * lut + w_o * v.lz * row.overcast_shape;
 }
 
 LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposures,
                                    const std::vector<double>& robust_weights,
                                    const LinearSkySolution* linearize_at, bool with_cost) const {
   const double w_o = state_.preset.overcast_weight;
-  const std::vector<double> phase_m = MiePhases(g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(g);
+  const std::vector<double>& phase_m = *phases;
   // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
   // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once. Rows
   // are split between threads, each with its own triplets and right-hand side.
@@ -211,6 +225,14 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   };
   auto accumulate = [&](size_t row_begin, size_t row_end, Part* part) {
     part->rhs = Eigen::VectorXd::Zero(num_unknowns_);
+    // Reserved: growing ~10^6 triplets (a day) re-allocated and page-faulted ~10% of the
+    // day's linear stage (perf).
+    size_t count = 0;
+    for (size_t ri = row_begin; ri < row_end; ++ri) {
+      const size_t kk = rows_[ri].nodes.size() + (lz_index_ >= 0 ? 1 : 0);
+      count += 3 * kk * kk;
+    }
+    part->triplets.reserve(count);
     for (size_t ri = row_begin; ri < row_end; ++ri) {
       const Row& row = rows_[ri];
       const size_t pixel_index = row.first_sample / 3;
@@ -218,10 +240,24 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
       const int kk = k + (lz_index_ >= 0 ? 1 : 0);
       const double exposure = exposures[row.ref];
       const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * held_overcast_zenith_ * row.overcast_shape;
+      // Every coefficient of a row is (bilinear weight) x (a pixel feature): the phase of
+      // its table, or the overcast shape for L_z. So the row's normal matrix is the
+      // weights' outer product times the features' second moments over its pixels (4 x 4
+      // at most), accumulated per pixel instead of the nodes' 13 x 13.
+      const RowValues v0 = linearize_at ? Blend(row, *linearize_at) : RowValues{};
+      double coef[kMax];
+      int feature[kMax];
+      for (int j = 0; j < k; ++j) {
+        coef[j] = (1.0 - w_o) * row.nodes[j].weight;
+        feature[j] = row.nodes[j].table;
+      }
+      if (lz_index_ >= 0) {
+        coef[k] = w_o * row.overcast_shape;
+        feature[k] = 3;
+      }
       for (int c = 0; c < 3; ++c) {
-        double n[kMax][kMax] = {};
-        double b[kMax] = {};
-        double a[kMax];
+        double mom[4][4] = {};
+        double mb[4] = {};
         for (size_t p = 0; p < row.pixels.size(); ++p) {
           const Pixel& px = row.pixels[p];
           const size_t smp = row.first_sample + 3 * p + c;
@@ -232,23 +268,26 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
           // a . x / M0 - (1 - ln(k M0 / R)).
           double norm = px.ref[c], target = s;
           if (linearize_at) {
-            const double m0 = exposure * Model(row, px, c, pm, *linearize_at);
+            const double m0 = exposure * Model(row, px, c, pm, v0);
             if (m0 > 0.0) {
               norm = m0;
               target = s * (1.0 - std::log(m0 / px.ref[c]));
             }
           }
           const double scale = s * exposure / norm;
-          for (int j = 0; j < k; ++j) {
-            const auto& nd = row.nodes[j];
-            const double phase = nd.table == 0 ? px.phase_r : nd.table == 1 ? pm : kIsotropicPhase;
-            a[j] = scale * (1.0 - w_o) * nd.weight * phase;
-          }
-          if (lz_index_ >= 0) a[k] = scale * w_o * row.overcast_shape;
           target -= scale * fixed_lz;
-          for (int i = 0; i < kk; ++i) {
-            b[i] += target * a[i];
-            for (int j = i; j < kk; ++j) n[i][j] += a[i] * a[j];
+          const double f[4] = {scale * px.phase_r, scale * pm, scale * kIsotropicPhase, scale};
+          for (int a = 0; a < 4; ++a) {
+            mb[a] += target * f[a];
+            for (int b = a; b < 4; ++b) mom[a][b] += f[a] * f[b];
+          }
+        }
+        double n[kMax][kMax], b[kMax];
+        for (int i = 0; i < kk; ++i) {
+          b[i] = coef[i] * mb[feature[i]];
+          for (int j = i; j < kk; ++j) {
+            const int fa = std::min(feature[i], feature[j]), fb = std::max(feature[i], feature[j]);
+            n[i][j] = coef[i] * coef[j] * mom[fa][fb];
           }
         }
         auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
@@ -270,6 +309,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     parts[1].rhs = Eigen::VectorXd::Zero(num_unknowns_);
   }
   std::vector<Eigen::Triplet<double>> triplets = std::move(parts[0].triplets);
+  triplets.reserve(triplets.size() + parts[1].triplets.size() + 10 * static_cast<size_t>(num_unknowns_));
   triplets.insert(triplets.end(), parts[1].triplets.begin(), parts[1].triplets.end());
   Eigen::VectorXd rhs = parts[0].rhs + parts[1].rhs;
   // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
@@ -351,6 +391,10 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   LinearSkySolution sol;
   sol.g = g;
   Eigen::VectorXd x;
+  // The rounds change only the diagonal: the fill-reducing ordering is computed once (the
+  // day's first joint step takes 5 rounds).
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool analysed = false;
   for (int round = 0; round < kActiveSetRounds; ++round) {
     Eigen::SparseMatrix<double> sys = normal;
     Eigen::VectorXd rb = rhs;
@@ -367,7 +411,11 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     Eigen::VectorXd d(num_unknowns_);
     for (int j = 0; j < num_unknowns_; ++j) d[j] = 1.0 / std::sqrt(std::max(sys.coeff(j, j), 1e-300));
     const Eigen::SparseMatrix<double> scaled = d.asDiagonal() * sys * d.asDiagonal();
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(scaled);
+    if (!analysed) {
+      ldlt.analyzePattern(scaled);
+      analysed = true;
+    }
+    ldlt.factorize(scaled);
     if (ldlt.info() != Eigen::Success) throw Error("linear sky solve: the normal equations are not positive definite");
     x = d.asDiagonal() * ldlt.solve(d.asDiagonal() * rb);
     // Hold entries that went below their floor; release held entries the objective
@@ -398,11 +446,12 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   double cost = 0.0, sq = 0.0, wsum = 0.0;
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
+    const RowValues v = Blend(row, sol);
     for (size_t p = 0; p < row.pixels.size(); ++p) {
       const Pixel& px = row.pixels[p];
       for (int c = 0; c < 3; ++c) {
         const size_t smp = row.first_sample + 3 * p + c;
-        const double e = (exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], sol) - px.ref[c]) / px.ref[c];
+        const double e = (exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], v) - px.ref[c]) / px.ref[c];
         const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
         cost += 0.5 * rw * error_weight_[smp] * e * e;
         sq += error_weight_[smp] * e * e;
@@ -477,27 +526,31 @@ double LinearSky::RobustCostOf(const std::vector<double>& e, RobustLoss loss, co
 }
 
 std::vector<double> LinearSky::ModelValues(const LinearSkySolution& s, const std::vector<double>& exposures) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(s.g);
+  const std::vector<double>& phase_m = *phases;
   std::vector<double> out(error_weight_.size(), 0.0);
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
+    const RowValues v = Blend(row, s);
     for (size_t p = 0; p < row.pixels.size(); ++p)
       for (int c = 0; c < 3; ++c)
-        out[row.first_sample + 3 * p + c] = exposures[row.ref] * Model(row, row.pixels[p], c, phase_m[pixel_index + p], s);
+        out[row.first_sample + 3 * p + c] = exposures[row.ref] * Model(row, row.pixels[p], c, phase_m[pixel_index + p], v);
     pixel_index += row.pixels.size();
   }
   return out;
 }
 
 std::vector<double> LinearSky::LogErrors(const LinearSkySolution& s, const std::vector<double>& exposures) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
+  const std::shared_ptr<const std::vector<double>> phases = MiePhases(s.g);
+  const std::vector<double>& phase_m = *phases;
   std::vector<double> out(error_weight_.size(), 0.0);
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
+    const RowValues v = Blend(row, s);
     for (size_t p = 0; p < row.pixels.size(); ++p) {
       const Pixel& px = row.pixels[p];
       for (int c = 0; c < 3; ++c) {
-        const double mv = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], s);
+        const double mv = exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], v);
         out[row.first_sample + 3 * p + c] = mv > 0.0 ? std::clamp(std::log(mv / px.ref[c]), -20.0, 20.0) : 20.0;
       }
     }
@@ -506,26 +559,28 @@ std::vector<double> LinearSky::LogErrors(const LinearSkySolution& s, const std::
   return out;
 }
 
-double LinearSky::BestExposure(const LinearSkySolution& s, size_t r, const std::vector<double>& robust_weights) const {
-  const std::vector<double> phase_m = MiePhases(s.g);
-  double num = 0.0, den = 0.0;
-  size_t pixel_index = 0;
+std::vector<double> LinearSky::BestExposures(const LinearSkySolution& s, const std::vector<double>& robust_weights) const {
+  const std::shared_ptr<const std::vector<double>> phase_m = MiePhases(s.g);
+  std::vector<double> num(n_refs_, 0.0), den(n_refs_, 0.0);
   for (const Row& row : rows_) {
-    if (row.ref == r) {
-      for (size_t p = 0; p < row.pixels.size(); ++p) {
-        const Pixel& px = row.pixels[p];
-        for (int c = 0; c < 3; ++c) {
-          const size_t smp = row.first_sample + 3 * p + c;
-          const double w = error_weight_[smp] * (robust_weights.empty() ? 1.0 : robust_weights[smp]);
-          const double q = Model(row, px, c, phase_m[pixel_index + p], s) / px.ref[c];
-          num += w * q;
-          den += w * q * q;
-        }
+    const size_t pixel_index = row.first_sample / 3;
+    const RowValues v = Blend(row, s);
+    for (size_t p = 0; p < row.pixels.size(); ++p) {
+      const Pixel& px = row.pixels[p];
+      for (int c = 0; c < 3; ++c) {
+        const size_t smp = row.first_sample + 3 * p + c;
+        const double w = error_weight_[smp] * (robust_weights.empty() ? 1.0 : robust_weights[smp]);
+        const double q = Model(row, px, c, (*phase_m)[pixel_index + p], v) / px.ref[c];
+        num[row.ref] += w * q;
+        den[row.ref] += w * q * q;
       }
     }
-    pixel_index += row.pixels.size();
   }
-  return den > 0.0 && num > 0.0 ? num / den : 1.0;
+  std::vector<double> out(n_refs_, 1.0);
+  for (int r = 0; r < n_refs_; ++r) {
+    if (den[r] > 0.0 && num[r] > 0.0) out[r] = num[r] / den[r];
+  }
+  return out;
 }
 
 std::vector<double*> LinearSky::HeldParameters(const LinearSkySolution& s, FitState* state) const {

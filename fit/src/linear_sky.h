@@ -25,6 +25,8 @@
 // initial value (an active set, formed anew in every solve).
 #pragma once
 #include <array>
+#include <memory>
+#include <mutex>
 #include <utility>
 #include <vector>
 
@@ -104,8 +106,9 @@ class LinearSky {
   std::vector<double> LogErrors(const LinearSkySolution& s, const std::vector<double>& exposures) const;
   // Solid-angle weights matching LogErrors (w / total, summing to 1 per channel).
   const std::vector<double>& error_weights() const { return error_weight_; }
-  // Least-squares exposure of reference r for a solution (relative error; the others held).
-  double BestExposure(const LinearSkySolution& s, size_t r, const std::vector<double>& robust_weights) const;
+  // Least-squares exposure factor of each reference for a solution (relative error; each
+  // on its own pixels), in one pass over the samples.
+  std::vector<double> BestExposures(const LinearSkySolution& s, const std::vector<double>& robust_weights) const;
 
   // Writes a tied-rows or free-rows solution into the state (log_delta or log_lut, and
   // log L_z when it was fitted).
@@ -151,9 +154,20 @@ class LinearSky {
     struct Node { int table; int col; int unknown_ch0; double weight; };  // unknown of channel c: unknown_ch0 + c
     std::vector<Node> nodes;
   };
+  // A solution's values along one row: per channel and table the LUT blended over the
+  // row's nodes (the bilinear weights are the row's), and L_z. The model at a pixel is then
+  // (1 - w_o) sum_t phase_t lut[c][t] + w_o lz shape: three products instead of a pass
+  // over the row's up to 12 nodes.
+  struct RowValues {
+    double lut[3][3] = {};  // [channel][table]
+    double lz = 0.0;
+  };
+  RowValues Blend(const Row& row, const LinearSkySolution& s) const;
   // M / exposure at a pixel for channel ch, given the Mie phase there.
-  double Model(const Row& row, const Pixel& px, int ch, double phase_m, const LinearSkySolution& s) const;
-  std::vector<double> MiePhases(double g) const;  // per pixel, rows in order
+  double Model(const Row& row, const Pixel& px, int ch, double phase_m, const RowValues& v) const;
+  // Per pixel, rows in order; the last g's are kept (a day's joint steps and a search's
+  // repeated solves at one g compute them once).
+  std::shared_ptr<const std::vector<double>> MiePhases(double g) const;
   double Floor(int j) const;                      // value non-positive entries are held at
   // Least-squares scale of the start (initial values) on the data, at the start's g and
   // exposures: the centre of the prior is this scale times the start (see Solve).
@@ -171,6 +185,12 @@ class LinearSky {
   double start_scale_ = 1.0;           // StartScale at the state's g and exposures
   int n_refs_ = 0;
   int width_ = 0;
+  struct PhaseCache {
+    std::mutex mutex;
+    double g = 0.0;
+    std::shared_ptr<const std::vector<double>> phases;
+  };
+  std::unique_ptr<PhaseCache> phase_cache_ = std::make_unique<PhaseCache>();
 };
 
 }  // namespace skycal::fit

@@ -28,12 +28,13 @@ struct LinearStageOutcome {
 
 // One reference: the linear start on the tied rows, the render check, the polish decision.
 // Several references (a day): the linear start of each reference on its own (tied rows,
-// its own g and loss scales; two threads), combined into the day's start: every fitted
-// LUT row takes the log change of the references around its sun angle, interpolated
-// along the row coordinate, g the median of theirs. The joint free-row solve is then the
-// Ceres polish (always run for a day): the linear structure's free-row solve with unknown
-// exposures and the log-space smoothness prior is not linear (measured: 4-6% off and
-// 10-30 s on 24 references before this split).
+// its own loss scales; two threads, no render check; the robust steps on every second
+// pixel of every second row, the final steps on all), g searched by six references spread
+// over the sun angles and held by the others at the median of theirs; combined into the
+// day's start: every fitted LUT row takes the log change of the references around its sun
+// angle, interpolated along the row coordinate. Then Gauss-Newton steps of the whole day
+// (free rows, the log-space priors linearised, the exposures alternated) until a step no
+// longer lowers the robust cost, and one render check of the joint solution.
 LinearStageOutcome RunLinearStage(const std::vector<Reference>& refs, const FitOptions& o, bool tied,
                                   const std::vector<bool>& row_fitted, bool fit_overcast, bool probed,
                                   int finest_width, render::SkyRenderer& renderer, FitState* state,

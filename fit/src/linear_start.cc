@@ -172,7 +172,8 @@ LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robus
   double g = std::clamp(state->g, 0.0, kGMax);
   auto update_exposures = [&](const LinearSky& level, const LinearSkySolution& s) {
     if (!fit_exposures) return;
-    for (size_t r = 1; r < exposures.size(); ++r) exposures[r] *= level.BestExposure(s, r, weights);
+    const std::vector<double> best = level.BestExposures(s, weights);
+    for (size_t r = 1; r < exposures.size(); ++r) exposures[r] *= best[r];
   };
   auto alternate_exposures = [&](const LinearSky& level, int rounds) {
     for (int k = 0; k < rounds && fit_exposures; ++k) {

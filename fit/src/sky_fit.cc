@@ -101,6 +101,8 @@ struct DecisionFacts {
   int extrapolated_columns = 0;
   long long samples = 0;                   // the finest level's fitted samples
   double evaluation_s = 0.0;               // measured: the linear stage and the Ceres levels
+  double polish_level_s = 0.0;             // measured: the finest Ceres level, when it ran
+  int polish_level_width = 0;
 };
 
 void RecordDecisions(const std::vector<Reference>& refs, const DecisionFacts& f, FitResult* result) {
@@ -110,10 +112,14 @@ void RecordDecisions(const std::vector<Reference>& refs, const DecisionFacts& f,
   if (!f.coarse_widths_skipped.empty()) {
     std::string widths;
     for (int w : f.coarse_widths_skipped) widths += (widths.empty() ? "" : ", ") + std::to_string(w);
-    d.push_back(DecisionFromBench("coarse pyramid levels (" + widths + " wide) not solved",
-                                  "the linear start already placed the LUT and g at the optimum of the linear "
-                                  "structure (the model's ceiling in the fit's error measure)",
-                                  bench.coarse_levels, "coarse levels", f.samples));
+    const std::string what = "coarse pyramid levels (" + widths + " wide) not solved";
+    const std::string why = "the linear start already placed the LUT and g at the optimum of the linear structure "
+                            "(the model's ceiling in the fit's error measure)";
+    FitDecision from_bench = DecisionFromBench(what, why, bench.coarse_levels, "coarse levels", f.samples);
+    // The finest level ran in this run (the polish): the skipped levels from its measured time.
+    d.push_back(f.polish_level_s > 0.0 ? SkippedLevelsFromThisRun(std::move(from_bench), f.coarse_widths_skipped,
+                                                                  f.polish_level_width, f.polish_level_s)
+                                       : std::move(from_bench));
   }
   if (f.polish_skipped) {
     d.push_back(DecisionFromBench("Ceres polish skipped",
@@ -285,6 +291,10 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
 
   facts.evaluation_s = result.linear_start.time_s();
   for (const LevelReport& l : result.levels) facts.evaluation_s += l.time_s;
+  if (!result.levels.empty()) {
+    facts.polish_level_s = result.levels.back().time_s;
+    facts.polish_level_width = result.levels.back().width;
+  }
   facts.samples = linear.ran ? result.linear_start.samples() : sky_rows.last_residuals();
 
   result.preset = state.ToPreset();
