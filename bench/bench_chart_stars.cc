@@ -167,11 +167,11 @@ int main(int argc, char** argv) {
   // --- Stars over twilight ---
   md << "\n## Stars: synthetic stars over a rendered twilight sky\n\n"
      << "The bundled clear preset at sun elevation -6 deg (azimuth 40), 1024x512 (CPU renderer), 0.5% noise; 300 stars "
-        "(Gaussian spread sigma 0.5 px, >= 8 px apart, elevations ~10-67 deg) per band of peak contrast (peak / sky, "
-        "log-uniform); default options (7 px window, 6 sigma, +50%, <= 12 px groups, isolated by 2 px). Recall: stars "
+        "(Gaussian spread sigma 0.5 px, >= 8 px apart, elevations ~10-67 deg) per band of peak excess (the star adds this many times "
+        "the sky at its centre pixel before the spread; log-uniform); default options (7 px window, 6 sigma, +50%, <= 12 px groups, isolated by 2 px). Recall: stars "
         "whose centre pixel was replaced; precision: those / groups removed. `far changed`: pixels more than 3 px from "
         "every star that changed (must be 0).\n\n"
-     << "| contrast band | stars | removed | recall | precision | far changed | restored p50 / p95 rel. error | ms |\n"
+     << "| peak excess band (x sky) | stars | removed | recall | precision | far changed | restored p50 / p95 rel. error | ms |\n"
      << "|---|---|---|---|---|---|---|---|\n";
   render::RenderRequest req;
   req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(-6.0, 40.0);
@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
   std::mt19937 rng(6);
   std::normal_distribution<float> noise(0.0f, 0.005f);
   for (float& v : twilight.pixels) v *= 1.0f + noise(rng);
-  const std::pair<double, double> bands[] = {{1.2, 1.6}, {1.6, 2.5}, {2.5, 6.0}, {6.0, 30.0}, {30.0, 300.0}};
+  const std::pair<double, double> bands[] = {{0.3, 0.6}, {0.6, 1.2}, {1.2, 2.5}, {2.5, 6.0}, {6.0, 30.0}, {30.0, 300.0}};
   for (const auto& [lo, hi] : bands) {
     ImageRGB starry = twilight;
     const auto stars = testing::AddStars(&starry, 300, 64, 224, lo, hi, 8, 11);
@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
     const double p50 = restored.empty() ? 0.0 : restored[restored.size() / 2];
     const double p95 = restored.empty() ? 0.0 : restored[restored.size() * 95 / 100];
     char line[300];
-    std::snprintf(line, sizeof line, "| %.1f-%.0f x | %zu | %d | %.3f | %.3f | %lld | %.4f / %.4f | %.0f |\n", lo, hi,
+    std::snprintf(line, sizeof line, "| %.1f-%.1f | %zu | %d | %.3f | %.3f | %lld | %.4f / %.4f | %.0f |\n", lo, hi,
                   stars.size(), r.stars, double(found) / stars.size(), r.stars ? double(found) / r.stars : 0.0,
                   far_changed, p50, p95, ms);
     md << line;

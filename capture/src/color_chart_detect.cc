@@ -108,9 +108,10 @@ namespace {
 struct Sampled {
   ChartColors mean{};
   std::array<int, kChartPatches> pixels{}, clipped{};
+  std::array<double, kChartPatches> spread{};  // variance of ln(luminance) in the square
 };
 
-// Means of each patch's central square, through the homography chart units -> pixels.
+// Means (and spreads) of each patch's central square, through the homography chart units -> pixels.
 Sampled SamplePatches(const ChartImage& img, const std::array<double, 8>& corners, double fraction) {
   const cv::Point2f unit[4] = {{0.0f, 0.0f}, {float(kChartW), 0.0f}, {float(kChartW), float(kChartH)}, {0.0f, float(kChartH)}};
   cv::Point2f px[4];
@@ -133,6 +134,7 @@ Sampled SamplePatches(const ChartImage& img, const std::array<double, 8>& corner
       x_lo = std::min(x_lo, q.x), x_hi = std::max(x_hi, q.x), y_lo = std::min(y_lo, q.y), y_hi = std::max(y_hi, q.y);
     }
     Rgb sum{0, 0, 0};
+    double sum_l = 0.0, sum_l2 = 0.0;
     for (int y = std::max(0, int(std::floor(y_lo))); y <= std::min(img.linear.height - 1, int(std::ceil(y_hi))); ++y) {
       for (int x = std::max(0, int(std::floor(x_lo))); x <= std::min(img.linear.width - 1, int(std::ceil(x_hi))); ++x) {
         const cv::Point2d q = map(to_unit, x, y);
@@ -141,8 +143,12 @@ Sampled SamplePatches(const ChartImage& img, const std::array<double, 8>& corner
         ++s.pixels[p];
         s.clipped[p] += img.clipped[i];
         for (int c = 0; c < 3; ++c) sum[c] += img.linear.pixels[3 * i + c];
+        const float* rgb = &img.linear.pixels[3 * i];
+        const double l = std::log(std::max(1e-12, 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]));
+        sum_l += l, sum_l2 += l * l;
       }
     }
+    if (s.pixels[p] > 0) s.spread[p] = sum_l2 / s.pixels[p] - (sum_l / s.pixels[p]) * (sum_l / s.pixels[p]);
     for (int c = 0; c < 3; ++c) s.mean[p][c] = s.pixels[p] > 0 ? sum[c] / s.pixels[p] : 0.0;
   }
   return s;
@@ -208,6 +214,36 @@ void CheckSamples(const ChartImage& img, const Sampled& s, const ChartOptions& o
   }
 }
 
+// Spread of the patches' central squares: the sum over patches of the variance of log
+// luminance (a square that straddles a gap or a neighbour is not uniform).
+double PatchSpread(const ChartImage& img, const std::array<double, 8>& corners, double fraction) {
+  const Sampled s = SamplePatches(img, corners, fraction);
+  double sum = 0.0;
+  for (int p = 0; p < kChartPatches; ++p) sum += s.pixels[p] > 1 ? s.spread[p] : 1e3;
+  return sum;
+}
+
+// OpenCV mcc's box is good to a few pixels (up to 5 at 12 px patches, measured), enough to
+// put a patch's central square partly on the black gap: refine it by the shift (whole
+// pixels, +-4) and scale (+-4%) about its centre that makes the patches most uniform.
+std::array<double, 8> RefineCorners(const ChartImage& img, const std::array<double, 8>& c, double fraction) {
+  const double cx = 0.25 * (c[0] + c[2] + c[4] + c[6]), cy = 0.25 * (c[1] + c[3] + c[5] + c[7]);
+  std::array<double, 8> best = c;
+  double best_spread = PatchSpread(img, c, fraction);
+  for (const double scale : {0.96, 0.98, 1.0, 1.02, 1.04})
+    for (int dy = -4; dy <= 4; ++dy)
+      for (int dx = -4; dx <= 4; ++dx) {
+        std::array<double, 8> t{};
+        for (int k = 0; k < 4; ++k) {
+          t[2 * k] = cx + scale * (c[2 * k] - cx) + dx;
+          t[2 * k + 1] = cy + scale * (c[2 * k + 1] - cy) + dy;
+        }
+        const double spread = PatchSpread(img, t, fraction);
+        if (spread < best_spread) best_spread = spread, best = t;
+      }
+  return best;
+}
+
 }  // namespace
 
 ChartDetection FindColorChecker(const ChartImage& img, const ChartOptions& o) {
@@ -245,6 +281,7 @@ ChartDetection FindColorChecker(const ChartImage& img, const ChartOptions& o) {
     const std::vector<cv::Point2f> box = detector->getBestColorChecker()->getBox();
     if (box.size() != 4) continue;
     for (int k = 0; k < 4; ++k) d.corners[2 * k] = box[k].x, d.corners[2 * k + 1] = box[k].y;
+    d.corners = RefineCorners(img, d.corners, o.patch_fraction);
     const Sampled s = SamplePatches(img, d.corners, o.patch_fraction);
     if (!NeutralsOrdered(s.mean)) continue;  // a false or mis-oriented detection
     CheckSamples(img, s, o);
