@@ -245,7 +245,7 @@ int main(int argc, char** argv) {
     }
   ImageRGB mask_img(night.width, night.height);
   for (size_t i = 0; i < nr.mask.size(); ++i) mask_img.pixels[3 * i] = mask_img.pixels[3 * i + 1] = mask_img.pixels[3 * i + 2] = nr.mask[i];
-  const double night_gain = 0.18 / MedianLuminance(night) * 0.5;
+  const double night_gain = 0.18 / MedianLuminance(night) * 0.12;  // dark enough to see the stars
   cv::Mat bottom;
   cv::hconcat(std::vector<cv::Mat>{Preview(night, night_gain, best_x, best_y, 256, 128, 2),
                                    Preview(nr.image, night_gain, best_x, best_y, 256, 128, 2),
