@@ -243,7 +243,8 @@ TEST(ColorChart, CaptureAppliesAndStoresTheCorrection) {
     for (int y = 0; y < 32; ++y)
       for (int x = 0; x < 64; ++x) {
         const double base[3] = {20.0 + 1.5 * x, 30.0 + 2.0 * y, 60.0 + 0.5 * (x + y)};
-        for (int c = 0; c < 3; ++c) bgr.at<cv::Vec3b>(y, x)[2 - c] = static_cast<uint8_t>(std::min(255.0, base[c] * (1 << b) * 0.6));
+        const double star = (x == 20 && y == 8) ? 3.0 : 1.0;  // one point source, for --remove-stars
+        for (int c = 0; c < 3; ++c) bgr.at<cv::Vec3b>(y, x)[2 - c] = static_cast<uint8_t>(std::min(255.0, star * base[c] * (1 << b) * 0.6));
       }
     brackets.push_back(dir / ("b" + std::to_string(b) + ".png"));
     ASSERT_TRUE(cv::imwrite(brackets.back(), bgr));
@@ -265,6 +266,22 @@ TEST(ColorChart, CaptureAppliesAndStoresTheCorrection) {
   ASSERT_TRUE(corrected.attributes.strings.count("skycalColorCorrection"));
   EXPECT_EQ(nlohmann::json::parse(corrected.attributes.strings.at("skycalColorCorrection"))["label"], "nd");
   EXPECT_FALSE(plain.attributes.strings.count("skycalColorCorrection"));
+  // --remove-stars: the point source is counted and masked (mask.stars), the rest untouched.
+  r = RunCli(base + (dir / "stars.exr") + " --remove-stars --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["stars"]["stars_removed"], 1);
+  int w = 0, h = 0;
+  const std::vector<float> star_mask = ReadExrChannel(dir / "stars.exr", "mask.stars", &w, &h);
+  const ExrRGB starless = ReadExrRGB(dir / "stars.exr");
+  int masked = 0;
+  for (size_t i = 0; i < star_mask.size(); ++i) {
+    masked += star_mask[i] == 1.0f;
+    if (star_mask[i] == 0.0f) {
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(starless.image.pixels[3 * i + c], plain.image.pixels[3 * i + c]);
+    }
+  }
+  EXPECT_GE(masked, 1);
+  EXPECT_LE(masked, 16);
   // Bad input: exit 1, named, nothing written.
   const std::string out = dir / "bad.exr";
   WriteFileAtomically(dir / "bad.json", R"({"format": "skycal.color_correction", "matrix": [1, 0, 0]})");
