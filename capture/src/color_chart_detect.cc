@@ -225,7 +225,8 @@ double PatchSpread(const ChartImage& img, const std::array<double, 8>& corners, 
 
 // OpenCV mcc's box is good to a few pixels (up to 5 at 12 px patches, measured), enough to
 // put a patch's central square partly on the black gap: refine it by the shift (whole
-// pixels, +-4) and scale (+-4%) about its centre that makes the patches most uniform.
+// pixels, +-4) and scale (+-4%) about its centre, then each corner, whichever make the
+// patches most uniform.
 std::array<double, 8> RefineCorners(const ChartImage& img, const std::array<double, 8>& c, double fraction) {
   const double cx = 0.25 * (c[0] + c[2] + c[4] + c[6]), cy = 0.25 * (c[1] + c[3] + c[5] + c[7]);
   std::array<double, 8> best = c;
@@ -241,6 +242,19 @@ std::array<double, 8> RefineCorners(const ChartImage& img, const std::array<doub
         const double spread = PatchSpread(img, t, fraction);
         if (spread < best_spread) best_spread = spread, best = t;
       }
+  // Then each corner on its own (mcc's box can be skewed: up to 5 px at one corner and the
+  // opposite way at the next, measured), two passes of +-3 px.
+  for (int pass = 0; pass < 2; ++pass)
+    for (int k = 0; k < 4; ++k) {
+      const std::array<double, 8> start = best;
+      for (int dy = -3; dy <= 3; ++dy)
+        for (int dx = -3; dx <= 3; ++dx) {
+          std::array<double, 8> t = start;
+          t[2 * k] += dx, t[2 * k + 1] += dy;
+          const double spread = PatchSpread(img, t, fraction);
+          if (spread < best_spread) best_spread = spread, best = t;
+        }
+    }
   return best;
 }
 
