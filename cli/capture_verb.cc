@@ -5,9 +5,11 @@
 #include <iostream>
 #include <sstream>
 
+#include "chart_verb.h"
 #include "command_line.h"
 #include "option_values.h"
 #include "render_verb.h"
+#include "stars_verb.h"
 #include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/rig.h"
 #include "skycal/capture/solar_position.h"
@@ -104,8 +106,45 @@ bool CaptureOptions::IsValid(std::string* why) const {
     *why = "--north-longitude: expected degrees in [-360, 360]";
     return false;
   }
+  if (!chart_path.empty() && !color_correction_path.empty()) {
+    *why = "--chart and --color-correction: give one (--chart fits the correction from a chart image now, "
+           "--color-correction reads one skycal chart wrote)";
+    return false;
+  }
+  if (chart_corners && chart_path.empty()) {
+    *why = "--chart-corners: needs --chart IMG (the image the corners are in)";
+    return false;
+  }
+  if ((!chart_path.empty() || !color_correction_path.empty()) && input_colorspace != "lin_rec709") {
+    *why = std::string(chart_path.empty() ? "--color-correction" : "--chart") +
+           " with --input-colorspace " + input_colorspace +
+           ": the chart's 3x3 already takes camera RGB to lin_rec709; drop one of them";
+    return false;
+  }
+  if (remove_stars && !stars.IsValid(why)) return false;
   return merge.IsValid(why);
 }
+
+namespace {
+// The chart correction of this capture, or nothing: read (--color-correction) or fitted from
+// the chart image through the merge's response curve (--chart).
+std::optional<capture::ColorCorrection> CaptureColorCorrection(const CaptureOptions& o,
+                                                               const std::vector<float>& response_curve) {
+  if (!o.color_correction_path.empty()) {
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(ReadFile(o.color_correction_path));
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(o.color_correction_path + ": --color-correction: not valid JSON (" + e.what() + ")");
+    }
+    return capture::ColorCorrectionFromJson(j, o.color_correction_path);
+  }
+  if (o.chart_path.empty()) return std::nullopt;
+  capture::ChartOptions chart;
+  chart.corners = o.chart_corners;
+  return capture::CorrectionFromChartImage(o.chart_path, response_curve, chart, o.chart_label);
+}
+}  // namespace
 
 nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   std::string why;
@@ -113,6 +152,8 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   // Inputs first (the rig names its cameras' images): --out must replace none of them.
   std::vector<NamedPath> inputs;
   for (const auto& p : o.brackets) inputs.push_back({"--brackets", p});
+  if (!o.chart_path.empty()) inputs.push_back({"--chart", o.chart_path});
+  if (!o.color_correction_path.empty()) inputs.push_back({"--color-correction", o.color_correction_path});
   std::vector<capture::RigCamera> rig_cameras;
   if (!o.rig_path.empty()) {
     inputs.push_back({"--rig", o.rig_path});
@@ -140,12 +181,14 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   std::vector<ImageRGB> images, measured;
   double exposure_scale = 1.0;
   nlohmann::json merge_report;
+  std::vector<float> response_curve;  // the merge's, for a chart image of the same camera
   if (!o.brackets.empty()) {
     nlohmann::json load_report;
     const auto brackets = capture::LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
     capture::MergeResult merged = capture::MergeBrackets(brackets, o.merge);
     exposure_scale = merged.exposure_scale;
     merge_report = merged.report;
+    response_curve = merged.response_curve;
     capture::RigCamera cam;
     cam.lens = o.lens;
     cam.width = merged.radiance.width;
@@ -182,8 +225,17 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   const auto t1 = Clock::now();
   stages["merge_ms"] = Ms(t0, t1);
 
-  // 2. Colour: camera space -> the working space (scene-linear Rec.709).
-  if (o.input_colorspace != "lin_rec709") {
+  // 2. Colour: camera space -> the working space (scene-linear Rec.709): the chart's 3x3, or OCIO.
+  nlohmann::json color_summary;
+  const std::optional<capture::ColorCorrection> chart = CaptureColorCorrection(o, response_curve);
+  if (chart) {
+    for (ImageRGB& img : images) capture::ApplyColorCorrection(chart->matrix, &img);
+    color_summary = ChartSummary(*chart);
+    Log("capture", "colour chart correction (" + (o.chart_path.empty() ? o.color_correction_path : o.chart_path) +
+                       ") applied: chart mean CIEDE2000 " +
+                       std::to_string(color_summary["delta_e2000_before"]["mean"].get<double>()) + " -> " +
+                       std::to_string(color_summary["delta_e2000_after"]["mean"].get<double>()));
+  } else if (o.input_colorspace != "lin_rec709") {
     for (ImageRGB& img : images) color::ConvertColorspace(img, o.input_colorspace, "lin_rec709");
   } else {
     skipped.push_back({{"stage", "colour"}, {"reason", "input already lin_rec709"}});
@@ -200,6 +252,13 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   std::vector<float> coverage;
   ImageRGB frame = capture::UnwrapToLatLong(views, o.width, o.height, &coverage);
   const ImageRGB measured_frame = capture::UnwrapToLatLong(measured_views, o.width, o.height, nullptr);
+  std::optional<capture::StarRemovalResult> stars;
+  if (o.remove_stars) {
+    stars = capture::RemoveStars(frame, o.stars);
+    frame = std::move(stars->image);
+    Log("capture", "removed " + std::to_string(stars->stars) + " stars (" + std::to_string(stars->pixels_replaced) +
+                       " pixels replaced by their neighbourhood's median)");
+  }
   const auto t3 = Clock::now();
   stages["unwrap_ms"] = Ms(t2, t3);
 
@@ -252,6 +311,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   }
   // Cloud probability: colour against the clear-sky model at this sun (bundled preset).
   std::vector<ExrPlane> planes = {valid, below};
+  if (stars) planes.push_back({"mask.stars", std::vector<float>(stars->mask.begin(), stars->mask.end())});
   if (sun_dir) {
     render::RenderRequest req;
     req.sun_dir = *sun_dir;
@@ -288,6 +348,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
     const std::array<double, 3> ypr = o.CameraRotationDeg();
     attrs.v3fs["skycalCameraRotationDeg"] = {static_cast<float>(ypr[0]), static_cast<float>(ypr[1]), static_cast<float>(ypr[2])};
   }
+  if (chart) attrs.strings["skycalColorCorrection"] = capture::ColorCorrectionToJson(*chart).dump();
   attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
   attrs.strings["skycalVersion"] = kSkycalVersion;
   WriteExrRGBWithPlanes(o.out, frame, planes, attrs);
@@ -303,6 +364,8 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
           {"exposure_scale", exposure_scale},
           {"sun", sun},
           {"merge", merge_report},
+          {"color_correction", color_summary},
+          {"stars", stars ? stars->ToJson() : nlohmann::json()},
           {"stages", stages},
           {"skipped", skipped},
           {"sources", sources}};
@@ -315,11 +378,13 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
       "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
       "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
       "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
-      "                 [--input-colorspace NAME] [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]\n"
+      "                 [--input-colorspace NAME | --color-correction CORRECTION.json | --chart IMG [--chart-corners ...]]\n"
+      "                 [--remove-stars [--star-window PX] [--star-sigma K] [--star-contrast C] [--star-max-pixels N]]\n"
+      "                 [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]\n"
       "                 [--size WxH] --out FRAME.exr [--json]",
       "Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.");
   CaptureOptions o;
-  std::optional<std::string> exposure_times, response, lens, lens_center, kb_k, vignetting, rotation, size;
+  std::optional<std::string> exposure_times, response, lens, lens_center, kb_k, vignetting, rotation, size, chart_corners;
   std::optional<double> lens_fov, lens_radius;
   bool json = false;
   cl.List("--brackets", &o.brackets, "IMG",
@@ -350,6 +415,20 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Text("--input-colorspace", &o.input_colorspace, "CS",
           "OCIO colour space of the camera data (default lin_rec709; $OCIO or\n"
           "config/skycal.ocio), converted to lin_rec709");
+  cl.Text("--color-correction", &o.color_correction_path, "CORRECTION.json",
+          "a colour-chart correction from skycal chart (camera RGB -> lin_rec709), applied\n"
+          "to the merged image and stored in the frame (skycalColorCorrection)");
+  cl.Text("--chart", &o.chart_path, "IMG",
+          "fit the colour-chart correction now from this image of a ColorChecker Classic\n"
+          "through the same camera (a bracket: linearised by this merge's response; or\n"
+          "an EXR), then apply and store it as --color-correction does");
+  cl.Text("--chart-corners", &chart_corners, "X1,Y1,...",
+          "--chart's corners in pixels (patch 1 first, clockwise); default: detected (OpenCV mcc)");
+  cl.Text("--chart-label", &o.chart_label, "TEXT", "which exposure set --chart belongs to, e.g. nd (stored)");
+  cl.Flag("--remove-stars", &o.remove_stars,
+          "night frames: remove the stars from the lat-long (as skycal stars; mask.stars\n"
+          "channel: 1 where replaced)");
+  RegisterStarOptions(cl, &o.stars);
   cl.Text("--time", &o.time_iso, "ISO8601", "capture time with its UTC offset; with --lat and --lon: the sun by NREL SPA");
   cl.Number("--lat", &o.latitude_deg, "DEG", "capture latitude, degrees, north positive");
   cl.Number("--lon", &o.longitude_deg, "DEG", "capture longitude, degrees, east positive");
@@ -361,6 +440,7 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
           "sunDirection, time, place, exposure scale, sources, lens");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
   cl.Parse(argc, argv);
+  if (chart_corners) o.chart_corners = ParseChartCorners(*chart_corners, "--chart-corners");
   if (exposure_times) o.exposure_times_s = ParseNumberList(*exposure_times, "--exposure-times");
   if (response) o.merge.response = capture::ParseResponseModel(*response, "--response");
   if (lens) {

@@ -12,6 +12,7 @@
 
 #include "skycal/capture/hdr_merge.h"
 #include "skycal/capture/lens.h"
+#include "skycal/capture/star_removal.h"
 
 namespace skycal::cli {
 
@@ -31,6 +32,16 @@ struct CaptureOptions {
   std::optional<std::array<double, 3>> camera_ypr_deg;
   std::array<double, 3> CameraRotationDeg() const;  // the one used (defaults above)
   std::string input_colorspace = "lin_rec709";
+  // Colour-chart correction (capture/color_chart.h), camera RGB -> scene-linear Rec.709,
+  // replacing --input-colorspace: a `skycal chart` JSON, or a chart image fitted now (an
+  // 8/16-bit image is linearised through this capture's response curve; an EXR is linear).
+  std::string color_correction_path;
+  std::string chart_path;
+  std::optional<std::array<double, 8>> chart_corners;  // with chart_path: not detected
+  std::string chart_label;
+  // Night frames: stars removed from the lat-long (capture/star_removal.h), mask.stars plane.
+  bool remove_stars = false;
+  capture::StarRemovalOptions stars;
   std::string time_iso;                     // with lat/lon: the sun by NREL SPA
   std::optional<double> latitude_deg, longitude_deg;
   double north_longitude_deg = 0.0;         // lat-long longitude of geographic north

@@ -9,11 +9,13 @@
 #include "batch_verb.h"
 #include "bench_verb.h"
 #include "capture_verb.h"
+#include "chart_verb.h"
 #include "ceiling_verb.h"
 #include "export_verb.h"
 #include "fit_verb.h"
 #include "import_verb.h"
 #include "mask_verb.h"
+#include "stars_verb.h"
 #include "probe_extract_verb.h"
 #include "probe_predict_verb.h"
 #include "render_verb.h"
@@ -37,11 +39,13 @@ const std::vector<Verb>& Verbs() {
       {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
       {"ceiling", "the model's best possible fit of a reference sky (rel RMSE), LUT and per image row", &skycal::cli::RunCeiling},
       {"capture", "exposure brackets (fisheye or rig) to a calibrated lat-long reference frame", &skycal::cli::RunCapture},
+      {"chart", "a colour-chart correction (ColorChecker -> 3x3 to scene-linear Rec.709) for capture", &skycal::cli::RunChart},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"batch", "fit a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
       {"mask", "find what is not sky in a reference frame (buildings, trees, terrain): a mask for fit --mask", &skycal::cli::RunMask},
+      {"stars", "remove the stars of a night frame (small isolated point sources -> local median), count and mask them", &skycal::cli::RunStars},
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},
       {"probe-predict", "predict the gray diffuse probe (irradiance, ball radiance, SH-9) from a preset", &skycal::cli::RunProbePredict},
       {"bench", "run time against error per setting (Pareto plots), numerical stress, --compare two runs", &skycal::cli::RunBench},
