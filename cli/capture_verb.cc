@@ -121,6 +121,11 @@ bool CaptureOptions::IsValid(std::string* why) const {
            ": the chart's 3x3 already takes camera RGB to lin_rec709; drop one of them";
     return false;
   }
+  if (!remove_stars && !(stars == capture::StarRemovalOptions{})) {
+    *why = "--star-window, --star-sigma, --star-contrast, --star-max-pixels: only with --remove-stars "
+           "(without it no star is removed and they would do nothing)";
+    return false;
+  }
   if (remove_stars && !stars.IsValid(why)) return false;
   return merge.IsValid(why);
 }

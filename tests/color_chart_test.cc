@@ -291,6 +291,9 @@ TEST(ColorChart, CaptureAppliesAndStoresTheCorrection) {
   r = RunCli(base + out + " --color-correction " + cc + " --input-colorspace ACEScg");
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("--color-correction with --input-colorspace ACEScg"), std::string::npos) << r.err;
+  r = RunCli(base + out + " --star-sigma 4");  // a star option without --remove-stars does nothing: refused
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("only with --remove-stars"), std::string::npos) << r.err;
   r = RunCli(base + out + " --chart " + brackets[0]);  // a gradient, no chart
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("b0.png: no ColorChecker 24 chart found"), std::string::npos) << r.err;

@@ -36,6 +36,7 @@ struct StarRemovalOptions {
   // the horizon are reflections or lights.
   double min_elevation_deg = 0.0;
   bool IsValid(std::string* why) const;  // names the field
+  bool operator==(const StarRemovalOptions&) const = default;
 };
 
 struct StarRemovalResult {
