@@ -118,7 +118,10 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
 
   // The light the atmosphere already models: direct sun at the ground, the clear sky's
   // SH-9 (no disc: the sun is the direct term) and the lit ground below.
-  const render::Rgb e_sun = render::SunIlluminanceAtGround(preset, sun);
+  // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
+  // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
+  // at dusk has no sunlit clouds rather than ones lit through the ground).
+  const render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
   s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
   render::RenderRequest sky_request;
   sky_request.sun_dir = sun;
