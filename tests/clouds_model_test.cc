@@ -219,6 +219,22 @@ TEST(CloudsModel, SunBelowTheHorizonLightsByAmbientOnly) {
   EXPECT_GT(f.shade().sun_illuminance.x, 0.0);
 }
 
+// The shared source wraps texel indices with a power-of-two mask: a weather map of another
+// size reaching the renderer directly (not through LoadWeatherMap) is refused, named.
+TEST(CloudsModel, WeatherMapOfANonPowerOfTwoSizeIsRefused) {
+  Fixture f;
+  f.weather.width = f.weather.height = 3;
+  f.weather.rgb.assign(27, 0.5f);
+  try {
+    f.shade();
+    FAIL() << "a 3x3 weather map was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("weather map is 3x3 texels (expected a power of two"), std::string::npos) << e.what();
+  }
+  f.weather = testing::UniformWeather(0.5f, 0.0f, 0.5f);  // control: 4x4 passes
+  EXPECT_NO_THROW(f.shade());
+}
+
 // Each HG lobe and their blend integrate to 1 over the sphere: integral of p 2 pi dmu over
 // mu in [-1, 1] by the midpoint rule in u = 1 - mu on two geometric grids, from u = 0 up
 // and from u = 2 down (dense at the forward and the backward peak, whose width is
