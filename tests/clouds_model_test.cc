@@ -285,6 +285,21 @@ TEST(CloudsModel, PowderValues) {
   EXPECT_NEAR(m.sun_attenuation(0.7, 0.3, s), m.beer_powder(0.7), 1e-15);
   s.powder_view_fade = 1.0;  // toward the sun (1 - mu = 0): no powder
   EXPECT_NEAR(m.sun_attenuation(0.7, 0.0, s), std::exp(-0.7), 1e-15);
+  // The march's per-ray form of the sun term (phases and powder weight taken once a ray,
+  // exp(-2d) as exp(-d)^2) equals the direct sum to rounding, for every octave count.
+  s.powder_strength = 0.4;
+  s.powder_view_fade = 0.7;
+  for (int octaves = 0; octaves <= 4; ++octaves) {
+    s.ms_octaves = octaves;
+    for (double one_minus_mu : {0.0, 0.3, 1.2, 2.0}) {
+      for (double tau : {0.0, 0.05, 1.0, 7.0}) {
+        const auto direct = m.sun_inscatter(tau, one_minus_mu, s);
+        const auto hoisted = m.sun_inscatter_ray(tau, m.sun_ray(one_minus_mu, s), s);
+        EXPECT_NEAR(hoisted.x, direct.x, 1e-13 * std::abs(direct.x) + 1e-300) << octaves << " " << one_minus_mu << " " << tau;
+        EXPECT_NEAR(hoisted.z, direct.z, 1e-13 * std::abs(direct.z) + 1e-300);
+      }
+    }
+  }
 }
 
 // Energy: albedo 1, no absorption (no rain), single scattering, no powder, ambient, ground
