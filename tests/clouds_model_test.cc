@@ -135,6 +135,106 @@ TEST(CloudsModel, CirrusSheetTransmittance) {
   EXPECT_DOUBLE_EQ(m.cloud_march(Dir(-5.0, 0.0), s).transmittance, 1.0);  // below the horizon: ground
 }
 
+// HZD's horizon rule is a distance from the player: beyond horizon_start (15 km) the
+// coverage tends to horizon_coverage, complete at horizon_end (35 km). The model applies it
+// by each sample's distance along the view ray, not by the pixel's elevation: an empty map
+// (coverage 0) with horizon_coverage 1, a slab (base noise 1, no erosion), so the density
+// along a ray is smooth_ramp(15 km, 35 km, t) exactly and the optical depth is
+// extinction x its integral over the ray's part in the layer. A ray at 8 deg enters the
+// layer at ~10.7 km and leaves at ~27.5 km: cut at 15 km it is clear (T = 1 exactly: a
+// per-elevation rule would shade the whole pixel alike); to 35 km its depth matches the
+// integral. Bound: the composite midpoint rule's extinction x L dt^2 / 24 x max|f''|, f'' <=
+// 6 / (20 km)^2 (a smoothstep; C1 at 15 km, so the rule keeps its order): 4.2e-5 in depth
+// here (measured 1.2e-5).
+TEST(CloudsModel, HorizonRuleFollowsTheDistanceAlongTheRay) {
+  Fixture f;
+  f.weather = testing::UniformWeather(0.0f, 0.0f, 0.5f);
+  f.params.height_shaping = 0.0;
+  f.params.erosion = 0.0;
+  f.params.horizon_rule = 1.0;
+  f.params.horizon_coverage = 1.0;
+  f.params.extinction_per_m = 0.0002;
+  f.request.march = MarchOptions::Naive();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  const double e = 8.0;
+  f.params.draw_distance_m = 15000.0;
+  EXPECT_EQ(m.cloud_march(Dir(e, 30.0), f.shade()).transmittance, 1.0);
+  f.params.draw_distance_m = 35000.0;
+  const CloudShadeD s = f.shade();
+  const double er = e * kPi / 180.0;
+  const double rc = s.planet_radius + s.camera_height, mu = std::sin(er);
+  auto far = [&](double a) { return -rc * mu + std::sqrt(rc * rc * mu * mu - rc * rc + (s.planet_radius + a) * (s.planet_radius + a)); };
+  const double t0 = far(s.layer_bottom), t1 = std::min(far(s.layer_top), s.draw_distance);
+  ASSERT_LT(t0, 15000.0);
+  ASSERT_GT(t1, 25000.0);
+  double integral = 0.0;
+  const int fine = 200000;
+  for (int i = 0; i < fine; ++i) {
+    const double t = t0 + (i + 0.5) * (t1 - t0) / fine;
+    const double x = std::clamp((t - 15000.0) / 20000.0, 0.0, 1.0);
+    integral += x * x * (3.0 - 2.0 * x) * (t1 - t0) / fine;
+  }
+  const double tau = -std::log(m.cloud_march(Dir(e, 30.0), s).transmittance);
+  const int n = static_cast<int>(std::floor(s.steps_horizon + (s.steps_zenith - s.steps_horizon) * mu + 0.5));
+  const double dt = (t1 - t0) / n;
+  const double bound = s.extinction * (t1 - t0) * dt * dt / 24.0 * 6.0 / (20000.0 * 20000.0);
+  EXPECT_NEAR(tau, s.extinction * integral, bound);
+  EXPECT_GT(tau, 0.5);  // a meaningful depth
+  // Control: the rule off, the empty map stays clear at any distance.
+  f.params.horizon_rule = 0.0;
+  EXPECT_EQ(m.cloud_march(Dir(e, 30.0), f.shade()).transmittance, 1.0);
+}
+
+// The sun below the horizon: no direct term (the clouds are lit by the sky's ambient
+// alone), every value finite, the radiance exactly that of the same march with the sun's
+// illuminance zeroed by hand; above the horizon the direct term is there (control).
+TEST(CloudsModel, SunBelowTheHorizonLightsByAmbientOnly) {
+  Fixture f;
+  f.noise = testing::SinusoidCloudNoise();
+  f.weather = testing::PatchyWeather(0.6f, 0.5f);
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  for (double sun_elevation : {-0.5, -8.0}) {
+    f.request.sun_dir = latlong::DirectionFromElevationAzimuthDeg(sun_elevation, 40.0);
+    const CloudShadeD s = f.shade();
+    EXPECT_EQ(s.sun_illuminance.x, 0.0);
+    EXPECT_EQ(s.sun_illuminance.y, 0.0);
+    EXPECT_EQ(s.sun_illuminance.z, 0.0);
+    CloudShadeD ambient_only = s;
+    ambient_only.sun_illuminance = glsl::Vec3<double>(0.0, 0.0, 0.0);
+    bool some_cloud = false;
+    for (double elevation : {60.0, 10.0}) {
+      const auto r = m.cloud_march(Dir(elevation, 40.0), s);
+      const auto a = m.cloud_march(Dir(elevation, 40.0), ambient_only);
+      ASSERT_TRUE(std::isfinite(r.radiance.x) && std::isfinite(r.radiance.y) && std::isfinite(r.radiance.z) && std::isfinite(r.transmittance));
+      EXPECT_EQ(r.radiance.x, a.radiance.x);
+      EXPECT_EQ(r.radiance.z, a.radiance.z);
+      EXPECT_GE(r.radiance.y, 0.0);
+      some_cloud = some_cloud || r.transmittance < 0.9;
+    }
+    EXPECT_TRUE(some_cloud) << "sun " << sun_elevation;
+  }
+  f.request.sun_dir = latlong::DirectionFromElevationAzimuthDeg(2.0, 40.0);
+  EXPECT_GT(f.shade().sun_illuminance.x, 0.0);
+}
+
+// The shared source wraps texel indices with a power-of-two mask: a weather map of another
+// size reaching the renderer directly (not through LoadWeatherMap) is refused, named.
+TEST(CloudsModel, WeatherMapOfANonPowerOfTwoSizeIsRefused) {
+  Fixture f;
+  f.weather.width = f.weather.height = 3;
+  f.weather.rgb.assign(27, 0.5f);
+  try {
+    f.shade();
+    FAIL() << "a 3x3 weather map was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("weather map is 3x3 texels (expected a power of two"), std::string::npos) << e.what();
+  }
+  f.weather = testing::UniformWeather(0.5f, 0.0f, 0.5f);  // control: 4x4 passes
+  EXPECT_NO_THROW(f.shade());
+}
+
 // Each HG lobe and their blend integrate to 1 over the sphere: integral of p 2 pi dmu over
 // mu in [-1, 1] by the midpoint rule in u = 1 - mu on two geometric grids, from u = 0 up
 // and from u = 2 down (dense at the forward and the backward peak, whose width is
@@ -185,6 +285,21 @@ TEST(CloudsModel, PowderValues) {
   EXPECT_NEAR(m.sun_attenuation(0.7, 0.3, s), m.beer_powder(0.7), 1e-15);
   s.powder_view_fade = 1.0;  // toward the sun (1 - mu = 0): no powder
   EXPECT_NEAR(m.sun_attenuation(0.7, 0.0, s), std::exp(-0.7), 1e-15);
+  // The march's per-ray form of the sun term (phases and powder weight taken once a ray,
+  // exp(-2d) as exp(-d)^2) equals the direct sum to rounding, for every octave count.
+  s.powder_strength = 0.4;
+  s.powder_view_fade = 0.7;
+  for (int octaves = 0; octaves <= 4; ++octaves) {
+    s.ms_octaves = octaves;
+    for (double one_minus_mu : {0.0, 0.3, 1.2, 2.0}) {
+      for (double tau : {0.0, 0.05, 1.0, 7.0}) {
+        const auto direct = m.sun_inscatter(tau, one_minus_mu, s);
+        const auto hoisted = m.sun_inscatter_ray(tau, m.sun_ray(one_minus_mu, s), s);
+        EXPECT_NEAR(hoisted.x, direct.x, 1e-13 * std::abs(direct.x) + 1e-300) << octaves << " " << one_minus_mu << " " << tau;
+        EXPECT_NEAR(hoisted.z, direct.z, 1e-13 * std::abs(direct.z) + 1e-300);
+      }
+    }
+  }
 }
 
 // Energy: albedo 1, no absorption (no rain), single scattering, no powder, ambient, ground

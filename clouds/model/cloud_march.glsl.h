@@ -79,6 +79,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   r.full_samples = 0;
   vec3 diff = view - p.sun_dir;
   Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
+  SunRay sun = sun_ray(one_minus_mu, p);
   CloudSegment seg = cloud_segment(view, p);
   if (!(seg.t1 > seg.t0)) return cirrus_sheet(view, one_minus_mu, p);  // nothing in front of the sheet
   Scalar up = view.y < Scalar(0.0) ? -view.y : view.y;
@@ -183,7 +184,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
       Scalar sigma_s = p.albedo * p.extinction * lit_d;
       Scalar sigma_t = p.extinction * lit_d * (Scalar(1.0) + p.rain_absorption * lit_precipitation);
       Scalar h = height_fraction(lit_alt, p);
-      vec3 source = (sun_inscatter(tau, one_minus_mu, p) + ambient_inscatter(h, p)) * sigma_s;
+      vec3 source = (sun_inscatter_ray(tau, sun, p) + ambient_inscatter(h, p)) * sigma_s;
       Scalar x = sigma_t * lit_step;
       Scalar step_t = exp(-x);
       r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, p));

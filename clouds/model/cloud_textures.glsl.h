@@ -28,7 +28,11 @@ struct Texel4 {
 #endif
 
 // One axis of a wrapped linear filter: texel coordinate u (texel centres at i + 0.5)
-// -> the two texel indices and the weight of the second.
+// -> the two texel indices and the weight of the second. n is a power of two (the noise
+// sizes are; ValidateCloudTextures checks the weather map's), so the wrap is a mask of the
+// floor's two's-complement bits: no division and no fix-ups (lavapipe runs ten of these per
+// density sample). f = t - floor(t) is exact in float, as was t mod n - floor(t mod n):
+// the same weights and texels as the modulo form.
 struct WrapAxis {
   int i0;
   int i1;
@@ -37,15 +41,11 @@ struct WrapAxis {
 
 WrapAxis wrap_axis(Scalar u, int n) {
   Scalar t = u - Scalar(0.5);
-  Scalar nn = Scalar(n);
-  t = t - nn * floor(t / nn);  // [0, n) up to rounding
+  Scalar fl = floor(t);
   WrapAxis w;
-  w.i0 = floor_to_int(t);
-  w.f = t - Scalar(w.i0);
-  if (w.i0 >= n) w.i0 = w.i0 - n;
-  if (w.i0 < 0) w.i0 = w.i0 + n;
-  w.i1 = w.i0 + 1;
-  if (w.i1 >= n) w.i1 = 0;
+  w.f = t - fl;
+  w.i0 = floor_to_int(fl) & (n - 1);
+  w.i1 = (w.i0 + 1) & (n - 1);
   return w;
 }
 

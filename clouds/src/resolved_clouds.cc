@@ -53,9 +53,11 @@ void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, c
   check(noise.base, b * b * b * 4, 0.0f, 1.0f, "base noise");
   check(noise.detail, d * d * d * 3, 0.0f, 1.0f, "detail noise");
   check(noise.curl, c * c * 3, -1.0f, 1.0f, "curl noise");
-  if (weather.width < 1 || weather.height < 1 || weather.width > 16384 || weather.height > 16384) {
+  // Powers of two: the shared source wraps texel indices with a mask (cloud_textures.glsl.h).
+  auto power_of_two = [](int n) { return n > 0 && (n & (n - 1)) == 0; };
+  if (!power_of_two(weather.width) || !power_of_two(weather.height) || weather.width > 16384 || weather.height > 16384) {
     throw Error(origin + ": weather map is " + std::to_string(weather.width) + "x" + std::to_string(weather.height) +
-                " texels (expected 1..16384 a side)");
+                " texels (expected a power of two from 1 to 16384 a side)");
   }
   check(weather.rgb, static_cast<size_t>(weather.width) * weather.height * 3, 0.0f, 1.0f,
         "weather map (R coverage, G precipitation, B type)");
@@ -116,7 +118,10 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
 
   // The light the atmosphere already models: direct sun at the ground, the clear sky's
   // SH-9 (no disc: the sun is the direct term) and the lit ground below.
-  const render::Rgb e_sun = render::SunIlluminanceAtGround(preset, sun);
+  // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
+  // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
+  // at dusk has no sunlit clouds rather than ones lit through the ground).
+  const render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
   s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
   render::RenderRequest sky_request;
   sky_request.sun_dir = sun;
