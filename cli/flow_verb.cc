@@ -164,9 +164,19 @@ nlohmann::json RunFlowImpl(const FlowOptions& o) {
   if (!cv::imencode(".png", codes, png_bytes)) throw Error(png + ": PNG encoding failed");
   ExrAttributes attrs;
   attrs.strings["skycalFlow"] = meta.dump();
-  WriteExrRGBWithPlanes(o.out, rgb, planes, attrs);
-  WriteFileAtomically(png, std::string(png_bytes.begin(), png_bytes.end()));
-  WriteFileAtomically(sidecar, meta.dump(2) + "\n");
+  // Three files, each atomic; a failure on a later one removes the earlier ones (all or none).
+  std::vector<std::string> written;
+  try {
+    WriteExrRGBWithPlanes(o.out, rgb, planes, attrs);
+    written.push_back(o.out);
+    WriteFileAtomically(png, std::string(png_bytes.begin(), png_bytes.end()));
+    written.push_back(png);
+    WriteFileAtomically(sidecar, meta.dump(2) + "\n");
+  } catch (...) {
+    std::error_code ec;
+    for (const std::string& f : written) std::filesystem::remove(f, ec);
+    throw;
+  }
   Log("flow", "wrote " + o.out + ", " + png + ", " + sidecar + " (forward u " + std::to_string(mins[0] * (w - 1)) +
                   ".." + std::to_string(maxs[0] * (w - 1)) + " px)");
   nlohmann::json j = meta;
