@@ -120,6 +120,11 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     if (!names.insert(refs.back().name).second) {
       throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
     }
+    if (refs.back().row_mapping && (o.cloud_mask || cloud_shapes)) {
+      throw Error(path + ": has horizon-biased rows (skycal resample): " +
+                  std::string(o.cloud_mask ? "--cloud-mask" : "--cloud-preset (the cloud lighting fit)") +
+                  " needs uniform 2:1 rows; fit the frame before resampling");
+    }
     if (o.cloud_mask) {
       const CloudMaskApplied cm = ApplyCloudMask(&refs.back(), DefaultPresetPath());
       cloud_json.push_back(cm.ToJson());
@@ -209,6 +214,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     capture::LatLongFrame frame;
     frame.radiance = rf.rendered;
     frame.sun_direction = ref.sun_dir;
+    frame.row_mapping = ref.row_mapping;  // the fit image has the reference's rows
     frame.extra.strings["skycalReference"] = ref.path;
     frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
     capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);

@@ -21,6 +21,8 @@
 #include "render_verb.h"
 #include "report_verb.h"
 #include "sun_verb.h"
+#include "flow_verb.h"
+#include "resample_verb.h"
 #include "weather_verb.h"
 #include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/version.h"
@@ -44,6 +46,8 @@ const std::vector<Verb>& Verbs() {
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"batch", "fit a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
+      {"flow", "motion vectors between two time-lapse frames (quarter res, 8-bit + per-frame range sidecar)", &skycal::cli::RunFlow},
+      {"resample", "a lat-long frame to horizon-biased rows for the game (fit reads them through the exact inverse)", &skycal::cli::RunResample},
       {"mask", "find what is not sky in a reference frame (buildings, trees, terrain): a mask for fit --mask", &skycal::cli::RunMask},
       {"stars", "remove the stars of a night frame (small isolated point sources -> local median), count and mask them", &skycal::cli::RunStars},
       {"probe-extract", "measure the gray diffuse ball in a linear EXR: samples by normal for fit --probe", &skycal::cli::RunProbeExtract},

@@ -204,6 +204,9 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                          "--sky-width", "--backend", "--ground", "--vulkan-validation", "--json"}},
       {"sun", {"--time", "--lat", "--lon", "--elevation-m", "--pressure", "--temperature", "--delta-t",
                "--north-longitude", "--json"}},
+      {"resample", {"--in", "--out", "--nominal-height", "--horizon-density", "--zenith-density", "--nadir-density",
+                    "--half", "--json"}},
+      {"flow", {"--out", "--scale", "--json"}},
   };
   for (const auto& [verb, names] : options) {
     const Result r = Skycal(verb + " --help");

@@ -17,7 +17,9 @@ struct FitLevel {
   double total_weight = 0.0;
 };
 
-// `width` must be even and at most the reference's width; height = width / 2. A coarse
+// `width` must be even and at most the reference's width; height = width / 2 (a reference
+// with horizon-biased rows is read at each node row's elevation through the mapping's
+// exact inverse, then binned in longitude like any other). A coarse
 // pixel is fitted when at least half of the solid angle assigned to it is fitted.
 FitLevel BuildLevel(const Reference& ref, int width);
 

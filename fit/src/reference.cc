@@ -57,13 +57,28 @@ namespace {
 bool UsableValue(float v) { return v >= std::numeric_limits<float>::min() && v <= 1e37f; }
 }  // namespace
 
+double Reference::Latitude(int y) const {
+  return row_mapping ? row_mapping->Elevation(y) : latlong::Latitude(y, radiance.height);
+}
+
+double Reference::PixelSolidAngle(int x, int y) const {
+  return row_mapping ? row_mapping->PixelSolidAngle(x, y, radiance.width)
+                     : latlong::PixelSolidAngle(x, y, radiance.width, radiance.height);
+}
+
+std::array<double, 3> Reference::PixelDirection(int x, int y) const {
+  return row_mapping ? row_mapping->PixelDirection(x, y, radiance.width)
+                     : latlong::PixelDirection(x, y, radiance.width, radiance.height);
+}
+
 Reference LoadReference(const std::string& path, const FitOptions& o) {
   Reference r;
   r.path = path;
   r.name = std::filesystem::path(path).stem().string();
-  capture::LatLongFrame frame = capture::ReadLatLongFrame(path);
+  capture::LatLongFrame frame = capture::ReadLatLongFrame(path, capture::RowMappingPolicy::kAccept);
   r.sha256 = Sha256OfFile(path);
   r.radiance = std::move(frame.radiance);
+  r.row_mapping = frame.row_mapping;
   if (auto it = frame.extra.strings.find("skycalWarning"); it != frame.extra.strings.end()) {
     r.warnings.push_back(path + ": " + it->second);
   }
@@ -81,6 +96,9 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
   } else if (frame.sun_direction) {
     r.sun_dir = *frame.sun_direction;
     r.sun_source = "attribute";
+  } else if (r.row_mapping) {
+    throw Error(path + ": no sun direction: a frame with horizon-biased rows ('" + std::string(kRowMappingAttribute) +
+                "') needs --sun-dir/--sun-elevation or a 'sunDirection' attribute (detection assumes uniform rows)");
   } else {
     std::string why;
     auto d = capture::DetectSun(r.radiance, &why);
@@ -111,12 +129,12 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
   const double cos_cone = std::cos(o.sun_cone_deg * M_PI / 180.0);
   r.pixel_class.assign(static_cast<size_t>(w) * h, PixelClass::kSky);
   for (int y = 0; y < h; ++y) {
-    const double lat = latlong::Latitude(y, h);
+    const double lat = r.Latitude(y);
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
       const float* p = &r.radiance.pixels[3 * i];
       PixelClass c = PixelClass::kSky;
-      const auto v = latlong::PixelDirection(x, y, w, h);
+      const auto v = r.PixelDirection(x, y);
       if (lat <= 0.0) {
         c = PixelClass::kBelowHorizon;
       } else if (!UsableValue(p[0]) || !UsableValue(p[1]) || !UsableValue(p[2])) {

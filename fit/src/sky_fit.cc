@@ -156,6 +156,18 @@ void RecordDecisions(const std::vector<Reference>& refs, const DecisionFacts& f,
 
 }  // namespace
 
+ImageRGB RenderAtReference(const Reference& ref, const render::Preset& preset, render::SkyRenderer& renderer) {
+  render::RenderRequest req;
+  req.sun_dir = ref.sun_dir;
+  req.width = ref.radiance.width;
+  req.height = ref.radiance.height;
+  if (!ref.row_mapping) return renderer.Render(preset, req);
+  // Horizon-biased rows: a uniform render at least as dense, through the same resampling
+  // `skycal resample` applied to the reference (band means of the rows).
+  req.height = UniformHeightCovering(*ref.row_mapping);
+  return ResampleToRows(renderer.Render(preset, req), *ref.row_mapping);
+}
+
 ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit) {
   ImageErrors e;
   double wsum = 0.0, rel = 0.0, lg = 0.0;
@@ -164,7 +176,7 @@ ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit) {
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
       if (ref.pixel_class[i] != PixelClass::kSky) continue;
-      const double omega = latlong::PixelSolidAngle(x, y, w, h);
+      const double omega = ref.PixelSolidAngle(x, y);
       for (int c = 0; c < 3; ++c) {
         const double r = ref.radiance.pixels[3 * i + c], f = fit.pixels[3 * i + c];
         rel += omega * ((f - r) / r) * ((f - r) / r);
@@ -302,11 +314,7 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
   for (size_t r = 0; r < refs.size(); ++r) {
     ReferenceFit& rf = result.references[r];
     rf.exposure = std::exp(state.log_exposure[r]);
-    render::RenderRequest req;
-    req.sun_dir = refs[r].sun_dir;
-    req.width = refs[r].radiance.width;
-    req.height = refs[r].radiance.height;
-    rf.rendered = renderer.Render(result.preset, req);
+    rf.rendered = RenderAtReference(refs[r], result.preset, renderer);
     for (float& v : rf.rendered.pixels) v = static_cast<float>(v * rf.exposure);
     rf.errors = CompareToReference(refs[r], rf.rendered);
   }

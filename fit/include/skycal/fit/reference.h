@@ -9,6 +9,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "skycal/core/image.h"
+#include "skycal/core/row_mapping.h"
 #include "skycal/fit/fit_options.h"
 
 namespace skycal::fit {
@@ -36,10 +37,18 @@ struct Reference {
   MaskCounts counts;
   double clip_level = 0.0;             // 0: no clipping plateau found
   std::optional<double> time_of_day_h; // from the `skycalTimeOfDay` attribute (hours)
+  // Horizon-biased rows (`skycal resample`, core/row_mapping.h): each row's elevation and
+  // solid angle come from the mapping; absent: core/latlong.h's uniform 2:1 rows.
+  std::optional<RowMapping> row_mapping;
+
+  double Latitude(int y) const;                             // radians
+  double PixelSolidAngle(int x, int y) const;               // sr
+  std::array<double, 3> PixelDirection(int x, int y) const;  // unit vector
 };
 
 // Loads and classifies. Throws skycal::Error naming the file when it is unreadable, not a
-// 2:1 lat-long, has no valid sky pixel, or has no sun direction and none can be detected.
+// 2:1 lat-long (or one with a valid row mapping; such a frame needs its sun direction as
+// an option or attribute: detection assumes uniform rows), has no valid sky pixel, or has no sun direction and none can be detected.
 Reference LoadReference(const std::string& path, const FitOptions& options);
 
 nlohmann::json MaskCountsToJson(const MaskCounts& c);

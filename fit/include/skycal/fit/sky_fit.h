@@ -22,6 +22,9 @@ struct ImageErrors {
 };
 // Errors of `fit` (already multiplied by the exposure) against the reference's kSky pixels.
 ImageErrors CompareToReference(const Reference& ref, const ImageRGB& fit);
+// The preset rendered at the reference's pixels (exposure not applied): its size, and for
+// horizon-biased rows a uniform render resampled onto them (core/row_mapping.h).
+ImageRGB RenderAtReference(const Reference& ref, const render::Preset& preset, render::SkyRenderer& renderer);
 
 // ---- The gray diffuse probe (fit/src/probe_cost.h, fit/src/sun_from_probe.cc) -----------
 // Probe samples of one frame, as `skycal probe-extract` writes them ("skycal-probe-samples").

@@ -1,0 +1,219 @@
+#include "flow_verb.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "command_line.h"
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/core/atomic_file.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/file_safety.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace {
+
+double LogLuminance(const ImageRGB& img, size_t i) {
+  const double l = 0.2126 * img.pixels[3 * i] + 0.7152 * img.pixels[3 * i + 1] + 0.0722 * img.pixels[3 * i + 2];
+  return std::log(std::max(std::isfinite(l) ? l : 0.0, 1e-30));
+}
+
+// Log luminance over [lo, hi] to 8 bits, padded by `pad` columns each side with the
+// longitude wrapped (period width - 1: the seam column is stored twice).
+cv::Mat Tonemapped(const ImageRGB& img, double lo, double hi, int pad) {
+  const int w = img.width, h = img.height, period = w - 1;
+  cv::Mat out(h, period + 2 * pad, CV_8UC1);
+  for (int y = 0; y < h; ++y)
+    for (int j = 0; j < out.cols; ++j) {
+      const int x = (((j - pad) % period) + period) % period;
+      const double v = (LogLuminance(img, static_cast<size_t>(y) * w + x) - lo) / (hi - lo);
+      out.at<uint8_t>(y, j) = static_cast<uint8_t>(std::lround(255.0 * std::clamp(v, 0.0, 1.0)));
+    }
+  return out;
+}
+
+}  // namespace
+
+bool FlowOptions::IsValid(std::string* why) const {
+  if (a.empty() || b.empty()) {
+    *why = "two frames are required: skycal flow A.exr B.exr --out V.exr";
+    return false;
+  }
+  if (out.size() < 5 || out.substr(out.size() - 4) != ".exr") {
+    *why = "--out: expected a path ending in .exr (V.png and V.json are written beside it)";
+    return false;
+  }
+  if (scale < 1 || scale > 16) {
+    *why = "--scale: expected an integer in [1, 16]";
+    return false;
+  }
+  return true;
+}
+
+std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b) {
+  // One tonemapping for both frames (brightness constancy): the 0.5th..99.5th percentile of
+  // their log luminance, so a change of exposure between frames is not read as motion of
+  // the whole sky to 8 bits but as what it is.
+  std::vector<double> logs;
+  const size_t n = static_cast<size_t>(a.width) * a.height;
+  for (size_t i = 0; i < n; i += std::max<size_t>(1, n / 50000)) {
+    logs.push_back(LogLuminance(a, i));
+    logs.push_back(LogLuminance(b, i));
+  }
+  std::sort(logs.begin(), logs.end());
+  const double lo = logs[logs.size() / 200], hi = std::max(logs[logs.size() - 1 - logs.size() / 200], lo + 1e-6);
+  const int pad = std::max(8, a.width / 8);
+  const cv::Mat ia = Tonemapped(a, lo, hi, pad), ib = Tonemapped(b, lo, hi, pad);
+  cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
+  cv::Mat flow;
+  dis->calc(ia, ib, flow);
+  std::vector<float> out(2 * n);
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const cv::Vec2f f = flow.at<cv::Vec2f>(y, x + pad);
+      out[2 * (static_cast<size_t>(y) * a.width + x)] = f[0];
+      out[2 * (static_cast<size_t>(y) * a.width + x) + 1] = f[1];
+    }
+  return out;
+}
+
+nlohmann::json RunFlowImpl(const FlowOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  const std::filesystem::path exr(o.out);
+  const std::string png = std::filesystem::path(exr).replace_extension(".png").string();
+  const std::string sidecar = std::filesystem::path(exr).replace_extension(".json").string();
+  RefuseOutputsOverInputs({{"--out", o.out}, {"--out's 8-bit image", png}, {"--out's sidecar", sidecar}},
+                          {{"frame A", o.a}, {"frame B", o.b}});
+  const capture::LatLongFrame fa = capture::ReadLatLongFrame(o.a), fb = capture::ReadLatLongFrame(o.b);
+  const int w = fa.radiance.width, h = fa.radiance.height;
+  if (fb.radiance.width != w || fb.radiance.height != h) {
+    throw Error(o.b + ": frame is " + std::to_string(fb.radiance.width) + "x" + std::to_string(fb.radiance.height) +
+                ", but " + o.a + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                ": consecutive frames of a time-lapse must share one size");
+  }
+  const int qw = std::max(2, w / o.scale), qh = std::max(2, h / o.scale);
+  Log("flow", o.a + " -> " + o.b + ": " + std::to_string(w) + "x" + std::to_string(h) + ", vectors at " +
+                  std::to_string(qw) + "x" + std::to_string(qh));
+  const std::vector<float> fwd = DenseFlow(fa.radiance, fb.radiance), bwd = DenseFlow(fb.radiance, fa.radiance);
+  // Texture space (u: fraction of the width's longitude span, v: of the height), area-
+  // averaged to the vectors' resolution.
+  cv::Mat full(h, w, CV_32FC4);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = 2 * (static_cast<size_t>(y) * w + x);
+      full.at<cv::Vec4f>(y, x) = {fwd[i] / (w - 1.0f), fwd[i + 1] / (h - 1.0f), bwd[i] / (w - 1.0f), bwd[i + 1] / (h - 1.0f)};
+    }
+  cv::Mat quarter;
+  cv::resize(full, quarter, cv::Size(qw, qh), 0, 0, cv::INTER_AREA);
+  const char* names[4] = {"forward_u", "forward_v", "backward_u", "backward_v"};
+  double mins[4], maxs[4];
+  for (int c = 0; c < 4; ++c) {
+    mins[c] = INFINITY;
+    maxs[c] = -INFINITY;
+    for (int y = 0; y < qh; ++y)
+      for (int x = 0; x < qw; ++x) {
+        mins[c] = std::min(mins[c], static_cast<double>(quarter.at<cv::Vec4f>(y, x)[c]));
+        maxs[c] = std::max(maxs[c], static_cast<double>(quarter.at<cv::Vec4f>(y, x)[c]));
+      }
+  }
+  cv::Mat codes(qh, qw, CV_8UC4);
+  ImageRGB rgb(qw, qh);
+  std::vector<ExrPlane> planes = {{"backward.u", std::vector<float>(static_cast<size_t>(qw) * qh)},
+                                  {"backward.v", std::vector<float>(static_cast<size_t>(qw) * qh)}};
+  for (int y = 0; y < qh; ++y)
+    for (int x = 0; x < qw; ++x) {
+      const cv::Vec4f v = quarter.at<cv::Vec4f>(y, x);
+      cv::Vec4b q;
+      for (int c = 0; c < 4; ++c) {
+        const double span = maxs[c] - mins[c];
+        q[c] = static_cast<uint8_t>(span > 0.0 ? std::lround(255.0 * (v[c] - mins[c]) / span) : 0);
+      }
+      // OpenCV writes BGRA: R forward u, G forward v, B backward u, A backward v in the file.
+      codes.at<cv::Vec4b>(y, x) = {q[2], q[1], q[0], q[3]};
+      rgb.at(x, y, 0) = v[0];
+      rgb.at(x, y, 1) = v[1];
+      const size_t i = static_cast<size_t>(y) * qw + x;
+      planes[0].values[i] = v[2];
+      planes[1].values[i] = v[3];
+    }
+  nlohmann::json components = nlohmann::json::array();
+  for (int c = 0; c < 4; ++c) components.push_back({{"name", names[c]}, {"min", mins[c]}, {"max", maxs[c]}});
+  const nlohmann::json meta = {
+      {"format", "skycal-flow"},
+      {"version", 1},
+      {"a", o.a},
+      {"b", o.b},
+      {"frame_width", w},
+      {"frame_height", h},
+      {"width", qw},
+      {"height", qh},
+      {"units", "texture space: u as a fraction of the image width (a full turn of longitude), v of its height"},
+      {"meaning", "forward: a(p) ~ b(p + forward(p)); backward: b(p) ~ a(p + backward(p))"},
+      {"png_channels", {"R forward_u", "G forward_v", "B backward_u", "A backward_v"}},
+      {"decode", "value = min + (max - min) * code / 255"},
+      {"components", components}};
+  std::vector<uint8_t> png_bytes;
+  if (!cv::imencode(".png", codes, png_bytes)) throw Error(png + ": PNG encoding failed");
+  ExrAttributes attrs;
+  attrs.strings["skycalFlow"] = meta.dump();
+  // Three files, each atomic; a failure on a later one removes the earlier ones (all or none).
+  std::vector<std::string> written;
+  try {
+    WriteExrRGBWithPlanes(o.out, rgb, planes, attrs);
+    written.push_back(o.out);
+    WriteFileAtomically(png, std::string(png_bytes.begin(), png_bytes.end()));
+    written.push_back(png);
+    WriteFileAtomically(sidecar, meta.dump(2) + "\n");
+  } catch (...) {
+    std::error_code ec;
+    for (const std::string& f : written) std::filesystem::remove(f, ec);
+    throw;
+  }
+  Log("flow", "wrote " + o.out + ", " + png + ", " + sidecar + " (forward u " + std::to_string(mins[0] * (w - 1)) +
+                  ".." + std::to_string(maxs[0] * (w - 1)) + " px)");
+  nlohmann::json j = meta;
+  j["out"] = o.out;
+  j["png"] = png;
+  j["sidecar"] = sidecar;
+  return j;
+}
+
+FlowOptions ParseFlowArgs(int argc, char** argv) {
+  VerbCommandLine cl("flow",
+                     "skycal flow: motion vectors between two consecutive time-lapse frames (quarter resolution,\n"
+                     "forward and backward, 8-bit with a per-frame range in a JSON sidecar)",
+                     "  skycal flow A.exr B.exr --out V.exr [--scale 4] [--json]",
+                     "Writes V.exr (float: R,G forward u,v; backward.u, backward.v), V.png (8-bit RGBA) and\n"
+                     "V.json (per-component min/max: value = min + (max - min) * code / 255). Units: texture\n"
+                     "space (u a fraction of the width, v of the height). OpenCV DIS on log luminance.");
+  FlowOptions o;
+  // The two frames lead (`skycal flow A.exr B.exr --out V.exr`); the options follow.
+  std::vector<std::string> frames;
+  std::vector<char*> rest;
+  int i = 0;
+  for (; i < argc && argv[i][0] != '-'; ++i) frames.emplace_back(argv[i]);
+  for (; i < argc; ++i) rest.push_back(argv[i]);
+  cl.Text("--out", &o.out, "V.exr", "the float vectors (V.png and V.json beside it)");
+  cl.Integer("--scale", &o.scale, 1, 16, "expected an integer in [1, 16]", "N", "vectors at 1/N of the frames' size (default 4)");
+  bool json = false;
+  cl.Flag("--json", &json, "print the sidecar as a JSON summary on stdout");
+  cl.Parse(static_cast<int>(rest.size()), rest.data());
+  if (frames.size() != 2) throw Error("expected two frames, A.exr B.exr; found " + std::to_string(frames.size()));
+  o.a = frames[0];
+  o.b = frames[1];
+  return o;
+}
+
+int RunFlow(int argc, char** argv) {
+  return RunVerb("flow", WantsJson(argc, argv), [&]() { return RunFlowImpl(ParseFlowArgs(argc, argv)); });
+}
+
+}  // namespace skycal::cli

@@ -1,0 +1,32 @@
+// `skycal flow`: dense motion vectors between two consecutive frames of a time-lapse, as
+// Forza Horizon 3 shipped them (GDC talk "The Ambitious HDR Time-lapse Skies of Forza
+// Horizon 3"): quarter resolution, forward (A to B) and backward (B to A) texture-space
+// motion, 8 bits per component with each frame's per-component range in a JSON sidecar so
+// the game can decode; plus a float EXR for tools.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/core/image.h"
+
+namespace skycal::cli {
+
+struct FlowOptions {
+  std::string a, b;  // consecutive frames (uniform 2:1 lat-long EXRs of one size)
+  std::string out;   // V.exr; V.png (8-bit RGBA) and V.json (ranges) beside it
+  int scale = 4;     // the vectors' resolution: 1 / scale of the frames' (quarter: 4)
+  bool IsValid(std::string* why) const;
+};
+
+// Forward flow of `b` relative to `a` (and nothing else): per pixel of the full frames,
+// (dx, dy) in pixels such that a(x, y) ~ b(x + dx, y + dy). Log luminance tonemapped to 8
+// bits over the two frames' common range, OpenCV DIS (medium preset), longitude wrapped.
+// Exposed for tests.
+std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b);
+
+nlohmann::json RunFlowImpl(const FlowOptions& options);
+FlowOptions ParseFlowArgs(int argc, char** argv);
+int RunFlow(int argc, char** argv);
+
+}  // namespace skycal::cli
