@@ -109,13 +109,13 @@ Suite FitProbeSuite() {
            "ground (the probe's; without one the fitted preset's); sky error: solid-angle RMS of fit / truth - 1 "
            "against the clean sky, above the horizon, outside 3 deg of the sun. The scenarios lie to the fit: "
            "`ball-albedo-5pct-high` tells it 0.189; `ground-held-low` holds the ground albedo at 0.1.\n\n" +
-           CaseTable(cases, "sun error %",
+           CaseTable(cases, "sun error (fraction)",
                      {{"sky error %", [](const CaseResult& c) { return ExtraNumber(c, "sky_rel_rmse_vs_clean_truth", 100.0); }},
                       {"g (truth 0.76)", [](const CaseResult& c) { return ExtraNumber(c, "haziness_g"); }},
                       {"ground albedo (truth 0.25)", [](const CaseResult& c) { return ExtraNumber(c, "ground_albedo"); }},
                       {"probe log RMSE", [](const CaseResult& c) { return ExtraNumber(c, "probe_log_rmse"); }},
                       {"Ceres iterations", [](const CaseResult& c) { return ExtraNumber(c, "ceres_iterations"); }}}) +
-           "\nThe error column is a fraction (0.011 = 1.1%).\n";
+           "\nThe sun error is a fraction (0.011 = 1.1%).\n";
   };
   s.run = [](const SuiteOptions& o) {
     const Grid grid = FitProbeGrid(o.quick);

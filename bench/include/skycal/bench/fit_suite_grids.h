@@ -13,7 +13,7 @@ Grid FitProbeGrid(bool quick);
 
 // sky start (the bundled clear preset, relative: what a user runs; the truth's sky,
 // --absolute) x reference size x cloud samples (the Jacobian's cloud pixels). The truth's
-// sky start is measured at the default size and samples only. --quick: 64x32 and 128x64.
+// sky start is measured at the default size and samples only. --quick: 128x64 only.
 Grid FitCloudsGrid(bool quick);
 
 }  // namespace skycal::bench
