@@ -138,6 +138,8 @@ nlohmann::json Replot(const BenchOptions& o, const bench::SuiteRegistry& registr
     for (const bench::CaseResult& c : results.cases)
       if (c.suite == rep.name) cases.push_back(c);
     const bench::Suite* suite = registry.Find(rep.name);
+    if (suite && suite->markdown && !cases.empty())
+      WriteFileAtomically(out / (suite->name + ".md"), suite->markdown(cases));
     const bool pareto = suite ? suite->pareto : !rep.plots.empty();
     if (!pareto || cases.empty()) continue;
     const std::string label = suite && !suite->error_axis.empty() ? suite->error_axis : rep.error_metric;
@@ -161,6 +163,7 @@ bench::SuiteOptions SuiteOptionsFor(const BenchOptions& o, const fs::path& scrat
   bench::SuiteOptions so;
   so.quick = o.quick;
   so.repeat = o.repeat;
+  so.verb_logs = o.verb_logs;
   so.scratch = scratch;
   so.log = [](const std::string& line) { Log("bench", line); };
   std::string why;
@@ -186,6 +189,7 @@ std::vector<bench::CaseResult> RunSuite(const BenchOptions& o, const bench::Suit
   io.worker_argv = {o.worker_executable, "bench", "--suite", suite.name, "--worker-journal", io.journal.string(),
                     "--worker-scratch", so.scratch.string()};
   if (o.quick) io.worker_argv.push_back("--quick");
+  if (o.verb_logs) io.worker_argv.push_back("--verb-logs");
   if (o.repeat > 0) io.worker_argv.insert(io.worker_argv.end(), {"--repeat", std::to_string(o.repeat)});
   io.log = so.log;
   return bench::RunSuiteIsolated(suite.name, io);
@@ -287,6 +291,10 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
     if (suite->pareto && !cases.empty())
       AnalyseSuite(suite->error_axis.empty() ? suite->error_metric : suite->error_axis, cases, results.machine, o.quick,
                    out.staging(), &rep);
+    if (suite->markdown && !cases.empty()) {
+      WriteFileAtomically(out / (suite->name + ".md"), suite->markdown(cases));
+      Log("bench", suite->name + ": its table in " + o.out + "/" + suite->name + ".md");
+    }
     results.suites.push_back(rep);
     results.cases.insert(results.cases.end(), cases.begin(), cases.end());
   }
@@ -346,6 +354,9 @@ BenchOptions ParseBenchArgs(int argc, char** argv) {
   cl.Text("--replot", &o.replot, "RESULTS.json",
           "redraw an earlier run's Pareto fronts and plots with this build, into --out (runs nothing)");
   cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
+  cl.Flag("--verb-logs", &o.verb_logs,
+          "let the verbs the suites run (capture, export) print their own progress lines\n"
+          "(default: only the bench's one line per case)");
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");

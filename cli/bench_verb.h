@@ -29,6 +29,7 @@ struct BenchOptions {
   // to worker_journal, with worker_scratch as its scratch directory; no results written.
   std::string worker_journal, worker_scratch;
   bool report = true;                // write DIR/report.html (skycal report)
+  bool verb_logs = false;            // --verb-logs: the verbs the suites run (capture, export) log too
 
   bool IsValid(std::string* why) const;
 };

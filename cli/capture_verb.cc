@@ -152,6 +152,10 @@ std::optional<capture::ColorCorrection> CaptureColorCorrection(const CaptureOpti
 }  // namespace
 
 nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
+  // Progress lines on stderr unless o.verbose is off (the bench runs the verb many times).
+  const auto progress = [&o](const std::string& line) {
+    if (o.verbose) Log("capture", line);
+  };
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   // Inputs first (the rig names its cameras' images): --out must replace none of them.
@@ -208,13 +212,13 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
     const std::array<double, 3> ypr = o.CameraRotationDeg();
     cam.rotation = capture::RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
     if (cam.lens.model == capture::LensModel::kLatLong && !o.camera_ypr_deg)
-      Log("capture", "--lens latlong: camera rotation = identity (the input is already a world lat-long)");
+      progress("--lens latlong: camera rotation = identity (the input is already a world lat-long)");
     cam.name = "camera";
     measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
     images.push_back(std::move(merged.radiance));
     cameras.push_back(cam);
     for (const auto& p : o.brackets) sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
-    Log("capture", "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
+    progress("merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
                        " pixels no exposure measured well)");
   } else {
     cameras = rig_cameras;
@@ -287,7 +291,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
       offset = std::remainder(offset, 360.0);
       sun["camera_heading_offset_deg"] = offset;
       sun["suggested_north_longitude_deg"] = std::remainder(o.north_longitude_deg + offset, 360.0);
-      Log("capture", "camera heading: the detected sun is " + std::to_string(offset) +
+      progress("camera heading: the detected sun is " + std::to_string(offset) +
                          " deg of longitude from the SPA sun; --north-longitude " +
                          std::to_string(sun["suggested_north_longitude_deg"].get<double>()) + " aligns them");
     } else {
@@ -360,7 +364,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
   const auto t5 = Clock::now();
   stages["write_ms"] = Ms(t_mask, t5);
   stages["total_ms"] = Ms(t0, t5);
-  Log("capture", "wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
+  progress("wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
                      std::to_string(valid_count) + " valid pixels, " + std::to_string(Ms(t0, t5)) + " ms)");
   return {{"out", o.out},
           {"size", {o.width, o.height}},

@@ -47,6 +47,7 @@ struct CaptureOptions {
   double north_longitude_deg = 0.0;         // lat-long longitude of geographic north
   int width = 2048, height = 1024;          // output lat-long, pixels
   std::string out;
+  bool verbose = true;                      // progress lines on stderr ([capture] ...); skycal bench turns them off
   bool IsValid(std::string* why) const;
 };
 

@@ -138,6 +138,10 @@ bool ExportOptions::IsValid(std::string* why) const {
 }
 
 nlohmann::json RunExportImpl(const ExportOptions& o) {
+  // Progress lines on stderr unless o.verbose is off (the bench runs the verb many times).
+  const auto progress = [&o](const std::string& line) {
+    if (o.verbose) Log("export", line);
+  };
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   std::vector<NamedPath> inputs;
@@ -162,7 +166,7 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
       for (float v : *t) max_value = std::max(max_value, static_cast<double>(v));
   const double target = o.headroom * kHalfMax;
   const double scale = max_value > 0.0 ? std::exp2(std::floor(std::log2(target / max_value))) : 1.0;
-  Log("export", "pre-exposure scale " + CsvNumber(scale) + " (largest LUT value " + CsvNumber(max_value) + " -> " +
+  progress("pre-exposure scale " + CsvNumber(scale) + " (largest LUT value " + CsvNumber(max_value) + " -> " +
                     CsvNumber(max_value * scale) + ", FP16 max 65504)");
 
   nlohmann::json manifest_presets = nlohmann::json::array();
@@ -219,7 +223,7 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
                                        "SunTransmittance(sun zenith); luminance Rec.709"}};
       if (!renderer) {
         renderer = render::CreateRenderer(o.backend);
-        Log("export", "backend: " + renderer->Describe());
+        progress("backend: " + renderer->Describe());
       }
       render::RenderRequest req;
       req.sun_dir = sp.sun.dir;
@@ -375,8 +379,8 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
   WriteJsonFileAtomically(out / "manifest.json", manifest);
   if (o.report) WriteVerbReport("export", out.staging().string());
   out.Commit();
-  for (const auto& s : skipped) Log("export", "skipped " + s["block"].get<std::string>() + ": " + s["reason"].get<std::string>());
-  Log("export", "wrote " + o.out_dir + " (" + std::to_string(presets.size()) + " preset(s))");
+  for (const auto& s : skipped) progress("skipped " + s["block"].get<std::string>() + ": " + s["reason"].get<std::string>());
+  progress("wrote " + o.out_dir + " (" + std::to_string(presets.size()) + " preset(s))");
   nlohmann::json summary = manifest;
   summary["out"] = o.out_dir;
   return summary;

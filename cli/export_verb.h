@@ -23,6 +23,7 @@ struct ExportOptions {
   render::Backend backend = render::Backend::kVulkan;  // renders the sky for SH-9 and fog
   double fog_sigma_deg = 15.0;       // Gaussian blur of the fog lat-long, degrees, (0, 30]
   bool report = true;                // write GAME_DIR/report.html (skycal report)
+  bool verbose = true;               // progress lines on stderr ([export] ...); skycal bench turns them off
   bool IsValid(std::string* why) const;
 };
 

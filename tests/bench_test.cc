@@ -10,13 +10,17 @@
 #include "bench_verb.h"
 #include "command_line.h"
 #include "skycal/bench/compare.h"
+#include "skycal/bench/fit_suite_grids.h"
 #include "skycal/bench/grid.h"
 #include "skycal/bench/pareto.h"
 #include "skycal/bench/results.h"
 #include "skycal/bench/stress_table.h"
+#include "skycal/bench/suite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "test_util.h"
+#include "export_verb.h"
+#include "render_verb.h"
 #include "verb_common.h"
 
 using namespace skycal;
@@ -65,6 +69,7 @@ SuiteRegistry FakeRegistry(Outcome last_outcome = Outcome::kOk) {
     for (const CaseResult& c : out) o.Done(c);
     return out;
   };
+  s.markdown = [](const std::vector<CaseResult>& cases) { return "# fake\n" + std::to_string(cases.size()) + " cases\n"; };
   r.Add(s);
   return r;
 }
@@ -111,6 +116,80 @@ TEST(BenchGrid, SkipDropsPointsAndBadGridsThrow) {
   EXPECT_THROW(bad.Expand(), Error);
   bad.axes = {{"x", {"1"}, "1"}, {"x", {"2"}, "2"}};
   EXPECT_THROW(bad.Expand(), Error);
+}
+
+// The fit-probe and fit-clouds suites' grids (no fit run): how many cases, which is the
+// default, and that each sweep stays where its skip rule puts it.
+static int Count(const std::vector<Settings>& pts, const std::function<bool(const Settings&)>& pred) {
+  int n = 0;
+  for (const Settings& s : pts) n += pred(s);
+  return n;
+}
+
+TEST(BenchFitSuites, ProbeGridSweepsWeightsAndScenariosAtTheDefaultsOnly) {
+  for (const bool quick : {false, true}) {
+    const Grid g = FitProbeGrid(quick);
+    const std::vector<Settings> pts = g.Expand();
+    const std::string small = quick ? "128x64" : "256x128";
+    const int weights = quick ? 2 : 4;
+    // Probe on: weights x 3 scenarios at vulkan/small, + vulkan/large, + cpu at both sizes;
+    // probe off: both backends x both sizes.
+    EXPECT_EQ(pts.size(), static_cast<size_t>(weights * 3 + 1 + 2 + 4)) << quick;
+    EXPECT_EQ(Label(g.Defaults()), "probe=on backend=vulkan size=" + small + " probe_weight=0.1 scenario=consistent");
+    EXPECT_EQ(Count(pts, [](const Settings& s) { return Get(s, "probe") == "off" &&
+                                                        (Get(s, "probe_weight") != "0.1" || Get(s, "scenario") != "consistent"); }),
+              0);
+    EXPECT_EQ(Count(pts, [&](const Settings& s) {
+                return Get(s, "probe_weight") != "0.1" && (Get(s, "backend") != "vulkan" || Get(s, "size") != small);
+              }),
+              0);
+    EXPECT_EQ(Count(pts, [](const Settings& s) { return Get(s, "scenario") == "ground-held-low"; }), weights);
+    EXPECT_EQ(Count(pts, [&](const Settings& s) { return s == g.Defaults(); }), 1);
+  }
+}
+
+TEST(BenchFitSuites, CloudsGridMeasuresTheTruthStartAndTheCpuAtTheDefaultsOnly) {
+  const Grid full = FitCloudsGrid(false);
+  const std::vector<Settings> pts = full.Expand();
+  ASSERT_EQ(pts.size(), 8u);  // bundled/vulkan: 2 sizes x 3 sample counts; bundled/cpu; truth/vulkan
+  EXPECT_EQ(Label(full.Defaults()), "sky_start=bundled backend=vulkan size=256x128 samples=256");
+  EXPECT_EQ(Label(pts.back()), "sky_start=truth backend=vulkan size=256x128 samples=256");
+  EXPECT_EQ(Count(pts, [](const Settings& s) { return Get(s, "backend") == "cpu"; }), 1);
+  const Grid quick = FitCloudsGrid(true);
+  EXPECT_EQ(quick.Expand().size(), 4u);  // one size: bundled/vulkan x 2 sample counts, cpu, truth
+  EXPECT_EQ(Label(quick.Defaults()), "sky_start=bundled backend=vulkan size=128x64 samples=256");
+}
+
+TEST(BenchFitSuites, RegisteredWithTheirMetrics) {
+  const SuiteRegistry r = BuiltinSuites();
+  for (const char* name : {"fit-probe", "fit-clouds"}) {
+    const Suite* s = r.Find(name);
+    ASSERT_NE(s, nullptr) << name;
+    EXPECT_TRUE(s->pareto) << name;
+    EXPECT_FALSE(s->error_metric.empty()) << name;
+    EXPECT_FALSE(s->error_axis.empty()) << name;
+  }
+  EXPECT_EQ(r.Resolve("fit,fit-probe,fit-clouds").size(), 3u);
+}
+
+// The bench runs the verbs quietly: `skycal export` with verbose off prints nothing on
+// stderr; on (a user's run, the control) it prints its progress lines.
+TEST(BenchVerbLogs, ExportIsQuietWithVerboseOff) {
+  skycal::testing::ScratchDir dir("bench-verb-logs");
+  cli::ExportOptions eo;
+  eo.presets = {cli::DefaultPresetPath()};
+  eo.backend = render::Backend::kCpu;
+  eo.report = false;
+  eo.verbose = false;
+  eo.out_dir = dir / "quiet";
+  ::testing::internal::CaptureStderr();
+  cli::RunExportImpl(eo);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  eo.verbose = true;
+  eo.out_dir = dir / "loud";
+  ::testing::internal::CaptureStderr();
+  cli::RunExportImpl(eo);
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("[export] wrote"), std::string::npos);
 }
 
 TEST(BenchPareto, ExactMembershipOnAHandMadeSet) {
@@ -233,6 +312,8 @@ TEST(BenchVerb, WritesResultsJsonCsvAndPlots) {
   EXPECT_EQ(rows[0].rfind("fake,size=small method=a,0,1,0.9,1.1,5,0.1,rel error,ok,,1,", 0), 0u) << rows[0];
   EXPECT_EQ(rows[1].rfind("fake,size=small method=b,0,2,", 0), 0u) << rows[1];
   EXPECT_NE(rows[1].find(",ok,,0,"), std::string::npos) << rows[1];
+  // The suite's own table (Suite::markdown) as DIR/<suite>.md.
+  EXPECT_EQ(ReadText(dir / "results/fake.md"), "# fake\n4 cases\n");
   // Plots: a PNG (its signature) and an SVG.
   EXPECT_EQ(ReadText(dir / "results/fake_pareto.png").substr(1, 3), "PNG");
   EXPECT_NE(ReadText(dir / "results/fake_pareto.svg").find("<svg"), std::string::npos);
@@ -295,7 +376,7 @@ TEST(BenchVerb, BadInput) {
     cli::RunBenchImpl(o, BuiltinSuites());
     FAIL() << "unknown suite accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, probe, capture, export, stress, clouds)"),
+    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, fit-skies, fit-probe, fit-clouds, probe, capture, export, stress, clouds)"),
               std::string::npos)
         << e.what();
   }

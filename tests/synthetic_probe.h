@@ -1,5 +1,5 @@
 // A synthetic gray ball under a known sky, sun and ground (tests/probe_fit_test.cc,
-// bench/bench_probe_fit.cc).
+// bench/src/fit_probe_suite.cc).
 #pragma once
 #include <algorithm>
 #include <array>

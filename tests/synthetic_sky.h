@@ -1,4 +1,4 @@
-// Synthetic references, shared by tests/fit_roundtrip_test.cc and bench/bench_fit.cc: the
+// Synthetic references, shared by tests/fit_roundtrip_test.cc and bench/src/fit_probe_suite.cc: the
 // bundled preset as truth, a smooth multiplicative perturbation of its LUTs and g as the
 // start, references rendered by the CPU reference with optional noise and outliers.
 #pragma once

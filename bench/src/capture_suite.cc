@@ -32,9 +32,10 @@ Suite CaptureSuite() {
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     std::vector<CaseResult> out = RunGrid("capture", grid, o, [&](CaseResult& c) {
       const std::string& size = Get(c.settings, "size");
-      const cli::CaptureOptions co = FisheyeCaptureOptions(b.paths, b.exposure_times_s, Get(c.settings, "response"),
+      cli::CaptureOptions co = FisheyeCaptureOptions(b.paths, b.exposure_times_s, Get(c.settings, "response"),
                                                            std::stoi(size.substr(0, size.find('x'))),
                                                            (o.scratch / "capture_frame.exr").string());
+      co.verbose = o.verb_logs;
       nlohmann::json summary;
       c.time = Measure([&] { summary = cli::RunCaptureImpl(co); }, o.quick ? 0 : o.warmup, repeats);
       const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;

@@ -33,6 +33,7 @@ Suite ExportSuite() {
       eo.presets = {DefaultPresetPath()};
       eo.headroom = std::stod(Get(c.settings, "headroom"));
       eo.backend = render::Backend::kCpu;
+      eo.verbose = o.verb_logs;
       eo.report = false;  // the export's own work is timed, not the HTML report
       eo.out_dir = (o.scratch / ("export_" + std::to_string(k++))).string();
       nlohmann::json summary;

@@ -2,9 +2,11 @@
 // exposure per frame, the smoothness prior along sun zenith) from the bundled default
 // preset, on frames baked from an atmosphere the preset was not built from (the standard
 // variants' second: other aerosol amount and albedo), sun elevation 4..80 deg over the day.
-// Grid: frames per day x backend x the smoothness prior (default, off). Time: the day's
-// whole fit, median of repeats; error: the mean rel RMSE of the fitted frames against
-// their references (the truth: noiseless bakes).
+// Grid: frames per day (3, 6, 12, 24; --quick 3, 6) x backend x the smoothness prior
+// (default, off) x path (the linear start; the old coarse-to-fine Ceres path, at the most
+// frames only: bench_fit's 24-reference day). Time: the day's whole fit, median of repeats
+// (the old path: one run); error: the mean rel RMSE of the fitted frames against their
+// references (the truth: noiseless bakes).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -41,17 +43,24 @@ std::vector<fit::Reference> WriteDay(const SuiteOptions& o, int n, int width, co
 Suite FitDaySuite() {
   Suite s;
   s.name = "fit-day";
-  s.summary = "a clear day fitted as one problem from the bundled preset: frames x backend x smoothness";
+  s.summary = "a clear day fitted as one problem from the bundled preset: frames x backend x smoothness x path";
   s.error_metric = "mean rel RMSE of the fitted frames vs their references (another atmosphere's bakes)";
   s.error_axis = "mean rel RMSE over the day's frames";
   s.run = [](const SuiteOptions& o) {
     const int width = o.quick ? 128 : 256;
     Grid grid;
-    grid.axes = {{"frames", o.quick ? std::vector<std::string>{"3", "6"} : std::vector<std::string>{"3", "6", "12"}, "6"},
+    const std::vector<std::string> frames =
+        o.quick ? std::vector<std::string>{"3", "6"} : std::vector<std::string>{"3", "6", "12", "24"};
+    grid.axes = {{"frames", frames, "6"},
                  {"backend", {"vulkan", "cpu"}, "vulkan"},
-                 {"smoothness", {"default", "off"}, "default"}};
-    grid.skip = [](const Settings& st) -> std::string {
+                 {"smoothness", {"default", "off"}, "default"},
+                 {"path", {"linear-start", "ceres"}, "linear-start"}};
+    const std::string most = frames.back();
+    grid.skip = [most](const Settings& st) -> std::string {
       if (Get(st, "smoothness") == "off" && Get(st, "frames") != "6") return "the prior's effect: measured at 6 frames only";
+      if (Get(st, "path") == "ceres" &&
+          (Get(st, "frames") != most || Get(st, "backend") != "vulkan" || Get(st, "smoothness") != "default"))
+        return "the old path: at the most frames with the other defaults only";
       return "";
     };
     fit::FitOptions base;
@@ -65,10 +74,12 @@ Suite FitDaySuite() {
       fit::FitOptions f = base;
       f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
       if (Get(c.settings, "smoothness") == "off") f.smoothness = 0.0;
+      f.linear_start = Get(c.settings, "path") == "linear-start";
       const std::vector<fit::Reference>& refs = days.at(Get(c.settings, "frames"));
       fit::FitResult result;
-      c.time = Measure([&] { result = fit::FitSky(refs, start, f, *renderers.at(Get(c.settings, "backend"))); }, o.warmup,
-                       repeats);
+      const bool slow = !f.linear_start;  // tens of seconds: one run, no warm-up
+      c.time = Measure([&] { result = fit::FitSky(refs, start, f, *renderers.at(Get(c.settings, "backend"))); },
+                       slow ? 0 : o.warmup, slow ? 1 : repeats);
       double sum = 0.0, worst = 0.0;
       bool finite = std::isfinite(result.preset.haziness_g);
       for (size_t i = 0; i < refs.size(); ++i) {
@@ -86,7 +97,10 @@ Suite FitDaySuite() {
       c.extra = {{"frames", refs.size()},
                  {"worst_frame_rel_rmse", worst},
                  {"ms_per_frame", c.time.median_ms / refs.size()},
-                 {"ceres_iterations", result.iterations}};
+                 {"ceres_iterations", result.iterations},
+                 {"linear_start_ms", 1e3 * result.linear_start.time_s()},
+                 {"haziness_g", result.preset.haziness_g},
+                 {"truth_haziness_g", refsky::StandardAtmosphereVariants().at(1).haziness_g}};
     });
   };
   return s;

@@ -324,8 +324,9 @@ void CaptureArea(Runner& run, const SuiteOptions& o) {
   for (const Input& in : inputs)
     for (const char* response : {"debevec", "srgb"}) {
       run("capture", in.name + " " + response, [&](CaseResult& c) {
-        const cli::CaptureOptions co =
+        cli::CaptureOptions co =
             FisheyeCaptureOptions(in.brackets, in.times, response, 128, dir + "/frame_" + std::to_string(n++) + ".exr");
+        co.verbose = o.verb_logs;
         const nlohmann::json summary = cli::RunCaptureImpl(co);
         const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;
         if (!AllFinite(frame)) NonFinite(c, "non-finite radiance in the frame");
@@ -410,6 +411,7 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
         eo.headroom = headroom;
         eo.backend = render::Backend::kCpu;
         eo.report = false;  // the export's numbers are stressed, not the HTML report
+        eo.verbose = o.verb_logs;
         eo.out_dir = (o.scratch / ("stress_export_" + std::to_string(n++))).string();
         const nlohmann::json summary = cli::RunExportImpl(eo);
         if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the manifest");

@@ -13,6 +13,31 @@ std::string FormatG(double v, int digits) {
   return buf;
 }
 
+std::string ExtraNumber(const CaseResult& c, const std::string& key, double scale) {
+  const auto it = c.extra.find(key);
+  if (it == c.extra.end() || !it->is_number()) return "-";
+  return FormatG(scale * it->get<double>(), 4);
+}
+
+std::string CaseTable(const std::vector<CaseResult>& cases, const std::string& error_header,
+                      const std::vector<TableColumn>& columns) {
+  std::string t = "| case | time ms (median; min..max) | " + error_header + " |";
+  std::string rule = "|---|---|---|";
+  for (const TableColumn& col : columns) {
+    t += " " + col.header + " |";
+    rule += "---|";
+  }
+  t += "\n" + rule + "\n";
+  for (const CaseResult& c : cases) {
+    t += "| " + c.name + (c.is_default ? " (default)" : "") + " | " + FormatG(c.time.median_ms, 4) + " (" +
+         FormatG(c.time.min_ms, 3) + ".." + FormatG(c.time.max_ms, 3) + ") | " +
+         (c.outcome == Outcome::kOk ? FormatG(c.error, 4) : std::string(ToString(c.outcome))) + " |";
+    for (const TableColumn& col : columns) t += " " + col.value(c) + " |";
+    t += "\n";
+  }
+  return t;
+}
+
 std::optional<CaseResult> RunCase(const std::string& suite, const Settings& settings, const Settings& defaults, int k, int n,
                    const SuiteOptions& o, const std::function<void(CaseResult&)>& body) {
   CaseResult c;

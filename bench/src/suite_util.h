@@ -25,6 +25,17 @@ std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, cons
 
 std::string FormatG(double v, int digits = 3);  // %.*g
 
+// A Markdown table of `cases`, one row each: the case's name, its median time (ms) and
+// error, then one column per (header, value) pair; values from `extra` via ExtraNumber.
+struct TableColumn {
+  std::string header;
+  std::function<std::string(const CaseResult&)> value;
+};
+std::string CaseTable(const std::vector<CaseResult>& cases, const std::string& error_header,
+                      const std::vector<TableColumn>& columns);
+// extra[key] as %.4g (scaled by `scale`, e.g. 100 for %), "-" when absent or not a number.
+std::string ExtraNumber(const CaseResult& c, const std::string& key, double scale = 1.0);
+
 // One sky renderer per backend, keyed by the `backend` axis' values ("cpu", "vulkan").
 std::map<std::string, std::unique_ptr<render::SkyRenderer>> SkyRenderersByBackend();
 

@@ -11,12 +11,14 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitSuite());
   r.Add(FitDaySuite());
   r.Add(FitCieSuite());
+  r.Add(FitSkiesSuite());
+  r.Add(FitProbeSuite());
+  r.Add(FitCloudsSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
   r.Add(CloudsSuite());
-  // The cloud-lighting fit (issue 11) registers its suite here when it lands.
   return r;
 }
 

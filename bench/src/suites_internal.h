@@ -10,6 +10,9 @@ Suite RenderSuite();   // render_suite.cc
 Suite FitSuite();      // fit_suite.cc
 Suite FitDaySuite();   // fit_day_suite.cc
 Suite FitCieSuite();   // fit_cie_suite.cc
+Suite FitSkiesSuite();  // fit_skies_suite.cc
+Suite FitProbeSuite();  // fit_probe_suite.cc
+Suite FitCloudsSuite();  // fit_clouds_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
 Suite ExportSuite();   // export_suite.cc

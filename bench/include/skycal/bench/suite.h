@@ -17,6 +17,9 @@ struct SuiteOptions {
   bool quick = false;  // CI sizes: every suite in seconds, not minutes
   int repeat = 0;      // timed repeats per case; 0: the suite's own default
   int warmup = 1;      // untimed runs before the repeats
+  // The verbs a suite runs (capture, export) print their own progress lines; off, only the
+  // suite's own lines (`skycal bench --verb-logs`).
+  bool verb_logs = false;
   std::filesystem::path scratch;  // a directory the suite may write temporaries into
   std::function<void(const std::string&)> log;        // progress lines (may be empty)
   std::function<void(const CaseResult&)> on_case;     // called as each case finishes (may be empty)
@@ -42,6 +45,10 @@ struct Suite {
   std::string error_axis;    // the same, short, for the plot's y axis
   bool pareto = true;        // time against error is meaningful (not for stress)
   std::function<std::vector<CaseResult>(const SuiteOptions&)> run;
+  // Optional: a readable table of the suite's cases (Markdown), written as DIR/<name>.md --
+  // what a retired study program wrote (fit-skies: bench_fit's per-sky table; fit-probe:
+  // bench_probe_fit's probe-weight table). Empty: none.
+  std::function<std::string(const std::vector<CaseResult>&)> markdown;
 };
 
 class SuiteRegistry {
@@ -57,7 +64,7 @@ class SuiteRegistry {
   std::vector<Suite> suites_;
 };
 
-// render, fit, probe, capture, export, stress, clouds (suites.cc).
+// render, fit, fit-day, fit-cie, fit-skies, fit-probe, fit-clouds, probe, capture, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench
