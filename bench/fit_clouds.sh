@@ -25,7 +25,7 @@ PY
   python3 - "$T/fit_$mode/fit.json" <<'PY'
 import json, sys
 j = json.load(open(sys.argv[1])); c = j["clouds"]
-print("  sky fit time_s %.2f, levels %s" % (j["time_s"], [(l["iterations"], l["renders"]) for l in j["levels"]]))
+print("  fit.json time_s %.2f (now the whole fit, sky and clouds; before this change the sky fit alone), levels %s" % (j["time_s"], [(l["iterations"], l["renders"]) for l in j["levels"]]))
 print("  clouds.solve", json.dumps(c["solve"]))
 print("  cloud pixels", c["cloud_pixels"]["count"], "samples", c["cloud_pixels"]["samples"],
       "log RMSE initial %.5f final %.5f, clear %.5f, whole-sky rel RMSE %.5f" % (

@@ -1,5 +1,7 @@
 #include "export_clouds.h"
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 
@@ -35,23 +37,93 @@ void ExportPresetClouds(const render::Preset& p, const std::string& preset_path,
   (*files)["clouds"] = p.name + "/clouds.json";
 }
 
-void ExportCloudKeyframes(const std::vector<const render::Preset*>& keyed, const fs::path& out_root,
-                          nlohmann::json* skipped) {
-  std::vector<const render::Preset*> with;
+namespace {
+
+struct CloudKey {
+  double time_h = 0.0;
+  std::string preset, source;  // the preset's name; where the key came from (for errors)
+  cloudfit::CloudLighting lighting{};
+};
+
+// The keys of a day fit's <stem>.cloud_keyframes.json (written by fit --clouds).
+std::vector<CloudKey> DayKeys(const render::Preset& p, const fs::path& file) {
+  const nlohmann::json j = ReadJsonFile(file.string());
+  const std::string where = file.string();
+  if (!j.contains("keys") || !j["keys"].is_array() || j["keys"].empty()) {
+    throw Error(where + ": 'keys': expected a non-empty array of cloud keyframes");
+  }
+  // Parameters a key does not list keep the preset's section (fit writes all of them).
+  const cloudfit::CloudLighting base = cloudfit::GetCloudLighting(clouds::ParseCloudSectionText(p.clouds_json, where));
+  std::vector<CloudKey> out;
+  for (size_t k = 0; k < j["keys"].size(); ++k) {
+    const nlohmann::json& key = j["keys"][k];
+    const std::string at = where + ": keys[" + std::to_string(k) + "]";
+    if (!key.contains("time_of_day_h") || !key["time_of_day_h"].is_number()) {
+      throw Error(at + ".time_of_day_h: expected hours in [0, 24)");
+    }
+    CloudKey c;
+    c.time_h = key["time_of_day_h"].get<double>();
+    if (!(c.time_h >= 0.0 && c.time_h < 24.0)) throw Error(at + ".time_of_day_h: expected hours in [0, 24)");
+    c.preset = p.name;
+    c.source = at;
+    c.lighting = base;
+    if (!key.contains("lighting") || !key["lighting"].is_object()) throw Error(at + ".lighting: expected an object");
+    clouds::CloudParams params;
+    for (int i = 0; i < cloudfit::kCloudLightingParameters; ++i) {
+      const char* name = cloudfit::CloudLightingNames()[i];
+      if (!key["lighting"].contains(name)) continue;
+      const nlohmann::json& v = key["lighting"][name];
+      const clouds::CloudParamSpec& s = cloudfit::CloudLightingSpec(i);
+      if (!v.is_number() || !(v.get<double>() >= s.min && v.get<double>() <= s.max)) {
+        throw Error(at + ".lighting." + name + ": expected a number in [" + CsvNumber(s.min) + ", " + CsvNumber(s.max) +
+                    "] " + s.unit + ", got " + v.dump());
+      }
+      c.lighting[i] = v.get<double>();
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
+void ExportCloudKeyframes(const std::vector<render::Preset>& presets, const std::vector<std::string>& paths,
+                          const fs::path& out_root, nlohmann::json* skipped) {
+  std::vector<CloudKey> keys;
   std::string without;
-  for (const render::Preset* p : keyed) {
-    if (p->clouds_json.empty()) {
-      without += (without.empty() ? "'" : ", '") + p->name + "'";
+  for (size_t i = 0; i < presets.size(); ++i) {
+    const render::Preset& p = presets[i];
+    const fs::path path(paths.at(i));
+    const fs::path day = path.parent_path() / (path.stem().string() + ".cloud_keyframes.json");
+    if (!p.clouds_json.empty() && fs::is_regular_file(day)) {
+      for (const CloudKey& k : DayKeys(p, day)) keys.push_back(k);
+    } else if (!std::isfinite(p.time_of_day_h)) {
+      continue;  // untimed: no key (the sky's keyframe table says so)
+    } else if (p.clouds_json.empty()) {
+      without += (without.empty() ? "'" : ", '") + p.name + "'";
     } else {
-      with.push_back(p);
+      CloudKey k;
+      k.time_h = p.time_of_day_h;
+      k.preset = p.name;
+      k.source = "preset '" + p.name + "'";
+      k.lighting = cloudfit::GetCloudLighting(clouds::ParseCloudSectionText(p.clouds_json, k.source));
+      keys.push_back(k);
     }
   }
-  if (with.empty()) {
-    skipped->push_back({{"block", "cloud keyframe table"}, {"reason", "no timed preset has a clouds section"}});
+  if (keys.empty()) {
+    skipped->push_back({{"block", "cloud keyframe table"},
+                        {"reason", "no timed preset has a clouds section and no preset is a day fit with clouds"}});
     return;
   }
   if (!without.empty()) {
     skipped->push_back({{"block", "cloud keyframes of " + without}, {"reason", "no clouds section (fit --clouds)"}});
+  }
+  std::stable_sort(keys.begin(), keys.end(), [](const CloudKey& a, const CloudKey& b) { return a.time_h < b.time_h; });
+  for (size_t k = 1; k < keys.size(); ++k) {
+    if (keys[k].time_h == keys[k - 1].time_h) {
+      throw Error(keys[k - 1].source + " and " + keys[k].source + " have the same time of day " +
+                  CsvNumber(keys[k].time_h) + " h (one cloud keyframe per time)");
+    }
   }
   std::vector<std::string> header = {"time_of_day_h", "preset"};
   nlohmann::json units = {{"time_of_day_h", "h"}};
@@ -64,14 +136,12 @@ void ExportCloudKeyframes(const std::vector<const render::Preset*>& keyed, const
   for (size_t c = 0; c < header.size(); ++c) csv += (c ? "," : "") + header[c];
   csv += "\n";
   nlohmann::json rows = nlohmann::json::array();
-  for (const render::Preset* p : with) {
-    const clouds::CloudParams params = clouds::ParseCloudSectionText(p->clouds_json, "preset '" + p->name + "'");
-    const cloudfit::CloudLighting l = cloudfit::GetCloudLighting(params);
-    nlohmann::json row = {{"time_of_day_h", p->time_of_day_h}, {"preset", p->name}};
-    csv += CsvNumber(p->time_of_day_h) + "," + p->name;
+  for (const CloudKey& key : keys) {
+    nlohmann::json row = {{"time_of_day_h", key.time_h}, {"preset", key.preset}};
+    csv += CsvNumber(key.time_h) + "," + key.preset;
     for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
-      csv += "," + CsvNumber(l[k]);
-      row[cloudfit::CloudLightingNames()[k]] = l[k];
+      csv += "," + CsvNumber(key.lighting[k]);
+      row[cloudfit::CloudLightingNames()[k]] = key.lighting[k];
     }
     csv += "\n";
     rows.push_back(row);

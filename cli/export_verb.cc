@@ -368,8 +368,8 @@ nlohmann::json RunExportImpl(const ExportOptions& o) {
     }
     WriteFileAtomically(out / "keyframes.csv", csv);
     WriteJsonFileAtomically(out / "keyframes.json", {{"columns", header}, {"units", units}, {"keys", rows}});
-    ExportCloudKeyframes(keyed, out.staging(), &skipped);  // cloud_keyframes.csv/.json (export_clouds.h)
   }
+  ExportCloudKeyframes(presets, o.presets, out.staging(), &skipped);  // cloud_keyframes.csv/.json (export_clouds.h)
   const nlohmann::json manifest = {{"tool", std::string("skycal ") + kSkycalVersion},
                                    {"pre_exposure", scale},
                                    {"pre_exposure_note", "LUT texels = model LUT (cd/m^2 * sr) x pre_exposure; FP16"},

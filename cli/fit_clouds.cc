@@ -1,11 +1,14 @@
 #include "fit_clouds.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "render_clouds.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/json_file.h"
 #include "skycal/core/format_number.h"
 #include "verb_common.h"
 
@@ -23,12 +26,13 @@ bool FitCloudOptions::IsValid(std::string* why) const {
     *why = e.what();
     return false;
   }
-  if (!std::isfinite(time_s) || std::abs(time_s) > 1.0e7) {
-    *why = "--cloud-time " + FormatNumber(time_s) + " (expected seconds, finite, within 1e7)";
+  if (time_s && (!std::isfinite(*time_s) || std::abs(*time_s) > 1.0e7)) {
+    *why = "--cloud-time " + FormatNumber(*time_s) + " (expected seconds, finite, within 1e7)";
     return false;
   }
   cloudfit::CloudLightingOptions co;
   co.samples = samples;
+  co.day_smoothness = day_smoothness;
   co.hold = hold;
   if (!co.IsValid(why)) {
     if (why->starts_with("cloud samples")) *why = "--cloud-samples: " + *why;
@@ -48,7 +52,7 @@ std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) 
   if (p.clouds_json.empty()) throw Error(o.preset + ": --cloud-preset: the preset has no 'clouds' section");
   CloudOptions co;
   co.enabled = true;
-  co.time_s = o.time_s;
+  co.time_s = o.time_s.value_or(0.0);
   CloudInputsLoaded in = LoadCloudInputs(co, p, o.preset);  // names the file and field on a bad section
   auto out = std::make_unique<LoadedCloudShapes>();
   out->origin = in.params_origin;
@@ -58,7 +62,7 @@ std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) 
   out->shapes.params = in.params;
   out->shapes.noise = &out->noise;
   out->shapes.weather = &out->weather;
-  out->shapes.time_s = o.time_s;
+  out->shapes.time_s = o.time_s.value_or(0.0);
   return out;
 }
 
@@ -79,7 +83,20 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   cloudfit::CloudLightingOptions co;
   co.samples = o.samples;
   co.hold = o.hold;
+  co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;
+  cloudfit::KnownCloudShapes known;
+  if (shapes) {
+    known = shapes->shapes;
+    if (!o.time_s) {
+      // Each reference's own wind time (a time-lapse's clouds move between frames).
+      for (const fit::Reference& r : refs) {
+        const ExrAttributes a = ReadExrHeader(r.path).attributes;
+        const auto it = a.floats.find("skycalCloudTimeS");
+        known.time_s_per_reference.push_back(it != a.floats.end() ? it->second : 0.0);
+      }
+    }
+  }
   std::unique_ptr<clouds::CloudRenderer> cloud_renderer;
   if (d.march) {
     // The values come from the cloud renderer of the sky's backend: Vulkan (the game's
@@ -90,9 +107,10 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   }
   cloudfit::SkyCloudFit f =
       cloudfit::FitSkyAndClouds(refs, init, fo, renderer, probes, d, cloudfit::CloudTermKind::kKnownShapes,
-                                shapes ? &shapes->shapes : nullptr, co, cloud_renderer.get());
+                                shapes ? &known : nullptr, co, cloud_renderer.get());
   if (d.march) {
     f.clouds.decision = d.why;
+    for (cloudfit::CloudLightingReport& r : f.references) r.decision = d.why;
     f.sky.decisions.push_back({"cloud mask for --clouds " + o.mode, d.why, 0.0,
                                "none: the mask cost " + FormatNumber(1000.0 * d.time_s) + " ms", std::nullopt, ""});
   }
@@ -106,7 +124,8 @@ nlohmann::json Errors(const cloudfit::PixelErrors& e) {
 nlohmann::json Finite(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 }  // namespace
 
-nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLightingReport& r) {
+nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::SkyCloudFit& f) {
+  const cloudfit::CloudLightingReport& r = f.clouds;
   nlohmann::json params = nlohmann::json::object();
   for (const cloudfit::CloudParamReport& p : r.parameters) {
     nlohmann::json j = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
@@ -120,12 +139,13 @@ nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLi
     }
     params[p.name] = j;
   }
+  nlohmann::json cloud_time = o.time_s ? nlohmann::json(*o.time_s) : nlohmann::json("per reference: skycalCloudTimeS");
   nlohmann::json j = {{"mode", o.mode},
                       {"fitted", r.fitted},
                       {"decision", r.decision},
                       {"term", "known shapes (per-pixel composite residuals)"},
                       {"cloud_preset", o.preset},
-                      {"cloud_time_s", o.time_s},
+                      {"cloud_time_s", cloud_time},
                       {"cloud_fraction", r.cloud_fraction},
                       {"parameters", params}};
   if (!r.fitted) return j;
@@ -134,7 +154,12 @@ nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLi
                       "when the parameter is near 0), at the start"},
       {"predicted_relative_error", "sigma sqrt(diag((J^T J)^-1)) with sigma = 2% pixel noise over the samples, free set"},
       {"separability", "1 / sqrt(variance inflation) among all observed parameters: 1 independent, 0 collinear"},
-      {"singular_values", "of the column-normalised Jacobian (d ln composite / d ln parameter), descending"}};
+      {"singular_values", "of the column-normalised Jacobian (d ln composite / d ln parameter), descending"},
+      {"solve", "seconds of the whole fit (time_s, the same as fit.json time_s) and of its stages: cloud_pixels_time_s "
+                "(the start's cloud renders that find the cloud pixels), sky_fit_time_s (the sky on its clear pixels; "
+                "sky_renders backend renders), conditioning_time_s and cloud_solve_time_s (the Ceres solve of the cloud "
+                "blocks, conditioning included; renders and jacobians counted, render_time_s and jacobian_time_s of it), "
+                "report_time_s (the composites' errors)"}};
   j["singular_values"] = r.singular_values;
   j["singular_values_free"] = r.singular_values_free;
   j["cloud_pixels"] = {{"count", r.cloud_pixels}, {"samples", r.samples},
@@ -142,20 +167,59 @@ nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLi
   j["clear_pixels"] = Errors(r.clear);
   j["solve"] = {{"iterations", r.iterations},        {"termination", r.termination},
                 {"renders", r.renders},              {"jacobians", r.jacobians},
-                {"value_source", r.value_source},    {"render_time_s", r.render_time_s},
-                {"jacobian_time_s", r.jacobian_time_s}, {"conditioning_time_s", r.conditioning_time_s},
-                {"time_s", r.time_s}};
+                {"sky_renders", r.sky_renders},      {"value_source", r.value_source},
+                {"render_time_s", r.render_time_s},  {"jacobian_time_s", r.jacobian_time_s},
+                {"conditioning_time_s", r.conditioning_time_s},
+                {"cloud_pixels_time_s", r.cloud_pixels_time_s},
+                {"sky_fit_time_s", r.sky_fit_time_s}, {"cloud_solve_time_s", r.solve_time_s},
+                {"report_time_s", r.report_time_s},  {"time_s", r.time_s}};
+  if (f.references.size() > 1) {
+    j["day"] = {{"references", f.references.size()},
+                {"smoothness", o.day_smoothness},
+                {"prior_residuals", r.prior_residuals},
+                {"note", "one lighting per reference, a second-difference prior over time of day on each parameter "
+                         "(relative to the start, per h^2) weighted by smoothness; parameters holds: a parameter one "
+                         "reference cannot separate is held in all; `parameters` above are the earliest reference's"}};
+    j["keyframes"] = CloudDayKeyframesJson(f)["keys"];
+  }
   return j;
 }
 
-void AttachFittedClouds(const cloudfit::CloudLightingReport& r, const LoadedCloudShapes& shapes,
-                        const fs::path& preset_json, render::Preset* preset) {
+nlohmann::json CloudDayKeyframesJson(const cloudfit::SkyCloudFit& f) {
+  std::vector<const cloudfit::CloudLightingReport*> order;
+  for (const auto& r : f.references) order.push_back(&r);
+  std::stable_sort(order.begin(), order.end(), [](auto* a, auto* b) {
+    return a->time_of_day_h.value_or(0.0) < b->time_of_day_h.value_or(0.0);
+  });
+  nlohmann::json keys = nlohmann::json::array(), units = nlohmann::json::object();
+  for (const cloudfit::CloudLightingReport* r : order) {
+    nlohmann::json lighting = nlohmann::json::object();
+    for (const cloudfit::CloudParamReport& p : r->parameters) {
+      lighting[p.name] = p.value;
+      units[p.name] = p.unit;
+    }
+    keys.push_back({{"time_of_day_h", r->time_of_day_h ? nlohmann::json(*r->time_of_day_h) : nlohmann::json()},
+                    {"reference", r->reference},
+                    {"lighting", lighting},
+                    {"cloud_pixels", {{"count", r->cloud_pixels}, {"samples", r->samples},
+                                      {"initial", Errors(r->cloud_initial)}, {"final", Errors(r->cloud_final)}}}});
+  }
+  return {{"keys", keys}, {"units", units}};
+}
+
+void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes& shapes, const fs::path& preset_json,
+                        render::Preset* preset) {
+  const cloudfit::CloudLightingReport& r = f.clouds;
   if (!r.fitted) return;
   clouds::CloudParams p = r.fitted_params;
   const std::string weather_name = preset_json.stem().string() + ".weather.exr";
   clouds::SaveWeatherMap(shapes.weather, (preset_json.parent_path() / weather_name).string());
   p.weather_map = weather_name;
   preset->clouds_json = clouds::CloudSectionToJson(p).dump();
+  if (f.references.size() > 1) {
+    WriteJsonFileAtomically(preset_json.parent_path() / (preset_json.stem().string() + ".cloud_keyframes.json"),
+                            CloudDayKeyframesJson(f));
+  }
 }
 
 }  // namespace skycal::cli

@@ -20,7 +20,10 @@ namespace skycal::cli {
 struct FitCloudOptions {
   std::string mode = "auto";        // --clouds auto|on|off
   std::string preset;               // --cloud-preset PRESET.json: a clouds section (shapes + start lighting)
-  double time_s = 0.0;              // --cloud-time S: the wind time the reference was rendered at
+  // --cloud-time S: the wind time of every reference; unset: each reference's
+  // skycalCloudTimeS attribute (render --clouds --cloud-time writes it), else 0
+  std::optional<double> time_s;
+  double day_smoothness = 0.02;     // --cloud-day-smoothness L: the day's prior over time of day
   int samples = 256;                // --cloud-samples N: cloud pixels in the Jacobian
   std::vector<std::string> hold;    // --cloud-hold NAME (repeatable)
   bool IsValid(std::string* why) const;
@@ -39,17 +42,24 @@ struct LoadedCloudShapes {
 std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o);
 
 // Runs the fit with or without clouds (the decision first: a bad --clouds on fails before
-// any solve). `verbose`: progress on stderr.
+// any solve). Each reference's wind time: --cloud-time, else its skycalCloudTimeS
+// attribute, else 0. `verbose`: progress on stderr.
 cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector<fit::Reference>& refs,
                                      const render::Preset& init, const fit::FitOptions& fo, render::SkyRenderer& renderer,
                                      const std::vector<const fit::ProbeSamples*>& probes, const LoadedCloudShapes* shapes);
 
-// fit.json's `clouds` object.
-nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::CloudLightingReport& r);
+// fit.json's `clouds` object (a day: `keyframes`, one per reference in time order).
+nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::SkyCloudFit& f);
 
-// With fitted clouds: the preset gains the clouds section (fitted lighting) naming a copy of
-// the weather map written beside preset.json as <stem>.weather.exr.
-void AttachFittedClouds(const cloudfit::CloudLightingReport& r, const LoadedCloudShapes& shapes,
+// A day's cloud keyframes (<stem>.cloud_keyframes.json): {"keys": [{time_of_day_h,
+// reference, lighting {name: value}, cloud_pixels}], "units": {name: unit}}, in time order.
+nlohmann::json CloudDayKeyframesJson(const cloudfit::SkyCloudFit& f);
+
+// With fitted clouds: the preset gains the clouds section (fitted lighting; a day: the
+// earliest reference's) naming a copy of the weather map written beside preset.json as
+// <stem>.weather.exr; a day of references also writes <stem>.cloud_keyframes.json
+// (CloudDayKeyframesJson), which `skycal export` turns into one keyframe per time of day.
+void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes& shapes,
                         const std::filesystem::path& preset_json, render::Preset* preset);
 
 }  // namespace skycal::cli

@@ -239,8 +239,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   summary["references"] = per_ref;
   summary["warnings"] = warnings;
   summary["options"] = resolved;
-  summary["clouds"] = CloudReportJson(co, joint.clouds);
-  if (cloud_shapes) AttachFittedClouds(joint.clouds, *cloud_shapes, out / "preset.json", &result.preset);
+  summary["clouds"] = CloudReportJson(co, joint);
+  if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
                                        {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
@@ -312,13 +312,19 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Text("--clouds", &c.clouds.mode, "MODE",
-          "auto (default), on or off: fit the cloud lighting too (one reference).\n"
+          "auto (default), on or off: fit the cloud lighting too (per reference; a day\n"
+          "of references adds a smoothness prior over time of day, --cloud-day-smoothness).\n"
           "auto: on when the reference's cloud mask finds >= 1% cloud pixels and\n"
           "--cloud-preset gives the shapes; a clear reference never marches clouds");
   cl.Text("--cloud-preset", &c.clouds.preset, "PRESET.json",
           "the known cloud shapes: a preset whose clouds section (shape fields, start\n"
           "lighting) and weather map rendered the reference (e.g. default_cloudy.json)");
-  cl.Number("--cloud-time", &c.clouds.time_s, "S", "wind time of the reference's clouds, seconds (default 0)");
+  cl.Number("--cloud-time", &c.clouds.time_s, "S",
+            "wind time of the references' clouds, seconds (default: each reference's\n"
+            "skycalCloudTimeS attribute, written by render --clouds, else 0)");
+  cl.Number("--cloud-day-smoothness", &c.clouds.day_smoothness, "L",
+            "a day of >= 3 references: weight of the second-difference prior on each cloud\n"
+            "lighting parameter over time of day (relative change per h^2; default 0.02, 0: off)");
   cl.Integer("--cloud-samples", &c.clouds.samples, -1e9, 1e9, "expected an integer", "N",
              "cloud pixels in the Jet Jacobian (default 256; all when fewer)");
   cl.Repeatable("--cloud-hold", &c.clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");

@@ -85,43 +85,39 @@ void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& 
     const size_t i = static_cast<size_t>(s.y) * sky_image.width + s.x;
     for (int c = 0; c < 3; ++c) s.sky[c] = sky_image.pixels[3 * i + c];
   }
+  // Every value depends on the sky and the exposure: nothing cached survives a new one.
   cached_theta_.clear();
-}
-
-void CloudSampleModel::FreezeJacobianAt(const double* theta) {
-  std::vector<double> values(residuals()), jac(residuals() * kCloudLightingParameters);
-  const auto t0 = Clock::now();
-  if (!JetValues(theta, values.data(), jac.data())) {
-    throw Error("cloud lighting fit: the composite is not positive and finite at the joint polish's start");
-  }
-  ++jacobians;
-  jacobian_time_s += Seconds(t0);
-  frozen_ = std::move(jac);
-  frozen_values_ = std::move(values);
-  frozen_theta_.assign(theta, theta + kCloudLightingParameters);
+  jet_theta_.clear();
+  images_.clear();
 }
 
 bool CloudSampleModel::Evaluate(const double* theta, double* log_model, double* jacobian) {
-  if (!frozen_.empty()) {
-    const size_t n = residuals();
-    for (size_t i = 0; i < n; ++i) {
-      double v = frozen_values_[i];
-      for (int j = 0; j < kCloudLightingParameters; ++j) {
-        v += frozen_[i * kCloudLightingParameters + j] * (theta[j] - frozen_theta_[j]);
-      }
-      log_model[i] = v;
-    }
-    if (jacobian) std::copy(frozen_.begin(), frozen_.end(), jacobian);
-    return true;
-  }
   if (jacobian) {
-    const auto t0 = Clock::now();
-    if (!JetValues(theta, log_model, jacobian)) return false;
-    ++jacobians;
-    jacobian_time_s += Seconds(t0);
+    const size_t n = residuals() * kCloudLightingParameters;
+    if (jet_theta_.size() != kCloudLightingParameters || !std::equal(jet_theta_.begin(), jet_theta_.end(), theta)) {
+      const auto t0 = Clock::now();
+      jet_log_.assign(residuals(), 0.0);
+      jet_jacobian_.assign(n, 0.0);
+      if (!JetValues(theta, jet_log_.data(), jet_jacobian_.data())) {
+        jet_theta_.clear();
+        return false;
+      }
+      ++jacobians;
+      jacobian_time_s += Seconds(t0);
+      jet_theta_.assign(theta, theta + kCloudLightingParameters);
+    }
+    std::copy(jet_log_.begin(), jet_log_.end(), log_model);
+    std::copy(jet_jacobian_.begin(), jet_jacobian_.end(), jacobian);
   }
   if (source_ == CloudValueSource::kCpuDouble) return jacobian ? true : DoubleValues(theta, log_model);
   return RenderValues(theta, log_model);
+}
+
+const clouds::CloudImage* CloudSampleModel::RenderedAt(const double* theta) const {
+  for (const auto& [t, image] : images_) {
+    if (std::equal(t.begin(), t.end(), theta)) return &image;
+  }
+  return nullptr;
 }
 
 bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
@@ -136,8 +132,7 @@ bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
   CloudLighting l{};
   std::copy(theta, theta + kCloudLightingParameters, l.begin());
   SetCloudLighting(l, &params);
-  const clouds::CloudImage img =
-      renderer_->Render({&scene_.sky_preset, &params, scene_.noise, scene_.weather}, scene_.request);
+  clouds::CloudImage img = renderer_->Render({&scene_.sky_preset, &params, scene_.noise, scene_.weather}, scene_.request);
   ++renders;
   render_time_s += Seconds(t0);
   cached_log_.assign(n3, 0.0);
@@ -152,6 +147,8 @@ bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
       cached_log_[3 * k + c] = ok ? std::log(m) : 0.0;
     }
   }
+  if (images_.size() == kKeptImages) images_.erase(images_.begin() + 1);  // keep the first
+  images_.emplace_back(std::vector<double>(theta, theta + kCloudLightingParameters), std::move(img));
   if (!ok) {
     cached_theta_.clear();
     return false;

@@ -55,14 +55,12 @@ class CloudSampleModel {
   // not positive and finite (the trial point leaves the model's domain).
   bool Evaluate(const double* theta, double* log_model, double* jacobian);
 
-  // Linearised (the joint polish): values and Jacobian are evaluated once at `theta` (Jet
-  // march) and the block is then the affine model v0 + J0 (theta' - theta) until
-  // Unfreeze: a joint iteration costs neither a cloud render nor a Jet march (measured:
-  // rendering the clouds at every joint point cost ~0.8 s x ~40 points at 512x256 on
-  // lavapipe here); the exact solve that follows on the final sky, through the renderer,
-  // finishes the block.
-  void FreezeJacobianAt(const double* theta);
-  void Unfreeze() { frozen_.clear(); }
+  // The full-frame cloud render at `theta` when one of the renders since SetSky was made
+  // there (the first, at the solve's start, and the last kKeptImages - 1): the report's
+  // composites reuse them instead of rendering again. Null otherwise (or with kCpuDouble
+  // values). Each kept image is ~2 MB at 512x256.
+  static constexpr size_t kKeptImages = 4;
+  const clouds::CloudImage* RenderedAt(const double* theta) const;
 
   const std::vector<CloudSample>& samples() const { return samples_; }
   size_t residuals() const { return 3 * samples_.size(); }
@@ -90,8 +88,10 @@ class CloudSampleModel {
   // The last rendered point and its composite (Ceres asks for the residuals and then the
   // Jacobian at the same point: one render serves both).
   std::vector<double> cached_theta_, cached_log_;
-  std::vector<double> frozen_;  // the frozen Jacobian (row-major), empty when not frozen
-  std::vector<double> frozen_values_, frozen_theta_;
+  // The last Jet march (the conditioning's Jacobian at the start is the solve's first).
+  std::vector<double> jet_theta_, jet_log_, jet_jacobian_;
+  // Full-frame renders since SetSky, each with its point: the first, then the latest.
+  std::vector<std::pair<std::vector<double>, clouds::CloudImage>> images_;
 };
 
 }  // namespace skycal::cloudfit

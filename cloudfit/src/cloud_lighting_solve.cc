@@ -1,9 +1,12 @@
 #include "cloud_lighting_solve.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <iostream>
 
 #include "cloud_lighting_cost.h"
+#include "cloud_lighting_day_prior.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
@@ -92,10 +95,33 @@ void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* the
 
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
                                        const CloudLightingOptions& o) {
+  return SolveCloudDay({model}, {theta}, c, {0.0}, {}, o, nullptr);
+}
+
+ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& models, const std::vector<double*>& thetas,
+                                     const Conditioning& c, const std::vector<double>& times_h,
+                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals) {
+  if (models.size() != thetas.size() || models.size() != times_h.size() || models.empty()) {
+    throw Error("cloud lighting fit: one model, block and time per reference");
+  }
   ceres::Problem problem;
-  AddCloudBlock(&problem, model, theta, c);
+  for (size_t r = 0; r < models.size(); ++r) AddCloudBlock(&problem, models[r], thetas[r], c);
+  int priors = 0;
+  if (models.size() >= 3 && o.day_smoothness > 0.0) {
+    std::vector<size_t> order(models.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return times_h[a] < times_h[b]; });
+    for (size_t k = 1; k + 1 < order.size(); ++k) {
+      const size_t a = order[k - 1], m = order[k], b = order[k + 1];
+      problem.AddResidualBlock(new DaySmoothnessPrior(o.day_smoothness, times_h[a], times_h[m], times_h[b], scale),
+                               nullptr, thetas[a], thetas[m], thetas[b]);
+      ++priors;
+    }
+  }
+  if (prior_residuals) *prior_residuals = priors * kCloudLightingParameters;
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;  // 14 parameters, ~3,000 rows
+  // 14 parameters per reference, ~800 rows each: dense normal equations are tiny.
+  so.linear_solver_type = models.size() == 1 ? ceres::DENSE_QR : ceres::DENSE_NORMAL_CHOLESKY;
   so.max_num_iterations = o.max_iterations;
   // The recovery targets are 1% on parameters whose effect on the image can be ~1e-3 in
   // log units, so the cost's tail matters (function tolerance 1e-8); a step below 1e-6 of
@@ -103,6 +129,11 @@ ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, c
   so.function_tolerance = 1e-8;
   so.gradient_tolerance = 1e-12;
   so.parameter_tolerance = 1e-6;
+  // With bounds Ceres follows every trust-region step by a projected Armijo line search
+  // whose cubic interpolation asks for the gradient at the trial point: a Jet Jacobian
+  // (~256 Jet marches) for a point the step may reject. The bounds are the spec table's
+  // wide ranges, which the steps clamp to anyway (the parameter blocks' Plus projects).
+  so.max_num_line_search_step_size_iterations = 0;
   so.logging_type = ceres::SILENT;
   Progress progress;
   if (o.verbose) so.callbacks.push_back(&progress);

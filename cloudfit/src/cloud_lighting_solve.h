@@ -1,4 +1,4 @@
-// The pieces both entry points share: choosing the cloud pixels and their samples, the
+// The pieces the entry points share: choosing the cloud pixels and their samples, the
 // conditioning at a point, the cloud block's bounds and held entries in a Ceres problem,
 // a solve of the cloud block alone, and the report.
 #pragma once
@@ -34,6 +34,15 @@ void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* the
 // Solves the cloud block alone (the sky fixed); returns the Ceres summary.
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
                                        const CloudLightingOptions& o);
+
+// A day's cloud blocks in one problem: one block per reference (models[r], thetas[r]; the
+// sky fixed), the held entries of `c` held in every block, and with three or more
+// references and o.day_smoothness > 0 the time-of-day prior (cloud_lighting_day_prior.h)
+// over each reference and its neighbours in time. `times_h`: one per reference, distinct;
+// `scale`: the prior's unit per parameter.
+ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& models, const std::vector<double*>& thetas,
+                                     const Conditioning& c, const std::vector<double>& times_h,
+                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals);
 
 // Errors of a composite against the reference at `pixels` (solid-angle weighted).
 PixelErrors CompositeErrors(const std::vector<size_t>& pixels, const ImageRGB& reference, const ImageRGB& composite);

@@ -6,9 +6,10 @@
 // through the same model source on ceres::Jet (CPU) at a sample of the cloud pixels.
 // What the pixels cannot separate is held and said (cloud_lighting_conditioning.h).
 //
-// Two entry points: FitCloudLightingKnownSky (the sky given: the recovery tests and the
-// benchmark's core) and FitSkyAndClouds (the joint fit of `skycal fit --clouds`: sky terms
-// and the cloud term in one Ceres problem).
+// Three entry points: FitCloudLightingKnownSky (the sky given: the recovery tests),
+// FitCloudDayKnownSky (a day of references with the sky given: per-reference lighting with
+// a smoothness prior over time of day) and FitSkyAndClouds (`skycal fit --clouds`: the sky
+// fitted on its clear pixels, then the cloud blocks on that sky).
 #pragma once
 #include <array>
 #include <limits>
@@ -37,7 +38,13 @@ struct KnownCloudShapes {
   const clouds::CloudNoise* noise = nullptr;
   const clouds::WeatherMap* weather = nullptr;
   double time_s = 0.0;  // s: wind offset = wind speed x time
+  // s: per reference of a day, its own wind time (a time-lapse's clouds move); empty: time_s
+  // for every reference.
+  std::vector<double> time_s_per_reference;
   clouds::MarchOptions march;
+  double TimeOf(size_t reference) const {
+    return time_s_per_reference.empty() ? time_s : time_s_per_reference.at(reference);
+  }
 };
 
 struct CloudLightingOptions {
@@ -57,6 +64,13 @@ struct CloudLightingOptions {
   bool auto_hold = true;
   std::vector<std::string> hold;  // parameter names held whatever the conditioning says
   int max_iterations = 100;
+  // A day (three or more references): weight of the second-difference prior on each
+  // lighting parameter over time of day (cloud_lighting_day_prior.h: relative curvature per
+  // h^2). 0: every reference's lighting independent. Default: at references 2 h apart the
+  // prior on a middle key weighs about as much as the cloud pixels' data on a parameter
+  // they predict to 1% at 2% noise (256 samples), so it steers the weakly determined ones
+  // and barely moves the well determined ones.
+  double day_smoothness = 0.02;
   int threads = 2;
   bool verbose = false;
   bool IsValid(std::string* why) const;
@@ -82,6 +96,8 @@ struct PixelErrors {
 
 struct CloudLightingReport {
   bool fitted = false;
+  std::string reference;                     // the reference's name (a day: one report per reference)
+  std::optional<double> time_of_day_h;       // its time of day, hours
   std::string decision;   // what auto/on/off decided and why
   std::vector<CloudParamReport> parameters;  // CloudLightingNames order
   std::vector<double> singular_values;       // column-normalised Jacobian, observed parameters, descending
@@ -93,6 +109,12 @@ struct CloudLightingReport {
   PixelErrors clear;                         // the clear pixels (the sky terms), final
   int iterations = 0, renders = 0, jacobians = 0;
   double render_time_s = 0.0, jacobian_time_s = 0.0, conditioning_time_s = 0.0, time_s = 0.0;
+  // Stages of the whole fit (FitSkyAndClouds), s: the cloud renders that find the cloud
+  // pixels, the sky fit on the clear pixels, the cloud solve (conditioning included), the
+  // report's renders of the composites; sky_renders: the sky fit's backend renders.
+  double cloud_pixels_time_s = 0.0, sky_fit_time_s = 0.0, solve_time_s = 0.0, report_time_s = 0.0;
+  int sky_renders = 0;
+  int prior_residuals = 0;  // the day's smoothness prior (0 for fewer than 3 references)
   std::string termination, value_source;
   clouds::CloudParams fitted_params;         // the section with the fitted lighting
 };
@@ -108,7 +130,23 @@ CloudLightingReport FitCloudLightingKnownSky(const ImageRGB& reference, const st
                                              const KnownCloudShapes& shapes, const CloudLightingOptions& o,
                                              clouds::CloudRenderer* renderer);
 
-// The kinds of cloud term the joint fit can hold (MakeCloudTerm in cloud_lighting_fit.cc).
+// A day with the sky given: per reference its image, sun, sky and exposure, and its time
+// of day (hours) for the prior; shapes.TimeOf(r) the wind time of reference r. One
+// report per reference (input order); every reference holds the same parameters (those
+// some reference cannot separate are held in all, so the day's keyframes share columns).
+struct DayReference {
+  const ImageRGB* reference = nullptr;
+  std::array<double, 3> sun_dir{};
+  const render::Preset* sky_preset = nullptr;
+  const ImageRGB* sky = nullptr;
+  double exposure = 1.0;
+  double time_of_day_h = 0.0;
+  std::string name;
+};
+std::vector<CloudLightingReport> FitCloudDayKnownSky(const std::vector<DayReference>& day, const KnownCloudShapes& shapes,
+                                                     const CloudLightingOptions& o, clouds::CloudRenderer* renderer);
+
+// The kinds of cloud term the fit can hold.
 enum class CloudTermKind {
   kKnownShapes,  // regime 1: per-pixel residuals against the known shapes' composite
 };
@@ -123,18 +161,27 @@ struct CloudDecision {
   double time_s = 0.0;          // the mask's cost
 };
 // Throws skycal::Error for --clouds on without a cloud pixel (naming the reference) or
-// without shapes; several references with clouds on are refused (one at a time for now).
+// without shapes. Several references (a day): the fraction is over all of them, and each
+// needs a time of day (the prior's axis) when clouds are marched.
 CloudDecision DecideClouds(CloudMode mode, const std::vector<fit::Reference>& refs, const render::Preset& init,
                            bool shapes_given, double min_cloud_fraction = 0.01);
 
 struct SkyCloudFit {
   fit::FitResult sky;         // references[].rendered: the composite with clouds when they ran
+  // The fit's cloud report: one reference's, or for a day the earliest reference's values
+  // with the day's solve (iterations, renders, times summed over the references).
   CloudLightingReport clouds;
+  std::vector<CloudLightingReport> references;  // per reference (input order) when fitted
 };
 
-// The joint fit: sky terms + the cloud term of `kind` in one Ceres problem (fit_term.h)
-// when decision.march, else the sky alone with every cloud parameter held. `cloud_renderer`
-// gives the cloud values (the Vulkan renderer in the verb).
+// The fit with clouds, when decision.march: the cloud pixels (known-shape transmittance
+// below the threshold at the start) leave the sky rows; the sky is fitted on the rest (its
+// linear stage alone, as a clear sky: the cloud cost has no sky parameter, so a joint
+// problem would only be block-diagonal, and the Ceres polish it forced cost ~50 sky
+// renders); then the cloud blocks are solved on the fitted sky, after its gauge move (the
+// sun's illuminance is not scaled with the LUT, so the clouds' sun-to-ambient balance is
+// final only then), through the renderer with exact Jet Jacobians. Else the sky alone with
+// every cloud parameter held. `cloud_renderer` gives the cloud values (Vulkan in the verb).
 SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const render::Preset& init,
                             const fit::FitOptions& fit_options, render::SkyRenderer& renderer,
                             const std::vector<const fit::ProbeSamples*>& probes, const CloudDecision& decision,
