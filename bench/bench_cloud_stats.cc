@@ -39,6 +39,12 @@ double* Field(clouds::CloudParams& p, const std::string& name) {
   throw Error("no cloud field " + name);
 }
 
+std::string FittedList(const fit::CloudStatsOptions& o) {
+  std::string s;
+  for (const auto& n : o.fitted) s += (s.empty() ? "" : ",") + n;
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -64,6 +70,13 @@ int main(int argc, char** argv) {
   const int model_maps = argc > 5 ? std::max(1, std::atoi(argv[5])) : 1;
   if (argc > 6) options.model_renders = std::max(1, std::atoi(argv[6]));
   if (argc > 7) options.max_iterations = std::max(0, std::atoi(argv[7]));
+  // FITTED: a comma list of the parameters fitted (default: the options' four); the others
+  // of the four are held at the truth (the start is not perturbed for them).
+  if (argc > 8) {
+    options.fitted.clear();
+    std::stringstream list(argv[8]);
+    for (std::string name; std::getline(list, name, ',');) options.fitted.push_back(name);
+  }
   nlohmann::json runs = nlohmann::json::array();
   std::vector<std::vector<double>> errors(kStart.size());  // per parameter, over the unknown-shape pairs
   std::ostringstream rows;
@@ -78,6 +91,7 @@ int main(int argc, char** argv) {
     auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, ref_seeds, model_seeds, 25.0, 30.0, options, *renderer, cache);
     clouds::CloudParams start = scene.truth;
     for (const auto& [name, f] : kStart) {
+      if (std::find(options.fitted.begin(), options.fitted.end(), name) == options.fitted.end()) continue;
       const auto& specs = clouds::CloudParameterSpecs();
       const auto it = std::find_if(specs.begin(), specs.end(), [&](const auto& s) { return name == s.name; });
       *Field(start, name) = std::clamp(*Field(scene.truth, name) * f, it->min, it->max);
@@ -141,7 +155,8 @@ int main(int argc, char** argv) {
      << model_maps << ", renders per evaluation " << options.model_renders << ", at most " << options.max_iterations
      << " iterations.\n\n"
      << "`build/bench/bench_cloud_stats " << pairs << " STEM " << options.render_width << " " << refs_per_fit << " "
-     << model_maps << " " << options.model_renders << " " << options.max_iterations << "` (fit/include/skycal/fit/cloud_stats.h, default options: "
+     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options)
+     << "` (fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
      << options.render_width << "x" << options.render_height << " renders, bins sun angle 0-20-45-90-180 deg x elevation "
      << "2-15-35-90 deg x opacity thin/thick, quantiles 0.25-0.5-0.75 of log radiance per channel and the thick "
      << "share per bin; the model's statistics pool " << options.model_renders << " renders "

@@ -114,6 +114,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   so.render_height = o.width / 2;
   so.model_renders = o.renders;
   so.max_iterations = o.max_iterations;
+  so.fitted = o.fitted;
   const render::Preset cloudy = render::LoadPreset(DefaultCloudyPresetPath());
   const clouds::CloudParams initial = clouds::ParseCloudSectionText(cloudy.clouds_json, DefaultCloudyPresetPath());
   auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
