@@ -26,13 +26,14 @@ struct FitCloudStatsOptions {
   int renders = 8;           // renders per evaluation (map m % maps, wind 1800 s apart)
   int max_iterations = 12;   // --cloud-stats-iterations
   uint64_t weather_seed = 1; // seeds of the model's weather maps: seed, seed + 1, ...
-  // What a photograph's statistics can fit: the overall brightness of cloud against the
-  // clear sky (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer
-  // traded against it), extinction and the ambient. The phase lobe g1 and powder are held at
-  // the bundled default_cloudy's values: with unknown shapes they land 86% / 100% off
-  // (median over 5 seed pairs, even with the model pooled over 4 weather maps;
-  // bench/results/cloud_stats_seed_pairs_ensemble.md).
-  std::vector<std::string> fitted = {"extinction", "scattering_albedo", "ambient_strength"};
+  // What a photograph's statistics can fit: the brightness of cloud against the clear sky
+  // (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer traded
+  // against it) and the ambient. Held at the bundled default_cloudy's values: the phase lobe
+  // g1 and powder (with unknown shapes they land 86% / 100% off, median over 5 seed pairs,
+  // even with the model pooled over 4 weather maps: bench/results/cloud_stats_seed_pairs_ensemble.md)
+  // and extinction (the coverage match sets the opacity with it; fitted on dawn it ran to 0:
+  // clouds that vanish leave their bins empty, and an empty bin adds no residual).
+  std::vector<std::string> fitted = {"scattering_albedo", "ambient_strength"};
   bool IsValid(std::string* why) const;
 };
 

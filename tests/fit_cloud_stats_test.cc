@@ -110,7 +110,8 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   EXPECT_GT(target, 0.05);
   EXPECT_NEAR(got, target, 0.05);
   EXPECT_EQ(j["parameters"]["phase_g1"]["held"], true);
-  EXPECT_EQ(j["parameters"]["extinction"]["held"], false);
+  EXPECT_EQ(j["parameters"]["extinction"]["held"], true);
+  EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], false);
   EXPECT_EQ(j["render_size"][0], 32);
   const auto& r = j["references"][0];
   // The "atmosphere-only" image is the photo itself: zero error everywhere; the statistics'
