@@ -289,7 +289,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
                      "  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]\n"
                      "             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]\n"
                      "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
-                     "             [--clouds auto|on|off] [--cloud-preset P.json] [--cloud-time S]");
+                     "             [--clouds auto|on|off|stats] [--cloud-preset P.json] [--cloud-time S]\n"
+                     "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
