@@ -7,7 +7,10 @@
 // reference's own seeds (known shapes).
 //
 // Usage: bench_cloud_stats [PAIRS (default 6)] [OUT_STEM] [RENDER_WIDTH (default 256)] [REFERENCES_PER_FIT (default 1)]
-//   further references of a fit use noise/weather seeds (1 + k + 10 j, 11 + k + 10 j)
+//                          [MODEL_WEATHER_MAPS (default 1)] [MODEL_RENDERS (default: the options' 2)] [MAX_ITERATIONS]
+//   further references of a fit use noise/weather seeds (1 + k + 10 j, 11 + k + 10 j); with
+//   MODEL_WEATHER_MAPS E > 1 the model pools renders of E weather maps (seeds 211 + k + 1000 e),
+//   MODEL_RENDERS in all (render m: map m % E, wind (m / E) * 1800 s)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -36,6 +39,12 @@ double* Field(clouds::CloudParams& p, const std::string& name) {
   throw Error("no cloud field " + name);
 }
 
+std::string FittedList(const fit::CloudStatsOptions& o) {
+  std::string s;
+  for (const auto& n : o.fitted) s += (s.empty() ? "" : ",") + n;
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -57,6 +66,17 @@ int main(int argc, char** argv) {
   // References per fit (the same lighting over several skies: the reference side's shape
   // noise averages out); more than 1 skips the control.
   const int refs_per_fit = argc > 4 ? std::max(1, std::atoi(argv[4])) : 1;
+  // The model's ensemble of shape draws (weather-map seeds) and its renders per evaluation.
+  const int model_maps = argc > 5 ? std::max(1, std::atoi(argv[5])) : 1;
+  if (argc > 6) options.model_renders = std::max(1, std::atoi(argv[6]));
+  if (argc > 7) options.max_iterations = std::max(0, std::atoi(argv[7]));
+  // FITTED: a comma list of the parameters fitted (default: the options' four); the others
+  // of the four are held at the truth (the start is not perturbed for them).
+  if (argc > 8) {
+    options.fitted.clear();
+    std::stringstream list(argv[8]);
+    for (std::string name; std::getline(list, name, ',');) options.fitted.push_back(name);
+  }
   nlohmann::json runs = nlohmann::json::array();
   std::vector<std::vector<double>> errors(kStart.size());  // per parameter, over the unknown-shape pairs
   std::ostringstream rows;
@@ -71,11 +91,19 @@ int main(int argc, char** argv) {
     auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, ref_seeds, model_seeds, 25.0, 30.0, options, *renderer, cache);
     clouds::CloudParams start = scene.truth;
     for (const auto& [name, f] : kStart) {
+      if (std::find(options.fitted.begin(), options.fitted.end(), name) == options.fitted.end()) continue;
       const auto& specs = clouds::CloudParameterSpecs();
       const auto it = std::find_if(specs.begin(), specs.end(), [&](const auto& s) { return name == s.name; });
       *Field(start, name) = std::clamp(*Field(scene.truth, name) * f, it->min, it->max);
     }
-    const fit::CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
+    fit::CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
+    std::vector<clouds::WeatherMap> ensemble;
+    if (!control && model_maps > 1) {
+      ensemble.push_back(scene.weather);
+      for (int e = 1; e < model_maps; ++e)
+        ensemble.push_back(bench::CloudStatsWeather(model_seeds.weather + 1000 * e, scene.truth.weather_extent_m));
+      for (const auto& w : ensemble) model.weather_ensemble.push_back(&w);
+    }
     // The control renders the model once, at the reference's own wind time: the same shapes.
     fit::CloudStatsOptions run_options = options;
     if (control) run_options.model_renders = 1;
@@ -123,8 +151,12 @@ int main(int argc, char** argv) {
   }
   std::ostringstream md;
   md << "# Cloud lighting from statistics, unknown shapes: seed pairs\n\n"
-     << "References per fit: " << refs_per_fit << ".\n\n"
-     << "`build/bench/bench_cloud_stats " << pairs << "` (fit/include/skycal/fit/cloud_stats.h, default options: "
+     << "References per fit: " << refs_per_fit << "; the model's weather maps (shape draws) per evaluation: "
+     << model_maps << ", renders per evaluation " << options.model_renders << ", at most " << options.max_iterations
+     << " iterations.\n\n"
+     << "`build/bench/bench_cloud_stats " << pairs << " STEM " << options.render_width << " " << refs_per_fit << " "
+     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options)
+     << "` (fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
      << options.render_width << "x" << options.render_height << " renders, bins sun angle 0-20-45-90-180 deg x elevation "
      << "2-15-35-90 deg x opacity thin/thick, quantiles 0.25-0.5-0.75 of log radiance per channel and the thick "
      << "share per bin; the model's statistics pool " << options.model_renders << " renders "
@@ -147,7 +179,14 @@ int main(int argc, char** argv) {
     md << buf;
   }
   std::ofstream(stem + ".md") << md.str();
-  std::ofstream(stem + ".json") << nlohmann::json{{"machine", bench::MachineJson()}, {"runs", runs}, {"spread", spread}}.dump(2)
+  std::ofstream(stem + ".json") << nlohmann::json{{"machine", bench::MachineJson()},
+                                                  {"references_per_fit", refs_per_fit},
+                                                  {"model_weather_maps", model_maps},
+                                                  {"model_renders", options.model_renders},
+                                                  {"render_width", options.render_width},
+                                                  {"runs", runs},
+                                                  {"spread", spread}}
+                                       .dump(2)
                                 << "\n";
   std::fprintf(stderr, "wrote %s.md/.json\n", stem.c_str());
   return 0;

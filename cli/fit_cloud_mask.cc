@@ -43,6 +43,7 @@ CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_pr
     ++out.cloudy_pixels;
   }
   out.fraction = sky_before > 0 ? static_cast<double>(out.cloudy_pixels) / static_cast<double>(sky_before) : 0.0;
+  out.probability = std::move(probability);
   if (ref->counts.sky == 0) {
     throw Error(ref->path + ": --cloud-mask: every sky pixel is cloud (probability >= 0.5): nothing clear to fit");
   }

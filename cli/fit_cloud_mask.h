@@ -5,6 +5,7 @@
 // frame's sun). Pixels with probability >= 0.5 become user-masked; fit.json reports the count.
 #pragma once
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +17,7 @@ struct CloudMaskApplied {
   long long cloudy_pixels = 0;  // sky pixels taken out
   double fraction = 0.0;        // of the sky pixels before masking
   std::string source;           // "mask.cloud channel" or "estimated against <preset>"
+  std::vector<float> probability;  // per pixel of the frame (fit --clouds stats reads it; not in ToJson)
   nlohmann::json ToJson() const;
 };
 

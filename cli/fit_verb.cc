@@ -87,16 +87,20 @@ bool FitVerbOptions::IsValid(std::string* why) const {
 }
 
 namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co);
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
+                                const FitCloudStatsOptions& cs = {});
 }  // namespace
 
 nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}, FitCloudOptions{}); }
 
 namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co) {
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
+                                const FitCloudStatsOptions& cs) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   if (!co.IsValid(&why)) throw Error(why);
+  if (cs.enabled && !cs.IsValid(&why)) throw Error(why);
+  if (cs.enabled && !o.cloud_mask) throw Error("--clouds stats fits the atmosphere to the clear pixels: it needs --cloud-mask");
   const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
   std::vector<NamedPath> read = PresetInputs("--init", init_path);
   for (const std::string& r : o.references) read.push_back({"--reference", r});
@@ -114,6 +118,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   const std::unique_ptr<LoadedCloudShapes> cloud_shapes = LoadFitCloudShapes(co);  // a bad section fails early
   std::vector<fit::Reference> refs;
   std::vector<nlohmann::json> cloud_json;
+  std::vector<std::vector<float>> cloud_probability;  // per reference, for --clouds stats
   std::set<std::string> names;
   for (const std::string& path : o.references) {
     refs.push_back(fit::LoadReference(path, o.fit));
@@ -128,6 +133,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     if (o.cloud_mask) {
       const CloudMaskApplied cm = ApplyCloudMask(&refs.back(), DefaultPresetPath());
       cloud_json.push_back(cm.ToJson());
+      cloud_probability.push_back(cm.probability);
       Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
                      std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
     }
@@ -240,6 +246,14 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   summary["warnings"] = warnings;
   summary["options"] = resolved;
   summary["clouds"] = CloudReportJson(co, joint);
+  if (cs.enabled) {
+    std::vector<CloudStatsPhoto> photos;
+    for (size_t r = 0; r < refs.size(); ++r) photos.push_back({&refs[r], cloud_probability[r]});
+    summary["clouds"]["mode"] = "stats";
+    summary["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by statistics "
+                                    "of the cloud pixels (fit.json's cloud_stats)";
+    summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit");
+  }
   if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
@@ -281,7 +295,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
                      "  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]\n"
                      "             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]\n"
                      "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
-                     "             [--clouds auto|on|off] [--cloud-preset P.json] [--cloud-time S]");
+                     "             [--clouds auto|on|off|stats] [--cloud-preset P.json] [--cloud-time S]\n"
+                     "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
@@ -312,10 +327,13 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
   cl.Text("--clouds", &c.clouds.mode, "MODE",
-          "auto (default), on or off: fit the cloud lighting too (per reference; a day\n"
+          "auto (default), on, off or stats: fit the cloud lighting too (on: per reference; a day\n"
           "of references adds a smoothness prior over time of day, --cloud-day-smoothness).\n"
           "auto: on when the reference's cloud mask finds >= 1% cloud pixels and\n"
-          "--cloud-preset gives the shapes; a clear reference never marches clouds");
+          "--cloud-preset gives the shapes; a clear reference never marches clouds.\n"
+          "stats: unknown shapes (a photograph): implies --cloud-mask; the atmosphere\n"
+          "fits the clear pixels, then the cloud lighting fits statistics of the cloud\n"
+          "pixels (fit.json's cloud_stats, fit/<ref>.clouds.*.png)");
   cl.Text("--cloud-preset", &c.clouds.preset, "PRESET.json",
           "the known cloud shapes: a preset whose clouds section (shape fields, start\n"
           "lighting) and weather map rendered the reference (e.g. default_cloudy.json)");
@@ -328,8 +346,22 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Integer("--cloud-samples", &c.clouds.samples, -1e9, 1e9, "expected an integer", "N",
              "cloud pixels in the Jet Jacobian (default 256; all when fewer)");
   cl.Repeatable("--cloud-hold", &c.clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");
+  cl.Integer("--cloud-stats-width", &c.cloud_stats.width, 16, 1024, "expected pixels in [16, 1024]", "PX",
+             "--clouds stats: width of the statistics' lat-long renders (default 128; the\n"
+             "frame's width must be a multiple)");
+  cl.Integer("--cloud-stats-maps", &c.cloud_stats.maps, 1, 16, "expected an integer in [1, 16]", "N",
+             "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
+  cl.Integer("--cloud-stats-iterations", &c.cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",
+             "--clouds stats: Ceres iterations at most (default 12)");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
+  c.cloud_stats.renders = 2 * c.cloud_stats.maps;
+  if (c.clouds.mode == "stats") {
+    if (!c.clouds.preset.empty()) throw Error("--clouds stats: the shapes are unknown: --cloud-preset does not apply");
+    c.cloud_stats.enabled = true;
+    c.clouds.mode = "off";  // no known-shapes term
+    o.cloud_mask = true;
+  }
 
   ApplyFitOptionArgs(fa, &f);
   if (sun_dir && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
@@ -347,7 +379,7 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
 int RunFit(int argc, char** argv) {
   return RunVerb("fit", WantsJson(argc, argv), [&]() {
     const FitCommandLine c = ParseFitArgs(argc, argv);
-    return RunFitWithProbes(c.options, c.probes, c.clouds);
+    return RunFitWithProbes(c.options, c.probes, c.clouds, c.cloud_stats);
   });
 }
 

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fit_cloud_stats.h"
 #include "fit_clouds.h"
 #include "skycal/fit/fit_options.h"
 
@@ -33,6 +34,7 @@ struct FitCommandLine {
   FitVerbOptions options;
   FitProbeOptions probes;
   FitCloudOptions clouds;  // --clouds, --cloud-preset, --cloud-time ... (fit_clouds.h)
+  FitCloudStatsOptions cloud_stats;  // --clouds stats, --cloud-stats-* (fit_cloud_stats.h)
 };
 
 nlohmann::json RunFitImpl(const FitVerbOptions& options);

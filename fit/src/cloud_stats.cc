@@ -90,8 +90,8 @@ bool CloudStatsOptions::IsValid(std::string* why) const {
            " (expected 8x4 ... 4096x2048 pixels)";
     return false;
   }
-  if (model_renders < 1 || model_renders > 16) {
-    *why = "cloud stats: model_renders = " + std::to_string(model_renders) + " (expected an integer in [1, 16])";
+  if (model_renders < 1 || model_renders > 64) {
+    *why = "cloud stats: model_renders = " + std::to_string(model_renders) + " (expected an integer in [1, 64])";
     return false;
   }
   if (!(std::isfinite(model_time_step_s) && std::abs(model_time_step_s) <= 1e6)) {
@@ -107,6 +107,18 @@ bool CloudStatsOptions::IsValid(std::string* why) const {
     return false;
   }
   return march.IsValid(why);
+}
+
+bool FindCloudBin(const CloudStatsOptions& o, double sun_angle_deg, double elevation_deg, int* sun_bin,
+                  int* elevation_bin) {
+  *sun_bin = FindBin(o.sun_angle_edges_deg, sun_angle_deg);
+  *elevation_bin = FindBin(o.elevation_edges_deg, elevation_deg);
+  return *sun_bin >= 0 && *elevation_bin >= 0;
+}
+
+void OpacityClassWeights(const CloudStatsOptions& o, double a, double* thin, double* thick) {
+  *thick = Smoothstep(o.thick_lo, o.thick_hi, a);
+  *thin = Smoothstep(o.thin_lo, o.thin_hi, a) * (1.0 - *thick);
 }
 
 CloudStatistics ComputeCloudStatistics(const ImageRGB& img, const std::vector<float>& opacity,
@@ -145,9 +157,8 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
     for (int x = 0; x < img.width; ++x) {
       const size_t i = static_cast<size_t>(y) * img.width + x;
       if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
-      const double a = opacity[i];
-      const double thick = Smoothstep(o.thick_lo, o.thick_hi, a);
-      const double thin = Smoothstep(o.thin_lo, o.thin_hi, a) * (1.0 - thick);
+      double thin = 0.0, thick = 0.0;
+      OpacityClassWeights(o, opacity[i], &thin, &thick);
       if (thick <= 0.0 && thin <= 0.0) continue;
       const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
       if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
@@ -184,12 +195,13 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
 
 CloudStatsRender RenderForCloudStats(const CloudStatsReference& ref, const CloudStatsScene& scene,
                                      const clouds::CloudParams& params, clouds::CloudRenderer& renderer,
-                                     const CloudStatsOptions& o, double time_offset_s) {
+                                     const CloudStatsOptions& o, double time_offset_s,
+                                     const clouds::WeatherMap* weather) {
   if (ref.clear_sky.width != o.render_width || ref.clear_sky.height != o.render_height)
     throw Error("cloud stats: reference '" + ref.name + "': the clear sky is " + std::to_string(ref.clear_sky.width) +
                 "x" + std::to_string(ref.clear_sky.height) + ", expected the render size " +
                 std::to_string(o.render_width) + "x" + std::to_string(o.render_height));
-  clouds::CloudScene cs{scene.preset, &params, scene.noise, scene.weather};
+  clouds::CloudScene cs{scene.preset, &params, scene.noise, weather ? weather : scene.weather};
   clouds::CloudRenderRequest req;
   req.sun_dir = ref.sun_dir;
   req.width = o.render_width;
@@ -210,6 +222,8 @@ CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>&
   std::string why;
   if (!options.IsValid(&why)) throw Error(why);
   if (!scene.preset || !scene.noise || !scene.weather) throw Error("cloud stats: the scene needs a preset, noise and a weather map");
+  for (const clouds::WeatherMap* w : scene.weather_ensemble)
+    if (!w) throw Error("cloud stats: a null weather map in the scene's weather_ensemble");
   if (refs.empty()) throw Error("cloud stats: no reference");
   clouds::ValidateCloudParams(scene.initial, "cloud stats: initial parameters");
   clouds::CloudParams init = scene.initial;
@@ -273,8 +287,11 @@ bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vect
   for (size_t r = 0; r < refs_.size(); ++r) {
     std::vector<CloudStatsRender> renders(options_.model_renders);
     try {
+      const int e = static_cast<int>(scene_.weather_ensemble.size());
       for (int m = 0; m < options_.model_renders; ++m)
-        renders[m] = RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s);
+        renders[m] = e > 0 ? RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (m / e) * options_.model_time_step_s,
+                                                 scene_.weather_ensemble[m % e])
+                           : RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s);
     } catch (const Error&) {
       return false;
     }

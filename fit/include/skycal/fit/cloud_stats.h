@@ -36,7 +36,7 @@ struct CloudStatsOptions {
   // between them (other shapes from the same weather statistics): a photograph is one draw
   // of a cloud population, the model's side need not be, and pooling halves its share of
   // the shape noise in the statistics.
-  int model_renders = 2;
+  int model_renders = 2;  // [1, 64]
   double model_time_step_s = 1800.0;  // s (10 m/s of wind: 18 km, half the draw distance)
   // Weight of the residual per (sun angle, elevation) bin matching the thick share of cloud
   // weight, thick / (thin + thick): the opacity distribution, which extinction sets.
@@ -84,6 +84,12 @@ struct CloudStatsScene {
   clouds::CloudParams initial;
   const clouds::CloudNoise* noise = nullptr;
   const clouds::WeatherMap* weather = nullptr;
+  // The model's ensemble of shapes: when non-empty, model render m uses weather map
+  // weather_ensemble[m % size] at wind offset (m / size) * model_time_step_s (`weather` is
+  // then unused by the statistics). Several independent draws of the same weather statistics
+  // make the model's statistics an expectation over shapes, not one draw
+  // (bench/results/cloud_stats_seed_pairs.md measures what that buys).
+  std::vector<const clouds::WeatherMap*> weather_ensemble;
 };
 
 // Statistics of one image: per bin (sun angle x elevation x opacity class) the weight
@@ -99,6 +105,12 @@ struct CloudStatistics {
     return (sun * elevation_bins + elevation) * kOpacityClasses + opacity_class;
   }
 };
+// The (sun angle, elevation) bin of a direction, false outside the edges; and the opacity
+// classes' memberships of an opacity a (thin + thick <= 1; the rest is clear).
+bool FindCloudBin(const CloudStatsOptions& options, double sun_angle_deg, double elevation_deg, int* sun_bin,
+                  int* elevation_bin);
+void OpacityClassWeights(const CloudStatsOptions& options, double opacity, double* thin, double* thick);
+
 // `opacity` and `sky` as in CloudStatsReference; pixels with a non-positive or non-finite
 // channel are left out. Throws skycal::Error on size mismatches.
 CloudStatistics ComputeCloudStatistics(const ImageRGB& radiance, const std::vector<float>& opacity,
@@ -142,9 +154,11 @@ struct CloudStatsRender {
   ImageRGB composite;
   std::vector<float> opacity;  // 1 - T
 };
-// `time_offset_s` is added to the reference's cloud_time_s.
+// `time_offset_s` is added to the reference's cloud_time_s; `weather` overrides the scene's
+// map when given.
 CloudStatsRender RenderForCloudStats(const CloudStatsReference& ref, const CloudStatsScene& scene,
                                      const clouds::CloudParams& params, clouds::CloudRenderer& renderer,
-                                     const CloudStatsOptions& options, double time_offset_s = 0.0);
+                                     const CloudStatsOptions& options, double time_offset_s = 0.0,
+                                     const clouds::WeatherMap* weather = nullptr);
 
 }  // namespace skycal::fit

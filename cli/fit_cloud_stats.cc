@@ -1,0 +1,337 @@
+#include "fit_cloud_stats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "fit_report.h"
+#include "render_clouds.h"
+#include "skycal/capture/sky_segmentation.h"
+#include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
+#include "skycal/core/latlong.h"
+#include "skycal/fit/cloud_stats.h"
+#include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
+#include "verb_common.h"
+
+namespace skycal::cli {
+namespace fs = std::filesystem;
+
+bool FitCloudStatsOptions::IsValid(std::string* why) const {
+  if (width < 16 || width > 1024 || width % 2 != 0) {
+    *why = "--cloud-stats-width " + std::to_string(width) + " (expected an even number of pixels in [16, 1024])";
+    return false;
+  }
+  if (maps < 1 || maps > 16) {
+    *why = "--cloud-stats-maps " + std::to_string(maps) + " (expected an integer in [1, 16])";
+    return false;
+  }
+  if (renders < maps || renders > 64) {
+    *why = "cloud stats renders per evaluation " + std::to_string(renders) + " (expected [maps, 64])";
+    return false;
+  }
+  if (max_iterations < 0 || max_iterations > 200) {
+    *why = "--cloud-stats-iterations " + std::to_string(max_iterations) + " (expected an integer in [0, 200])";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// Box average by an integer factor (a lat-long keeps its 2:1 shape and pixel centres).
+ImageRGB BoxDown(const ImageRGB& in, int f) {
+  ImageRGB out(in.width / f, in.height / f);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        double s = 0.0;
+        for (int j = 0; j < f; ++j)
+          for (int i = 0; i < f; ++i) s += in.at(x * f + i, y * f + j, c);
+        out.at(x, y, c) = static_cast<float>(s / (f * f));
+      }
+  return out;
+}
+std::vector<float> BoxDown(const std::vector<float>& in, int w, int h, int f) {
+  std::vector<float> out(static_cast<size_t>(w / f) * (h / f));
+  for (int y = 0; y < h / f; ++y)
+    for (int x = 0; x < w / f; ++x) {
+      double s = 0.0;
+      for (int j = 0; j < f; ++j)
+        for (int i = 0; i < f; ++i) s += in[static_cast<size_t>(y * f + j) * w + x * f + i];
+      out[static_cast<size_t>(y) * (w / f) + x] = static_cast<float>(s / (f * f));
+    }
+  return out;
+}
+
+// Solid-angle weighted mean opacity over sky pixels above `min_elevation_deg`.
+double MeanOpacity(const std::vector<float>& opacity, const std::vector<float>& sky, int w, int h,
+                   double min_elevation_deg) {
+  double s = 0.0, n = 0.0;
+  for (int y = 0; y < h; ++y) {
+    if (latlong::Latitude(y, h) * 180.0 / M_PI < min_elevation_deg) continue;
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
+      const double om = latlong::PixelSolidAngle(x, y, w, h);
+      s += om * opacity[i];
+      n += om;
+    }
+  }
+  return n > 0.0 ? s / n : 0.0;
+}
+
+clouds::WeatherMap StatsWeather(uint64_t seed, double extent_m, double mean_coverage) {
+  clouds::WeatherNoiseOptions w;  // default_cloudy's statistics of shapes, the coverage matched
+  w.mean_coverage = mean_coverage;
+  w.coverage_contrast = 3.0;
+  w.coverage_cells = 8;
+  return clouds::NoiseWeatherMap(seed, 256, extent_m, w);
+}
+
+nlohmann::json ErrorsJson(const fit::ImageErrors& e) {
+  return {{"pixels", e.pixels}, {"rel_rmse", e.rel_rmse}, {"log_rmse", e.log_rmse}};
+}
+
+struct PhotoData {
+  fit::CloudStatsReference stats_ref;
+  fit::Reference whole;  // the reference with every sky pixel (clear and cloud) of the segmentation as kSky
+  fit::Reference clear, cloud;  // the same restricted to probability < 0.5 / >= 0.5
+  long long non_sky_segmented = 0;
+};
+
+}  // namespace
+
+nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<CloudStatsPhoto>& photos,
+                                     const fit::FitResult& sky, const fs::path& fit_dir) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  fit::CloudStatsOptions so;
+  so.render_width = o.width;
+  so.render_height = o.width / 2;
+  so.model_renders = o.renders;
+  so.max_iterations = o.max_iterations;
+  so.fitted = o.fitted;
+  const render::Preset cloudy = render::LoadPreset(DefaultCloudyPresetPath());
+  const clouds::CloudParams initial = clouds::ParseCloudSectionText(cloudy.clouds_json, DefaultCloudyPresetPath());
+  auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
+  std::vector<PhotoData> data(photos.size());
+  for (size_t r = 0; r < photos.size(); ++r) {
+    const fit::Reference& ref = *photos[r].ref;
+    const int w = ref.radiance.width, h = ref.radiance.height;
+    if (w % o.width != 0 || w / o.width < 1)
+      throw Error(ref.path + ": --clouds stats: the frame is " + std::to_string(w) + " wide, not a multiple of " +
+                  "--cloud-stats-width " + std::to_string(o.width));
+    const int f = w / o.width;
+    // Sky: what the sky fit used or left out as cloud, minus what the automatic segmentation
+    // finds is not sky (buildings, trees, terrain: grey like cloud in the colour test).
+    const capture::SkyMask seg = capture::EstimateSkyMask(ref.radiance, ref.sun_dir, capture::SkyMaskOptions{});
+    std::vector<float> skymask(static_cast<size_t>(w) * h, 0.0f);
+    PhotoData& d = data[r];
+    d.whole = ref;
+    d.clear = ref;
+    d.cloud = ref;
+    for (size_t i = 0; i < skymask.size(); ++i) {
+      const fit::PixelClass c = ref.pixel_class[i];
+      const bool candidate = c == fit::PixelClass::kSky || c == fit::PixelClass::kUserMasked;
+      const bool is_sky = candidate && seg.sky[i] >= 0.5f;
+      d.non_sky_segmented += candidate && !is_sky;
+      skymask[i] = is_sky ? 1.0f : 0.0f;
+      const bool cloudy = photos[r].cloud_probability[i] >= 0.5f;
+      const auto keep = fit::PixelClass::kSky, drop = fit::PixelClass::kUserMasked;
+      if (candidate) {
+        d.whole.pixel_class[i] = is_sky ? keep : drop;
+        d.clear.pixel_class[i] = is_sky && !cloudy ? keep : drop;
+        d.cloud.pixel_class[i] = is_sky && cloudy ? keep : drop;
+      }
+    }
+    const double exposure = sky.references[r].exposure;
+    fit::CloudStatsReference& sr = d.stats_ref;
+    sr.name = ref.name;
+    sr.radiance = BoxDown(ref.radiance, f);
+    for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
+    sr.opacity = BoxDown(photos[r].cloud_probability, w, h, f);
+    sr.sky = BoxDown(skymask, w, h, f);
+    for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
+    sr.sun_dir = ref.sun_dir;
+    render::RenderRequest req;
+    req.sun_dir = ref.sun_dir;
+    req.width = o.width;
+    req.height = o.width / 2;
+    req.sun_disc = false;
+    sr.clear_sky = sky_renderer->Render(sky.preset, req);
+  }
+
+  std::unique_ptr<clouds::CloudRenderer> renderer;
+  try {
+    renderer = clouds::CreateVulkanCloudRenderer(false);
+  } catch (const Error& e) {
+    Log("fit", std::string("clouds stats: no Vulkan device (") + e.what() + "): the float CPU march renders");
+    renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
+  }
+  const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::DefaultCloudNoiseCacheDir());
+
+  // Coverage first: bisect the weather maps' mean coverage until the model's mean opacity
+  // (pooled over the ensemble, at the starting lighting) equals the photos' mean cloud
+  // probability over their sky above the lowest elevation bin.
+  const double min_el = so.elevation_edges_deg.front();
+  double target = 0.0;
+  for (const PhotoData& d : data)
+    target += MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el) / data.size();
+  auto model_opacity = [&](double coverage, std::vector<clouds::WeatherMap>* maps) {
+    maps->clear();
+    for (int m = 0; m < o.maps; ++m) maps->push_back(StatsWeather(o.weather_seed + m, initial.weather_extent_m, coverage));
+    fit::CloudStatsScene scene{&sky.preset, initial, &noise, &(*maps)[0]};
+    double mean = 0.0;
+    for (const PhotoData& d : data)
+      for (int m = 0; m < o.maps; ++m)
+        mean += MeanOpacity(fit::RenderForCloudStats(d.stats_ref, scene, initial, *renderer, so, 0.0, &(*maps)[m]).opacity,
+                            d.stats_ref.sky, o.width, o.width / 2, min_el) /
+                (data.size() * o.maps);
+    return mean;
+  };
+  std::vector<clouds::WeatherMap> maps;
+  double lo = 0.0, hi = 1.0, coverage = 0.5, achieved = 0.0;
+  nlohmann::json coverage_steps = nlohmann::json::array();
+  for (int step = 0; step < 7; ++step) {
+    coverage = 0.5 * (lo + hi);
+    achieved = model_opacity(coverage, &maps);
+    coverage_steps.push_back({{"mean_coverage", coverage}, {"model_mean_opacity", achieved}});
+    Log("fit", "clouds stats: coverage " + FormatNumber(coverage) + " -> model mean opacity " + FormatNumber(achieved) +
+                   " (photo " + FormatNumber(target) + ")");
+    (achieved < target ? lo : hi) = coverage;
+  }
+  coverage = 0.5 * (lo + hi);
+  achieved = model_opacity(coverage, &maps);
+
+  std::vector<fit::CloudStatsReference> refs;
+  for (const PhotoData& d : data) refs.push_back(d.stats_ref);
+  fit::CloudStatsScene scene{&sky.preset, initial, &noise, &maps[0]};
+  for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
+  Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters (" +
+                 std::to_string(o.renders) + " renders of " + std::to_string(o.maps) + " weather maps per evaluation, " +
+                 std::to_string(o.width) + "x" + std::to_string(o.width / 2) + ", at most " +
+                 std::to_string(o.max_iterations) + " iterations)");
+  const fit::CloudStatsResult res = fit::FitCloudStats(refs, scene, *renderer, so);
+  Log("fit", "clouds stats: cost " + FormatNumber(res.initial_cost) + " -> " + FormatNumber(res.final_cost) + ", " +
+                 std::to_string(res.renders) + " renders, " + FormatNumber(res.time_s) + " s");
+
+  nlohmann::json params = nlohmann::json::object();
+  for (const auto& p : res.parameters) {
+    params[p.name] = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
+    if (p.held) params[p.name]["why"] = p.why_held;
+  }
+  nlohmann::json per_ref = nlohmann::json::array();
+  const int nq = static_cast<int>(so.quantiles.size());
+  const int mid = nq / 2;  // the median of the default {0.25, 0.5, 0.75}
+  std::vector<fit::Reference> panel_refs;
+  fit::FitResult panels = sky;
+  panels.references.clear();
+  for (size_t r = 0; r < data.size(); ++r) {
+    const PhotoData& d = data[r];
+    const fit::CloudStatistics& photo = res.reference_stats[r];
+    const fit::CloudStatistics& model = res.final_stats.empty() ? photo : res.final_stats[r];
+    // The statistical fit image: each sky pixel is the atmosphere's fit where clear and, by
+    // its cloud membership, the model's median radiance of its (sun angle, elevation,
+    // opacity) bin where cloud. The photo's own cloud map places the clouds; the lighting is
+    // the fitted one. It shows how well the bins' lighting predicts the photo, pixel by pixel.
+    const fit::Reference& ref = *photos[r].ref;
+    const double exposure = sky.references[r].exposure;
+    ImageRGB pred = sky.references[r].rendered;
+    const int w = ref.radiance.width, h = ref.radiance.height;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        if (d.whole.pixel_class[i] != fit::PixelClass::kSky) continue;
+        const auto v = latlong::PixelDirection(x, y, w, h);
+        const double c = std::clamp(v[0] * ref.sun_dir[0] + v[1] * ref.sun_dir[1] + v[2] * ref.sun_dir[2], -1.0, 1.0);
+        int sb = 0, eb = 0;
+        if (!fit::FindCloudBin(so, std::acos(c) * 180.0 / M_PI, latlong::Latitude(y, h) * 180.0 / M_PI, &sb, &eb)) continue;
+        double thin = 0.0, thick = 0.0;
+        fit::OpacityClassWeights(so, photos[r].cloud_probability[i], &thin, &thick);
+        const double weights[2] = {thin, thick};
+        double clear_share = 1.0;
+        double acc[3] = {0.0, 0.0, 0.0};
+        for (int k = 0; k < 2; ++k) {
+          const int bin = model.Bin(sb, eb, k);
+          if (weights[k] <= 0.0 || model.weight[bin] <= 0.0) continue;
+          clear_share -= weights[k];
+          for (int ch = 0; ch < 3; ++ch)
+            acc[ch] += weights[k] * exposure * std::exp(model.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + mid]);
+        }
+        for (int ch = 0; ch < 3; ++ch) pred.at(x, y, ch) = static_cast<float>(clear_share * pred.at(x, y, ch) + acc[ch]);
+      }
+    const ImageRGB& atmosphere = sky.references[r].rendered;
+    nlohmann::json errors = {
+        {"atmosphere_only", {{"whole_sky", ErrorsJson(fit::CompareToReference(d.whole, atmosphere))},
+                             {"clear", ErrorsJson(fit::CompareToReference(d.clear, atmosphere))},
+                             {"cloud", ErrorsJson(fit::CompareToReference(d.cloud, atmosphere))}}},
+        {"with_cloud_statistics", {{"whole_sky", ErrorsJson(fit::CompareToReference(d.whole, pred))},
+                                   {"clear", ErrorsJson(fit::CompareToReference(d.clear, pred))},
+                                   {"cloud", ErrorsJson(fit::CompareToReference(d.cloud, pred))}}}};
+    nlohmann::json bins = nlohmann::json::array();
+    for (int sb = 0; sb < photo.sun_bins; ++sb)
+      for (int eb = 0; eb < photo.elevation_bins; ++eb)
+        for (int k = 0; k < 2; ++k) {
+          const int bin = photo.Bin(sb, eb, k);
+          if (photo.weight[bin] < so.min_bin_sr) continue;
+          auto medians = [&](const fit::CloudStatistics& s) {
+            nlohmann::json m = nlohmann::json::array();
+            for (int ch = 0; ch < 3; ++ch) m.push_back(s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + mid]);
+            return m;
+          };
+          bins.push_back({{"sun_angle_deg", {so.sun_angle_edges_deg[sb], so.sun_angle_edges_deg[sb + 1]}},
+                          {"elevation_deg", {so.elevation_edges_deg[eb], so.elevation_edges_deg[eb + 1]}},
+                          {"opacity_class", k == 0 ? "thin" : "thick"},
+                          {"photo_sr", photo.weight[bin]},
+                          {"model_sr", model.weight[bin] / o.renders},
+                          {"photo_log_median_rgb", medians(photo)},
+                          {"fit_log_median_rgb", medians(model)},
+                          {"initial_log_median_rgb", res.initial_stats.empty() ? nlohmann::json() : medians(res.initial_stats[r])}});
+        }
+    per_ref.push_back({{"name", ref.name},
+                       {"non_sky_pixels_segmented", d.non_sky_segmented},
+                       {"photo_mean_cloud_probability",
+                        MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el)},
+                       {"errors", errors},
+                       {"bins", bins},
+                       {"images", {{"reference", "fit/" + ref.name + ".clouds.reference.png"},
+                                   {"fit", "fit/" + ref.name + ".clouds.fit.png"},
+                                   {"error", "fit/" + ref.name + ".clouds.error.png"}}}});
+    fit::Reference pr = d.whole;
+    pr.name = ref.name + ".clouds";
+    panel_refs.push_back(std::move(pr));
+    fit::ReferenceFit rf = sky.references[r];
+    rf.rendered = std::move(pred);
+    panels.references.push_back(std::move(rf));
+  }
+  WriteFitPanels(fit_dir.string(), panel_refs, panels);
+  return {{"term", "cloud statistics (unknown shapes): weighted quantiles of log radiance per (sun angle x elevation x "
+                   "opacity) bin, model pooled over an ensemble of weather maps"},
+          {"shared_with_atmosphere", "the sun's illuminance, tint and transmittance and the sky's SH-9 ambient come from "
+                                     "the fitted preset"},
+          {"render_size", {o.width, o.width / 2}},
+          {"weather_maps", o.maps},
+          {"renders_per_evaluation", o.renders},
+          {"coverage", {{"photo_mean_cloud_probability", target},
+                        {"matched_mean_coverage", coverage},
+                        {"model_mean_opacity", achieved},
+                        {"steps", coverage_steps}}},
+          {"parameters", params},
+          {"initial_cost", res.initial_cost},
+          {"final_cost", res.final_cost},
+          {"iterations", res.iterations},
+          {"renders", res.renders},
+          {"singular_values", res.singular_values},
+          {"termination", res.termination},
+          {"time_s", res.time_s},
+          {"notes", {{"fit image", "clear pixels: the atmosphere's fit; cloud pixels: by their cloud membership, the "
+                                   "fitted model's median radiance of their bin (the photo's cloud map places them)"},
+                     {"model_sr", "per render (the pooled weight divided by the renders)"}}},
+          {"references", per_ref}};
+}
+
+}  // namespace skycal::cli

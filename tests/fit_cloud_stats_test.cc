@@ -1,0 +1,138 @@
+// `skycal fit --clouds stats` (cli/fit_cloud_stats.h): the command line, bad input, and the
+// wiring at a small size — a synthetic "photo" (the default cloudy preset's clouds over its
+// sky, 64x32) through the coverage match, the statistics fit and the panels. The recovery
+// itself is measured in bench/results/cloud_stats_seed_pairs_ensemble.md, the real skies in
+// bench/results/cloud_photos.md.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "fit_cloud_stats.h"
+#include "fit_verb.h"
+#include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
+
+namespace skycal::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+FitCommandLine Parse(std::vector<std::string> words) {
+  std::vector<char*> argv;
+  for (auto& w : words) argv.push_back(w.data());
+  return ParseFitArgs(static_cast<int>(argv.size()), argv.data());
+}
+
+std::string ErrorOf(std::vector<std::string> words) {
+  try {
+    Parse(std::move(words));
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FitCloudStats, CommandLine) {
+  const FitCommandLine c = Parse({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-maps", "3", "--out", "d"});
+  EXPECT_TRUE(c.cloud_stats.enabled);
+  EXPECT_TRUE(c.options.cloud_mask);   // the clear pixels fit the atmosphere
+  EXPECT_EQ(c.clouds.mode, "off");     // no known-shapes term
+  EXPECT_EQ(c.cloud_stats.maps, 3);
+  EXPECT_EQ(c.cloud_stats.renders, 6);  // two wind times per map
+  // Control: without --clouds stats nothing of it is on.
+  EXPECT_FALSE(Parse({"--reference", "a.exr", "--out", "d"}).cloud_stats.enabled);
+  EXPECT_NE(ErrorOf({"--reference", "a.exr", "--clouds", "stats", "--cloud-preset", "p.json", "--out", "d"}).find("--cloud-preset"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-width", "8", "--out", "d"})
+                .find("--cloud-stats-width"),
+            std::string::npos);
+  std::string why;
+  FitCloudStatsOptions o;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.width = 65;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-width 65"), std::string::npos) << why;
+}
+
+struct SyntheticPhoto {
+  std::unique_ptr<clouds::CloudRenderer> renderer;
+  bench::CloudStatsSyntheticScene scene;
+  fit::Reference ref;
+  fit::FitResult sky;
+  std::vector<float> probability;
+  SyntheticPhoto() {
+    try {
+      renderer = clouds::CreateVulkanCloudRenderer(false);
+    } catch (const Error&) {
+      renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
+    }
+    fit::CloudStatsOptions so;
+    so.render_width = 64;
+    so.render_height = 32;
+    const std::string cache = (fs::temp_directory_path() / "skycal-cloud-stats-cache").string();
+    scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1, 11}, {101, 211}, 25.0, 30.0, so, *renderer, cache);
+    const auto& r = scene.reference;
+    ref.path = "synthetic.exr";
+    ref.name = "synthetic";
+    ref.radiance = r.radiance;
+    ref.sun_dir = r.sun_dir;
+    probability = r.opacity;
+    ref.pixel_class.assign(r.opacity.size(), fit::PixelClass::kSky);
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const size_t i = static_cast<size_t>(y) * 64 + x;
+        if (latlong::Latitude(y, 32) <= 0.0) ref.pixel_class[i] = fit::PixelClass::kBelowHorizon;
+        else if (probability[i] >= 0.5f) ref.pixel_class[i] = fit::PixelClass::kUserMasked;  // as --cloud-mask
+      }
+    sky.preset = scene.preset;
+    fit::ReferenceFit rf;
+    rf.exposure = 1.0;
+    rf.rendered = r.radiance;  // the "atmosphere's fit": the photo itself (a control of the error bookkeeping)
+    sky.references.push_back(rf);
+  }
+};
+
+TEST(FitCloudStats, WiringAtASmallSize) {
+  SyntheticPhoto p;
+  const fs::path dir = fs::temp_directory_path() / ("skycal-fit-cloud-stats-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  FitCloudStatsOptions o;
+  o.width = 32;  // the 64x32 frame box-averaged by 2
+  o.maps = 1;
+  o.renders = 1;
+  o.max_iterations = 0;  // the wiring, not the recovery (benchmarked)
+  const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+  // Coverage first: the bisection ends with the model's mean opacity near the photo's (the
+  // last of 7 halvings moves the coverage by 1/256; measured |difference| < 0.02 at 32x16).
+  const double target = j["coverage"]["photo_mean_cloud_probability"], got = j["coverage"]["model_mean_opacity"];
+  EXPECT_GT(target, 0.05);
+  EXPECT_NEAR(got, target, 0.05);
+  EXPECT_EQ(j["parameters"]["phase_g1"]["held"], true);
+  EXPECT_EQ(j["parameters"]["extinction"]["held"], true);
+  EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], false);
+  EXPECT_EQ(j["render_size"][0], 32);
+  const auto& r = j["references"][0];
+  // The "atmosphere-only" image is the photo itself: zero error everywhere; the statistics'
+  // image replaces each cloud pixel by its bin's median, which no bin reproduces exactly (the
+  // same bookkeeping, shown to see a difference).
+  EXPECT_LT(r["errors"]["atmosphere_only"]["whole_sky"]["rel_rmse"].get<double>(), 1e-6);
+  EXPECT_GT(r["errors"]["atmosphere_only"]["whole_sky"]["pixels"].get<long long>(), 100);
+  EXPECT_GT(r["errors"]["with_cloud_statistics"]["cloud"]["rel_rmse"].get<double>(), 0.01);
+  EXPECT_GT(r["bins"].size(), 0u);
+  for (const char* k : {"reference", "fit", "error"}) EXPECT_TRUE(fs::exists(dir / ("synthetic.clouds." + std::string(k) + ".png"))) << k;
+  fs::remove_all(dir);
+  // A frame whose width is not a multiple of the statistics' width: named, nothing run.
+  o.width = 48;
+  try {
+    RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("synthetic.exr"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--cloud-stats-width 48"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace skycal::cli
