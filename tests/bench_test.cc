@@ -20,6 +20,7 @@
 #include "skycal/core/json_file.h"
 #include "test_util.h"
 #include "export_verb.h"
+#include "image_compare.h"
 #include "render_verb.h"
 #include "verb_common.h"
 
@@ -190,6 +191,28 @@ TEST(BenchVerbLogs, ExportIsQuietWithVerboseOff) {
   ::testing::internal::CaptureStderr();
   cli::RunExportImpl(eo);
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("[export] wrote"), std::string::npos);
+}
+
+// The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.
+TEST(BenchImageCompare, AreaMeanAtNodesKeepsAConstantAndAveragesDetailAway) {
+  ImageRGB flat(256, 128);
+  for (float& v : flat.pixels) v = 2.5f;
+  const ImageRGB flat_mean = bench::AreaMeanAtNodes(flat, 64, 32);
+  for (float v : flat_mean.pixels) ASSERT_NEAR(v, 2.5f, 1e-5f);
+  // A one-pixel checkerboard of 1 and 3: every node of a 4x coarser grid averages it to ~2,
+  // and the relative error of that mean against the point-sampled truth is ~50% (the
+  // detail a coarse grid cannot hold), against ~0 for the area mean.
+  ImageRGB checker(256, 128);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 256; ++x)
+      for (int c = 0; c < 3; ++c) checker.at(x, y, c) = ((x + y) % 2) ? 3.0f : 1.0f;
+  const ImageRGB mean = bench::AreaMeanAtNodes(checker, 64, 32);
+  for (int y = 2; y < 30; ++y)  // the poles' nodes gather few pixels
+    for (int x = 0; x < 64; ++x) ASSERT_NEAR(mean.at(x, y, 0), 2.0f, 0.35f) << x << "," << y;
+  ImageRGB coarse(64, 32);
+  for (float& v : coarse.pixels) v = 2.0f;
+  EXPECT_GT(bench::RelRmse(checker, coarse, 10.0), 0.4);
+  EXPECT_LT(bench::RelRmse(mean, coarse, 10.0), 0.12);
 }
 
 TEST(BenchPareto, ExactMembershipOnAHandMadeSet) {

@@ -25,6 +25,28 @@ void Sample(const ImageRGB& im, double x, double y, double out[3]) {
 
 }  // namespace
 
+ImageRGB AreaMeanAtNodes(const ImageRGB& fine, int width, int height) {
+  std::vector<double> sum(static_cast<size_t>(width) * height * 3, 0.0), weight(static_cast<size_t>(width) * height, 0.0);
+  for (int y = 0; y < fine.height; ++y)
+    for (int x = 0; x < fine.width; ++x) {
+      const auto pos = latlong::PixelPosition(latlong::PixelDirection(x, y, fine.width, fine.height), width, height);
+      int nx = static_cast<int>(std::lround(pos[0]));
+      const int ny = std::clamp(static_cast<int>(std::lround(pos[1])), 0, height - 1);
+      if (nx >= width - 1) nx = 0;  // the seam: column W-1 repeats column 0
+      const double w = latlong::PixelSolidAngle(x, y, fine.width, fine.height);
+      const size_t i = static_cast<size_t>(ny) * width + std::clamp(nx, 0, width - 1);
+      for (int c = 0; c < 3; ++c) sum[3 * i + c] += w * fine.at(x, y, c);
+      weight[i] += w;
+    }
+  ImageRGB out(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + (x == width - 1 ? 0 : x);
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = weight[i] > 0.0 ? static_cast<float>(sum[3 * i + c] / weight[i]) : 0.0f;
+    }
+  return out;
+}
+
 bool AllFinite(const ImageRGB& image) {
   return std::all_of(image.pixels.begin(), image.pixels.end(), [](float v) { return std::isfinite(v); });
 }

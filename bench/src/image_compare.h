@@ -12,6 +12,13 @@ namespace skycal::bench {
 // whose absolute exposure is arbitrary. NaN when no pixel qualifies.
 double RelRmse(const ImageRGB& truth, const ImageRGB& image, double min_elevation_deg, bool fit_scale = false);
 
+// `fine` averaged onto the nodes of a width x height lat-long: each fine pixel goes to its
+// nearest node (the seam's two columns are one direction), weighted by its solid angle, as
+// the fit's pyramid levels are built (fit/src/pyramid.h). What a filtered output of that size
+// should hold, so an output is compared with the scene at its own resolution rather than
+// charged for the detail a coarser grid cannot carry. Nodes no fine pixel reaches: 0.
+ImageRGB AreaMeanAtNodes(const ImageRGB& fine, int width, int height);
+
 // True when every value is finite.
 bool AllFinite(const ImageRGB& image);
 
