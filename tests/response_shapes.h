@@ -154,6 +154,11 @@ inline SyntheticBrackets MakeShapeBrackets(const ImageRGB& scene, const Response
 struct ShapeMergeError {
   double median = 0.0, p90 = 0.0, scale = 1.0;
   std::array<double, 3> channel{1.0, 1.0, 1.0};  // median ratio per channel / scale: the balance error
+  // The same after one scale per channel (each channel's median ratio): the error left once
+  // the white balance is fixed, as a colour chart fixes it (capture/color_chart.h). A
+  // channel's radiance scale is itself a gauge the brackets cannot fix when the channels'
+  // curves differ (scaling E_c and the curve's argument together leaves every code as it is).
+  double median_balanced = 0.0, p90_balanced = 0.0;
 };
 inline ShapeMergeError EvaluateShapeMerge(const ImageRGB& merged, const SyntheticBrackets& s) {
   std::vector<double> ratio;
@@ -173,6 +178,11 @@ inline ShapeMergeError EvaluateShapeMerge(const ImageRGB& merged, const Syntheti
   }
   e.median = Quantile(rel, 0.5);
   e.p90 = Quantile(rel, 0.9);
+  std::vector<double> balanced;
+  balanced.reserve(ratio.size());
+  for (size_t i = 0; i < ratio.size(); ++i) balanced.push_back(std::fabs(ratio[i] / (e.scale * e.channel[i % 3]) - 1.0));
+  e.median_balanced = Quantile(balanced, 0.5);
+  e.p90_balanced = Quantile(balanced, 0.9);
   return e;
 }
 
