@@ -81,7 +81,7 @@ CloudBenchScene LoadDefaultCloudyScene() {
 Suite CloudsSuite() {
   Suite s;
   s.name = "clouds";
-  s.summary = "HZD cloud march of the bundled cloudy preset (sun 25 deg): backend x march x steps x light samples";
+  s.summary = "HZD cloud march of the bundled cloudy preset (sun 25 deg): backend x march x steps x light samples x light step";
   s.error_metric = "rel RMSE of the composite above the horizon vs a converged double reference (1,024 steps, light integral on the sun ray: 64 samples over 8 km)";
   s.error_axis = "rel RMSE vs converged clouds";
   s.run = [](const SuiteOptions& o) {
