@@ -79,7 +79,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   } else {
     d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);
   }
-  Log("fit", "clouds: " + d.why);
+  if (fo.verbose) Log("fit", "clouds: " + d.why);  // fit --quiet and skycal bench: off
   cloudfit::CloudLightingOptions co;
   co.samples = o.samples;
   co.hold = o.hold;
@@ -103,7 +103,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
     // path) by default, the double CPU model with --backend cpu.
     cloud_renderer = fo.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
                                                             : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
-    Log("fit", "clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
+    if (fo.verbose) Log("fit", "clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
   }
   cloudfit::SkyCloudFit f =
       cloudfit::FitSkyAndClouds(refs, init, fo, renderer, probes, d, cloudfit::CloudTermKind::kKnownShapes,

@@ -88,7 +88,8 @@ nlohmann::json RunProbeExtractImpl(const ProbeExtractOptions& o) {
                           {"nonfinite", m.pixels_nonfinite}}},
                         {"samples", samples}};
   WriteJsonFileAtomically(o.out, doc);
-  Log("probe-extract", o.image + ": ball at (" + std::to_string(m.circle.cx) + ", " + std::to_string(m.circle.cy) +
+  if (o.verbose)
+    Log("probe-extract", o.image + ": ball at (" + std::to_string(m.circle.cx) + ", " + std::to_string(m.circle.cy) +
                            ") r " + std::to_string(m.circle.radius_px) + " px, " + std::to_string(m.samples.size()) +
                            " samples from " + std::to_string(m.pixels_used) + " pixels (" +
                            std::to_string(m.pixels_clipped) + " clipped), max luminance " +

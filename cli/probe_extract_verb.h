@@ -20,6 +20,7 @@ struct ProbeExtractOptions {
   double albedo = 0.18;                        // the ball's Lambertian albedo, (0, 1]
   double clip_level = std::numeric_limits<double>::infinity();  // pixels with a channel >= this are rejected
   std::string out;                             // SAMPLES.json, written atomically
+  bool verbose = true;                         // its progress line on stderr ([probe-extract] ...); skycal bench turns it off
 
   bool IsValid(std::string* why) const;
 };

@@ -15,11 +15,14 @@
 #include "skycal/bench/pareto.h"
 #include "skycal/bench/results.h"
 #include "skycal/bench/stress_table.h"
+#include "skycal/bench/study_suite_grids.h"
 #include "skycal/bench/suite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "test_util.h"
 #include "export_verb.h"
+#include "probe_extract_verb.h"
+#include "skycal/core/exr_io.h"
 #include "image_compare.h"
 #include "render_verb.h"
 #include "verb_common.h"
@@ -191,6 +194,104 @@ TEST(BenchVerbLogs, ExportIsQuietWithVerboseOff) {
   ::testing::internal::CaptureStderr();
   cli::RunExportImpl(eo);
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("[export] wrote"), std::string::npos);
+}
+
+// `skycal probe-extract` (run by the stress suite) with verbose off prints nothing; on (the
+// control) its one progress line.
+TEST(BenchVerbLogs, ProbeExtractIsQuietWithVerboseOff) {
+  skycal::testing::ScratchDir dir("bench-verb-logs-probe");
+  ImageRGB im(64, 64);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const double dx = (x - 32) / 20.0, dy = (y - 32) / 20.0;
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = dx * dx + dy * dy < 1.0 ? static_cast<float>(0.2 + 0.8 * std::max(0.0, -dy)) : 0.05f;
+    }
+  cli::ProbeExtractOptions po;
+  po.image = dir / "ball.exr";
+  WriteExrRGB(po.image, im, {});
+  po.circle = capture::BallCircle{32, 32, 20};
+  po.verbose = false;
+  po.out = dir / "quiet.json";
+  ::testing::internal::CaptureStderr();
+  cli::RunProbeExtractImpl(po);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  po.verbose = true;
+  po.out = dir / "loud.json";
+  ::testing::internal::CaptureStderr();
+  cli::RunProbeExtractImpl(po);
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("[probe-extract]"), std::string::npos);
+}
+
+// The suites that replaced bench_cie, bench_sky_segmentation and bench_chart_stars: their
+// grids (no fit, mask or chart run), registration and plot flags.
+TEST(BenchStudySuites, GridsAndRegistration) {
+  const CieStudyPlan cie = FitCieStudyPlan(false);
+  ASSERT_EQ(cie.grid.Expand().size(), 3u);
+  EXPECT_EQ(Label(cie.grid.Defaults()), "model=ffxv-iso");
+  EXPECT_EQ(cie.types.size(), 15u);
+  EXPECT_EQ(cie.elevations_deg, (std::vector<double>{10.0, 30.0, 60.0}));
+  EXPECT_EQ(cie.width, 256);
+  const CieStudyPlan cie_quick = FitCieStudyPlan(true);
+  EXPECT_EQ(cie_quick.types, (std::vector<int>{1, 4, 7, 10, 13}));
+  EXPECT_EQ(cie_quick.elevations_deg, (std::vector<double>{30.0}));
+
+  for (const bool quick : {false, true}) {
+    const SkySegmentationPlan seg = SkySegmentationGridPlan(quick);
+    EXPECT_EQ(Label(seg.grid.Defaults()), "grabcut=on");
+    EXPECT_EQ(seg.grid.Expand().size(), 2u);
+    ASSERT_EQ(seg.frames.size(), seg.hand_masks.size());
+    EXPECT_EQ(seg.frames.size(), quick ? 2u : 5u);
+    int scored = 0;
+    for (const std::string& m : seg.hand_masks) scored += !m.empty();
+    EXPECT_EQ(scored, 2);  // sunrise and sunset: the error's IoU is over these
+  }
+
+  EXPECT_EQ(CaptureChartGrid(false).Expand().size(), 12u);  // 3 frames x 4 casts
+  EXPECT_EQ(CaptureChartGrid(true).Expand().size(), 2u);
+  EXPECT_EQ(Label(CaptureChartGrid(false).Defaults()), "frame=sky cast=crosstalk-warm-wb");
+  for (const Settings& st : CaptureChartGrid(false).Expand()) {
+    int found = 0;
+    for (const ChartCast& c : ChartCasts()) found += c.name == Get(st, "cast");
+    EXPECT_EQ(found, 1) << Label(st);
+  }
+  const std::vector<Settings> stars = CaptureStarsGrid(false).Expand();
+  ASSERT_EQ(stars.size(), 7u);  // 6 bands of peak excess + the real night sky
+  EXPECT_EQ(Get(stars.back(), "scene"), "night");
+  EXPECT_EQ(CaptureStarsGrid(true).Expand().size(), 2u);
+
+  const SuiteRegistry r = BuiltinSuites();
+  for (const char* name : {"fit-cie-study", "sky-segmentation", "capture-chart", "capture-stars"}) {
+    const Suite* s = r.Find(name);
+    ASSERT_NE(s, nullptr) << name;
+    EXPECT_TRUE(static_cast<bool>(s->markdown)) << name;
+    EXPECT_FALSE(s->error_metric.empty()) << name;
+    // A time/error trade-off only where a setting is swept (model; grabcut); the chart
+    // and star suites run one setting on several inputs.
+    EXPECT_EQ(s->pareto, std::string(name) == "fit-cie-study" || std::string(name) == "sky-segmentation") << name;
+  }
+}
+
+// fit-cie-study's table (bench/results/cie.md's shape) from hand-made fits: the per-sky
+// cell, the per-elevation median and the summary row, in percent.
+TEST(BenchStudySuites, CieStudyMarkdownFromHandMadeFits) {
+  const Suite* s = BuiltinSuites().Find("fit-cie-study");
+  ASSERT_NE(s, nullptr);
+  CaseResult c = MakeCase("fit-cie-study", {{"model", "ffxv-iso"}}, T(900, 900, 900, 1), 0.0201, true);
+  nlohmann::json fits = nlohmann::json::array();
+  const double rel[3] = {0.0201, 0.0100, 0.0374};
+  for (int t = 1; t <= 3; ++t)
+    fits.push_back({{"sky_type", t}, {"sun_elevation_deg", 30.0}, {"rel_rmse", rel[t - 1]}, {"log_rmse", 0.02},
+                    {"haziness_g", 0.7}, {"time_s", 0.1 * t},
+                    {"breakdown", {{"circumsolar_3_15deg", 0.05}, {"horizon_0_10deg", 0.01}, {"rest", 0.015}}}});
+  c.extra = {{"fits", fits}};
+  const std::string md = s->markdown({c});
+  EXPECT_NE(md.find("| ffxv-iso 30° |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 3 | "), std::string::npos) << md;      // type 3's row
+  EXPECT_NE(md.find(" 3.74 |"), std::string::npos) << md;      // its cell, %
+  EXPECT_NE(md.find("**2.01**"), std::string::npos) << md;     // the median of 2.01, 1.00, 3.74
+  EXPECT_NE(md.find("type 3, 30°: 3.74"), std::string::npos) << md;  // the worst first
+  EXPECT_NE(md.find("| 0.20 |"), std::string::npos) << md;     // median time per fit, s
+  EXPECT_NE(md.find("**not met** (2.01%)"), std::string::npos) << md;
 }
 
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.
@@ -399,9 +500,11 @@ TEST(BenchVerb, BadInput) {
     cli::RunBenchImpl(o, BuiltinSuites());
     FAIL() << "unknown suite accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, fit-skies, fit-probe, fit-clouds, probe, capture, export, stress, clouds)"),
-              std::string::npos)
-        << e.what();
+    // The message names the unknown suite and lists every registered one.
+    const std::string what = e.what();
+    EXPECT_NE(what.find("unknown suite 'nosuch' (valid: render, fit, fit-day, "), std::string::npos) << what;
+    for (const std::string& name : BuiltinSuites().Names())
+      EXPECT_NE(what.find(" " + name + (name == "clouds" ? ")" : ",")), std::string::npos) << name << ": " << what;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "results"));
   // A user's directory is never replaced.

@@ -5,7 +5,7 @@
 // backend. Time: all the case's fits, one run each (the sweep is the repetition); error:
 // the mean rel RMSE over the skies (fit::CompareToReference), with the worst sky and the
 // clear/overcast halves in `extra`. The detailed study (sun elevations 10/30/60, regions,
-// the overcast variant) stays in the bench_cie program (bench/results/cie.md).
+// the overcast variant) is the fit-cie-study suite (bench/results/cie.md).
 #include <algorithm>
 #include <cmath>
 #include <map>

@@ -120,7 +120,7 @@ Suite FitCloudsSuite() {
     return RunGrid("fit-clouds", grid, o, [&](CaseResult& c) {
       const bool from_truth = Get(c.settings, "sky_start") == "truth";
       fit::FitOptions f;
-      f.verbose = false;
+      f.verbose = o.verb_logs;  // the fit's and its clouds' progress lines: --verb-logs only
       f.absolute = from_truth;  // the truth's sky is in the reference's units
       f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
       cli::FitCloudOptions co = shapes_options;

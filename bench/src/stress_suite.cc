@@ -375,6 +375,7 @@ void ProbeArea(Runner& run, const SuiteOptions& o) {
       po.image = path;
       po.circle = capture::BallCircle{in.cx, in.cy, in.r};
       po.clip_level = in.clip;
+      po.verbose = o.verb_logs;
       po.out = (o.scratch / ("stress_ball_" + std::to_string(n++) + ".json")).string();
       const nlohmann::json summary = cli::RunProbeExtractImpl(po);
       if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the samples");

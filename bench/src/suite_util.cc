@@ -13,6 +13,12 @@ std::string FormatG(double v, int digits) {
   return buf;
 }
 
+std::string FormatFixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
 std::string ExtraNumber(const CaseResult& c, const std::string& key, double scale) {
   const auto it = c.extra.find(key);
   if (it == c.extra.end() || !it->is_number()) return "-";

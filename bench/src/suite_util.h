@@ -24,6 +24,7 @@ std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, cons
                                 const std::function<void(CaseResult&)>& body);
 
 std::string FormatG(double v, int digits = 3);  // %.*g
+std::string FormatFixed(double v, int decimals);  // %.*f
 
 // A Markdown table of `cases`, one row each: the case's name, its median time (ms) and
 // error, then one column per (header, value) pair; values from `extra` via ExtraNumber.

@@ -11,11 +11,15 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitSuite());
   r.Add(FitDaySuite());
   r.Add(FitCieSuite());
+  r.Add(FitCieStudySuite());
   r.Add(FitSkiesSuite());
   r.Add(FitProbeSuite());
   r.Add(FitCloudsSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
+  r.Add(SkySegmentationSuite());
+  r.Add(CaptureChartSuite());
+  r.Add(CaptureStarsSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
   r.Add(CloudsSuite());

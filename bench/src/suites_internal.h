@@ -10,6 +10,10 @@ Suite RenderSuite();   // render_suite.cc
 Suite FitSuite();      // fit_suite.cc
 Suite FitDaySuite();   // fit_day_suite.cc
 Suite FitCieSuite();   // fit_cie_suite.cc
+Suite FitCieStudySuite();  // fit_cie_study_suite.cc
+Suite SkySegmentationSuite();  // sky_segmentation_suite.cc
+Suite CaptureChartSuite();  // capture_chart_suite.cc
+Suite CaptureStarsSuite();  // capture_stars_suite.cc
 Suite FitSkiesSuite();  // fit_skies_suite.cc
 Suite FitProbeSuite();  // fit_probe_suite.cc
 Suite FitCloudsSuite();  // fit_clouds_suite.cc
