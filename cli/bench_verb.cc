@@ -355,7 +355,7 @@ BenchOptions ParseBenchArgs(int argc, char** argv) {
           "redraw an earlier run's Pareto fronts and plots with this build, into --out (runs nothing)");
   cl.Number("--noise-floor", &o.noise_floor, "F", "--compare: relative noise floor (default 0.10)");
   cl.Flag("--verb-logs", &o.verb_logs,
-          "let the verbs the suites run (capture, export) print their own progress lines\n"
+          "let the verbs the suites run (capture, export, probe-extract, fit and its clouds) print their own progress lines\n"
           "(default: only the bench's one line per case)");
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");

@@ -109,7 +109,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   vk.validation = o.vulkan_validation;
   const auto t_init = Clock::now();
   auto renderer = render::CreateRenderer(o.backend, vk);
-  Log("render", "backend: " + renderer->Describe());
+  if (o.verbose) Log("render", "backend: " + renderer->Describe());
   // The cloud pipeline is created (lavapipe compiles the shader) before the render clock starts.
   std::unique_ptr<clouds::CloudRenderer> cloud_renderer;
   if (cloud_inputs) {
@@ -183,7 +183,8 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
     ++n;
   }
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
-  Log("render", "wrote " + o.out_exr + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", render " +
+  if (o.verbose)
+    Log("render", "wrote " + o.out_exr + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", render " +
                     std::to_string(ms(t_render, t_done)) + " ms)");
   return {{"backend", render::ToString(o.backend)},
           {"device", renderer->Describe()},

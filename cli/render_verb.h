@@ -29,6 +29,7 @@ struct RenderOptions {
   bool vulkan_validation = false;
   CloudOptions clouds;                           // --clouds and its options
   std::optional<double> time_of_day_h;           // hours in [0, 24): the skycalTimeOfDay attribute (fit, batch)
+  bool verbose = true;                           // progress lines on stderr ([render] ...; warnings always); skycal bench turns them off
 
   bool IsValid(std::string* why) const;
   std::array<double, 3> SunDirection() const;  // unit vector (valid options only)

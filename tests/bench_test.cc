@@ -222,6 +222,28 @@ TEST(BenchVerbLogs, ProbeExtractIsQuietWithVerboseOff) {
   EXPECT_NE(::testing::internal::GetCapturedStderr().find("[probe-extract]"), std::string::npos);
 }
 
+// `skycal render` (the fit-clouds suite renders its reference with it) with verbose off
+// prints nothing; on (the control) its backend and `wrote` lines.
+TEST(BenchVerbLogs, RenderIsQuietWithVerboseOff) {
+  skycal::testing::ScratchDir dir("bench-verb-logs-render");
+  cli::RenderOptions ro;
+  ro.backend = render::Backend::kCpu;
+  ro.width = 64;
+  ro.height = 32;
+  ro.sun_elevation_deg = 30.0;
+  ro.sun_azimuth_deg = 0.0;
+  ro.verbose = false;
+  ro.out_exr = dir / "quiet.exr";
+  ::testing::internal::CaptureStderr();
+  cli::RunRenderImpl(ro);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  ro.verbose = true;
+  ro.out_exr = dir / "loud.exr";
+  ::testing::internal::CaptureStderr();
+  cli::RunRenderImpl(ro);
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find("[render] wrote"), std::string::npos);
+}
+
 // The suites that replaced bench_cie, bench_sky_segmentation and bench_chart_stars: their
 // grids (no fit, mask or chart run), registration and plot flags.
 TEST(BenchStudySuites, GridsAndRegistration) {
@@ -274,7 +296,8 @@ TEST(BenchStudySuites, GridsAndRegistration) {
 // fit-cie-study's table (bench/results/cie.md's shape) from hand-made fits: the per-sky
 // cell, the per-elevation median and the summary row, in percent.
 TEST(BenchStudySuites, CieStudyMarkdownFromHandMadeFits) {
-  const Suite* s = BuiltinSuites().Find("fit-cie-study");
+  const SuiteRegistry registry = BuiltinSuites();  // owns the suite (a temporary's would dangle)
+  const Suite* s = registry.Find("fit-cie-study");
   ASSERT_NE(s, nullptr);
   CaseResult c = MakeCase("fit-cie-study", {{"model", "ffxv-iso"}}, T(900, 900, 900, 1), 0.0201, true);
   nlohmann::json fits = nlohmann::json::array();

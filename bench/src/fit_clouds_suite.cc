@@ -106,6 +106,7 @@ Suite FitCloudsSuite() {
       ro.height = ro.width / 2;
       ro.clouds.enabled = true;
       ro.out_exr = (o.scratch / ("fit_clouds_" + size + ".exr")).string();
+      ro.verbose = o.verb_logs;
       cli::RunRenderImpl(ro);
       refs[size] = ro.out_exr;
     }
