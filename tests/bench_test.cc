@@ -176,6 +176,17 @@ TEST(BenchFitSuites, RegisteredWithTheirMetrics) {
   EXPECT_EQ(r.Resolve("fit,fit-probe,fit-clouds").size(), 3u);
 }
 
+// Runs `run(false)` (verbose off: nothing on stderr) and `run(true)` (the control: a user's
+// run prints `loud_marker`).
+static void ExpectQuietThenLoud(const std::function<void(bool verbose)>& run, const std::string& loud_marker) {
+  ::testing::internal::CaptureStderr();
+  run(false);
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  ::testing::internal::CaptureStderr();
+  run(true);
+  EXPECT_NE(::testing::internal::GetCapturedStderr().find(loud_marker), std::string::npos);
+}
+
 // The bench runs the verbs quietly: `skycal export` with verbose off prints nothing on
 // stderr; on (a user's run, the control) it prints its progress lines.
 TEST(BenchVerbLogs, ExportIsQuietWithVerboseOff) {
@@ -210,16 +221,13 @@ TEST(BenchVerbLogs, ProbeExtractIsQuietWithVerboseOff) {
   po.image = dir / "ball.exr";
   WriteExrRGB(po.image, im, {});
   po.circle = capture::BallCircle{32, 32, 20};
-  po.verbose = false;
-  po.out = dir / "quiet.json";
-  ::testing::internal::CaptureStderr();
-  cli::RunProbeExtractImpl(po);
-  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
-  po.verbose = true;
-  po.out = dir / "loud.json";
-  ::testing::internal::CaptureStderr();
-  cli::RunProbeExtractImpl(po);
-  EXPECT_NE(::testing::internal::GetCapturedStderr().find("[probe-extract]"), std::string::npos);
+  ExpectQuietThenLoud(
+      [&](bool verbose) {
+        po.verbose = verbose;
+        po.out = dir / (verbose ? "loud.json" : "quiet.json");
+        cli::RunProbeExtractImpl(po);
+      },
+      "[probe-extract]");
 }
 
 // `skycal render` (the fit-clouds suite renders its reference with it) with verbose off
@@ -232,16 +240,13 @@ TEST(BenchVerbLogs, RenderIsQuietWithVerboseOff) {
   ro.height = 32;
   ro.sun_elevation_deg = 30.0;
   ro.sun_azimuth_deg = 0.0;
-  ro.verbose = false;
-  ro.out_exr = dir / "quiet.exr";
-  ::testing::internal::CaptureStderr();
-  cli::RunRenderImpl(ro);
-  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
-  ro.verbose = true;
-  ro.out_exr = dir / "loud.exr";
-  ::testing::internal::CaptureStderr();
-  cli::RunRenderImpl(ro);
-  EXPECT_NE(::testing::internal::GetCapturedStderr().find("[render] wrote"), std::string::npos);
+  ExpectQuietThenLoud(
+      [&](bool verbose) {
+        ro.verbose = verbose;
+        ro.out_exr = dir / (verbose ? "loud.exr" : "quiet.exr");
+        cli::RunRenderImpl(ro);
+      },
+      "[render] wrote");
 }
 
 // The suites that replaced bench_cie, bench_sky_segmentation and bench_chart_stars: their
