@@ -7,6 +7,7 @@
 
 #include "fit_report.h"
 #include "lighting_basis_renderer.h"
+#include "photo_sun.h"
 #include "render_clouds.h"
 #include "skycal/capture/sky_segmentation.h"
 #include "skycal/clouds/cloud_noise.h"
@@ -15,6 +16,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/fit/cloud_stats.h"
+#include "skycal/render/irradiance.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 #include "verb_common.h"
@@ -33,6 +35,10 @@ bool FitCloudStatsOptions::IsValid(std::string* why) const {
   }
   if (renders < maps || renders > 64) {
     *why = "cloud stats renders per evaluation " + std::to_string(renders) + " (expected [maps, 64])";
+    return false;
+  }
+  if (sun != "photo" && sun != "model") {
+    *why = "--cloud-stats-sun '" + sun + "' (expected photo or model)";
     return false;
   }
   if (max_iterations < 0 || max_iterations > 200) {
@@ -103,7 +109,30 @@ struct PhotoData {
   fit::Reference whole;  // the reference with every sky pixel (clear and cloud) of the segmentation as kSky
   fit::Reference clear, cloud;  // the same restricted to probability < 0.5 / >= 0.5
   long long non_sky_segmented = 0;
+  nlohmann::json sun_check;
 };
+
+// The photo's sun against the model's, in model units (the photo divided by the sky fit's
+// exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
+// without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
+// sun-to-sky ratio).
+nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset, double exposure) {
+  const PhotoSun ps = MeasurePhotoSun(ref.radiance, ref.sun_dir);
+  const render::Rgb model = render::SunIlluminanceAtGround(preset, ref.sun_dir);
+  nlohmann::json photo = nlohmann::json::array(), ratio = nlohmann::json::array();
+  for (int c = 0; c < 3; ++c) {
+    photo.push_back(ps.illuminance[c] / exposure);
+    ratio.push_back(ps.illuminance[c] / exposure / model[c]);
+  }
+  return {{"photo_lux_model_units", photo},
+          {"model_lux", {model[0], model[1], model[2]}},
+          {"photo_over_model", ratio},
+          {"disc_pixels", ps.disc_pixels},
+          {"peak_over_background", ps.peak / std::max(ps.background[1], 1e-30)},
+          {"clipped", ps.clipped()},
+          {"note", "the photo's disc + blur within 3 deg above the median of a 4-6 deg ring, divided by the exposure; "
+                   "clipped: more than 2 disc pixels within 0.1% of the peak (a lower bound then)"}};
+}
 
 }  // namespace
 
@@ -151,6 +180,10 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
       }
     }
     const double exposure = sky.references[r].exposure;
+    d.sun_check = SunCheck(ref, sky.preset, exposure);
+    Log("fit", "clouds stats: " + ref.name + ": the photo's sun / the model's (green) " +
+                   FormatNumber(d.sun_check["photo_over_model"][1].get<double>()) +
+                   (d.sun_check["clipped"].get<bool>() ? " (clipped: a lower bound)" : ""));
     fit::CloudStatsReference& sr = d.stats_ref;
     sr.name = ref.name;
     sr.radiance = BoxDown(ref.radiance, f);
@@ -165,6 +198,22 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     req.height = o.width / 2;
     req.sun_disc = false;
     sr.clear_sky = sky_renderer->Render(sky.preset, req);
+  }
+
+  // The sun that lights the model's clouds (FitCloudStatsOptions::sun). One preset lights
+  // every reference: with several, the photos' suns are averaged (per channel, geometric).
+  render::Preset cloud_preset = sky.preset;
+  if (o.sun == "photo") {
+    std::array<double, 3> log_ratio{};
+    for (const PhotoData& d : data)
+      for (int c = 0; c < 3; ++c)
+        log_ratio[c] += std::log(std::max(d.sun_check["photo_over_model"][c].get<double>(), 1e-6)) / data.size();
+    const double g = std::exp(log_ratio[1]);
+    cloud_preset.sun_illuminance_lux = std::clamp(sky.preset.sun_illuminance_lux * g, 1.0, 2.0e5);
+    for (int c = 0; c < 3; ++c)
+      cloud_preset.sun_tint_rgb[c] = std::clamp(sky.preset.sun_tint_rgb[c] * std::exp(log_ratio[c]) / g, 0.0, 10.0);
+    Log("fit", "clouds stats: the clouds lit by the photo's sun: " + FormatNumber(cloud_preset.sun_illuminance_lux) +
+                   " lux (the fitted preset's " + FormatNumber(sky.preset.sun_illuminance_lux) + ")");
   }
 
   std::unique_ptr<clouds::CloudRenderer> renderer;
@@ -191,7 +240,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   auto model_opacity = [&](double coverage, std::vector<clouds::WeatherMap>* maps) {
     maps->clear();
     for (int m = 0; m < o.maps; ++m) maps->push_back(StatsWeather(o.weather_seed + m, initial.weather_extent_m, coverage));
-    fit::CloudStatsScene scene{&sky.preset, initial, &noise, &(*maps)[0]};
+    fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &(*maps)[0]};
     double mean = 0.0;
     for (const PhotoData& d : data)
       for (int m = 0; m < o.maps; ++m)
@@ -233,7 +282,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
 
   std::vector<fit::CloudStatsReference> refs;
   for (const PhotoData& d : data) refs.push_back(d.stats_ref);
-  fit::CloudStatsScene scene{&sky.preset, initial, &noise, &maps[0]};
+  fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
   for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
   Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters (" +
                  std::to_string(o.renders) + " renders of " + std::to_string(o.maps) + " weather maps per evaluation, " +
@@ -328,6 +377,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         }
     per_ref.push_back({{"name", ref.name},
                        {"non_sky_pixels_segmented", d.non_sky_segmented},
+                       {"sun_check", d.sun_check},
                        {"photo_mean_cloud_probability",
                         MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el)},
                        {"errors", errors},
@@ -345,8 +395,14 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   WriteFitPanels(fit_dir.string(), panel_refs, panels);
   return {{"term", "cloud statistics (unknown shapes): weighted quantiles of log radiance per (sun angle x elevation x "
                    "opacity) bin, model pooled over an ensemble of weather maps"},
-          {"shared_with_atmosphere", "the sun's illuminance, tint and transmittance and the sky's SH-9 ambient come from "
-                                     "the fitted preset"},
+          {"shared_with_atmosphere", o.sun == "photo"
+                                         ? "the sky's SH-9 ambient and the sun's transmittance come from the fitted preset; "
+                                           "the sun's illuminance and tint from the photo's disc (sun_check)"
+                                         : "the sun's illuminance, tint and transmittance and the sky's SH-9 ambient come "
+                                           "from the fitted preset"},
+          {"sun", o.sun},
+          {"cloud_sun_illuminance_lux", cloud_preset.sun_illuminance_lux},
+          {"cloud_sun_tint_rgb", cloud_preset.sun_tint_rgb},
           {"render_size", {o.width, o.width / 2}},
           {"weather_maps", o.maps},
           {"renders_per_evaluation", o.renders},

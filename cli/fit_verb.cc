@@ -353,6 +353,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
              "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
   cl.Integer("--cloud-stats-iterations", &c.cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",
              "--clouds stats: Ceres iterations at most (default 12)");
+  cl.Text("--cloud-stats-sun", &c.cloud_stats.sun, "photo|model",
+          "--clouds stats: the sun lighting the model's clouds: the photo's disc (lux in model\n"
+          "units, fit.json's sun_check; default photo) or the fitted preset's (model)");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;
