@@ -9,6 +9,7 @@
 #include "lighting_basis_renderer.h"
 #include "photo_sun.h"
 #include "render_clouds.h"
+#include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/sky_segmentation.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
@@ -39,6 +40,10 @@ bool FitCloudStatsOptions::IsValid(std::string* why) const {
   }
   if (sun != "photo" && sun != "model") {
     *why = "--cloud-stats-sun '" + sun + "' (expected photo or model)";
+    return false;
+  }
+  if (probability != "fitted" && probability != "initial") {
+    *why = "--cloud-stats-probability '" + probability + "' (expected fitted or initial)";
     return false;
   }
   if (max_iterations < 0 || max_iterations > 200) {
@@ -110,7 +115,28 @@ struct PhotoData {
   fit::Reference clear, cloud;  // the same restricted to probability < 0.5 / >= 0.5
   long long non_sky_segmented = 0;
   nlohmann::json sun_check;
+  std::vector<float> probability;  // the cloud probability the statistics use
+  nlohmann::json probability_json;
 };
+
+// Cloud pixels (probability >= 0.5, above the horizon) per bin of angle from the sun.
+nlohmann::json CloudPixelsBySunAngle(const std::vector<float>& p, const fit::Reference& ref,
+                                     const std::vector<double>& edges_deg) {
+  const int w = ref.radiance.width, h = ref.radiance.height;
+  std::vector<long long> n(edges_deg.size() - 1, 0);
+  for (int y = 0; y < h; ++y) {
+    if (latlong::Latitude(y, h) <= 0.0) continue;
+    for (int x = 0; x < w; ++x) {
+      if (!(p[static_cast<size_t>(y) * w + x] >= 0.5f)) continue;
+      const auto v = latlong::PixelDirection(x, y, w, h);
+      const double a =
+          std::acos(std::clamp(v[0] * ref.sun_dir[0] + v[1] * ref.sun_dir[1] + v[2] * ref.sun_dir[2], -1.0, 1.0)) * 180.0 / M_PI;
+      for (size_t b = 0; b + 1 < edges_deg.size(); ++b)
+        if (a >= edges_deg[b] && a < edges_deg[b + 1]) ++n[b];
+    }
+  }
+  return n;
+}
 
 // The photo's sun against the model's, in model units (the photo divided by the sky fit's
 // exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
@@ -162,6 +188,19 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     const capture::SkyMask seg = capture::EstimateSkyMask(ref.radiance, ref.sun_dir, capture::SkyMaskOptions{});
     std::vector<float> skymask(static_cast<size_t>(w) * h, 0.0f);
     PhotoData& d = data[r];
+    const double exposure = sky.references[r].exposure;
+    d.sun_check = SunCheck(ref, sky.preset, exposure);
+    d.probability = photos[r].cloud_probability;
+    const std::vector<double> angle_edges = {0.0, 20.0, 45.0, 90.0, 180.0};
+    d.probability_json = {{"expectation", o.probability},
+                          {"sun_angle_edges_deg", angle_edges},
+                          {"initial_cloud_pixels_by_sun_angle", CloudPixelsBySunAngle(d.probability, ref, angle_edges)}};
+    if (o.probability == "fitted") {
+      const capture::CloudMask refit =
+          capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
+      for (size_t i = 0; i < d.probability.size(); ++i) d.probability[i] = std::min(d.probability[i], refit.probability[i]);
+      d.probability_json["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(d.probability, ref, angle_edges);
+    }
     d.whole = ref;
     d.clear = ref;
     d.cloud = ref;
@@ -171,7 +210,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
       const bool is_sky = candidate && seg.sky[i] >= 0.5f;
       d.non_sky_segmented += candidate && !is_sky;
       skymask[i] = is_sky ? 1.0f : 0.0f;
-      const bool cloudy = photos[r].cloud_probability[i] >= 0.5f;
+      const bool cloudy = d.probability[i] >= 0.5f;
       const auto keep = fit::PixelClass::kSky, drop = fit::PixelClass::kUserMasked;
       if (candidate) {
         d.whole.pixel_class[i] = is_sky ? keep : drop;
@@ -179,8 +218,6 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         d.cloud.pixel_class[i] = is_sky && cloudy ? keep : drop;
       }
     }
-    const double exposure = sky.references[r].exposure;
-    d.sun_check = SunCheck(ref, sky.preset, exposure);
     Log("fit", "clouds stats: " + ref.name + ": the photo's sun / the model's (green) " +
                    FormatNumber(d.sun_check["photo_over_model"][1].get<double>()) +
                    (d.sun_check["clipped"].get<bool>() ? " (clipped: a lower bound)" : ""));
@@ -188,7 +225,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     sr.name = ref.name;
     sr.radiance = BoxDown(ref.radiance, f);
     for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
-    sr.opacity = BoxDown(photos[r].cloud_probability, w, h, f);
+    sr.opacity = BoxDown(d.probability, w, h, f);
     sr.sky = BoxDown(skymask, w, h, f);
     for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
     sr.sun_dir = ref.sun_dir;
@@ -334,7 +371,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         int sb = 0, eb = 0;
         if (!fit::FindCloudBin(so, std::acos(c) * 180.0 / M_PI, latlong::Latitude(y, h) * 180.0 / M_PI, &sb, &eb)) continue;
         double thin = 0.0, thick = 0.0;
-        fit::OpacityClassWeights(so, photos[r].cloud_probability[i], &thin, &thick);
+        fit::OpacityClassWeights(so, d.probability[i], &thin, &thick);
         const double weights[2] = {thin, thick};
         double clear_share = 1.0;
         double acc[3] = {0.0, 0.0, 0.0};
@@ -378,6 +415,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     per_ref.push_back({{"name", ref.name},
                        {"non_sky_pixels_segmented", d.non_sky_segmented},
                        {"sun_check", d.sun_check},
+                       {"cloud_probability", d.probability_json},
                        {"photo_mean_cloud_probability",
                         MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el)},
                        {"errors", errors},

@@ -33,6 +33,12 @@ struct FitCloudStatsOptions {
   // keeps the initial preset's sun-to-sky ratio): on `sky` the photo's sun is 0.036 of the
   // model's, and with the model's the fit greyed the clouds (albedo 0.09, ambient at its bound).
   std::string sun = "photo";
+  // --cloud-stats-probability: the clear-sky expectation of the cloud probability.
+  // "fitted": recomputed against the sky fit's own render (which carries the glow around a
+  // low sun the clear pixels near it pin: on `dawn` the bundled preset's expectation took
+  // the glow over the ridge for cloud), a pixel cloud when both expectations say so (the
+  // minimum); "initial": --cloud-mask's probability (the bundled preset's clear sky) as is.
+  std::string probability = "fitted";
   // What a photograph's statistics can fit: the brightness of cloud against the clear sky
   // (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer traded
   // against it) and the ambient. Held at the bundled default_cloudy's values: the phase lobe
