@@ -11,6 +11,7 @@
 #include "fit_cloud_stats.h"
 #include "fit_verb.h"
 #include "lighting_basis_renderer.h"
+#include "photo_sun.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -55,6 +56,16 @@ TEST(FitCloudStats, CommandLine) {
   o.width = 65;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("--cloud-stats-width 65"), std::string::npos) << why;
+  EXPECT_EQ(c.cloud_stats.sun, "photo");
+  EXPECT_EQ(c.cloud_stats.probability, "fitted");
+  o = FitCloudStatsOptions{};
+  o.sun = "disc";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-sun 'disc'"), std::string::npos) << why;
+  o = FitCloudStatsOptions{};
+  o.probability = "preset";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-probability 'preset'"), std::string::npos) << why;
 }
 
 struct SyntheticPhoto {
@@ -104,6 +115,9 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   o.maps = 1;
   o.renders = 1;
   o.max_iterations = 0;  // the wiring, not the recovery (benchmarked)
+  // The "sky fit's render" here is the photo itself: against it nothing is cloud. The
+  // probability as --cloud-mask gave it.
+  o.probability = "initial";
   const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
   // Coverage first: regula falsi ends with the model's mean opacity within 0.005 of the photo's or
   // after 8 steps (at 32x16 the opacity is a coarse function of the coverage: 0.05 allowed).
@@ -133,6 +147,40 @@ TEST(FitCloudStats, WiringAtASmallSize) {
     EXPECT_NE(std::string(e.what()).find("synthetic.exr"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("--cloud-stats-width 48"), std::string::npos) << e.what();
   }
+}
+
+// The photo's sun (cli/photo_sun.h): a disc of known illuminance spread over a few pixels
+// of a 512x256 lat-long on a sky gradient is recovered; its ring's median is subtracted.
+TEST(FitCloudStats, PhotoSunRecoversADiscOnASky) {
+  const int w = 512, h = 256;
+  ImageRGB img(w, h);
+  const std::array<double, 3> sun = {0.0, std::sin(40.0 * M_PI / 180.0), std::cos(40.0 * M_PI / 180.0)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<float>(1000.0 + 5.0 * y);  // a smooth sky
+  // The disc: 2x2 pixels at the sun (E = radiance x solid angle, lux in image units).
+  const auto p = latlong::PixelPosition(sun, w, h);
+  const double e_true[3] = {5000.0, 4000.0, 3000.0};
+  const int x0 = static_cast<int>(std::floor(p[0])), y0 = static_cast<int>(std::floor(p[1]));
+  const double share[2][2] = {{0.4, 0.25}, {0.2, 0.15}};  // a disc straddling 4 pixels unequally
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i)
+      for (int c = 0; c < 3; ++c)
+        img.at(x0 + i, y0 + j, c) +=
+            static_cast<float>(share[j][i] * e_true[c] / latlong::PixelSolidAngle(x0 + i, y0 + j, w, h));
+  const PhotoSun s = MeasurePhotoSun(img, sun);
+  // The ring's median is the sky at the ring's mean row; the gradient across the 3-deg disc
+  // is symmetric to first order: 1% covers what is left.
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.illuminance[c], e_true[c], 0.01 * e_true[c]) << c;
+  EXPECT_FALSE(s.clipped());
+  // Control: the same disc measured 10 deg away finds no sun.
+  const std::array<double, 3> off = {0.0, std::sin(50.0 * M_PI / 180.0), std::cos(50.0 * M_PI / 180.0)};
+  EXPECT_LT(std::abs(MeasurePhotoSun(img, off).illuminance[1]), 0.01 * e_true[1]);
+  // A clipped disc: a plateau of equal values.
+  for (int j = -2; j <= 2; ++j)
+    for (int i = -2; i <= 2; ++i)
+      for (int c = 0; c < 3; ++c) img.at(x0 + i, y0 + j, c) = 65504.0f;
+  EXPECT_TRUE(MeasurePhotoSun(img, sun).clipped());
 }
 
 // The lighting basis (cli/lighting_basis_renderer.h): albedo and ambient from three cached
