@@ -444,6 +444,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
           {"sun", o.sun},
           {"cloud_sun_illuminance_lux", cloud_preset.sun_illuminance_lux},
           {"cloud_sun_tint_rgb", cloud_preset.sun_tint_rgb},
+          {"direct_light_lux_at_albedo_1", res.params.scattering_albedo * cloud_preset.sun_illuminance_lux},
           {"render_size", {o.width, o.width / 2}},
           {"weather_maps", o.maps},
           {"renders_per_evaluation", o.renders},

@@ -58,6 +58,10 @@ TEST(FitCloudStats, CommandLine) {
   EXPECT_NE(why.find("--cloud-stats-width 65"), std::string::npos) << why;
   EXPECT_EQ(c.cloud_stats.sun, "photo");
   EXPECT_EQ(c.cloud_stats.probability, "fitted");
+  const FitCommandLine c2 = Parse({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-sun", "model",
+                                   "--cloud-stats-probability", "initial", "--out", "d"});
+  EXPECT_EQ(c2.cloud_stats.sun, "model");
+  EXPECT_EQ(c2.cloud_stats.probability, "initial");
   o = FitCloudStatsOptions{};
   o.sun = "disc";
   EXPECT_FALSE(o.IsValid(&why));
