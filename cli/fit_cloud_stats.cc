@@ -119,6 +119,11 @@ struct PhotoData {
   nlohmann::json probability_json;
 };
 
+// --cloud-stats-probability fitted applies when the sky fit's clear pixels are within this
+// relative RMSE (`sky` 0.17 and `dawn` 0.38 are; the overcast `city`'s 5.4 is not, and against
+// its sky fit the overcast lost 84% of its cloud pixels).
+constexpr double kMaxSkyFitRelForProbability = 0.5;
+
 // Cloud pixels (probability >= 0.5, above the horizon) per bin of angle from the sun.
 nlohmann::json CloudPixelsBySunAngle(const std::vector<float>& p, const fit::Reference& ref,
                                      const std::vector<double>& edges_deg) {
@@ -198,7 +203,13 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     d.probability_json = {{"expectation", o.probability},
                           {"sun_angle_edges_deg", angle_edges},
                           {"initial_cloud_pixels_by_sun_angle", CloudPixelsBySunAngle(d.probability, ref, angle_edges)}};
-    if (o.probability == "fitted") {
+    // A sky fit that misses its own clear pixels by more than half (an overcast frame: `city`,
+    // 536% on the few it had) is no clear-sky expectation: the initial probability stays.
+    const double sky_fit_rel = sky.references[r].errors.rel_rmse;
+    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability;
+    d.probability_json["sky_fit_clear_rel_rmse"] = sky_fit_rel;
+    d.probability_json["refined"] = refine;
+    if (refine) {
       const capture::CloudMask refit =
           capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
       for (size_t i = 0; i < d.probability.size(); ++i) d.probability[i] = std::min(d.probability[i], refit.probability[i]);

@@ -37,7 +37,8 @@ struct FitCloudStatsOptions {
   // "fitted": recomputed against the sky fit's own render (which carries the glow around a
   // low sun the clear pixels near it pin: on `dawn` the bundled preset's expectation took
   // the glow over the ridge for cloud), a pixel cloud when both expectations say so (the
-  // minimum); "initial": --cloud-mask's probability (the bundled preset's clear sky) as is.
+  // minimum) when the sky fit matches its clear pixels within 50% rel RMSE (not an overcast
+  // frame's); "initial": --cloud-mask's probability (the bundled preset's clear sky) as is.
   std::string probability = "fitted";
   // What a photograph's statistics can fit: the brightness of cloud against the clear sky
   // (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer traded
