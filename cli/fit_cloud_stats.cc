@@ -243,6 +243,16 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     sr.sky = BoxDown(skymask, w, h, f);
     for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
     sr.sun_dir = ref.sun_dir;
+    // Before any march: a photo with no cloud the statistics can use (after the refinement
+    // too) is refused here, naming the file.
+    {
+      const fit::CloudStatistics st = fit::ComputeCloudStatistics(sr.radiance, sr.opacity, sr.sky, sr.sun_dir, so);
+      if (std::none_of(st.weight.begin(), st.weight.end(), [&](double w) { return w >= so.min_bin_sr; }))
+        throw Error(ref.path + ": --clouds stats: no cloud pixels to fit (no bin of angle from the sun x elevation x " +
+                    "opacity holds " + FormatNumber(so.min_bin_sr) + " sr of cloud" +
+                    (refine ? "; against the sky fit's render too: --cloud-stats-probability initial uses --cloud-mask's alone)"
+                            : ")"));
+    }
     render::RenderRequest req;
     req.sun_dir = ref.sun_dir;
     req.width = o.width;

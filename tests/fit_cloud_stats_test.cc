@@ -119,10 +119,11 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   o.maps = 1;
   o.renders = 1;
   o.max_iterations = 0;  // the wiring, not the recovery (benchmarked)
-  // The "sky fit's render" here is the photo itself: against it nothing is cloud. The
-  // probability as --cloud-mask gave it.
-  o.probability = "initial";
+  // The "sky fit's render" here is the photo itself: against it nothing would be cloud. Told
+  // that fit missed its clear pixels by 60%, the default `fitted` expectation is not used.
+  p.sky.references[0].errors.rel_rmse = 0.6;
   const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+  EXPECT_EQ(j["references"][0]["cloud_probability"]["refined"], false);
   // Coverage first: regula falsi ends with the model's mean opacity within 0.005 of the photo's or
   // after 8 steps (at 32x16 the opacity is a coarse function of the coverage: 0.05 allowed).
   const double target = j["coverage"]["photo_mean_cloud_probability"], got = j["coverage"]["model_mean_opacity"];
@@ -141,6 +142,15 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   EXPECT_GT(r["errors"]["with_cloud_statistics"]["cloud"]["rel_rmse"].get<double>(), 0.01);
   EXPECT_GT(r["bins"].size(), 0u);
   for (const char* k : {"reference", "fit", "error"}) EXPECT_TRUE(fs::exists(dir / ("synthetic.clouds." + std::string(k) + ".png"))) << k;
+  fs::remove_all(dir);
+  // Control: with the sky fit within 50% the photo-as-expectation leaves no cloud to fit.
+  p.sky.references[0].errors.rel_rmse = 0.1;
+  try {
+    RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("synthetic.exr: --clouds stats: no cloud pixels"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
   // A frame whose width is not a multiple of the statistics' width: named, nothing run.
   o.width = 48;
