@@ -1,11 +1,15 @@
 #include "fit_cloud_stats.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
 
 #include "fit_report.h"
+#include "lighting_basis_renderer.h"
+#include "photo_sun.h"
 #include "render_clouds.h"
+#include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/sky_segmentation.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
@@ -13,6 +17,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/fit/cloud_stats.h"
+#include "skycal/render/irradiance.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 #include "verb_common.h"
@@ -31,6 +36,14 @@ bool FitCloudStatsOptions::IsValid(std::string* why) const {
   }
   if (renders < maps || renders > 64) {
     *why = "cloud stats renders per evaluation " + std::to_string(renders) + " (expected [maps, 64])";
+    return false;
+  }
+  if (sun != "photo" && sun != "model") {
+    *why = "--cloud-stats-sun '" + sun + "' (expected photo or model)";
+    return false;
+  }
+  if (probability != "fitted" && probability != "initial") {
+    *why = "--cloud-stats-probability '" + probability + "' (expected fitted or initial)";
     return false;
   }
   if (max_iterations < 0 || max_iterations > 200) {
@@ -101,7 +114,56 @@ struct PhotoData {
   fit::Reference whole;  // the reference with every sky pixel (clear and cloud) of the segmentation as kSky
   fit::Reference clear, cloud;  // the same restricted to probability < 0.5 / >= 0.5
   long long non_sky_segmented = 0;
+  nlohmann::json sun_check;
+  std::vector<float> probability;  // the cloud probability the statistics use
+  nlohmann::json probability_json;
 };
+
+// --cloud-stats-probability fitted applies when the sky fit's clear pixels are within this
+// relative RMSE (`sky` 0.17 and `dawn` 0.38 are; the overcast `city`'s 5.4 is not, and against
+// its sky fit the overcast lost 84% of its cloud pixels).
+constexpr double kMaxSkyFitRelForProbability = 0.5;
+
+// Cloud pixels (probability >= 0.5, above the horizon) per bin of angle from the sun.
+nlohmann::json CloudPixelsBySunAngle(const std::vector<float>& p, const fit::Reference& ref,
+                                     const std::vector<double>& edges_deg) {
+  const int w = ref.radiance.width, h = ref.radiance.height;
+  std::vector<long long> n(edges_deg.size() - 1, 0);
+  for (int y = 0; y < h; ++y) {
+    if (latlong::Latitude(y, h) <= 0.0) continue;
+    for (int x = 0; x < w; ++x) {
+      if (!(p[static_cast<size_t>(y) * w + x] >= 0.5f)) continue;
+      const auto v = latlong::PixelDirection(x, y, w, h);
+      const double a =
+          std::acos(std::clamp(v[0] * ref.sun_dir[0] + v[1] * ref.sun_dir[1] + v[2] * ref.sun_dir[2], -1.0, 1.0)) * 180.0 / M_PI;
+      for (size_t b = 0; b + 1 < edges_deg.size(); ++b)
+        if (a >= edges_deg[b] && a < edges_deg[b + 1]) ++n[b];
+    }
+  }
+  return n;
+}
+
+// The photo's sun against the model's, in model units (the photo divided by the sky fit's
+// exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
+// without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
+// sun-to-sky ratio).
+nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset, double exposure) {
+  const PhotoSun ps = MeasurePhotoSun(ref.radiance, ref.sun_dir);
+  const render::Rgb model = render::SunIlluminanceAtGround(preset, ref.sun_dir);
+  nlohmann::json photo = nlohmann::json::array(), ratio = nlohmann::json::array();
+  for (int c = 0; c < 3; ++c) {
+    photo.push_back(ps.illuminance[c] / exposure);
+    ratio.push_back(ps.illuminance[c] / exposure / model[c]);
+  }
+  return {{"photo_lux_model_units", photo},
+          {"model_lux", {model[0], model[1], model[2]}},
+          {"photo_over_model", ratio},
+          {"disc_pixels", ps.disc_pixels},
+          {"peak_over_background", ps.peak / std::max(ps.background[1], 1e-30)},
+          {"clipped", ps.clipped()},
+          {"note", "the photo's disc + blur within 3 deg above the median of a 4-6 deg ring, divided by the exposure; "
+                   "clipped: more than 2 disc pixels within 0.1% of the peak (a lower bound then)"}};
+}
 
 }  // namespace
 
@@ -115,6 +177,9 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   so.model_renders = o.renders;
   so.max_iterations = o.max_iterations;
   so.fitted = o.fitted;
+  // A bin the photo fills and the render empties costs as much as a 2-log-unit (7x) miss
+  // of each quantile: more than any bin's start is off on the three photos.
+  so.empty_bin_log_residual = 2.0;
   const render::Preset cloudy = render::LoadPreset(DefaultCloudyPresetPath());
   const clouds::CloudParams initial = clouds::ParseCloudSectionText(cloudy.clouds_json, DefaultCloudyPresetPath());
   auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
@@ -131,6 +196,25 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     const capture::SkyMask seg = capture::EstimateSkyMask(ref.radiance, ref.sun_dir, capture::SkyMaskOptions{});
     std::vector<float> skymask(static_cast<size_t>(w) * h, 0.0f);
     PhotoData& d = data[r];
+    const double exposure = sky.references[r].exposure;
+    d.sun_check = SunCheck(ref, sky.preset, exposure);
+    d.probability = photos[r].cloud_probability;
+    const std::vector<double> angle_edges = {0.0, 20.0, 45.0, 90.0, 180.0};
+    d.probability_json = {{"expectation", o.probability},
+                          {"sun_angle_edges_deg", angle_edges},
+                          {"initial_cloud_pixels_by_sun_angle", CloudPixelsBySunAngle(d.probability, ref, angle_edges)}};
+    // A sky fit that misses its own clear pixels by more than half (an overcast frame: `city`,
+    // 536% on the few it had) is no clear-sky expectation: the initial probability stays.
+    const double sky_fit_rel = sky.references[r].errors.rel_rmse;
+    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability;
+    d.probability_json["sky_fit_clear_rel_rmse"] = sky_fit_rel;
+    d.probability_json["refined"] = refine;
+    if (refine) {
+      const capture::CloudMask refit =
+          capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
+      for (size_t i = 0; i < d.probability.size(); ++i) d.probability[i] = std::min(d.probability[i], refit.probability[i]);
+      d.probability_json["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(d.probability, ref, angle_edges);
+    }
     d.whole = ref;
     d.clear = ref;
     d.cloud = ref;
@@ -140,7 +224,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
       const bool is_sky = candidate && seg.sky[i] >= 0.5f;
       d.non_sky_segmented += candidate && !is_sky;
       skymask[i] = is_sky ? 1.0f : 0.0f;
-      const bool cloudy = photos[r].cloud_probability[i] >= 0.5f;
+      const bool cloudy = d.probability[i] >= 0.5f;
       const auto keep = fit::PixelClass::kSky, drop = fit::PixelClass::kUserMasked;
       if (candidate) {
         d.whole.pixel_class[i] = is_sky ? keep : drop;
@@ -148,21 +232,49 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         d.cloud.pixel_class[i] = is_sky && cloudy ? keep : drop;
       }
     }
-    const double exposure = sky.references[r].exposure;
+    Log("fit", "clouds stats: " + ref.name + ": the photo's sun / the model's (green) " +
+                   FormatNumber(d.sun_check["photo_over_model"][1].get<double>()) +
+                   (d.sun_check["clipped"].get<bool>() ? " (clipped: a lower bound)" : ""));
     fit::CloudStatsReference& sr = d.stats_ref;
     sr.name = ref.name;
     sr.radiance = BoxDown(ref.radiance, f);
     for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
-    sr.opacity = BoxDown(photos[r].cloud_probability, w, h, f);
+    sr.opacity = BoxDown(d.probability, w, h, f);
     sr.sky = BoxDown(skymask, w, h, f);
     for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
     sr.sun_dir = ref.sun_dir;
+    // Before any march: a photo with no cloud the statistics can use (after the refinement
+    // too) is refused here, naming the file.
+    {
+      const fit::CloudStatistics st = fit::ComputeCloudStatistics(sr.radiance, sr.opacity, sr.sky, sr.sun_dir, so);
+      if (std::none_of(st.weight.begin(), st.weight.end(), [&](double w) { return w >= so.min_bin_sr; }))
+        throw Error(ref.path + ": --clouds stats: no cloud pixels to fit (no bin of angle from the sun x elevation x " +
+                    "opacity holds " + FormatNumber(so.min_bin_sr) + " sr of cloud" +
+                    (refine ? "; against the sky fit's render too: --cloud-stats-probability initial uses --cloud-mask's alone)"
+                            : ")"));
+    }
     render::RenderRequest req;
     req.sun_dir = ref.sun_dir;
     req.width = o.width;
     req.height = o.width / 2;
     req.sun_disc = false;
     sr.clear_sky = sky_renderer->Render(sky.preset, req);
+  }
+
+  // The sun that lights the model's clouds (FitCloudStatsOptions::sun). One preset lights
+  // every reference: with several, the photos' suns are averaged (per channel, geometric).
+  render::Preset cloud_preset = sky.preset;
+  if (o.sun == "photo") {
+    std::array<double, 3> log_ratio{};
+    for (const PhotoData& d : data)
+      for (int c = 0; c < 3; ++c)
+        log_ratio[c] += std::log(std::max(d.sun_check["photo_over_model"][c].get<double>(), 1e-6)) / data.size();
+    const double g = std::exp(log_ratio[1]);
+    cloud_preset.sun_illuminance_lux = std::clamp(sky.preset.sun_illuminance_lux * g, 1.0, 2.0e5);
+    for (int c = 0; c < 3; ++c)
+      cloud_preset.sun_tint_rgb[c] = std::clamp(sky.preset.sun_tint_rgb[c] * std::exp(log_ratio[c]) / g, 0.0, 10.0);
+    Log("fit", "clouds stats: the clouds lit by the photo's sun: " + FormatNumber(cloud_preset.sun_illuminance_lux) +
+                   " lux (the fitted preset's " + FormatNumber(sky.preset.sun_illuminance_lux) + ")");
   }
 
   std::unique_ptr<clouds::CloudRenderer> renderer;
@@ -174,50 +286,82 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   }
   const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::DefaultCloudNoiseCacheDir());
 
-  // Coverage first: bisect the weather maps' mean coverage until the model's mean opacity
+  // Coverage first: match the weather maps' mean coverage until the model's mean opacity
   // (pooled over the ensemble, at the starting lighting) equals the photos' mean cloud
   // probability over their sky above the lowest elevation bin.
   const double min_el = so.elevation_edges_deg.front();
+  // Opacity only: the transmittance depends on the extinction and the shapes, never on the
+  // light samples (cloud_march.glsl.h: the light march feeds the source term alone), so the
+  // match marches without them.
+  fit::CloudStatsOptions opacity_only = so;
+  opacity_only.march.light_samples = 0;
   double target = 0.0;
   for (const PhotoData& d : data)
     target += MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el) / data.size();
   auto model_opacity = [&](double coverage, std::vector<clouds::WeatherMap>* maps) {
     maps->clear();
     for (int m = 0; m < o.maps; ++m) maps->push_back(StatsWeather(o.weather_seed + m, initial.weather_extent_m, coverage));
-    fit::CloudStatsScene scene{&sky.preset, initial, &noise, &(*maps)[0]};
+    fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &(*maps)[0]};
     double mean = 0.0;
     for (const PhotoData& d : data)
       for (int m = 0; m < o.maps; ++m)
-        mean += MeanOpacity(fit::RenderForCloudStats(d.stats_ref, scene, initial, *renderer, so, 0.0, &(*maps)[m]).opacity,
+        mean += MeanOpacity(fit::RenderForCloudStats(d.stats_ref, scene, initial, *renderer, opacity_only, 0.0, &(*maps)[m]).opacity,
                             d.stats_ref.sky, o.width, o.width / 2, min_el) /
                 (data.size() * o.maps);
     return mean;
   };
   std::vector<clouds::WeatherMap> maps;
-  double lo = 0.0, hi = 1.0, coverage = 0.5, achieved = 0.0;
+  const auto coverage_t0 = std::chrono::steady_clock::now();
+  // The Illinois variant of regula falsi on f(c) = opacity(c) - photo: the opacity rises
+  // monotonically with the coverage from 0 (no cloud) toward 1, the anchors' assumed values
+  // until evaluated points replace them; it stops within 0.005 of the photo (3-4 steps on
+  // the real skies, where 8 halvings took 8) or after 8 steps.
+  double lo = 0.0, hi = 1.0, f_lo = -target, f_hi = 1.0 - target, coverage = 0.5, achieved = 0.0;
+  int side = 0;
   nlohmann::json coverage_steps = nlohmann::json::array();
-  for (int step = 0; step < 7; ++step) {
-    coverage = 0.5 * (lo + hi);
+  for (int step = 0; step < 8; ++step) {
+    coverage = std::clamp((lo * f_hi - hi * f_lo) / (f_hi - f_lo), 1e-3, 1.0);
     achieved = model_opacity(coverage, &maps);
     coverage_steps.push_back({{"mean_coverage", coverage}, {"model_mean_opacity", achieved}});
     Log("fit", "clouds stats: coverage " + FormatNumber(coverage) + " -> model mean opacity " + FormatNumber(achieved) +
                    " (photo " + FormatNumber(target) + ")");
-    (achieved < target ? lo : hi) = coverage;
+    const double f = achieved - target;
+    if (std::abs(f) < 0.005) break;
+    if (f < 0.0) {
+      lo = coverage;
+      f_lo = f;
+      if (side == -1) f_hi *= 0.5;
+      side = -1;
+    } else {
+      hi = coverage;
+      f_hi = f;
+      if (side == 1) f_lo *= 0.5;
+      side = 1;
+    }
   }
-  coverage = 0.5 * (lo + hi);
-  achieved = model_opacity(coverage, &maps);
+  const double coverage_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - coverage_t0).count();
 
   std::vector<fit::CloudStatsReference> refs;
   for (const PhotoData& d : data) refs.push_back(d.stats_ref);
-  fit::CloudStatsScene scene{&sky.preset, initial, &noise, &maps[0]};
+  fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
   for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
   Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters (" +
                  std::to_string(o.renders) + " renders of " + std::to_string(o.maps) + " weather maps per evaluation, " +
                  std::to_string(o.width) + "x" + std::to_string(o.width / 2) + ", at most " +
                  std::to_string(o.max_iterations) + " iterations)");
-  const fit::CloudStatsResult res = fit::FitCloudStats(refs, scene, *renderer, so);
+  // When only the linear lighting (albedo, ambient) is fitted, each draw of shapes is
+  // marched three times and every evaluation after that is a weighted sum of those
+  // (lighting_basis_renderer.h); otherwise every evaluation marches.
+  const bool linear = std::all_of(so.fitted.begin(), so.fitted.end(), [](const std::string& n) {
+    return n == "scattering_albedo" || n == "ambient_strength";
+  });
+  LightingBasisCloudRenderer basis(*renderer, static_cast<int>(refs.size()) * o.renders + 1);
+  clouds::CloudRenderer& fit_renderer = linear ? static_cast<clouds::CloudRenderer&>(basis) : *renderer;
+  const fit::CloudStatsResult res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+  const long long marches = linear ? basis.marches() : res.renders;
   Log("fit", "clouds stats: cost " + FormatNumber(res.initial_cost) + " -> " + FormatNumber(res.final_cost) + ", " +
-                 std::to_string(res.renders) + " renders, " + FormatNumber(res.time_s) + " s");
+                 std::to_string(res.renders) + " evaluations' renders (" + std::to_string(marches) + " marched), " +
+                 FormatNumber(res.time_s) + " s");
 
   nlohmann::json params = nlohmann::json::object();
   for (const auto& p : res.parameters) {
@@ -251,7 +395,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         int sb = 0, eb = 0;
         if (!fit::FindCloudBin(so, std::acos(c) * 180.0 / M_PI, latlong::Latitude(y, h) * 180.0 / M_PI, &sb, &eb)) continue;
         double thin = 0.0, thick = 0.0;
-        fit::OpacityClassWeights(so, photos[r].cloud_probability[i], &thin, &thick);
+        fit::OpacityClassWeights(so, d.probability[i], &thin, &thick);
         const double weights[2] = {thin, thick};
         double clear_share = 1.0;
         double acc[3] = {0.0, 0.0, 0.0};
@@ -294,6 +438,8 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         }
     per_ref.push_back({{"name", ref.name},
                        {"non_sky_pixels_segmented", d.non_sky_segmented},
+                       {"sun_check", d.sun_check},
+                       {"cloud_probability", d.probability_json},
                        {"photo_mean_cloud_probability",
                         MeanOpacity(d.stats_ref.opacity, d.stats_ref.sky, o.width, o.width / 2, min_el)},
                        {"errors", errors},
@@ -311,20 +457,30 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   WriteFitPanels(fit_dir.string(), panel_refs, panels);
   return {{"term", "cloud statistics (unknown shapes): weighted quantiles of log radiance per (sun angle x elevation x "
                    "opacity) bin, model pooled over an ensemble of weather maps"},
-          {"shared_with_atmosphere", "the sun's illuminance, tint and transmittance and the sky's SH-9 ambient come from "
-                                     "the fitted preset"},
+          {"shared_with_atmosphere", o.sun == "photo"
+                                         ? "the sky's SH-9 ambient and the sun's transmittance come from the fitted preset; "
+                                           "the sun's illuminance and tint from the photo's disc (sun_check)"
+                                         : "the sun's illuminance, tint and transmittance and the sky's SH-9 ambient come "
+                                           "from the fitted preset"},
+          {"sun", o.sun},
+          {"cloud_sun_illuminance_lux", cloud_preset.sun_illuminance_lux},
+          {"cloud_sun_tint_rgb", cloud_preset.sun_tint_rgb},
+          {"direct_light_lux_at_albedo_1", res.params.scattering_albedo * cloud_preset.sun_illuminance_lux},
           {"render_size", {o.width, o.width / 2}},
           {"weather_maps", o.maps},
           {"renders_per_evaluation", o.renders},
           {"coverage", {{"photo_mean_cloud_probability", target},
                         {"matched_mean_coverage", coverage},
                         {"model_mean_opacity", achieved},
+                        {"time_s", coverage_s},
                         {"steps", coverage_steps}}},
           {"parameters", params},
           {"initial_cost", res.initial_cost},
           {"final_cost", res.final_cost},
           {"iterations", res.iterations},
           {"renders", res.renders},
+          {"marched_renders", marches},
+          {"renderer", fit_renderer.Describe()},
           {"singular_values", res.singular_values},
           {"termination", res.termination},
           {"time_s", res.time_s},

@@ -26,6 +26,20 @@ struct FitCloudStatsOptions {
   int renders = 8;           // renders per evaluation (map m % maps, wind 1800 s apart)
   int max_iterations = 12;   // --cloud-stats-iterations
   uint64_t weather_seed = 1; // seeds of the model's weather maps: seed, seed + 1, ...
+  // --cloud-stats-sun: the sun that lights the model's clouds. "photo": the photo's own disc
+  // (cli/photo_sun.h, in model units: divided by the sky fit's exposure) replaces the
+  // fitted preset's sun illuminance and tint for the cloud renders; "model": the preset's.
+  // Why: a sky fit without the disc does not pin the sun apart from the exposure (the gauge
+  // keeps the initial preset's sun-to-sky ratio): on `sky` the photo's sun is 0.036 of the
+  // model's, and with the model's the fit greyed the clouds (albedo 0.09, ambient at its bound).
+  std::string sun = "photo";
+  // --cloud-stats-probability: the clear-sky expectation of the cloud probability.
+  // "fitted": recomputed against the sky fit's own render (which carries the glow around a
+  // low sun the clear pixels near it pin: on `dawn` the bundled preset's expectation took
+  // the glow over the ridge for cloud), a pixel cloud when both expectations say so (the
+  // minimum) when the sky fit matches its clear pixels within 50% rel RMSE (not an overcast
+  // frame's); "initial": --cloud-mask's probability (the bundled preset's clear sky) as is.
+  std::string probability = "fitted";
   // What a photograph's statistics can fit: the brightness of cloud against the clear sky
   // (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer traded
   // against it) and the ambient. Held at the bundled default_cloudy's values: the phase lobe

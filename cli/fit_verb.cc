@@ -296,7 +296,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
                      "             [--backend vulkan|cpu] [--sun-dir X,Y,Z | --sun-elevation DEG --sun-azimuth DEG]\n"
                      "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
                      "             [--clouds auto|on|off|stats] [--cloud-preset P.json] [--cloud-time S]\n"
-                     "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]");
+                     "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]\n"
+                     "             [--cloud-stats-sun photo|model] [--cloud-stats-probability fitted|initial]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
@@ -353,6 +354,12 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
              "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
   cl.Integer("--cloud-stats-iterations", &c.cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",
              "--clouds stats: Ceres iterations at most (default 12)");
+  cl.Text("--cloud-stats-sun", &c.cloud_stats.sun, "photo|model",
+          "--clouds stats: the sun lighting the model's clouds: the photo's disc (lux in model\n"
+          "units, fit.json's sun_check; default photo) or the fitted preset's (model)");
+  cl.Text("--cloud-stats-probability", &c.cloud_stats.probability, "fitted|initial",
+          "--clouds stats: the cloud probability's clear-sky expectation: also the sky fit's own\n"
+          "render (cloud where both say so; default fitted) or --cloud-mask's alone (initial)");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;

@@ -248,5 +248,45 @@ TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
   EXPECT_LT(cost_truth, cost_start);
 }
 
+// A bin the reference fills and the render leaves empty: no residual by default (the old
+// behaviour), options.empty_bin_log_residual x the bin's weight when set. The model's
+// extinction near 0: the render's clouds vanish and its bins empty.
+TEST(CloudStats, EmptyModelBinsAddTheirResidualWhenAsked) {
+  Fixture f;
+  CloudStatsOptions o;
+  o.fitted = {"extinction"};
+  o.opacity_share_weight = 0.0;
+  auto scene = f.Scene({1, 11}, {1, 11}, &o);
+  clouds::CloudParams vanished = scene.truth;
+  vanished.extinction_per_m = 1e-6;  // opacity far below the thin class's 0.1
+  const CloudStatsScene model{&scene.preset, vanished, &scene.noise, &scene.weather};
+  std::vector<std::vector<double>> res;
+  const std::vector<CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference
+  for (const double penalty : {0.0, 2.0}) {
+    o.empty_bin_log_residual = penalty;
+    CloudStatsObjective obj(refs, model, *f.renderer, o);
+    const std::vector<double> x = obj.InitialX();
+    res.emplace_back(obj.num_residuals());
+    ASSERT_TRUE(obj.Evaluate(x.data(), res.back().data()));
+  }
+  // Residuals of empty bins: 0 without the option (the control), 2 x sqrt(bin / total) with
+  // it; bins the render still fills (the cirrus sheet) are the same in both.
+  int empty = 0;
+  double weight_sq = 0.0;
+  for (size_t i = 0; i < res[0].size(); ++i) {
+    if (res[0][i] == res[1][i]) continue;
+    EXPECT_EQ(res[0][i], 0.0) << i;
+    EXPECT_GT(res[1][i], 0.0) << i;
+    ++empty;
+    weight_sq += (res[1][i] / 2.0) * (res[1][i] / 2.0);
+  }
+  EXPECT_GT(empty, 9);              // at least one bin's 3 channels x 3 quantiles
+  EXPECT_LE(weight_sq, 9.0 + 1e-9);  // the weights' squares sum to <= 1 per channel x quantile
+  o.empty_bin_log_residual = -1.0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("empty_bin_log_residual"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace skycal::fit

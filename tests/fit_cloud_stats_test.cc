@@ -10,6 +10,8 @@
 
 #include "fit_cloud_stats.h"
 #include "fit_verb.h"
+#include "lighting_basis_renderer.h"
+#include "photo_sun.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -54,6 +56,20 @@ TEST(FitCloudStats, CommandLine) {
   o.width = 65;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("--cloud-stats-width 65"), std::string::npos) << why;
+  EXPECT_EQ(c.cloud_stats.sun, "photo");
+  EXPECT_EQ(c.cloud_stats.probability, "fitted");
+  const FitCommandLine c2 = Parse({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-sun", "model",
+                                   "--cloud-stats-probability", "initial", "--out", "d"});
+  EXPECT_EQ(c2.cloud_stats.sun, "model");
+  EXPECT_EQ(c2.cloud_stats.probability, "initial");
+  o = FitCloudStatsOptions{};
+  o.sun = "disc";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-sun 'disc'"), std::string::npos) << why;
+  o = FitCloudStatsOptions{};
+  o.probability = "preset";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-probability 'preset'"), std::string::npos) << why;
 }
 
 struct SyntheticPhoto {
@@ -103,9 +119,13 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   o.maps = 1;
   o.renders = 1;
   o.max_iterations = 0;  // the wiring, not the recovery (benchmarked)
+  // The "sky fit's render" here is the photo itself: against it nothing would be cloud. Told
+  // that fit missed its clear pixels by 60%, the default `fitted` expectation is not used.
+  p.sky.references[0].errors.rel_rmse = 0.6;
   const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
-  // Coverage first: the bisection ends with the model's mean opacity near the photo's (the
-  // last of 7 halvings moves the coverage by 1/256; measured |difference| < 0.02 at 32x16).
+  EXPECT_EQ(j["references"][0]["cloud_probability"]["refined"], false);
+  // Coverage first: regula falsi ends with the model's mean opacity within 0.005 of the photo's or
+  // after 8 steps (at 32x16 the opacity is a coarse function of the coverage: 0.05 allowed).
   const double target = j["coverage"]["photo_mean_cloud_probability"], got = j["coverage"]["model_mean_opacity"];
   EXPECT_GT(target, 0.05);
   EXPECT_NEAR(got, target, 0.05);
@@ -123,6 +143,15 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   EXPECT_GT(r["bins"].size(), 0u);
   for (const char* k : {"reference", "fit", "error"}) EXPECT_TRUE(fs::exists(dir / ("synthetic.clouds." + std::string(k) + ".png"))) << k;
   fs::remove_all(dir);
+  // Control: with the sky fit within 50% the photo-as-expectation leaves no cloud to fit.
+  p.sky.references[0].errors.rel_rmse = 0.1;
+  try {
+    RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("synthetic.exr: --clouds stats: no cloud pixels"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
   // A frame whose width is not a multiple of the statistics' width: named, nothing run.
   o.width = 48;
   try {
@@ -132,6 +161,83 @@ TEST(FitCloudStats, WiringAtASmallSize) {
     EXPECT_NE(std::string(e.what()).find("synthetic.exr"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("--cloud-stats-width 48"), std::string::npos) << e.what();
   }
+}
+
+// The photo's sun (cli/photo_sun.h): a disc of known illuminance spread over a few pixels
+// of a 512x256 lat-long on a sky gradient is recovered; its ring's median is subtracted.
+TEST(FitCloudStats, PhotoSunRecoversADiscOnASky) {
+  const int w = 512, h = 256;
+  ImageRGB img(w, h);
+  const std::array<double, 3> sun = {0.0, std::sin(40.0 * M_PI / 180.0), std::cos(40.0 * M_PI / 180.0)};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<float>(1000.0 + 5.0 * y);  // a smooth sky
+  // The disc: 2x2 pixels at the sun (E = radiance x solid angle, lux in image units).
+  const auto p = latlong::PixelPosition(sun, w, h);
+  const double e_true[3] = {5000.0, 4000.0, 3000.0};
+  const int x0 = static_cast<int>(std::floor(p[0])), y0 = static_cast<int>(std::floor(p[1]));
+  const double share[2][2] = {{0.4, 0.25}, {0.2, 0.15}};  // a disc straddling 4 pixels unequally
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i)
+      for (int c = 0; c < 3; ++c)
+        img.at(x0 + i, y0 + j, c) +=
+            static_cast<float>(share[j][i] * e_true[c] / latlong::PixelSolidAngle(x0 + i, y0 + j, w, h));
+  const PhotoSun s = MeasurePhotoSun(img, sun);
+  // The ring's median is the sky at the ring's mean row; the gradient across the 3-deg disc
+  // is symmetric to first order: 1% covers what is left.
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.illuminance[c], e_true[c], 0.01 * e_true[c]) << c;
+  EXPECT_FALSE(s.clipped());
+  // Control: the same disc measured 10 deg away finds no sun.
+  const std::array<double, 3> off = {0.0, std::sin(50.0 * M_PI / 180.0), std::cos(50.0 * M_PI / 180.0)};
+  EXPECT_LT(std::abs(MeasurePhotoSun(img, off).illuminance[1]), 0.01 * e_true[1]);
+  // A clipped disc: a plateau of equal values.
+  for (int j = -2; j <= 2; ++j)
+    for (int i = -2; i <= 2; ++i)
+      for (int c = 0; c < 3; ++c) img.at(x0 + i, y0 + j, c) = 65504.0f;
+  EXPECT_TRUE(MeasurePhotoSun(img, sun).clipped());
+}
+
+// The lighting basis (cli/lighting_basis_renderer.h): albedo and ambient from three cached
+// marches equal a march at those values; anything else marches anew.
+TEST(FitCloudStats, LightingBasisEqualsAMarch) {
+  SyntheticPhoto p;
+  clouds::CloudRenderer& raw = *p.renderer;
+  LightingBasisCloudRenderer basis(raw, 4);
+  clouds::CloudParams c = p.scene.truth;
+  clouds::CloudScene scene{&p.scene.preset, &c, &p.scene.noise, &p.scene.weather};
+  clouds::CloudRenderRequest req;
+  req.sun_dir = p.ref.sun_dir;
+  req.width = 64;
+  req.height = 32;
+  auto max_rel = [](const clouds::CloudImage& a, const clouds::CloudImage& b) {
+    double worst = 0.0, peak = 0.0;
+    for (float v : b.radiance.pixels) peak = std::max(peak, static_cast<double>(std::abs(v)));
+    for (size_t i = 0; i < a.radiance.pixels.size(); ++i)
+      worst = std::max(worst, std::abs(static_cast<double>(a.radiance.pixels[i]) - b.radiance.pixels[i]) / peak);
+    return worst;
+  };
+  basis.Render(scene, req);  // the basis: 3 marches
+  EXPECT_EQ(basis.marches(), 3);
+  c.scattering_albedo = 0.37;
+  c.ambient_strength = 4.2;
+  const clouds::CloudImage synth = basis.Render(scene, req), marched = raw.Render(scene, req);
+  EXPECT_EQ(basis.marches(), 3);
+  EXPECT_EQ(basis.synthesized(), 1);
+  // Float renders: the sums C + a (D + k A) round differently from one march; 1e-4 of the
+  // brightest pixel is ~100x the float rounding of the three images.
+  EXPECT_LT(max_rel(synth, marched), 1e-4);
+  EXPECT_EQ(synth.transmittance, marched.transmittance);
+  // Control: a different lighting differs by far more than the tolerance.
+  c.ambient_strength = 1.0;
+  EXPECT_GT(max_rel(raw.Render(scene, req), marched), 1e-2);
+  // A non-linear field (the extinction) marches a new basis.
+  c.extinction_per_m *= 1.1;
+  basis.Render(scene, req);
+  EXPECT_EQ(basis.marches(), 6);
+  // The coverage match marches without light samples: the transmittance does not use them.
+  clouds::CloudRenderRequest dark = req;
+  dark.march.light_samples = 0;
+  EXPECT_EQ(raw.Render(scene, dark).transmittance, raw.Render(scene, req).transmittance);
 }
 
 }  // namespace

@@ -73,6 +73,10 @@ bool CloudStatsOptions::IsValid(std::string* why) const {
     *why = "cloud stats: expected 0 <= thin_lo < thin_hi <= 1 and 0 <= thick_lo < thick_hi <= 1 (opacity)";
     return false;
   }
+  if (!(empty_bin_log_residual >= 0.0 && empty_bin_log_residual <= 100.0)) {
+    *why = "cloud stats: empty_bin_log_residual = " + std::to_string(empty_bin_log_residual) + " (expected [0, 100] log units)";
+    return false;
+  }
   if (!(min_bin_sr > 0.0 && min_bin_sr < 4.0 * M_PI)) {
     *why = "cloud stats: min_bin_sr = " + std::to_string(min_bin_sr) + " (expected (0, 4 pi) sr)";
     return false;
@@ -312,7 +316,7 @@ bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vect
       for (int ch = 0; ch < 3; ++ch)
         for (int q = 0; q < nq; ++q) {
           const size_t i = (static_cast<size_t>(bin) * 3 + ch) * nq + q;
-          residuals[k++] = present ? w * (model.log_quantile[i] - ref.log_quantile[i]) : 0.0;
+          residuals[k++] = present ? w * (model.log_quantile[i] - ref.log_quantile[i]) : w * options_.empty_bin_log_residual;
         }
     }
     for (int b : active_shares_[r]) {

@@ -48,6 +48,10 @@ struct CloudStatsOptions {
   // (sr; 0.01 sr is ~16 pixels of a 256x128 lat-long at mid elevations); a bin the render
   // leaves below half of it adds zero residuals at that point.
   double min_bin_sr = 0.01;
+  // Residual per quantile and channel (log units, before the bin's weight) of a bin the
+  // reference fills and the render leaves empty; 0: none (an empty bin then costs nothing,
+  // and a parameter that empties bins can escape: extinction ran to 0 on the photo `dawn`).
+  double empty_bin_log_residual = 0.0;
   // The lighting parameters fitted (clouds.* names of CloudParameterSpecs()); every other
   // field is held at the initial value. The default set: the fields with a distinct signature
   // in the bins (recovered exactly with known shapes; with unknown shapes from ONE reference

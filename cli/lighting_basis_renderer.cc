@@ -1,0 +1,103 @@
+#include "lighting_basis_renderer.h"
+
+#include <cstring>
+#include <tuple>
+
+#include "skycal/core/error.h"
+
+namespace skycal::cli {
+namespace {
+
+bool IsLinearField(const char* name) {
+  return std::strcmp(name, "scattering_albedo") == 0 || std::strcmp(name, "ambient_strength") == 0;
+}
+
+// The params with the linear fields zeroed: two renders share a basis when these are equal.
+clouds::CloudParams NonLinearPart(const clouds::CloudParams& p) {
+  clouds::CloudParams q = p;
+  q.scattering_albedo = 0.0;
+  q.ambient_strength = 0.0;
+  return q;
+}
+
+bool SameParams(const clouds::CloudParams& a, const clouds::CloudParams& b) {
+  clouds::CloudParams x = a, y = b;
+  for (const auto& spec : clouds::CloudParameterSpecs())
+    if (!IsLinearField(spec.name) && !(*spec.field(x) == *spec.field(y))) return false;
+  return true;
+}
+
+auto MarchTie(const clouds::MarchOptions& m) {
+  return std::tie(m.steps_zenith, m.steps_horizon, m.light_samples, m.light_step_m, m.far_light_distance_m,
+                  m.cone_spread, m.cheap_march, m.cheap_step_factor, m.step_back, m.empty_to_cheap, m.opacity_stop,
+                  m.opacity_threshold, m.cheap_light, m.cheap_light_opacity, m.far_light);
+}
+
+bool SameRequest(const clouds::CloudRenderRequest& a, const clouds::CloudRenderRequest& b) {
+  return a.sun_dir == b.sun_dir && a.width == b.width && a.height == b.height && a.time_s == b.time_s &&
+         MarchTie(a.march) == MarchTie(b.march);
+}
+
+}  // namespace
+
+LightingBasisCloudRenderer::LightingBasisCloudRenderer(clouds::CloudRenderer& inner, int max_entries)
+    : inner_(inner), max_entries_(max_entries) {
+  if (max_entries < 1) throw Error("lighting basis renderer: max_entries " + std::to_string(max_entries) + " (expected >= 1)");
+}
+
+std::string LightingBasisCloudRenderer::Describe() const {
+  return inner_.Describe() + ", albedo and ambient from a cached 3-render basis per draw of shapes";
+}
+
+clouds::CloudImage LightingBasisCloudRenderer::Render(const clouds::CloudScene& scene,
+                                                      const clouds::CloudRenderRequest& request) {
+  if (!scene.params) throw Error("cloud render: incomplete scene");
+  clouds::ValidateCloudParams(*scene.params, "cloud parameters");  // the values the basis is weighted by
+  Basis* basis = nullptr;
+  for (auto& b : cache_)
+    if (b->scene.preset == scene.preset && b->scene.noise == scene.noise && b->scene.weather == scene.weather &&
+        SameParams(b->params, *scene.params) && SameRequest(b->request, request)) {
+      basis = b.get();
+      break;
+    }
+  if (!basis) {
+    auto b = std::make_unique<Basis>();
+    b->scene = scene;
+    b->params = NonLinearPart(*scene.params);
+    b->scene.params = &b->params;
+    b->request = request;
+    clouds::CloudParams p = b->params;  // a = 0, k = 0
+    clouds::CloudScene s = scene;
+    s.params = &p;
+    b->c = inner_.Render(s, request);
+    p.scattering_albedo = 1.0;  // a = 1, k = 0: C + D
+    b->d = inner_.Render(s, request);
+    p.ambient_strength = 1.0;  // a = 1, k = 1: C + D + A
+    b->a = inner_.Render(s, request);
+    marches_ += 3;
+    auto& cp = b->c.radiance.pixels;
+    auto& dp = b->d.radiance.pixels;
+    auto& ap = b->a.radiance.pixels;
+    for (size_t i = 0; i < cp.size(); ++i) {
+      ap[i] -= dp[i];  // A
+      dp[i] -= cp[i];  // D
+    }
+    if (static_cast<int>(cache_.size()) >= max_entries_) cache_.erase(cache_.begin());
+    cache_.push_back(std::move(b));
+    basis = cache_.back().get();
+  } else {
+    ++synthesized_;
+  }
+  const double a = scene.params->scattering_albedo, ak = a * scene.params->ambient_strength;
+  clouds::CloudImage out;
+  out.radiance = basis->c.radiance;
+  out.transmittance = basis->c.transmittance;  // the extinction's alone: the same in all three
+  out.full_samples = basis->c.full_samples;
+  auto& op = out.radiance.pixels;
+  const auto& dp = basis->d.radiance.pixels;
+  const auto& ap = basis->a.radiance.pixels;
+  for (size_t i = 0; i < op.size(); ++i) op[i] = static_cast<float>(op[i] + a * dp[i] + ak * ap[i]);
+  return out;
+}
+
+}  // namespace skycal::cli
