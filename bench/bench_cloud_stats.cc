@@ -47,7 +47,10 @@ std::string FittedList(const fit::CloudStatsOptions& o) {
 
 }  // namespace
 
+int RunCloudStatsNoise(int argc, char** argv);  // cloud_stats_noise.cc
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "noise") return RunCloudStatsNoise(argc, argv);
   const int pairs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 6;
   const std::string stem = argc > 2 ? argv[2] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_seed_pairs";
   const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
@@ -77,6 +80,10 @@ int main(int argc, char** argv) {
     std::stringstream list(argv[8]);
     for (std::string name; std::getline(list, name, ',');) options.fitted.push_back(name);
   }
+  // NOISE_DRAWS: whiten the residuals by the shape noise of that many draws (independent
+  // weather maps, seeds 5000 + d) measured at the start (options.noise_draws; 0: off).
+  if (argc > 9) options.noise_draws = std::max(0, std::atoi(argv[9]));
+  std::vector<clouds::WeatherMap> noise_maps;
   nlohmann::json runs = nlohmann::json::array();
   std::vector<std::vector<double>> errors(kStart.size());  // per parameter, over the unknown-shape pairs
   std::ostringstream rows;
@@ -104,6 +111,12 @@ int main(int argc, char** argv) {
         ensemble.push_back(bench::CloudStatsWeather(model_seeds.weather + 1000 * e, scene.truth.weather_extent_m));
       for (const auto& w : ensemble) model.weather_ensemble.push_back(&w);
     }
+    if (options.noise_draws > 0) {
+      if (noise_maps.empty())
+        for (int d = 0; d < options.noise_draws; ++d)
+          noise_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+      for (const auto& w : noise_maps) model.noise_ensemble.push_back(&w);
+    }
     // The control renders the model once, at the reference's own wind time: the same shapes.
     fit::CloudStatsOptions run_options = options;
     if (control) run_options.model_renders = 1;
@@ -124,6 +137,8 @@ int main(int argc, char** argv) {
                           {"initial_cost", res.initial_cost},
                           {"final_cost", res.final_cost},
                           {"singular_values", res.singular_values},
+                          {"noise_draws", res.noise_draws},
+                          {"median_noise_sd", res.median_noise_sd},
                           {"termination", res.termination}};
     rows << "| " << (control ? "control (same seeds)" : std::to_string(ref_seeds.noise) + "/" + std::to_string(ref_seeds.weather) +
                                                            " vs " + std::to_string(model_seeds.noise) + "/" +
@@ -155,8 +170,9 @@ int main(int argc, char** argv) {
      << model_maps << ", renders per evaluation " << options.model_renders << ", at most " << options.max_iterations
      << " iterations.\n\n"
      << "`build/bench/bench_cloud_stats " << pairs << " STEM " << options.render_width << " " << refs_per_fit << " "
-     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options)
-     << "` (fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
+     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options) << " "
+     << options.noise_draws << "` (residuals " << (options.noise_draws > 0 ? "whitened by the shape noise of " + std::to_string(options.noise_draws) + " draws at the start" : std::string("weighted by bin share"))
+     << "; fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
      << options.render_width << "x" << options.render_height << " renders, bins sun angle 0-20-45-90-180 deg x elevation "
      << "2-15-35-90 deg x opacity thin/thick, quantiles 0.25-0.5-0.75 of log radiance per channel and the thick "
      << "share per bin; the model's statistics pool " << options.model_renders << " renders "

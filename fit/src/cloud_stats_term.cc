@@ -155,6 +155,12 @@ CloudStatsResult FitCloudStats(const std::vector<CloudStatsReference>& refs, con
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J);
     for (int i = 0; i < svd.singularValues().size(); ++i) res.singular_values.push_back(svd.singularValues()(i));
   }
+  if (!obj.noise_sd().empty()) {
+    std::vector<double> sd = obj.noise_sd();
+    std::nth_element(sd.begin(), sd.begin() + sd.size() / 2, sd.end());
+    res.noise_draws = options.noise_draws;
+    res.median_noise_sd = sd[sd.size() / 2];
+  }
   res.renders = obj.renders();
   res.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

@@ -61,6 +61,17 @@ struct CloudStatsOptions {
   // Central-difference step per parameter, as a fraction of its (max - min) range.
   double relative_step = 2e-3;
   int max_iterations = 25;
+  // Whitening by the shape noise (a generalised least-squares objective; issue 11 regime 2,
+  // bench/results/cloud_stats_seed_pairs.md measures it). With noise_draws D > 0 the
+  // objective renders D single shape draws of the model at its start (the scene's
+  // noise_ensemble, else its weather maps at further wind times), takes each statistic's
+  // standard deviation over them (log radiance for a quantile, a fraction for a thick share)
+  // and divides its residual by sd sqrt(1 + 1/model_renders) (the reference is one draw, the
+  // model the mean of model_renders): a statistic the shapes move much counts little, and the
+  // cost at the right lighting is ~ half the number of residuals. 0: each bin weighted by
+  // its share of the reference's cloud (the first design).
+  int noise_draws = 0;        // [0, 256]; >= 4 when on
+  double noise_sd_floor = 0.02;  // lower bound of a statistic's sd (log radiance or share)
   int render_width = 256, render_height = 128;  // pixels of the model's render per reference
   clouds::MarchOptions march;
   bool IsValid(std::string* why) const;
@@ -90,6 +101,11 @@ struct CloudStatsScene {
   // make the model's statistics an expectation over shapes, not one draw
   // (bench/results/cloud_stats_seed_pairs.md measures what that buys).
   std::vector<const clouds::WeatherMap*> weather_ensemble;
+  // The shape draws that measure the statistics' shape noise (options.noise_draws): draw d
+  // renders noise_ensemble[d % size] at wind offset (d / size) * model_time_step_s. Empty:
+  // the weather ensemble (or `weather`) continued past the model's own renders (wind moves a
+  // 60 km map 18 km a step: after a few steps the draws repeat shapes, so give maps here).
+  std::vector<const clouds::WeatherMap*> noise_ensemble;
 };
 
 // Statistics of one image: per bin (sun angle x elevation x opacity class) the weight
@@ -142,6 +158,10 @@ struct CloudStatsResult {
   // parameters' ranges), largest first: a small ratio names what the bins cannot separate.
   std::vector<double> singular_values;
   std::string termination;
+  // With options.noise_draws > 0: the draws used and the median of the statistics' shape
+  // noise sd (log radiance / share); the residuals were divided by it (whitened).
+  int noise_draws = 0;
+  double median_noise_sd = 0.0;
 };
 
 // Fits the lighting of `scene.initial` so the model's statistics match the references'.
