@@ -332,7 +332,9 @@ std::vector<double> CloudStatsObjective::EstimateNoiseSd(const double* x, int dr
   }
   std::vector<double> sd(n);
   for (int k = 0; k < n; ++k) {
-    if (2 * count[k] < draws || count[k] < 2) {
+    // A statistic some draw leaves empty comes and goes with the shapes (and with the
+    // parameters): it makes the cost jump, so it counts for nothing.
+    if (count[k] < draws) {
       sd[k] = 1e3 * options_.noise_sd_floor;
       continue;
     }

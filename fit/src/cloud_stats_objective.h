@@ -46,8 +46,8 @@ class CloudStatsObjective {
   // Per statistic shape-noise sd (num_residuals() values, each floored at
   // options.noise_sd_floor); the residuals become (model - reference) / (sd sqrt(1 + 1/M)).
   void SetNoiseSd(const std::vector<double>& sd);
-  // The sd over `draws` shape draws at x (NaN-aware; a statistic present in fewer than half
-  // the draws gets 1e3 x the floor: it then counts for nothing). Throws when a render fails.
+  // The sd over `draws` shape draws at x (a statistic some draw leaves empty gets 1e3 x the
+  // floor: it then counts for nothing). Throws when a render fails.
   std::vector<double> EstimateNoiseSd(const double* x, int draws) const;
   const std::vector<double>& noise_sd() const { return noise_sd_; }
 
