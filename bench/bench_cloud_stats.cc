@@ -48,9 +48,11 @@ std::string FittedList(const fit::CloudStatsOptions& o) {
 }  // namespace
 
 int RunCloudStatsNoise(int argc, char** argv);  // cloud_stats_noise.cc
+int RunCloudStatsScan(int argc, char** argv);   // cloud_stats_noise.cc
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "noise") return RunCloudStatsNoise(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "scan") return RunCloudStatsScan(argc, argv);
   const int pairs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 6;
   const std::string stem = argc > 2 ? argv[2] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_seed_pairs";
   const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
@@ -115,7 +117,7 @@ int main(int argc, char** argv) {
       if (noise_maps.empty())
         for (int d = 0; d < options.noise_draws; ++d)
           noise_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
-      for (const auto& w : noise_maps) model.noise_ensemble.push_back(&w);
+      for (const auto& w : noise_maps) model.shape_draw_maps.push_back(&w);
     }
     // The control renders the model once, at the reference's own wind time: the same shapes.
     fit::CloudStatsOptions run_options = options;

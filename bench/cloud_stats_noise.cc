@@ -82,7 +82,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
   for (int d = 0; d < draws; ++d) draw_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
   fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
   for (const auto& w : model_maps) model.weather_ensemble.push_back(&w);
-  for (const auto& w : draw_maps) model.noise_ensemble.push_back(&w);
+  for (const auto& w : draw_maps) model.shape_draw_maps.push_back(&w);
   const std::vector<fit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
   const fit::CloudStatsObjective obj(refs, model, *renderer, options);
   const int n = obj.num_residuals(), p = obj.num_parameters();
@@ -186,6 +186,42 @@ int RunCloudStatsNoise(int argc, char** argv) {
        << " statistics): a systematic difference the draws over weather maps do not contain.\n\n";
     out["noise_seed_mean_abs_z"] = z.cwiseAbs().mean();
   }
+  {
+    // The 3D noise texture is a shape draw too: one weather map (draw 0), the noise seeds the
+    // seed pairs use (1-6 references, 101-106 models): the sd across them per statistic.
+    std::vector<std::vector<double>> vs;
+    for (uint64_t seed : {1, 2, 3, 4, 5, 6, 101, 102, 103, 104, 105, 106}) {
+      const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
+      fit::CloudStatsScene ms = model;
+      ms.noise = &nz;
+      const fit::CloudStatsObjective o2(refs, ms, *renderer, options);
+      vs.emplace_back(n);
+      if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
+    }
+    std::vector<double> ratio;
+    for (int i = 0; i < nk; ++i) {
+      double a = 0.0, a2 = 0.0;
+      int c = 0;
+      for (const auto& vv : vs)
+        if (std::isfinite(vv[keep[i]])) {
+          a += vv[keep[i]];
+          a2 += vv[keep[i]] * vv[keep[i]];
+          ++c;
+        }
+      if (c < 6) continue;
+      const double m = a / c, sd = std::sqrt(std::max(0.0, (a2 - c * m * m) / (c - 1)));
+      ratio.push_back(sd / std::sqrt(var(i)));
+    }
+    std::sort(ratio.begin(), ratio.end());
+    const double med = ratio.empty() ? 0.0 : ratio[ratio.size() / 2];
+    md << "Noise seeds as shape draws (12 seeds, one weather map): per statistic, sd across noise seeds / sd across "
+       << "weather maps: median " << med << " (" << ratio.size() << " statistics; 10% / 90%: "
+       << (ratio.empty() ? 0.0 : ratio[ratio.size() / 10]) << " / " << (ratio.empty() ? 0.0 : ratio[9 * ratio.size() / 10])
+       << "). The model renders ONE noise texture, so this part of the reference's shape noise is a fixed offset "
+       << "that its ensemble of weather maps does not average.\n\n";
+    out["noise_seed_sd_ratio_median"] = med;
+    std::fprintf(stderr, "  noise-seed draws: sd ratio median %.3g\n", med);
+  }
   md << "Median shape-noise sd of a statistic: " << sds[nk / 2] << " (log radiance / share); 10% / 90%: " << sds[nk / 10]
      << " / " << sds[9 * nk / 10] << ".\n\n";
   for (const auto& sub : subsets) {
@@ -229,5 +265,46 @@ int RunCloudStatsNoise(int argc, char** argv) {
   std::ofstream(stem + ".md") << md.str();
   std::ofstream(stem + ".json") << out.dump(2) << "\n";
   std::fprintf(stderr, "wrote %s.md/.json (%lld renders)\n", stem.c_str(), obj.renders());
+  return 0;
+}
+
+// `bench_cloud_stats scan K [WIDTH]`: the whitened cost of seed pair K (reference seeds
+// 1+K/11+K, model 101+K/211+K, 4 model maps, 24 noise draws) along extinction x 0.5 ... 1.5
+// of the truth, the other lighting at the truth: where the objective's minimum lies.
+int RunCloudStatsScan(int argc, char** argv) {
+  const int k = argc > 2 ? std::atoi(argv[2]) : 1;
+  fit::CloudStatsOptions options;
+  options.render_width = argc > 3 ? std::max(16, std::atoi(argv[3])) : 64;
+  options.render_height = options.render_width / 2;
+  options.fitted = {"extinction"};
+  options.model_renders = 4;
+  const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
+  std::unique_ptr<clouds::CloudRenderer> renderer = clouds::CreateVulkanCloudRenderer(false);
+  const uint64_t uk = static_cast<uint64_t>(k);
+  auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1 + uk, 11 + uk}, {101 + uk, 211 + uk}, 25.0, 30.0, options,
+                                          *renderer, cache);
+  std::vector<clouds::WeatherMap> maps = {scene.weather}, draws;
+  for (int e = 1; e < 4; ++e) maps.push_back(bench::CloudStatsWeather(211 + uk + 1000 * e, scene.truth.weather_extent_m));
+  for (int d = 0; d < 24; ++d) draws.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+  fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  for (const auto& w : maps) model.weather_ensemble.push_back(&w);
+  for (const auto& w : draws) model.shape_draw_maps.push_back(&w);
+  const std::vector<fit::CloudStatsReference> refs = {scene.reference};
+  for (int whiten : {0, 1}) {
+    fit::CloudStatsOptions o = options;
+    o.noise_draws = whiten ? 24 : 0;
+    const fit::CloudStatsObjective obj(refs, model, *renderer, o);
+    std::vector<double> r(obj.num_residuals());
+    const double x0 = obj.InitialX()[0];
+    std::printf("pair %d, %s: cost along extinction / truth:", k, whiten ? "whitened" : "bin shares");
+    for (double f = 0.5; f <= 1.51; f += 0.1) {
+      const double x = x0 * f;
+      double c = 0.0;
+      if (obj.Evaluate(&x, r.data()))
+        for (double v : r) c += 0.5 * v * v;
+      std::printf(" %.2f:%.4g", f, c);
+    }
+    std::printf("\n");
+  }
   return 0;
 }

@@ -263,8 +263,8 @@ CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>&
     num_residuals_ += static_cast<int>(shares.size());
     active_shares_.push_back(std::move(shares));
   }
-  for (const clouds::WeatherMap* w : scene.noise_ensemble)
-    if (!w) throw Error("cloud stats: a null weather map in the scene's noise_ensemble");
+  for (const clouds::WeatherMap* w : scene.shape_draw_maps)
+    if (!w) throw Error("cloud stats: a null weather map in the scene's shape_draw_maps");
   ref_values_.assign(num_residuals_, 0.0);
   weights_.assign(num_residuals_, 0.0);
   const int nq = static_cast<int>(options.quantiles.size());
@@ -346,13 +346,13 @@ std::vector<double> CloudStatsObjective::EstimateNoiseSd(const double* x, int dr
 
 bool CloudStatsObjective::DrawStatistics(const double* x, int draw, double* values) const {
   const clouds::CloudParams p = ParamsAt(x);
-  const int e = static_cast<int>(scene_.noise_ensemble.size());
+  const int e = static_cast<int>(scene_.shape_draw_maps.size());
   for (size_t r = 0; r < refs_.size(); ++r) {
     CloudStatsRender rr;
     try {
       if (e > 0) {
         rr = RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (draw / e) * options_.model_time_step_s,
-                                 scene_.noise_ensemble[draw % e]);
+                                 scene_.shape_draw_maps[draw % e]);
       } else {
         // Past the model's own renders: index M' + draw of the same scheme.
         const int me = std::max<int>(1, static_cast<int>(scene_.weather_ensemble.size()));

@@ -36,7 +36,7 @@ class CloudStatsObjective {
   // The statistics the residuals compare, unweighted, in the residual layout (per reference:
   // active bins x channel x quantile in log radiance, then the thick shares); NaN where the
   // render leaves a bin empty. ModelStatistics pools the model's renders at x; DrawStatistics
-  // is one shape draw d (CloudStatsScene::noise_ensemble); ReferenceStatistics the references'.
+  // is one shape draw d (CloudStatsScene::shape_draw_maps); ReferenceStatistics the references'.
   bool ModelStatistics(const double* x, double* values, std::vector<CloudStatistics>* stats = nullptr) const;
   bool DrawStatistics(const double* x, int draw, double* values) const;
   const std::vector<double>& ReferenceStatistics() const { return ref_values_; }

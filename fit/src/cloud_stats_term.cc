@@ -18,6 +18,18 @@ namespace {
 std::string WhyHeld(const std::string& name) {
   if (name == "scattering_albedo")
     return "an overall scale of the cloud radiance, traded against the sun's illuminance and the exposure";
+  // Measured with unknown shapes (bench/results/cloud_stats_seed_pairs.md, "Shape noise"):
+  // the statistics' shape noise predicts these spreads from one reference, and the seed
+  // pairs land there.
+  if (name == "phase_g1")
+    return "not separable from one sky's statistics: shape noise alone predicts an sd of 84% (40% whitened); "
+           "5 seed pairs land 86-105% off (median)";
+  if (name == "powder_strength")
+    return "not separable from one sky's statistics: shape noise alone predicts an sd of 136% (75% whitened); "
+           "5 seed pairs land at its bounds (median 100-134% off)";
+  if (name == "extinction")
+    return "biased by the cloud shapes: the noise texture's density moves the opacity distribution as extinction "
+           "does; 5 seed pairs land 27-41% off (median) although weather-map noise alone predicts 10%";
   if (name == "powder_view_fade") return "only its product with powder_strength shows in the statistics";
   if (name == "rain_absorption") return "no precipitation in the weather map: no rain pixel constrains it";
   if (name == "ambient_height_bias" || name == "ground_bounce")
