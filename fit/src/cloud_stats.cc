@@ -265,6 +265,8 @@ CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>&
   }
   for (const clouds::WeatherMap* w : scene.shape_draw_maps)
     if (!w) throw Error("cloud stats: a null weather map in the scene's shape_draw_maps");
+  for (const clouds::CloudNoise* nz : scene.noise_textures)
+    if (!nz) throw Error("cloud stats: a null noise texture in the scene's noise_textures");
   ref_values_.assign(num_residuals_, 0.0);
   weights_.assign(num_residuals_, 0.0);
   const int nq = static_cast<int>(options.quantiles.size());
@@ -402,10 +404,14 @@ bool CloudStatsObjective::ModelStatistics(const double* x, double* values, std::
     std::vector<CloudStatsRender> renders(options_.model_renders);
     try {
       const int e = static_cast<int>(scene_.weather_ensemble.size());
-      for (int m = 0; m < options_.model_renders; ++m)
-        renders[m] = e > 0 ? RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (m / e) * options_.model_time_step_s,
+      const int nt = static_cast<int>(scene_.noise_textures.size());
+      for (int m = 0; m < options_.model_renders; ++m) {
+        CloudStatsScene sm = scene_;
+        if (nt > 0) sm.noise = scene_.noise_textures[m % nt];
+        renders[m] = e > 0 ? RenderForCloudStats(refs_[r], sm, p, renderer_, options_, (m / e) * options_.model_time_step_s,
                                                  scene_.weather_ensemble[m % e])
-                           : RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s);
+                           : RenderForCloudStats(refs_[r], sm, p, renderer_, options_, m * options_.model_time_step_s);
+      }
     } catch (const Error&) {
       return false;
     }

@@ -109,6 +109,11 @@ struct CloudStatsScene {
   // the weather ensemble (or `weather`) continued past the model's own renders (wind moves a
   // 60 km map 18 km a step: after a few steps the draws repeat shapes, so give maps here).
   std::vector<const clouds::WeatherMap*> shape_draw_maps;
+  // The model's ensemble of noise textures: when non-empty, model render m uses
+  // noise_textures[m % size] (`noise` stays the texture of the shape draws). The 3D noise is a
+  // shape draw too: its density distribution moves the opacity distribution the way
+  // extinction does (bench/results/cloud_stats_noise.md), and one texture cannot average it.
+  std::vector<const clouds::CloudNoise*> noise_textures;
 };
 
 // Statistics of one image: per bin (sun angle x elevation x opacity class) the weight
