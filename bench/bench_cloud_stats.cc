@@ -55,14 +55,8 @@ int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "scan") return RunCloudStatsScan(argc, argv);
   const int pairs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 6;
   const std::string stem = argc > 2 ? argv[2] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_seed_pairs";
-  const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
-  std::unique_ptr<clouds::CloudRenderer> renderer;
-  try {
-    renderer = clouds::CreateVulkanCloudRenderer(false);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "no Vulkan device (%s): the float CPU path renders\n", e.what());
-    renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
-  }
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
   fit::CloudStatsOptions options;
   if (argc > 3) {
     options.render_width = std::max(16, std::atoi(argv[3]));

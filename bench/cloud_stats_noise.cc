@@ -64,14 +64,8 @@ int RunCloudStatsNoise(int argc, char** argv) {
   options.render_height = options.render_width / 2;
   const int maps = argc > 4 ? std::max(1, std::atoi(argv[4])) : 4;
   const std::string stem = argc > 5 ? argv[5] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_noise";
-  const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
-  std::unique_ptr<clouds::CloudRenderer> renderer;
-  try {
-    renderer = clouds::CreateVulkanCloudRenderer(false);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "no Vulkan device (%s): the float CPU path renders\n", e.what());
-    renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
-  }
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
   options.fitted = kFields;
   options.model_renders = maps;
   // The reference only fixes the bins (its layout); the analysis draws its own shapes.
@@ -278,8 +272,8 @@ int RunCloudStatsScan(int argc, char** argv) {
   options.render_height = options.render_width / 2;
   options.fitted = {"extinction"};
   options.model_renders = 4;
-  const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
-  std::unique_ptr<clouds::CloudRenderer> renderer = clouds::CreateVulkanCloudRenderer(false);
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
   const uint64_t uk = static_cast<uint64_t>(k);
   auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1 + uk, 11 + uk}, {101 + uk, 211 + uk}, 25.0, 30.0, options,
                                           *renderer, cache);
