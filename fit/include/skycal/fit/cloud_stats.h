@@ -53,8 +53,8 @@ struct CloudStatsOptions {
   // the two whose signatures stand above the statistics' shape noise (singular values of
   // diag(Σ)^-1/2 J per ln p of 32 and 9.4 at 64x32, bench/results/cloud_stats_noise.md).
   // phase_g1 and powder_strength are held: from one sky the shape noise alone predicts an
-  // sd of 84% and 136% for them, and 5 seed pairs land 86-134% off
-  // (bench/results/cloud_stats_seed_pairs.md, "Shape noise"); with known shapes they are
+  // sd of 84% and 136% for them, and 5 seed pairs land 38-134% off (median over three
+  // weightings; bench/results/cloud_stats_seed_pairs.md, "Shape noise"); with known shapes they are
   // recovered (fit them then). The silver-lining lobe (phase_g2, phase_blend: 164-1,076%
   // predicted), albedo (an overall scale with the sun and the exposure), powder_view_fade,
   // rain_absorption (no rain in a fair-weather photo), ambient_height_bias and ground_bounce
