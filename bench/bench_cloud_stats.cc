@@ -47,17 +47,16 @@ std::string FittedList(const fit::CloudStatsOptions& o) {
 
 }  // namespace
 
+int RunCloudStatsNoise(int argc, char** argv);  // cloud_stats_noise.cc
+int RunCloudStatsScan(int argc, char** argv);   // cloud_stats_noise.cc
+
 int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "noise") return RunCloudStatsNoise(argc, argv);
+  if (argc > 1 && std::string(argv[1]) == "scan") return RunCloudStatsScan(argc, argv);
   const int pairs = argc > 1 ? std::max(1, std::atoi(argv[1])) : 6;
   const std::string stem = argc > 2 ? argv[2] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_seed_pairs";
-  const std::string cache = (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
-  std::unique_ptr<clouds::CloudRenderer> renderer;
-  try {
-    renderer = clouds::CreateVulkanCloudRenderer(false);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "no Vulkan device (%s): the float CPU path renders\n", e.what());
-    renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
-  }
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
   fit::CloudStatsOptions options;
   if (argc > 3) {
     options.render_width = std::max(16, std::atoi(argv[3]));
@@ -77,6 +76,13 @@ int main(int argc, char** argv) {
     std::stringstream list(argv[8]);
     for (std::string name; std::getline(list, name, ',');) options.fitted.push_back(name);
   }
+  // NOISE_DRAWS: whiten the residuals by the shape noise of that many draws (independent
+  // weather maps, seeds 5000 + d) measured at the start (options.noise_draws; 0: off).
+  if (argc > 9) options.noise_draws = std::max(0, std::atoi(argv[9]));
+  std::vector<clouds::WeatherMap> noise_maps;
+  // MODEL_NOISES: the model's renders cycle through that many noise textures (seeds
+  // 101 + k + 1000 i; 1: the model's one texture).
+  const int model_noises = argc > 10 ? std::max(1, std::atoi(argv[10])) : 1;
   nlohmann::json runs = nlohmann::json::array();
   std::vector<std::vector<double>> errors(kStart.size());  // per parameter, over the unknown-shape pairs
   std::ostringstream rows;
@@ -104,6 +110,21 @@ int main(int argc, char** argv) {
         ensemble.push_back(bench::CloudStatsWeather(model_seeds.weather + 1000 * e, scene.truth.weather_extent_m));
       for (const auto& w : ensemble) model.weather_ensemble.push_back(&w);
     }
+    if (options.noise_draws > 0) {
+      if (noise_maps.empty())
+        for (int d = 0; d < options.noise_draws; ++d)
+          noise_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+      for (const auto& w : noise_maps) model.shape_draw_maps.push_back(&w);
+    }
+    std::vector<clouds::CloudNoise> textures;
+    if (!control && model_noises > 1) {
+      for (int i = 1; i < model_noises; ++i) {
+        std::fprintf(stderr, "  noise texture seed %llu\n", static_cast<unsigned long long>(model_seeds.noise + 1000 * i));
+        textures.push_back(clouds::LoadOrGenerateCloudNoise(model_seeds.noise + 1000 * i, cache));
+      }
+      model.noise_textures.push_back(&scene.noise);
+      for (const auto& t : textures) model.noise_textures.push_back(&t);
+    }
     // The control renders the model once, at the reference's own wind time: the same shapes.
     fit::CloudStatsOptions run_options = options;
     if (control) run_options.model_renders = 1;
@@ -124,6 +145,9 @@ int main(int argc, char** argv) {
                           {"initial_cost", res.initial_cost},
                           {"final_cost", res.final_cost},
                           {"singular_values", res.singular_values},
+                          {"noise_draws", res.noise_draws},
+                          {"model_noise_textures", control ? 1 : model_noises},
+                          {"median_noise_sd", res.median_noise_sd},
                           {"termination", res.termination}};
     rows << "| " << (control ? "control (same seeds)" : std::to_string(ref_seeds.noise) + "/" + std::to_string(ref_seeds.weather) +
                                                            " vs " + std::to_string(model_seeds.noise) + "/" +
@@ -155,8 +179,9 @@ int main(int argc, char** argv) {
      << model_maps << ", renders per evaluation " << options.model_renders << ", at most " << options.max_iterations
      << " iterations.\n\n"
      << "`build/bench/bench_cloud_stats " << pairs << " STEM " << options.render_width << " " << refs_per_fit << " "
-     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options)
-     << "` (fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
+     << model_maps << " " << options.model_renders << " " << options.max_iterations << " " << FittedList(options) << " "
+     << options.noise_draws << " " << model_noises << "` (model noise textures: " << model_noises << "; residuals " << (options.noise_draws > 0 ? "whitened by the shape noise of " + std::to_string(options.noise_draws) + " draws at the start" : std::string("weighted by bin share"))
+     << "; fitted: " << FittedList(options) << "; fit/include/skycal/fit/cloud_stats.h, default options: "
      << options.render_width << "x" << options.render_height << " renders, bins sun angle 0-20-45-90-180 deg x elevation "
      << "2-15-35-90 deg x opacity thin/thick, quantiles 0.25-0.5-0.75 of log radiance per channel and the thick "
      << "share per bin; the model's statistics pool " << options.model_renders << " renders "

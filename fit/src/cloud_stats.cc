@@ -2,6 +2,7 @@
 // cloud_stats_objective.h).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "cloud_stats_objective.h"
@@ -104,6 +105,14 @@ bool CloudStatsOptions::IsValid(std::string* why) const {
   }
   if (!(opacity_share_weight >= 0.0 && opacity_share_weight <= 1e3)) {
     *why = "cloud stats: opacity_share_weight = " + std::to_string(opacity_share_weight) + " (expected [0, 1000])";
+    return false;
+  }
+  if (noise_draws < 0 || noise_draws > 256 || (noise_draws > 0 && noise_draws < 4)) {
+    *why = "cloud stats: noise_draws = " + std::to_string(noise_draws) + " (expected 0 (off) or an integer in [4, 256])";
+    return false;
+  }
+  if (!(noise_sd_floor > 0.0 && noise_sd_floor <= 10.0)) {
+    *why = "cloud stats: noise_sd_floor = " + std::to_string(noise_sd_floor) + " (expected (0, 10] log radiance)";
     return false;
   }
   if (fitted.empty()) {
@@ -258,6 +267,115 @@ CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>&
     num_residuals_ += static_cast<int>(shares.size());
     active_shares_.push_back(std::move(shares));
   }
+  for (const clouds::WeatherMap* w : scene.shape_draw_maps)
+    if (!w) throw Error("cloud stats: a null weather map in the scene's shape_draw_maps");
+  for (const clouds::CloudNoise* nz : scene.noise_textures)
+    if (!nz) throw Error("cloud stats: a null noise texture in the scene's noise_textures");
+  ref_values_.assign(num_residuals_, 0.0);
+  weights_.assign(num_residuals_, 0.0);
+  const int nq = static_cast<int>(options.quantiles.size());
+  for (size_t r = 0; r < refs.size(); ++r) {
+    offsets_.push_back(r == 0 ? 0
+                              : offsets_.back() + static_cast<int>(active_bins_[r - 1].size()) * 3 * nq +
+                                    static_cast<int>(active_shares_[r - 1].size()));
+    const CloudStatistics& ref = ref_stats_[r];
+    Flatten(static_cast<int>(r), ref, 1, ref_values_.data() + offsets_[r]);
+    // Each bin counts by its share of the reference's cloud (sqrt: residuals are squared).
+    const double total = std::accumulate(ref.weight.begin(), ref.weight.end(), 0.0);
+    int k = offsets_[r];
+    for (int bin : active_bins_[r])
+      for (int j = 0; j < 3 * nq; ++j) weights_[k++] = std::sqrt(ref.weight[bin] / total);
+    for (int b : active_shares_[r]) {
+      const int sb = b / ref.elevation_bins, eb = b % ref.elevation_bins;
+      weights_[k++] = options.opacity_share_weight *
+                      std::sqrt((ref.weight[ref.Bin(sb, eb, 0)] + ref.weight[ref.Bin(sb, eb, 1)]) / total);
+    }
+  }
+  if (options.noise_draws > 0) {
+    const std::vector<double> x = InitialX();
+    SetNoiseSd(EstimateNoiseSd(x.data(), options.noise_draws));
+  }
+}
+
+void CloudStatsObjective::Flatten(int r, const CloudStatistics& s, int images, double* values) const {
+  const int nq = static_cast<int>(options_.quantiles.size());
+  int k = 0;
+  for (int bin : active_bins_[r]) {
+    // A bin the render leaves (almost) empty has no quantiles to compare.
+    const bool present = s.weight[bin] >= 0.5 * options_.min_bin_sr * images;
+    for (int ch = 0; ch < 3; ++ch)
+      for (int q = 0; q < nq; ++q)
+        values[k++] = present ? s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + q]
+                              : std::numeric_limits<double>::quiet_NaN();
+  }
+  for (int b : active_shares_[r]) values[k++] = s.thick_share[b];
+}
+
+void CloudStatsObjective::SetNoiseSd(const std::vector<double>& sd) {
+  if (static_cast<int>(sd.size()) != num_residuals_)
+    throw Error("cloud stats: " + std::to_string(sd.size()) + " noise sd values for " + std::to_string(num_residuals_) +
+                " statistics");
+  noise_sd_.resize(sd.size());
+  const double pooled = std::sqrt(1.0 + 1.0 / options_.model_renders);
+  for (size_t k = 0; k < sd.size(); ++k) {
+    noise_sd_[k] = std::max(std::isfinite(sd[k]) ? sd[k] : 1e3 * options_.noise_sd_floor, options_.noise_sd_floor);
+    weights_[k] = 1.0 / (noise_sd_[k] * pooled);
+  }
+}
+
+std::vector<double> CloudStatsObjective::EstimateNoiseSd(const double* x, int draws) const {
+  const int n = num_residuals_;
+  std::vector<double> sum(n, 0.0), sum2(n, 0.0), v(n);
+  std::vector<int> count(n, 0);
+  for (int d = 0; d < draws; ++d) {
+    if (!DrawStatistics(x, d, v.data())) throw Error("cloud stats: shape draw " + std::to_string(d) + " failed to render");
+    for (int k = 0; k < n; ++k)
+      if (std::isfinite(v[k])) {
+        sum[k] += v[k];
+        sum2[k] += v[k] * v[k];
+        ++count[k];
+      }
+  }
+  std::vector<double> sd(n);
+  for (int k = 0; k < n; ++k) {
+    // A statistic some draw leaves empty comes and goes with the shapes (and with the
+    // parameters): it makes the cost jump, so it counts for nothing.
+    if (count[k] < draws) {
+      sd[k] = 1e3 * options_.noise_sd_floor;
+      continue;
+    }
+    const double mean = sum[k] / count[k];
+    sd[k] = std::sqrt(std::max(0.0, (sum2[k] - count[k] * mean * mean) / (count[k] - 1)));
+  }
+  return sd;
+}
+
+bool CloudStatsObjective::DrawStatistics(const double* x, int draw, double* values) const {
+  const clouds::CloudParams p = ParamsAt(x);
+  const int e = static_cast<int>(scene_.shape_draw_maps.size());
+  for (size_t r = 0; r < refs_.size(); ++r) {
+    CloudStatsRender rr;
+    try {
+      if (e > 0) {
+        rr = RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (draw / e) * options_.model_time_step_s,
+                                 scene_.shape_draw_maps[draw % e]);
+      } else {
+        // Past the model's own renders: index M' + draw of the same scheme.
+        const int me = std::max<int>(1, static_cast<int>(scene_.weather_ensemble.size()));
+        const int m = (options_.model_renders + me - 1) / me * me + draw;
+        rr = scene_.weather_ensemble.empty()
+                 ? RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s)
+                 : RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (m / me) * options_.model_time_step_s,
+                                       scene_.weather_ensemble[m % me]);
+      }
+    } catch (const Error&) {
+      return false;
+    }
+    ++renders_;
+    Flatten(static_cast<int>(r), ComputeCloudStatistics(rr.composite, rr.opacity, {}, refs_[r].sun_dir, options_), 1,
+            values + offsets_[r]);
+  }
+  return true;
 }
 
 std::vector<double> CloudStatsObjective::InitialX() const {
@@ -283,19 +401,21 @@ clouds::CloudParams CloudStatsObjective::ParamsAt(const double* x) const {
   return p;
 }
 
-bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vector<CloudStatistics>* stats) const {
+bool CloudStatsObjective::ModelStatistics(const double* x, double* values, std::vector<CloudStatistics>* stats) const {
   const clouds::CloudParams p = ParamsAt(x);
-  const int nq = static_cast<int>(options_.quantiles.size());
-  int k = 0;
   if (stats) stats->clear();
   for (size_t r = 0; r < refs_.size(); ++r) {
     std::vector<CloudStatsRender> renders(options_.model_renders);
     try {
       const int e = static_cast<int>(scene_.weather_ensemble.size());
-      for (int m = 0; m < options_.model_renders; ++m)
-        renders[m] = e > 0 ? RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (m / e) * options_.model_time_step_s,
+      const int nt = static_cast<int>(scene_.noise_textures.size());
+      for (int m = 0; m < options_.model_renders; ++m) {
+        CloudStatsScene sm = scene_;
+        if (nt > 0) sm.noise = scene_.noise_textures[m % nt];
+        renders[m] = e > 0 ? RenderForCloudStats(refs_[r], sm, p, renderer_, options_, (m / e) * options_.model_time_step_s,
                                                  scene_.weather_ensemble[m % e])
-                           : RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s);
+                           : RenderForCloudStats(refs_[r], sm, p, renderer_, options_, m * options_.model_time_step_s);
+      }
     } catch (const Error&) {
       return false;
     }
@@ -307,27 +427,21 @@ bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vect
       opacities.push_back(&rr.opacity);
     }
     const CloudStatistics model = ComputeCloudStatistics(images, opacities, {}, refs_[r].sun_dir, options_);
-    const CloudStatistics& ref = ref_stats_[r];
-    const double total = std::accumulate(ref.weight.begin(), ref.weight.end(), 0.0);
-    for (int bin : active_bins_[r]) {
-      // Each bin counts by its share of the reference's cloud (sqrt: residuals are squared).
-      const double w = std::sqrt(ref.weight[bin] / total);
-      const bool present = model.weight[bin] >= 0.5 * options_.min_bin_sr * options_.model_renders;
-      for (int ch = 0; ch < 3; ++ch)
-        for (int q = 0; q < nq; ++q) {
-          const size_t i = (static_cast<size_t>(bin) * 3 + ch) * nq + q;
-          residuals[k++] = present ? w * (model.log_quantile[i] - ref.log_quantile[i]) : w * options_.empty_bin_log_residual;
-        }
-    }
-    for (int b : active_shares_[r]) {
-      const int sb = b / ref.elevation_bins, eb = b % ref.elevation_bins;
-      const double w = std::sqrt((ref.weight[ref.Bin(sb, eb, 0)] + ref.weight[ref.Bin(sb, eb, 1)]) / total);
-      residuals[k++] = options_.opacity_share_weight * w * (model.thick_share[b] - ref.thick_share[b]);
-    }
+    Flatten(static_cast<int>(r), model, options_.model_renders, values + offsets_[r]);
     if (stats) stats->push_back(model);
   }
-  for (int i = 0; i < k; ++i)
-    if (!std::isfinite(residuals[i])) return false;
+  return true;
+}
+
+bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vector<CloudStatistics>* stats) const {
+  std::vector<double> model(num_residuals_);
+  if (!ModelStatistics(x, model.data(), stats)) return false;
+  for (int k = 0; k < num_residuals_; ++k) {
+    // A bin the model leaves empty (NaN quantiles) costs options_.empty_bin_log_residual log
+    // units per quantile (0 by default: then only the share residual sees it).
+    residuals[k] = weights_[k] * (std::isnan(model[k]) ? options_.empty_bin_log_residual : model[k] - ref_values_[k]);
+    if (!std::isfinite(residuals[k])) return false;
+  }
   return true;
 }
 

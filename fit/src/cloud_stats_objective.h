@@ -33,6 +33,24 @@ class CloudStatsObjective {
   // a shorter step).
   bool Evaluate(const double* x, double* residuals, std::vector<CloudStatistics>* stats = nullptr) const;
 
+  // The statistics the residuals compare, unweighted, in the residual layout (per reference:
+  // active bins x channel x quantile in log radiance, then the thick shares); NaN where the
+  // render leaves a bin empty. ModelStatistics pools the model's renders at x; DrawStatistics
+  // is one shape draw d (CloudStatsScene::shape_draw_maps); ReferenceStatistics the references'.
+  bool ModelStatistics(const double* x, double* values, std::vector<CloudStatistics>* stats = nullptr) const;
+  bool DrawStatistics(const double* x, int draw, double* values) const;
+  const std::vector<double>& ReferenceStatistics() const { return ref_values_; }
+  // Residual k = weight(k) (model - reference); weights from the bins' shares, or 1 / sd of
+  // the shape noise once SetNoiseSd (or options.noise_draws) whitened them.
+  double Weight(int k) const { return weights_[k]; }
+  // Per statistic shape-noise sd (num_residuals() values, each floored at
+  // options.noise_sd_floor); the residuals become (model - reference) / (sd sqrt(1 + 1/M)).
+  void SetNoiseSd(const std::vector<double>& sd);
+  // The sd over `draws` shape draws at x (a statistic some draw leaves empty gets 1e3 x the
+  // floor: it then counts for nothing). Throws when a render fails.
+  std::vector<double> EstimateNoiseSd(const double* x, int draws) const;
+  const std::vector<double>& noise_sd() const { return noise_sd_; }
+
   const std::vector<CloudStatistics>& reference_stats() const { return ref_stats_; }
   long long renders() const { return renders_; }
 
@@ -51,7 +69,11 @@ class CloudStatsObjective {
   std::vector<std::vector<int>> active_bins_;  // per reference: bins with enough reference weight
   std::vector<std::vector<int>> active_shares_;  // per reference: (sun, elevation) bins with a thick-share residual
   int num_residuals_ = 0;
+  std::vector<double> ref_values_, weights_, noise_sd_;
+  std::vector<int> offsets_;  // per reference: its first residual
   mutable long long renders_ = 0;
+  // Flattens statistics of reference r pooled over `images` renders into the residual layout.
+  void Flatten(int r, const CloudStatistics& s, int images, double* values) const;
 };
 
 }  // namespace skycal::fit

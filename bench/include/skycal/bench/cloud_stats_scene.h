@@ -6,6 +6,8 @@
 // contrast 3, 8 cells). Header-only: the test does not link the bench library.
 #pragma once
 #include <cstdint>
+#include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -32,6 +34,21 @@ struct CloudStatsSyntheticScene {
   clouds::WeatherMap weather;
   fit::CloudStatsReference reference;
 };
+
+// The renderer of the benchmark's fits: Vulkan, else (no device) the float CPU path, said on stderr.
+inline std::unique_ptr<clouds::CloudRenderer> CreateCloudStatsRenderer() {
+  try {
+    return clouds::CreateVulkanCloudRenderer(false);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "no Vulkan device (%s): the float CPU path renders\n", e.what());
+    return clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
+  }
+}
+
+// The scratch folder of the benchmark's and test's noise textures.
+inline std::string CloudStatsCacheDir() {
+  return (std::filesystem::temp_directory_path() / "skycal-cloud-stats-cache").string();
+}
 
 inline clouds::WeatherMap CloudStatsWeather(uint64_t seed, double extent_m) {
   clouds::WeatherNoiseOptions w;

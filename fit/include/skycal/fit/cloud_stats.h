@@ -53,18 +53,32 @@ struct CloudStatsOptions {
   // and a parameter that empties bins can escape: extinction ran to 0 on the photo `dawn`).
   double empty_bin_log_residual = 0.0;
   // The lighting parameters fitted (clouds.* names of CloudParameterSpecs()); every other
-  // field is held at the initial value. The default set: the fields with a distinct signature
-  // in the bins (recovered exactly with known shapes; with unknown shapes from ONE reference
-  // 13-100% off, bench/results/cloud_stats_seed_pairs.md says why); the silver-lining lobe (phase_g2, phase_blend:
-  // with unknown shapes, few cloud pixels lie within ~20 deg of the sun and the
-  // three-parameter phase is not separable from the sun-angle bins: errors of 30-250% when
-  // fitted), albedo (an overall scale with the sun and the exposure), powder_view_fade, rain_absorption (no rain in a fair-weather photo),
-  // ambient_height_bias and ground_bounce (traded against ambient_strength), the
-  // multiple-scattering octaves and atmosphere_blend are held, and cloud_stats says so.
-  std::vector<std::string> fitted = {"extinction", "phase_g1", "powder_strength", "ambient_strength"};
+  // field is held at the initial value, and cloud_stats / fit.json say why. The default set:
+  // the two whose signatures stand above the statistics' shape noise (singular values of
+  // diag(Σ)^-1/2 J per ln p of 32 and 9.4 at 64x32, bench/results/cloud_stats_noise.md).
+  // phase_g1 and powder_strength are held: from one sky the shape noise alone predicts an
+  // sd of 84% and 136% for them, and 5 seed pairs land 38-134% off (median over three
+  // weightings; bench/results/cloud_stats_seed_pairs.md, "Shape noise"); with known shapes they are
+  // recovered (fit them then). The silver-lining lobe (phase_g2, phase_blend: 164-1,076%
+  // predicted), albedo (an overall scale with the sun and the exposure), powder_view_fade,
+  // rain_absorption (no rain in a fair-weather photo), ambient_height_bias and ground_bounce
+  // (traded against ambient_strength), the multiple-scattering octaves and atmosphere_blend
+  // are held too.
+  std::vector<std::string> fitted = {"extinction", "ambient_strength"};
   // Central-difference step per parameter, as a fraction of its (max - min) range.
   double relative_step = 2e-3;
   int max_iterations = 25;
+  // Whitening by the shape noise (a generalised least-squares objective; issue 11 regime 2,
+  // bench/results/cloud_stats_seed_pairs.md measures it). With noise_draws D > 0 the
+  // objective renders D single shape draws of the model at its start (the scene's
+  // shape_draw_maps, else its weather maps at further wind times), takes each statistic's
+  // standard deviation over them (log radiance for a quantile, a fraction for a thick share)
+  // and divides its residual by sd sqrt(1 + 1/model_renders) (the reference is one draw, the
+  // model the mean of model_renders): a statistic the shapes move much counts little, and the
+  // cost at the right lighting is ~ half the number of residuals. 0: each bin weighted by
+  // its share of the reference's cloud (the first design).
+  int noise_draws = 0;        // [0, 256]; >= 4 when on
+  double noise_sd_floor = 0.02;  // lower bound of a statistic's sd (log radiance or share)
   int render_width = 256, render_height = 128;  // pixels of the model's render per reference
   clouds::MarchOptions march;
   bool IsValid(std::string* why) const;
@@ -94,6 +108,16 @@ struct CloudStatsScene {
   // make the model's statistics an expectation over shapes, not one draw
   // (bench/results/cloud_stats_seed_pairs.md measures what that buys).
   std::vector<const clouds::WeatherMap*> weather_ensemble;
+  // The shape draws that measure the statistics' shape noise (options.noise_draws): draw d
+  // renders shape_draw_maps[d % size] at wind offset (d / size) * model_time_step_s. Empty:
+  // the weather ensemble (or `weather`) continued past the model's own renders (wind moves a
+  // 60 km map 18 km a step: after a few steps the draws repeat shapes, so give maps here).
+  std::vector<const clouds::WeatherMap*> shape_draw_maps;
+  // The model's ensemble of noise textures: when non-empty, model render m uses
+  // noise_textures[m % size] (`noise` stays the texture of the shape draws). The 3D noise is a
+  // shape draw too: its density distribution moves the opacity distribution the way
+  // extinction does (bench/results/cloud_stats_noise.md), and one texture cannot average it.
+  std::vector<const clouds::CloudNoise*> noise_textures;
 };
 
 // Statistics of one image: per bin (sun angle x elevation x opacity class) the weight
@@ -146,6 +170,10 @@ struct CloudStatsResult {
   // parameters' ranges), largest first: a small ratio names what the bins cannot separate.
   std::vector<double> singular_values;
   std::string termination;
+  // With options.noise_draws > 0: the draws used and the median of the statistics' shape
+  // noise sd (log radiance / share); the residuals were divided by it (whitened).
+  int noise_draws = 0;
+  double median_noise_sd = 0.0;
 };
 
 // Fits the lighting of `scene.initial` so the model's statistics match the references'.

@@ -1,0 +1,304 @@
+// The shape noise of the cloud statistics (issue 11 regime 2), measured at the truth:
+// Σ, the covariance of the statistics over D single shape draws (independent weather maps of
+// the same weather statistics), and J, the Jacobian of the model's pooled statistics with
+// respect to the lighting (central differences through the renderer). A linearised fit of
+// R references (each one draw) against the model's mean of M draws moves the parameters by
+// A (e_model - e_ref), A = (J' W J)^-1 J' W, so their covariance is A Σ (1/R + 1/M) A' for
+// the objective's weights W (the sandwich: Σ need not be invertible). That predicts each
+// parameter's spread under shape noise, and the singular values of Σ^-1/2 J say which
+// directions the statistics separate at all.
+//
+// `bench_cloud_stats noise [DRAWS (default 48)] [RENDER_WIDTH (default 64)] [MODEL_MAPS (default 4)] [OUT_STEM]`
+// writes OUT_STEM.md/.json (default bench/results/cloud_stats_noise).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "bench_util.h"
+#include "cloud_stats_objective.h"
+#include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/core/error.h"
+
+namespace {
+
+using namespace skycal;
+
+// The lighting fields the Jacobian covers (the fit's default four first).
+const std::vector<std::string> kFields = {"extinction",  "phase_g1",  "powder_strength",     "ambient_strength",
+                                          "scattering_albedo", "phase_g2", "phase_blend", "ambient_height_bias",
+                                          "ground_bounce"};
+
+struct Subset {
+  std::string label;
+  std::vector<int> columns;  // into kFields
+};
+
+// Predicted sd of each parameter of `cols` (relative: J's columns are d stat / d ln p) for
+// weights w (diagonal, squared weights) or a full weight matrix.
+Eigen::VectorXd PredictedSd(const Eigen::MatrixXd& J, const Eigen::MatrixXd& W, const Eigen::MatrixXd& S, double scale) {
+  const Eigen::MatrixXd JtW = J.transpose() * W;
+  const Eigen::MatrixXd A = (JtW * J).ldlt().solve(JtW);
+  const Eigen::MatrixXd C = A * S * A.transpose() * scale;
+  return C.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+std::string Pct(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, v < 0.1 ? "%.1f%%" : "%.0f%%", 100.0 * v);
+  return b;
+}
+
+}  // namespace
+
+int RunCloudStatsNoise(int argc, char** argv) {
+  const int draws = argc > 2 ? std::max(4, std::atoi(argv[2])) : 48;
+  fit::CloudStatsOptions options;
+  options.render_width = argc > 3 ? std::max(16, std::atoi(argv[3])) : 64;
+  options.render_height = options.render_width / 2;
+  const int maps = argc > 4 ? std::max(1, std::atoi(argv[4])) : 4;
+  const std::string stem = argc > 5 ? argv[5] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_noise";
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
+  options.fitted = kFields;
+  options.model_renders = maps;
+  // The reference only fixes the bins (its layout); the analysis draws its own shapes.
+  auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1, 11}, {101, 211}, 25.0, 30.0, options, *renderer, cache);
+  std::vector<clouds::WeatherMap> model_maps, draw_maps;
+  model_maps.push_back(scene.weather);
+  for (int e = 1; e < maps; ++e) model_maps.push_back(bench::CloudStatsWeather(211 + 1000 * e, scene.truth.weather_extent_m));
+  for (int d = 0; d < draws; ++d) draw_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+  fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  for (const auto& w : model_maps) model.weather_ensemble.push_back(&w);
+  for (const auto& w : draw_maps) model.shape_draw_maps.push_back(&w);
+  const std::vector<fit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
+  const fit::CloudStatsObjective obj(refs, model, *renderer, options);
+  const int n = obj.num_residuals(), p = obj.num_parameters();
+  const std::vector<double> x = obj.InitialX();
+  // Σ over the draws.
+  std::vector<std::vector<double>> v(draws, std::vector<double>(n));
+  for (int d = 0; d < draws; ++d) {
+    if (!obj.DrawStatistics(x.data(), d, v[d].data())) throw Error("shape draw failed");
+    if (d % 8 == 7) std::fprintf(stderr, "  %d/%d shape draws\n", d + 1, draws);
+  }
+  // The same draws with another noise seed (the seed pairs' references use seeds 1-6, the
+  // model 101-106): a difference of the means is a bias no number of draws averages away.
+  const clouds::CloudNoise other_noise = clouds::LoadOrGenerateCloudNoise(1, cache);
+  fit::CloudStatsScene model_other = model;
+  model_other.noise = &other_noise;
+  const fit::CloudStatsObjective obj_other(refs, model_other, *renderer, options);
+  std::vector<std::vector<double>> v_other(draws, std::vector<double>(n));
+  for (int d = 0; d < draws; ++d)
+    if (!obj_other.DrawStatistics(x.data(), d, v_other[d].data())) throw Error("shape draw failed");
+  std::fprintf(stderr, "  %d draws with noise seed 1\n", draws);
+  std::vector<double> m0(n);
+  if (!obj.ModelStatistics(x.data(), m0.data())) throw Error("model render failed");
+  // Keep the statistics every draw and the model have (a bin a draw leaves empty has no quantile).
+  std::vector<int> keep;
+  for (int k = 0; k < n; ++k) {
+    bool ok = std::isfinite(m0[k]);
+    for (int d = 0; d < draws && ok; ++d) ok = std::isfinite(v[d][k]) && std::isfinite(v_other[d][k]);
+    if (ok) keep.push_back(k);
+  }
+  const int nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd X(draws, nk);
+  for (int d = 0; d < draws; ++d)
+    for (int i = 0; i < nk; ++i) X(d, i) = v[d][keep[i]];
+  const Eigen::RowVectorXd mean = X.colwise().mean();
+  const Eigen::MatrixXd Xc = X.rowwise() - mean;
+  const Eigen::MatrixXd S = Xc.transpose() * Xc / (draws - 1);
+  Eigen::VectorXd bias(nk);  // mean(noise seed 1) - mean(noise seed 101), per statistic
+  for (int i = 0; i < nk; ++i) {
+    double a = 0.0;
+    for (int d = 0; d < draws; ++d) a += v_other[d][keep[i]];
+    bias(i) = a / draws - mean(i);
+  }
+  // J by central differences of the pooled model, columns per ln(parameter).
+  Eigen::MatrixXd J(nk, p);
+  std::vector<double> xp = x, rp(n), rm(n);
+  for (int j = 0; j < p; ++j) {
+    const double h = obj.StepX(j, x[j]);
+    const double hi = std::min(x[j] + h, obj.UpperX(j)), lo = std::max(x[j] - h, obj.LowerX(j));
+    xp[j] = hi;
+    if (!obj.ModelStatistics(xp.data(), rp.data())) throw Error("model render failed");
+    xp[j] = lo;
+    if (!obj.ModelStatistics(xp.data(), rm.data())) throw Error("model render failed");
+    xp[j] = x[j];
+    for (int i = 0; i < nk; ++i) {
+      const double dv = rp[keep[i]] - rm[keep[i]];
+      J(i, j) = (std::isfinite(dv) ? dv : 0.0) / (hi - lo) * x[j];  // d stat / d ln p
+    }
+    std::fprintf(stderr, "  Jacobian column %s\n", obj.Name(j).c_str());
+  }
+  // Weights: the first design's (bin shares), the diagonal GLS (1 / var), the shrunk full GLS.
+  Eigen::VectorXd w_share(nk), var = S.diagonal();
+  for (int i = 0; i < nk; ++i) {
+    w_share(i) = obj.Weight(keep[i]) * obj.Weight(keep[i]);
+    var(i) = std::max(var(i), options.noise_sd_floor * options.noise_sd_floor);
+  }
+  const Eigen::MatrixXd W_share = w_share.asDiagonal(), W_diag = var.cwiseInverse().asDiagonal();
+  const double lambda = 0.5;
+  Eigen::MatrixXd S_shrunk = (1.0 - lambda) * S;
+  S_shrunk.diagonal() += lambda * var;
+  const Eigen::MatrixXd W_full = S_shrunk.ldlt().solve(Eigen::MatrixXd::Identity(nk, nk));
+  const std::vector<Subset> subsets = {{"default four (extinction, g1, powder, ambient)", {0, 1, 2, 3}},
+                                       {"extinction + ambient", {0, 3}},
+                                       {"extinction + g1 + ambient", {0, 1, 3}},
+                                       {"extinction + powder + ambient", {0, 2, 3}},
+                                       {"all nine", {0, 1, 2, 3, 4, 5, 6, 7, 8}}};
+  std::ostringstream md;
+  md << "## Shape noise at the truth: predicted spread and what the statistics separate\n\n"
+     << "`build/bench/bench_cloud_stats noise " << draws << " " << options.render_width << " " << maps << "` ("
+     << options.render_width << "x" << options.render_height << " renders through " << renderer->Describe()
+     << "; the default bins and quantiles). Σ: covariance of the " << nk << " statistics (of " << n
+     << "; those every draw and the model fill) over " << draws
+     << " single shape draws (weather-map seeds 5000+, the model's noise seed 101) at default_cloudy's lighting, sun 25 deg up. "
+     << "J: central differences of the model's statistics pooled over M = " << maps
+     << " weather maps, per ln(parameter). Predicted sd of ln p for R references and M model draws: the sandwich "
+     << "A Σ (1/R + 1/M) A', A = (J'WJ)^-1 J'W, for W = the first design's bin-share weights, the diagonal GLS "
+     << "(W = diag Σ^-1) and a shrunk full GLS (W = ((1-λ)Σ + λ diag Σ)^-1, λ = " << lambda
+     << ": " << draws << " draws cannot estimate a full " << nk << "x" << nk << " Σ). Singular values of "
+     << "diag(Σ)^-1/2 J (per ln p; a direction with σ < 1 moves the statistics less than one draw's noise for "
+     << "a 100% change).\n\n";
+  nlohmann::json out = {{"machine", bench::MachineJson()}, {"draws", draws}, {"statistics", nk}, {"model_maps", maps},
+                        {"render_width", options.render_width}};
+  // Per-statistic noise and signal (median over statistics) for the reading.
+  std::vector<double> sds(nk);
+  for (int i = 0; i < nk; ++i) sds[i] = std::sqrt(S(i, i));
+  std::sort(sds.begin(), sds.end());
+  out["median_statistic_sd"] = sds[nk / 2];
+  {
+    const Eigen::VectorXd z = bias.cwiseQuotient(var.cwiseSqrt()) * std::sqrt(static_cast<double>(draws) / 2.0);
+    md << "Noise seed 1 vs 101 (same " << draws << " weather maps): the mean statistics differ by " << z.cwiseAbs().mean()
+       << " standard errors (unpaired: conservative, the draws share their maps) on average (|z| > 3 for " << (z.array().abs() > 3.0).count() << " of " << nk
+       << " statistics): a systematic difference the draws over weather maps do not contain.\n\n";
+    out["noise_seed_mean_abs_z"] = z.cwiseAbs().mean();
+  }
+  {
+    // The 3D noise texture is a shape draw too: one weather map (draw 0), the noise seeds the
+    // seed pairs use (1-6 references, 101-106 models): the sd across them per statistic.
+    std::vector<std::vector<double>> vs;
+    for (uint64_t seed : {1, 2, 3, 4, 5, 6, 101, 102, 103, 104, 105, 106}) {
+      const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
+      fit::CloudStatsScene ms = model;
+      ms.noise = &nz;
+      const fit::CloudStatsObjective o2(refs, ms, *renderer, options);
+      vs.emplace_back(n);
+      if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
+    }
+    std::vector<double> ratio;
+    for (int i = 0; i < nk; ++i) {
+      double a = 0.0, a2 = 0.0;
+      int c = 0;
+      for (const auto& vv : vs)
+        if (std::isfinite(vv[keep[i]])) {
+          a += vv[keep[i]];
+          a2 += vv[keep[i]] * vv[keep[i]];
+          ++c;
+        }
+      if (c < 6) continue;
+      const double m = a / c, sd = std::sqrt(std::max(0.0, (a2 - c * m * m) / (c - 1)));
+      ratio.push_back(sd / std::sqrt(var(i)));
+    }
+    std::sort(ratio.begin(), ratio.end());
+    const double med = ratio.empty() ? 0.0 : ratio[ratio.size() / 2];
+    md << "Noise seeds as shape draws (12 seeds, one weather map): per statistic, sd across noise seeds / sd across "
+       << "weather maps: median " << med << " (" << ratio.size() << " statistics; 10% / 90%: "
+       << (ratio.empty() ? 0.0 : ratio[ratio.size() / 10]) << " / " << (ratio.empty() ? 0.0 : ratio[9 * ratio.size() / 10])
+       << "). The model renders ONE noise texture, so this part of the reference's shape noise is a fixed offset "
+       << "that its ensemble of weather maps does not average.\n\n";
+    out["noise_seed_sd_ratio_median"] = med;
+    std::fprintf(stderr, "  noise-seed draws: sd ratio median %.3g\n", med);
+  }
+  md << "Median shape-noise sd of a statistic: " << sds[nk / 2] << " (log radiance / share); 10% / 90%: " << sds[nk / 10]
+     << " / " << sds[9 * nk / 10] << ".\n\n";
+  for (const auto& sub : subsets) {
+    Eigen::MatrixXd Js(nk, sub.columns.size());
+    for (size_t c = 0; c < sub.columns.size(); ++c) Js.col(c) = J.col(sub.columns[c]);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(var.cwiseSqrt().cwiseInverse().asDiagonal() * Js);
+    md << "### " << sub.label << "\n\nSingular values of diag(Σ)^-1/2 J:";
+    nlohmann::json js = {{"singular_values", std::vector<double>(svd.singularValues().data(), svd.singularValues().data() + svd.singularValues().size())}};
+    for (int i = 0; i < svd.singularValues().size(); ++i) {
+      char b[32];
+      std::snprintf(b, sizeof b, " %.3g", svd.singularValues()(i));
+      md << b;
+    }
+    md << "\n\n| weights | R refs | M model draws |";
+    for (int c : sub.columns) md << " " << kFields[c] << " |";
+    md << "\n|---|---|---|";
+    for (size_t c = 0; c < sub.columns.size(); ++c) md << "---|";
+    md << "\n";
+    const std::vector<std::pair<std::string, const Eigen::MatrixXd*>> ws = {
+        {"bin shares", &W_share}, {"diagonal GLS", &W_diag}, {"shrunk GLS", &W_full}};
+    for (const auto& [wname, W] : ws)
+      for (const auto& [R, M] : std::vector<std::pair<int, int>>{{1, maps}, {1, 1000000}, {3, maps}, {8, 16}}) {
+        const Eigen::VectorXd sd = PredictedSd(Js, *W, S, 1.0 / R + 1.0 / M);
+        md << "| " << wname << " | " << R << " | " << (M >= 1000000 ? std::string("inf") : std::to_string(M)) << " |";
+        for (int c = 0; c < sd.size(); ++c) md << " " << Pct(sd(c)) << " |";
+        md << "\n";
+        js["predicted_sd_ln"][wname][std::to_string(R) + "x" + std::to_string(M)] =
+            std::vector<double>(sd.data(), sd.data() + sd.size());
+      }
+    for (const auto& [wname, W] : ws) {
+      const Eigen::MatrixXd JtW = Js.transpose() * *W;
+      const Eigen::VectorXd shift = (JtW * Js).ldlt().solve(JtW * bias);
+      md << "| " << wname << ": shift from the noise seed (1 vs 101, mean of " << draws << " draws) | | |";
+      for (int c = 0; c < shift.size(); ++c) md << " " << (shift(c) >= 0 ? "+" : "-") << Pct(std::abs(shift(c))) << " |";
+      md << "\n";
+      js["noise_seed_shift_ln"][wname] = std::vector<double>(shift.data(), shift.data() + shift.size());
+    }
+    md << "\n";
+    out["subsets"][sub.label] = js;
+  }
+  std::ofstream(stem + ".md") << md.str();
+  std::ofstream(stem + ".json") << out.dump(2) << "\n";
+  std::fprintf(stderr, "wrote %s.md/.json (%lld renders)\n", stem.c_str(), obj.renders());
+  return 0;
+}
+
+// `bench_cloud_stats scan K [WIDTH]`: the whitened cost of seed pair K (reference seeds
+// 1+K/11+K, model 101+K/211+K, 4 model maps, 24 noise draws) along extinction x 0.5 ... 1.5
+// of the truth, the other lighting at the truth: where the objective's minimum lies.
+int RunCloudStatsScan(int argc, char** argv) {
+  const int k = argc > 2 ? std::atoi(argv[2]) : 1;
+  fit::CloudStatsOptions options;
+  options.render_width = argc > 3 ? std::max(16, std::atoi(argv[3])) : 64;
+  options.render_height = options.render_width / 2;
+  options.fitted = {"extinction"};
+  options.model_renders = 4;
+  const std::string cache = bench::CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
+  const uint64_t uk = static_cast<uint64_t>(k);
+  auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1 + uk, 11 + uk}, {101 + uk, 211 + uk}, 25.0, 30.0, options,
+                                          *renderer, cache);
+  std::vector<clouds::WeatherMap> maps = {scene.weather}, draws;
+  for (int e = 1; e < 4; ++e) maps.push_back(bench::CloudStatsWeather(211 + uk + 1000 * e, scene.truth.weather_extent_m));
+  for (int d = 0; d < 24; ++d) draws.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+  fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  for (const auto& w : maps) model.weather_ensemble.push_back(&w);
+  for (const auto& w : draws) model.shape_draw_maps.push_back(&w);
+  const std::vector<fit::CloudStatsReference> refs = {scene.reference};
+  for (int whiten : {0, 1}) {
+    fit::CloudStatsOptions o = options;
+    o.noise_draws = whiten ? 24 : 0;
+    const fit::CloudStatsObjective obj(refs, model, *renderer, o);
+    std::vector<double> r(obj.num_residuals());
+    const double x0 = obj.InitialX()[0];
+    std::printf("pair %d, %s: cost along extinction / truth:", k, whiten ? "whitened" : "bin shares");
+    for (double f = 0.5; f <= 1.51; f += 0.1) {
+      const double x = x0 * f;
+      double c = 0.0;
+      if (obj.Evaluate(&x, r.data()))
+        for (double v : r) c += 0.5 * v * v;
+      std::printf(" %.2f:%.4g", f, c);
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
