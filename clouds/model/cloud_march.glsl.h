@@ -18,6 +18,8 @@ struct CloudResult {
   vec3 radiance;          // cd/m^2
   Scalar transmittance;   // 1
   int full_samples;       // full-density samples taken (for measurement)
+  int iterations;         // march iterations, one density sample each (for measurement:
+                          // lavapipe runs 8 pixels' loops in lockstep, README)
 };
 
 // A fixed kernel of 6 unit-ish offsets spreading the light samples over the cone
@@ -51,6 +53,7 @@ CloudResult cirrus_sheet(vec3 view, Scalar one_minus_mu, CloudShadeParams p) {
   c.radiance = vec3(Scalar(0.0));
   c.transmittance = Scalar(1.0);
   c.full_samples = 0;
+  c.iterations = 0;
   if (!(p.cirrus_coverage > Scalar(0.0)) || p.camera_height >= p.cirrus_altitude) return c;
   SphereHit hit = sphere_hit(view.y, p.cirrus_altitude, p);
   SphereHit ground = sphere_hit(view.y, Scalar(0.0), p);
@@ -77,6 +80,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   r.radiance = vec3(Scalar(0.0));
   r.transmittance = Scalar(1.0);
   r.full_samples = 0;
+  r.iterations = 0;
   vec3 diff = view - p.sun_dir;
   Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
   SunRay sun = sun_ray(one_minus_mu, p);
@@ -116,6 +120,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   Scalar tau = Scalar(0.0);          // optical depth toward the sun of the pending sample
   int guard_all = guard * (p.light_samples + 1);
   for (int k = 0; k < guard_all; ++k) {
+    r.iterations = k + 1;
     Scalar step = Scalar(0.0);
     Scalar tm = lit_tm;  // the horizon rule's distance: the primary sample's
     vec3 pos;
