@@ -192,7 +192,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
       vec3 source = (sun_inscatter_ray(tau, sun, p) + ambient_inscatter(h, p)) * sigma_s;
       Scalar x = sigma_t * lit_step;
       Scalar step_t = exp(-x);
-      r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, p));
+      r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, step_t, p));
       Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
       depth_sum = depth_sum + absorbed * lit_tm;
       weight_sum = weight_sum + absorbed;
