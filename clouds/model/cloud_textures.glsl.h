@@ -103,6 +103,42 @@ Texel4 sample_volume(int tex, int n, Scalar u, Scalar v, Scalar w) {
   return acc;
 }
 
+// A trilinear read's texels and weights at texel coordinates (u, v, w) of an n^3 volume:
+// the wrapped indices per axis and the 8 weights in sample_volume's order (z, then y, then
+// x; each weight formed as there: gz gy gx).
+struct Trilinear {
+  WrapAxis x;
+  WrapAxis y;
+  WrapAxis z;
+  Scalar w000;
+  Scalar w001;
+  Scalar w010;
+  Scalar w011;
+  Scalar w100;
+  Scalar w101;
+  Scalar w110;
+  Scalar w111;
+};
+
+Trilinear trilinear_setup(Scalar u, Scalar v, Scalar w, int n) {
+  Trilinear t;
+  t.x = wrap_axis(u, n);
+  t.y = wrap_axis(v, n);
+  t.z = wrap_axis(w, n);
+  Scalar gx0 = Scalar(1.0) - t.x.f;
+  Scalar gy0 = Scalar(1.0) - t.y.f;
+  Scalar gz0 = Scalar(1.0) - t.z.f;
+  t.w000 = gz0 * gy0 * gx0;
+  t.w001 = gz0 * gy0 * t.x.f;
+  t.w010 = gz0 * t.y.f * gx0;
+  t.w011 = gz0 * t.y.f * t.x.f;
+  t.w100 = t.z.f * gy0 * gx0;
+  t.w101 = t.z.f * gy0 * t.x.f;
+  t.w110 = t.z.f * t.y.f * gx0;
+  t.w111 = t.z.f * t.y.f * t.x.f;
+  return t;
+}
+
 // The base noise's Perlin-Worley R and Worley fbm, trilinear: the same texels, weights and
 // order of terms as sample_volume (R bit for bit), from 4 loads of BASE_PAIRS.
 struct BaseNoise {
@@ -112,43 +148,30 @@ struct BaseNoise {
 
 BaseNoise sample_base_noise(Scalar u, Scalar v, Scalar w) {
   int n = CLOUD_BASE_SIZE;
-  WrapAxis ax = wrap_axis(u, n);
-  WrapAxis ay = wrap_axis(v, n);
-  WrapAxis az = wrap_axis(w, n);
-  Scalar gx0 = Scalar(1.0) - ax.f;
-  Scalar gy0 = Scalar(1.0) - ay.f;
-  Scalar gz0 = Scalar(1.0) - az.f;
-  int z0 = az.i0 * n;
-  int z1 = az.i1 * n;
-  Texel4 t00 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z0 + ay.i0) * n + ax.i0);
-  Texel4 t01 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z0 + ay.i1) * n + ax.i0);
-  Texel4 t10 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z1 + ay.i0) * n + ax.i0);
-  Texel4 t11 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z1 + ay.i1) * n + ax.i0);
-  Scalar w000 = gz0 * gy0 * gx0;
-  Scalar w001 = gz0 * gy0 * ax.f;
-  Scalar w010 = gz0 * ay.f * gx0;
-  Scalar w011 = gz0 * ay.f * ax.f;
-  Scalar w100 = az.f * gy0 * gx0;
-  Scalar w101 = az.f * gy0 * ax.f;
-  Scalar w110 = az.f * ay.f * gx0;
-  Scalar w111 = az.f * ay.f * ax.f;
+  Trilinear t = trilinear_setup(u, v, w, n);
+  int z0 = t.z.i0 * n;
+  int z1 = t.z.i1 * n;
+  Texel4 t00 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z0 + t.y.i0) * n + t.x.i0);
+  Texel4 t01 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z0 + t.y.i1) * n + t.x.i0);
+  Texel4 t10 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z1 + t.y.i0) * n + t.x.i0);
+  Texel4 t11 = cloud_texel4(CLOUD_TEX_BASE_PAIRS, (z1 + t.y.i1) * n + t.x.i0);
   BaseNoise b;
-  b.r = Scalar(0.0) + w000 * t00.r;
-  b.r = b.r + w001 * t00.b;
-  b.r = b.r + w010 * t01.r;
-  b.r = b.r + w011 * t01.b;
-  b.r = b.r + w100 * t10.r;
-  b.r = b.r + w101 * t10.b;
-  b.r = b.r + w110 * t11.r;
-  b.r = b.r + w111 * t11.b;
-  b.fbm = Scalar(0.0) + w000 * t00.g;
-  b.fbm = b.fbm + w001 * t00.a;
-  b.fbm = b.fbm + w010 * t01.g;
-  b.fbm = b.fbm + w011 * t01.a;
-  b.fbm = b.fbm + w100 * t10.g;
-  b.fbm = b.fbm + w101 * t10.a;
-  b.fbm = b.fbm + w110 * t11.g;
-  b.fbm = b.fbm + w111 * t11.a;
+  b.r = Scalar(0.0) + t.w000 * t00.r;
+  b.r = b.r + t.w001 * t00.b;
+  b.r = b.r + t.w010 * t01.r;
+  b.r = b.r + t.w011 * t01.b;
+  b.r = b.r + t.w100 * t10.r;
+  b.r = b.r + t.w101 * t10.b;
+  b.r = b.r + t.w110 * t11.r;
+  b.r = b.r + t.w111 * t11.b;
+  b.fbm = Scalar(0.0) + t.w000 * t00.g;
+  b.fbm = b.fbm + t.w001 * t00.a;
+  b.fbm = b.fbm + t.w010 * t01.g;
+  b.fbm = b.fbm + t.w011 * t01.a;
+  b.fbm = b.fbm + t.w100 * t10.g;
+  b.fbm = b.fbm + t.w101 * t10.a;
+  b.fbm = b.fbm + t.w110 * t11.g;
+  b.fbm = b.fbm + t.w111 * t11.a;
   return b;
 }
 
@@ -156,22 +179,17 @@ BaseNoise sample_base_noise(Scalar u, Scalar v, Scalar w) {
 // from 2 loads of DETAIL_QUADS.
 Scalar sample_detail_fbm(Scalar u, Scalar v, Scalar w) {
   int n = CLOUD_DETAIL_SIZE;
-  WrapAxis ax = wrap_axis(u, n);
-  WrapAxis ay = wrap_axis(v, n);
-  WrapAxis az = wrap_axis(w, n);
-  Scalar gx0 = Scalar(1.0) - ax.f;
-  Scalar gy0 = Scalar(1.0) - ay.f;
-  Scalar gz0 = Scalar(1.0) - az.f;
-  Texel4 q0 = cloud_texel4(CLOUD_TEX_DETAIL_QUADS, (az.i0 * n + ay.i0) * n + ax.i0);
-  Texel4 q1 = cloud_texel4(CLOUD_TEX_DETAIL_QUADS, (az.i1 * n + ay.i0) * n + ax.i0);
-  Scalar f = Scalar(0.0) + gz0 * gy0 * gx0 * q0.r;
-  f = f + gz0 * gy0 * ax.f * q0.g;
-  f = f + gz0 * ay.f * gx0 * q0.b;
-  f = f + gz0 * ay.f * ax.f * q0.a;
-  f = f + az.f * gy0 * gx0 * q1.r;
-  f = f + az.f * gy0 * ax.f * q1.g;
-  f = f + az.f * ay.f * gx0 * q1.b;
-  f = f + az.f * ay.f * ax.f * q1.a;
+  Trilinear t = trilinear_setup(u, v, w, n);
+  Texel4 q0 = cloud_texel4(CLOUD_TEX_DETAIL_QUADS, (t.z.i0 * n + t.y.i0) * n + t.x.i0);
+  Texel4 q1 = cloud_texel4(CLOUD_TEX_DETAIL_QUADS, (t.z.i1 * n + t.y.i0) * n + t.x.i0);
+  Scalar f = Scalar(0.0) + t.w000 * q0.r;
+  f = f + t.w001 * q0.g;
+  f = f + t.w010 * q0.b;
+  f = f + t.w011 * q0.a;
+  f = f + t.w100 * q1.r;
+  f = f + t.w101 * q1.g;
+  f = f + t.w110 * q1.b;
+  f = f + t.w111 * q1.a;
   return f;
 }
 
