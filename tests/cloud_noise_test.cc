@@ -302,7 +302,10 @@ TEST(CloudNoiseCache, AFlippedByteAnywhereIsRegeneratedWithAWarning) {
 TEST(CloudNoiseCache, AConsistentCacheWithAValueOutOfRangeIsRegeneratedWithAWarning) {
   ScratchDir dir("noise-range");
   const std::string cache = dir.path().string();
-  LoadOrGenerateCloudNoise(1, cache);
+  // A copy of the cache the parity and model tests share: one generation (the repair) here.
+  const std::string shared = (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string();
+  LoadOrGenerateCloudNoise(1, shared);
+  std::filesystem::copy_file(CacheFile(shared, 1), CacheFile(cache, 1));
   // One value (each regeneration costs a second; NaN takes the same check's other side).
   ExpectRegenerated(cache, [&](std::string& b) {
     const float bad = 1.5f;
@@ -325,7 +328,11 @@ std::string ErrorOf(const std::function<void()>& fn) {
 // Per render only the sizes of noise that carries its checksum are checked (it was
 // validated where it was made); noise without one (made by hand) is checked value by value.
 TEST(CloudNoiseValidation, RendersTrustChecksummedNoiseAndCheckHandMadeNoiseInFull) {
-  CloudNoise noise = Seed1();
+  // Loaded from the cache the parity and model tests share (ctest runs each test in its own
+  // process: a generation would cost a second here).
+  const CloudNoise loaded =
+      LoadOrGenerateCloudNoise(1, (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string());
+  CloudNoise noise = loaded;
   const WeatherMap weather = UniformWeatherMap(0.5, 0.0, 0.5, 1000.0);
   EXPECT_NO_THROW(ValidateCloudTextures(noise, weather, "render"));
   noise.base[8] = 2.0f;  // out of range, checksum kept: not re-checked per render
@@ -333,7 +340,7 @@ TEST(CloudNoiseValidation, RendersTrustChecksummedNoiseAndCheckHandMadeNoiseInFu
   EXPECT_THROW(ValidateCloudNoise(noise, "made"), Error);
   noise.sha256.clear();  // hand-made: checked in full
   EXPECT_NE(ErrorOf([&] { ValidateCloudTextures(noise, weather, "render"); }).find("base noise value 8 = 2"), std::string::npos);
-  noise = Seed1();
+  noise = loaded;
   noise.curl.pop_back();  // sizes are checked with or without the checksum
   EXPECT_NE(ErrorOf([&] { ValidateCloudTextures(noise, weather, "render"); }).find("curl noise has 49151 values"), std::string::npos);
 }
