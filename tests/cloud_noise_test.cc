@@ -8,10 +8,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 
 #include "noise_primitives.h"
 #include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/cloud_renderer.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/core/error.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/sha256.h"
 #include "test_util.h"
@@ -289,6 +293,56 @@ TEST(CloudNoiseCache, AFlippedByteAnywhereIsRegeneratedWithAWarning) {
     SCOPED_TRACE(offset);
     ExpectRegenerated(cache, [&](std::string& b) { b[offset] = static_cast<char>(b[offset] ^ 0x40); });
   }
+}
+
+// The values are validated once, when the cache is read (renders then check sizes only):
+// a cache whose checksum matches its payload but whose payload holds a value out of range
+// (a cache written by a broken build) is refused and regenerated. Control: the same forgery
+// with an in-range value is read (ReadsAConsistentCacheRatherThanRegenerating).
+TEST(CloudNoiseCache, AConsistentCacheWithAValueOutOfRangeIsRegeneratedWithAWarning) {
+  ScratchDir dir("noise-range");
+  const std::string cache = dir.path().string();
+  // A copy of the cache the parity and model tests share: one generation (the repair) here.
+  const std::string shared = (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string();
+  LoadOrGenerateCloudNoise(1, shared);
+  std::filesystem::copy_file(CacheFile(shared, 1), CacheFile(cache, 1));
+  // One value (each regeneration costs a second; NaN takes the same check's other side).
+  ExpectRegenerated(cache, [&](std::string& b) {
+    const float bad = 1.5f;
+    std::memcpy(&b[96 + 4 * 1000], &bad, sizeof bad);  // base texel 250, channel R
+    const std::string sha = Sha256Hex(b.substr(96));
+    std::memcpy(&b[32], sha.data(), 64);
+  });
+}
+
+// The message of the skycal::Error `fn` throws ("" when it does not throw).
+std::string ErrorOf(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Per render only the sizes of noise that carries its checksum are checked (it was
+// validated where it was made); noise without one (made by hand) is checked value by value.
+TEST(CloudNoiseValidation, RendersTrustChecksummedNoiseAndCheckHandMadeNoiseInFull) {
+  // Loaded from the cache the parity and model tests share (ctest runs each test in its own
+  // process: a generation would cost a second here).
+  const CloudNoise loaded =
+      LoadOrGenerateCloudNoise(1, (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string());
+  CloudNoise noise = loaded;
+  const WeatherMap weather = UniformWeatherMap(0.5, 0.0, 0.5, 1000.0);
+  EXPECT_NO_THROW(ValidateCloudTextures(noise, weather, "render"));
+  noise.base[8] = 2.0f;  // out of range, checksum kept: not re-checked per render
+  EXPECT_NO_THROW(ValidateCloudTextures(noise, weather, "render"));
+  EXPECT_THROW(ValidateCloudNoise(noise, "made"), Error);
+  noise.sha256.clear();  // hand-made: checked in full
+  EXPECT_NE(ErrorOf([&] { ValidateCloudTextures(noise, weather, "render"); }).find("base noise value 8 = 2"), std::string::npos);
+  noise = loaded;
+  noise.curl.pop_back();  // sizes are checked with or without the checksum
+  EXPECT_NE(ErrorOf([&] { ValidateCloudTextures(noise, weather, "render"); }).find("curl noise has 49151 values"), std::string::npos);
 }
 
 TEST(CloudNoiseCache, ATruncatedCacheIsRegeneratedWithAWarning) {

@@ -9,12 +9,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <numbers>
 #include <nlohmann/json.hpp>
 
 #include "cloud_test_scenes.h"
 #include "resolved_clouds.h"
+#include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/composite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -133,6 +135,60 @@ TEST(CloudsModel, CirrusSheetTransmittance) {
   const double mu = std::sqrt(1.0 - std::pow(rc * std::cos(e) / rs, 2.0));  // sin rule at the sheet
   EXPECT_NEAR(m.cloud_march(Dir(30.0, 0.0), s).transmittance, std::exp(-0.4 / mu), 1e-9);
   EXPECT_DOUBLE_EQ(m.cloud_march(Dir(-5.0, 0.0), s).transmittance, 1.0);  // below the horizon: ground
+}
+
+// The lag (grid steps) at which a periodic n x n field's autocorrelation along x (or z)
+// first falls below 1/2: its features' length along that axis.
+double HalfCorrelationLag(const std::vector<double>& f, int n, bool along_x) {
+  double mean = 0.0;
+  for (double v : f) mean += v / f.size();
+  auto corr = [&](int lag) {
+    double c = 0.0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int i2 = along_x ? (i + lag) % n : i, j2 = along_x ? j : (j + lag) % n;
+        c += (f[j * n + i] - mean) * (f[j2 * n + i2] - mean);
+      }
+    return c;
+  };
+  const double c0 = corr(0);
+  for (int lag = 1; lag < n / 2; ++lag)
+    if (corr(lag) < 0.5 * c0) return lag;
+  return n / 2;
+}
+
+// The alto/cirrus sheet has the talk's "big arcing bands and little puffs" (Schneider
+// 2015), not blobs: over one cirrus tile (30 km, 256 x 256 samples of 117 m) its pattern is
+// long along the bands (x) and narrow across them (z). Asserted: the half-correlation
+// length along x at least 3x that across (the bands are stretched 8x; the puffs shorten
+// both), and the width across between 1/64 and 1/8 of the tile (0.5 to 3.75 km: bands a
+// few km wide, puffs below that). Control: the old pattern, one isotropic slice of the base
+// noise (R x G), has a ratio near 1 and fails the first assertion.
+TEST(CloudsModel, CirrusPatternIsBandsNotBlobs) {
+  Fixture f;
+  f.noise = LoadOrGenerateCloudNoise(1, (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string());
+  f.params.cirrus_coverage = 1.0;
+  const CloudShadeD s = f.shade();
+  CpuCloudTextures tex(f.noise, f.weather);
+  CloudModelD m(tex);
+  constexpr int n = 256;
+  std::vector<double> bands(n * n), blobs(n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = s.cirrus_tile * i / n, z = s.cirrus_tile * j / n;
+      bands[j * n + i] = m.cirrus_pattern(x, z, s);
+      const double k = CloudModelD::CLOUD_BASE_SIZE / s.cirrus_tile;
+      const auto t = m.sample_volume(CloudModelD::CLOUD_TEX_BASE, CloudModelD::CLOUD_BASE_SIZE, x * k, 0.5, z * k);
+      blobs[j * n + i] = t.r * t.g;
+    }
+  const double along = HalfCorrelationLag(bands, n, true), across = HalfCorrelationLag(bands, n, false);
+  const double old_along = HalfCorrelationLag(blobs, n, true), old_across = HalfCorrelationLag(blobs, n, false);
+  std::printf("cirrus half-correlation lags (117 m steps): bands along %.0f across %.0f; old slice %.0f / %.0f\n", along,
+              across, old_along, old_across);
+  EXPECT_GE(along, 3.0 * across);
+  EXPECT_GE(across, n / 64.0);
+  EXPECT_LE(across, n / 8.0);
+  EXPECT_LT(old_along, 3.0 * old_across);  // control: the metric tells blobs from bands
 }
 
 // HZD's horizon rule is a distance from the player: beyond horizon_start (15 km) the

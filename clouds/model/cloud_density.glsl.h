@@ -73,9 +73,8 @@ Scalar height_fraction(Scalar altitude, CloudShadeParams p) {
 Scalar cloud_base_density(Scalar x, Scalar z, Scalar altitude, CloudWeather w, CloudShadeParams p) {
   Scalar h = height_fraction(altitude, p);
   Scalar s = Scalar(CLOUD_BASE_SIZE) / p.base_tile;
-  Texel4 n = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, (x + p.wind_x) * s, altitude * s, (z + p.wind_z) * s);
-  Scalar fbm = n.g * Scalar(0.625) + n.b * Scalar(0.25) + n.a * Scalar(0.125);
-  Scalar base = saturate1(remap(n.r, fbm - Scalar(1.0), Scalar(1.0), Scalar(0.0), Scalar(1.0)));
+  BaseNoise n = sample_base_noise((x + p.wind_x) * s, altitude * s, (z + p.wind_z) * s);
+  Scalar base = saturate1(remap(n.r, n.fbm - Scalar(1.0), Scalar(1.0), Scalar(0.0), Scalar(1.0)));
   Scalar shaping = mix(Scalar(1.0), height_gradient(h, w.type), p.height_shaping);
   base = base * shaping;
   // Coverage: what is below 1 - coverage vanishes; the rest is scaled by the coverage.
@@ -96,9 +95,8 @@ Scalar cloud_full_density(Scalar base, Scalar x, Scalar z, Scalar altitude, Clou
   Texel4 curl = sample_image(CLOUD_TEX_CURL, CLOUD_CURL_SIZE, CLOUD_CURL_SIZE, (x + p.wind_x) * cs, (z + p.wind_z) * cs);
   Scalar k = p.curl_strength * (Scalar(1.0) - h);
   Scalar ds = Scalar(CLOUD_DETAIL_SIZE) / p.detail_tile;
-  Texel4 d = sample_volume(CLOUD_TEX_DETAIL, CLOUD_DETAIL_SIZE, (x + p.wind_x + curl.r * k) * ds,
-                           (altitude + curl.b * k) * ds, (z + p.wind_z + curl.g * k) * ds);
-  Scalar fbm = d.r * Scalar(0.625) + d.g * Scalar(0.25) + d.b * Scalar(0.125);
+  Scalar fbm = sample_detail_fbm((x + p.wind_x + curl.r * k) * ds, (altitude + curl.b * k) * ds,
+                                 (z + p.wind_z + curl.g * k) * ds);
   Scalar modifier = mix(Scalar(1.0) - fbm, fbm, saturate1(h * Scalar(10.0)));
   return saturate1(remap(base, modifier * p.erosion, Scalar(1.0), Scalar(0.0), Scalar(1.0)));
 }

@@ -105,8 +105,10 @@ vec3 ambient_inscatter(Scalar h, CloudShadeParams p) {
 // Fraction of a step's source that reaches its start, (1 - exp(-x)) / x for x = sigma_t dt
 // (energy-conserving, Hillaire 2016), or 1 (HZD's simple accumulation: source x dt, which
 // over-counts thick steps). The series below 1e-3 avoids 0/0; the two sides agree to 1e-10.
-Scalar step_integral_factor(Scalar x, CloudShadeParams p) {
-  Scalar energy = x < Scalar(1e-3) ? Scalar(1.0) - x * (Scalar(0.5) - x / Scalar(6.0)) : (Scalar(1.0) - exp(-x)) / x;
+// exp_minus_x is exp(-x), the step's transmittance the march has already formed (one exp
+// a march iteration fewer: lavapipe evaluates this on every iteration, lit or not).
+Scalar step_integral_factor(Scalar x, Scalar exp_minus_x, CloudShadeParams p) {
+  Scalar energy = x < Scalar(1e-3) ? Scalar(1.0) - x * (Scalar(0.5) - x / Scalar(6.0)) : (Scalar(1.0) - exp_minus_x) / x;
   return p.integration == CLOUD_INTEGRATION_HZD_SIMPLE ? Scalar(1.0) : energy;
 }
 

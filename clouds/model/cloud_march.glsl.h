@@ -18,6 +18,8 @@ struct CloudResult {
   vec3 radiance;          // cd/m^2
   Scalar transmittance;   // 1
   int full_samples;       // full-density samples taken (for measurement)
+  int iterations;         // march iterations, one density sample each (for measurement:
+                          // lavapipe runs 8 pixels' loops in lockstep, README)
 };
 
 // A fixed kernel of 6 unit-ish offsets spreading the light samples over the cone
@@ -42,24 +44,44 @@ vec3 light_sample_position(vec3 pos, int i, CloudShadeParams p) {
 }
 
 // The optional 2D alto/cirrus sheet: a thin layer at cirrus_altitude whose vertical optical
-// depth is cirrus_depth x a pattern (one slice of the base noise, Perlin-Worley x Worley,
-// remapped by the coverage, scrolling with the wind). Single scattering in an optically
-// thin sheet lit by the unattenuated sun and the sky: L = (E_sun phase + ambient) albedo
-// (1 - T), T = exp(-tau / mu) with mu the cosine of the ray at the sheet.
+// depth is cirrus_depth x a pattern remapped by the coverage, scrolling with the wind.
+// Schneider 2015 describes the cirro clouds as "big arcing bands and little puffs" and the
+// alto ones as "bandy or puffy", drawn as tiling, scrolling 2D textures. The pattern here:
+// bands, the base noise's Perlin-Worley stretched 8x along x (one tile long, their width its
+// cells across: ~1/8 to 1/4 of cirrus_tile), eroded at their edges by puffs, the detail fbm
+// at 1/8 of the tile (cells of 1/16 to 1/64 of it). Single scattering in an optically thin sheet lit by the
+// unattenuated sun and the sky: L = (E_sun phase + ambient) albedo (1 - T),
+// T = exp(-tau / mu) with mu the cosine of the ray at the sheet.
+SC_CONST(CLOUD_CIRRUS_STRETCH, 8.0)   // band length / width
+SC_CONST(CLOUD_CIRRUS_PUFFS, 8.0)     // puff noise tiles per cirrus tile
+
+// The sheet's pattern in [0, 1] at camera-relative (x, z) metres, before the coverage.
+Scalar cirrus_pattern(Scalar x, Scalar z, CloudShadeParams p) {
+  Scalar u = (x + p.wind_x) / p.cirrus_tile;
+  Scalar v = (z + p.wind_z) / p.cirrus_tile;
+  Texel4 bands = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, u * (Scalar(CLOUD_BASE_SIZE) / Scalar(CLOUD_CIRRUS_STRETCH)),
+                               Scalar(0.5), v * Scalar(CLOUD_BASE_SIZE));
+  Scalar puffs_scale = Scalar(CLOUD_CIRRUS_PUFFS) * Scalar(CLOUD_DETAIL_SIZE);
+  Scalar puffs = sample_detail_fbm(u * puffs_scale, Scalar(0.5), v * puffs_scale);
+  // The puffs erode the bands (as the detail noise erodes the volumetric clouds' edges):
+  // a band's core stays whole, its edges break into puffs.
+  return saturate1(remap(bands.r, Scalar(0.5) * puffs, Scalar(1.0), Scalar(0.0), Scalar(1.0)));
+}
+
 CloudResult cirrus_sheet(vec3 view, Scalar one_minus_mu, CloudShadeParams p) {
   CloudResult c;
   c.radiance = vec3(Scalar(0.0));
   c.transmittance = Scalar(1.0);
   c.full_samples = 0;
+  c.iterations = 0;
   if (!(p.cirrus_coverage > Scalar(0.0)) || p.camera_height >= p.cirrus_altitude) return c;
   SphereHit hit = sphere_hit(view.y, p.cirrus_altitude, p);
   SphereHit ground = sphere_hit(view.y, Scalar(0.0), p);
   if (ground.hit == 1 && ground.near > Scalar(0.0)) return c;
   Scalar t = hit.far;
   vec3 pos = view * t;
-  Scalar s = Scalar(CLOUD_BASE_SIZE) / p.cirrus_tile;
-  Texel4 n = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, (pos.x + p.wind_x) * s, Scalar(0.5), (pos.z + p.wind_z) * s);
-  Scalar pattern = saturate1((n.r * n.g - (Scalar(1.0) - p.cirrus_coverage)) / max(p.cirrus_coverage, Scalar(1e-6))) * p.cirrus_coverage;
+  Scalar raw = cirrus_pattern(pos.x, pos.z, p);
+  Scalar pattern = saturate1((raw - (Scalar(1.0) - p.cirrus_coverage)) / max(p.cirrus_coverage, Scalar(1e-6))) * p.cirrus_coverage;
   Scalar mu = ((p.planet_radius + p.camera_height) * view.y + t) / (p.planet_radius + p.cirrus_altitude);
   Scalar tau = p.cirrus_depth * pattern / max(mu, Scalar(0.02));
   c.transmittance = exp(-tau);
@@ -77,6 +99,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   r.radiance = vec3(Scalar(0.0));
   r.transmittance = Scalar(1.0);
   r.full_samples = 0;
+  r.iterations = 0;
   vec3 diff = view - p.sun_dir;
   Scalar one_minus_mu = Scalar(0.5) * dot(diff, diff);
   SunRay sun = sun_ray(one_minus_mu, p);
@@ -116,6 +139,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
   Scalar tau = Scalar(0.0);          // optical depth toward the sun of the pending sample
   int guard_all = guard * (p.light_samples + 1);
   for (int k = 0; k < guard_all; ++k) {
+    r.iterations = k + 1;
     Scalar step = Scalar(0.0);
     Scalar tm = lit_tm;  // the horizon rule's distance: the primary sample's
     vec3 pos;
@@ -187,7 +211,7 @@ CloudResult cloud_march(vec3 view, CloudShadeParams p) {
       vec3 source = (sun_inscatter_ray(tau, sun, p) + ambient_inscatter(h, p)) * sigma_s;
       Scalar x = sigma_t * lit_step;
       Scalar step_t = exp(-x);
-      r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, p));
+      r.radiance = r.radiance + source * (r.transmittance * lit_step * step_integral_factor(x, step_t, p));
       Scalar absorbed = r.transmittance * (Scalar(1.0) - step_t);
       depth_sum = depth_sum + absorbed * lit_tm;
       weight_sum = weight_sum + absorbed;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "noise_primitives.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/sha256.h"
 
 namespace skycal::clouds {
@@ -170,6 +171,9 @@ CloudNoise GenerateCloudNoise(uint64_t seed) {
   noise.base = GenerateBase(seed);
   noise.detail = GenerateDetail(seed);
   noise.curl = GenerateCurl(seed);
+  // Validated once here (every value is clamped above, so this guards the generator
+  // itself); renders trust noise carrying its sha256 (ValidateCloudTextures).
+  ValidateCloudNoise(noise, "generated cloud noise (seed " + std::to_string(seed) + ")");
   noise.sha256 = CloudNoiseSha256(noise);
   return noise;
 }

@@ -18,6 +18,7 @@
 #include <iostream>
 
 #include "skycal/clouds/cloud_noise.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/sha256.h"
@@ -88,6 +89,11 @@ std::string Parse(const std::string& bytes, uint64_t seed, CloudNoise* noise) {
   noise->base = Floats(bytes, kHeaderBytes, BaseCount());
   noise->detail = Floats(bytes, kHeaderBytes + BaseCount() * sizeof(float), DetailCount());
   noise->curl = Floats(bytes, kHeaderBytes + (BaseCount() + DetailCount()) * sizeof(float), CurlCount());
+  // The checksum proves the bytes are the ones written, not that they are in range (a
+  // cache written by a broken build): the values are validated once here, where renders
+  // trust noise carrying its sha256 (ValidateCloudTextures). Throws: the caller warns and
+  // regenerates.
+  ValidateCloudNoise(*noise, "cloud noise cache");
   noise->sha256 = sha;
   return "";
 }

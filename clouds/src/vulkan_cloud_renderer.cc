@@ -1,6 +1,8 @@
 // The Vulkan cloud renderer on gpu::ComputePipeline (clouds/shaders/clouds_latlong.comp).
 // The textures are uploaded once per change of noise or weather map (keyed by content),
-// the RGB ones padded to one vec4 per texel, as uniform texel buffers (read by texelFetch:
+// the RGB ones padded to one vec4 per texel, the density's packed views of the noise
+// (cloud_noise_packing.h: base (R, fbm) pairs, detail fbm quads) made here, as uniform
+// texel buffers (read by texelFetch:
 // lavapipe turns storage-buffer loads at per-lane indices into scalar loops, 3x slower
 // overall; clouds_latlong.comp); the base noise is 128^3 = 2M texels (lavapipe allows 2^27;
 // a device below that fails with ComputePipeline's maxTexelBufferElements error);
@@ -17,6 +19,7 @@
 #include <vector>
 
 #include "resolved_clouds.h"
+#include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
 
@@ -29,7 +32,9 @@ namespace skycal::clouds {
 namespace {
 
 constexpr uint32_t kLocalX = 8, kLocalY = 8;
-enum Binding : uint32_t { kParams = 0, kBase = 1, kDetail = 2, kCurl = 3, kWeather = 4, kTrig = 5, kOutput = 6 };
+enum Binding : uint32_t {
+  kParams = 0, kBase = 1, kDetailQuads = 2, kCurl = 3, kWeather = 4, kTrig = 5, kOutput = 6, kBasePairs = 7
+};
 
 // FNV-1a over the bytes: the upload key of a texture without a checksum.
 uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
@@ -46,7 +51,7 @@ class VulkanCloudRenderer final : public CloudRenderer {
                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
                    VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
                    VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
                   {kLocalX, kLocalY}) {}
 
   CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
@@ -115,7 +120,8 @@ class VulkanCloudRenderer final : public CloudRenderer {
                                                     : Fnv(std::vector<float>{}, std::hash<std::string>{}(noise.sha256));
     if (noise_key != noise_key_ || !noise_uploaded_) {
       Upload(kBase, noise.base);
-      UploadPadded(kDetail, noise.detail);
+      Upload(kBasePairs, PackBasePairs(noise));
+      Upload(kDetailQuads, PackDetailQuads(noise));
       UploadPadded(kCurl, noise.curl);
       noise_key_ = noise_key;
       noise_uploaded_ = true;

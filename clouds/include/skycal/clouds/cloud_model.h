@@ -3,9 +3,11 @@
 // decisions; ceres::Jet: the lighting fit) and the texture source, as render::SkyModel.
 // TextureSource provides `template <class S> S texel(int texture, int index) const`
 // (the float at `index` of a texture's array; CpuCloudTextures below for CloudNoise +
-// WeatherMap); the model turns it into cloud_textures.glsl.h's texel hook.
+// WeatherMap) and `void packed(bool base, int texel, float out[4]) const` (the packed
+// views, cloud_noise_packing.h); the model turns them into cloud_textures.glsl.h's hook.
 #pragma once
 #include "../../../../render/model/glsl_compat.h"
+#include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/clouds/cloud_textures.h"
 
 namespace skycal::model {
@@ -20,8 +22,19 @@ struct CloudModel {
   const TextureSource& texture_source;
 
 #include "../../../model/cloud_textures.glsl.h"
-  // The shared source's texture hook (cloud_textures.glsl.h): base RGBA, the others RGB.
+  // The shared source's texture hook (cloud_textures.glsl.h): base RGBA, the others RGB;
+  // the packed views formed from them texel by texel (cloud_noise_packing.h).
   Texel4 cloud_texel4(int texture, int texel) const {
+    if (texture >= CLOUD_TEX_BASE_PAIRS) {
+      float v[4];
+      texture_source.packed(texture == CLOUD_TEX_BASE_PAIRS, texel, v);
+      Texel4 t;
+      t.r = Scalar(v[0]);
+      t.g = Scalar(v[1]);
+      t.b = Scalar(v[2]);
+      t.a = Scalar(v[3]);
+      return t;
+    }
     const int channels = texture == CLOUD_TEX_BASE ? 4 : 3;
     const int i = texel * channels;
     Texel4 t;
@@ -56,6 +69,14 @@ struct CpuCloudTextures {
   S texel(int texture, int index) const {
     const float* t = texture == 0 ? base : (texture == 1 ? detail : (texture == 2 ? curl : weather));
     return S(t[index]);
+  }
+  // A BASE_PAIRS (base) or DETAIL_QUADS texel, packed from the arrays as the upload does.
+  void packed(bool base_pairs, int texel, float out[4]) const {
+    if (base_pairs) {
+      BasePairTexel(base, texel, out);
+    } else {
+      DetailQuadTexel(detail, texel, out);
+    }
   }
 };
 

@@ -58,7 +58,12 @@ std::unique_ptr<CloudRenderer> CreateCpuCloudRenderer(CloudPrecision precision, 
 std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation = false);
 
 // Throws skycal::Error naming `origin` unless the textures match the layout contract
-// (sizes, finite values, the weather map's channels in [0, 1]).
+// (sizes, finite values, the weather map's channels in [0, 1]). Noise carrying its sha256
+// was validated where it was made (ValidateCloudNoise): only its sizes are checked here.
 void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, const std::string& origin);
+// Throws naming `origin` unless every noise value is finite and in range (base and detail
+// in [0, 1], curl in [-1, 1]) and the sizes match cloud_textures.h (8.7 M values: once,
+// where the noise is made or loaded).
+void ValidateCloudNoise(const CloudNoise& noise, const std::string& origin);
 
 }  // namespace skycal::clouds

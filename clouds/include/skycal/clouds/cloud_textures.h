@@ -27,7 +27,11 @@ struct CloudNoise {
   // Curl of a tileable vector noise: a divergence-free 2D distortion (x, z) in the
   // horizontal plane plus a third component; each in [-1, 1].
   std::vector<float> curl;
-  std::string sha256;  // of the three arrays' bytes in the order above (hex)
+  // Of the three arrays' bytes in the order above (hex). Set only by the makers that
+  // validate the values (GenerateCloudNoise, LoadOrGenerateCloudNoise): renders then check
+  // the sizes only. Code that changes the arrays must clear it (or recompute it after
+  // ValidateCloudNoise); noise without it is validated in full on every render.
+  std::string sha256;
 };
 
 // A world-space weather map (HZD): R coverage, G precipitation, B cloud type (0 stratus,
