@@ -163,7 +163,7 @@ TEST(BenchFitSuites, CloudsGridMeasuresTheTruthStartAndTheCpuAtTheDefaultsOnly) 
 
 TEST(BenchFitSuites, RegisteredWithTheirMetrics) {
   const SuiteRegistry r = BuiltinSuites();
-  for (const char* name : {"fit-probe", "fit-clouds"}) {
+  for (const char* name : {"fit-probe", "fit-clouds", "capture-response"}) {
     const Suite* s = r.Find(name);
     ASSERT_NE(s, nullptr) << name;
     EXPECT_TRUE(s->pareto) << name;
@@ -399,7 +399,7 @@ TEST(BenchVerb, BadInput) {
     cli::RunBenchImpl(o, BuiltinSuites());
     FAIL() << "unknown suite accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, fit-skies, fit-probe, fit-clouds, probe, capture, export, stress, clouds)"),
+    EXPECT_NE(std::string(e.what()).find("unknown suite 'nosuch' (valid: render, fit, fit-day, fit-cie, fit-skies, fit-probe, fit-clouds, probe, capture, capture-response, export, stress, clouds)"),
               std::string::npos)
         << e.what();
   }

@@ -16,6 +16,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitCloudsSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
+  r.Add(CaptureResponseSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
   r.Add(CloudsSuite());
