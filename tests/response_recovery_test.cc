@@ -5,8 +5,11 @@
 // global scale. The full table (5 shapes x 12 bracket sets) is bench/results/capture-response/capture-response.md.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstdio>
 
+#include "camera_response.h"
 #include "response_shapes.h"
 #include "skycal/capture/hdr_merge.h"
 
@@ -123,6 +126,23 @@ TEST(ResponseRecovery, AutoMeetsTheTargetOnSharedAndPerChannelCurves) {
     EXPECT_LT(a.median_balanced, 1.5 * truth.median_balanced) << k.shape.name;
     EXPECT_LT(a.p90_balanced, 1.5 * truth.p90_balanced) << k.shape.name;
   }
+}
+
+// auto's shape test: a channel's scale (a constant in ln f) does not count; a wiggle does,
+// by its RMS over the codes compared (a sine of amplitude a over whole periods: a / sqrt 2).
+TEST(ResponseRecovery, ChannelShapeDifferenceIgnoresScaleAndMeasuresShape) {
+  std::array<std::vector<double>, 3> g;
+  for (auto& c : g) c.resize(256);
+  for (int z = 0; z < 256; ++z) {
+    g[0][z] = 2.2 * std::log((z + 1) / 256.0);
+    g[1][z] = g[0][z] - 0.7;  // another scale
+    g[2][z] = g[0][z] + 0.3;
+  }
+  EXPECT_NEAR(capture::detail::ChannelShapeDifference(g, 3, 252), 0.0, 1e-12);
+  const double a = 0.2;
+  for (int z = 0; z < 256; ++z) g[2][z] = g[0][z] + 0.3 + a * std::sin(2.0 * 3.14159265358979 * 5.0 * (z - 3) / 250.0);
+  // Codes 3..252: 250 codes, five whole periods.
+  EXPECT_NEAR(capture::detail::ChannelShapeDifference(g, 3, 252), a / std::sqrt(2.0), 2e-3);
 }
 
 TEST(ResponseRecovery, BadOptionsAreRefused) {
