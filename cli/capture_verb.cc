@@ -383,7 +383,7 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
 CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   VerbCommandLine cl(
       "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
-      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response debevec|weighted|robertson|linear|srgb]\n"
+      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response auto|debevec|weighted|robertson|linear|srgb]\n"
       "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
       "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
       "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
@@ -402,9 +402,9 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
           "seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from\n"
           "EXIF put frames of a time-lapse on one scale)");
   cl.Text("--response", &response, "NAME",
-          "camera response: debevec (default, recovered), weighted (recovered, noise-weighted:\n"
-          "README \"Capture: lat-long brackets and camera-response recovery\"),\n"
-          "robertson, linear, srgb");
+          "camera response: auto (default: weighted's per-channel curves, or debevec's when\n"
+          "the channels' curves have one shape; README \"Capture: lat-long brackets and\n"
+          "camera-response recovery\"), debevec, weighted, robertson (recovered), linear, srgb");
   cl.Text("--lens", &lens, "NAME",
           "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
           "stereographic or kannala-brandt");

@@ -174,6 +174,13 @@ TEST(BenchFitSuites, RegisteredWithTheirMetrics) {
     EXPECT_FALSE(s->error_axis.empty()) << name;
   }
   EXPECT_EQ(r.Resolve("fit,fit-probe,fit-clouds").size(), 3u);
+  // capture-response: its error is a multiple of the known-response merge, its tables in
+  // DIR/capture-response.md; no Pareto front (the known merge is the floor, not a choice).
+  const Suite* response = r.Find("capture-response");
+  ASSERT_NE(response, nullptr);
+  EXPECT_FALSE(response->pareto);
+  EXPECT_FALSE(response->error_metric.empty());
+  EXPECT_TRUE(static_cast<bool>(response->markdown));
 }
 
 // Runs `run(false)` (verbose off: nothing on stderr) and `run(true)` (the control: a user's

@@ -1,5 +1,5 @@
 // Camera responses the merge code has never seen, for response-recovery tests and the
-// bench (bench/bench_response.cc): brackets of a real sky made through them with photon,
+// bench (`skycal bench --suite capture-response`, bench/src/capture_response_suite.cc): brackets of a real sky made through them with photon,
 // read and DN noise and clipping (synthetic_brackets.h's camera, another tone curve), the
 // merge through the true curve (the "known-response merge") as the floor to compare against.
 //
@@ -73,7 +73,7 @@ inline std::vector<ResponseShape> UnseenResponseShapes() {
 // A curve whose slope is zero at white (gamma 2.6, then the contrast S with a = 1.5, the
 // family of synthetic_brackets.h's filmic curve): codes 252..255 span 13% of the sensor
 // range, so the top code's value (the gauge) is an extrapolation; the same in every channel,
-// that error is one global scale and divides out (bench/results/capture_response.md).
+// that error is one global scale and divides out (bench/results/capture-response/capture-response.md).
 inline ResponseShape FlatShoulderShape() {
   return {"flat shoulder (gamma 2.6 + contrast S)", {GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5)}};
 }

@@ -25,8 +25,8 @@ Suite CaptureSuite() {
     Grid grid;
     const std::vector<std::string> sizes = o.quick ? std::vector<std::string>{"512x256", "2048x1024"}
                                                    : std::vector<std::string>{"512x256", "1024x512", "2048x1024"};
-    // Defaults: CaptureOptions (Debevec response, 2048x1024).
-    grid.axes = {{"response", {"debevec", "srgb"}, "debevec"}, {"size", sizes, "2048x1024"}};
+    // Defaults: CaptureOptions (auto response, 2048x1024).
+    grid.axes = {{"response", {"auto", "srgb"}, "auto"}, {"size", sizes, "2048x1024"}};
     const FisheyeBrackets b = WriteFisheyeBrackets(scene_w, fisheye, o.scratch.string());
     o.Log("[capture] scene " + b.scene_source + ", " + std::to_string(fisheye) + "x" + std::to_string(fisheye) +
           " fisheye, " + std::to_string(b.paths.size()) + " brackets");

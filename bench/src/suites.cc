@@ -20,6 +20,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(SkySegmentationSuite());
   r.Add(CaptureChartSuite());
   r.Add(CaptureStarsSuite());
+  r.Add(CaptureResponseSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
   r.Add(CloudsSuite());

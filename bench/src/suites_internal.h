@@ -19,6 +19,7 @@ Suite FitProbeSuite();  // fit_probe_suite.cc
 Suite FitCloudsSuite();  // fit_clouds_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
+Suite CaptureResponseSuite();  // capture_response_suite.cc
 Suite ExportSuite();   // export_suite.cc
 Suite StressSuite();   // stress_suite.cc
 Suite CloudsSuite();   // clouds_suite.cc

@@ -2,6 +2,7 @@
 // recovery from brackets with OpenCV's photo module.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -51,6 +52,11 @@ void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const
 std::vector<double> RecoverWeightedLogResponse(const std::vector<const BracketImage*>& images,
                                                const std::vector<double>& ln_k, int c, const MergeOptions& options,
                                                nlohmann::json* report);
+
+// kAuto's test of "one shape": the largest RMS over codes lo..hi, between two channels, of
+// the difference of their ln f (g per channel, 256 codes) less its mean (the per-channel
+// scale is a gauge), natural log units.
+double ChannelShapeDifference(const std::array<std::vector<double>, 3>& g, int lo, int hi);
 
 // Fills non-finite entries from their neighbours, clamps negatives to 0 and scales each
 // channel so the top code is 1. Returns the number of decreasing steps (all channels).

@@ -38,6 +38,7 @@ struct Tally {
 
 const char* ResponseModelName(ResponseModel m) {
   switch (m) {
+    case ResponseModel::kAuto: return "auto";
     case ResponseModel::kWeighted: return "weighted";
     case ResponseModel::kDebevec: return "debevec";
     case ResponseModel::kRobertson: return "robertson";
@@ -48,9 +49,9 @@ const char* ResponseModelName(ResponseModel m) {
 }
 
 ResponseModel ParseResponseModel(const std::string& name, const std::string& what) {
-  for (ResponseModel m : {ResponseModel::kWeighted, ResponseModel::kDebevec, ResponseModel::kRobertson, ResponseModel::kLinear, ResponseModel::kSrgb})
+  for (ResponseModel m : {ResponseModel::kAuto, ResponseModel::kWeighted, ResponseModel::kDebevec, ResponseModel::kRobertson, ResponseModel::kLinear, ResponseModel::kSrgb})
     if (name == ResponseModelName(m)) return m;
-  throw Error(what + ": unknown response model '" + name + "' (expected weighted, debevec, robertson, linear or srgb)");
+  throw Error(what + ": unknown response model '" + name + "' (expected auto, weighted, debevec, robertson, linear or srgb)");
 }
 
 bool MergeOptions::IsValid(std::string* why) const {
@@ -66,6 +67,8 @@ bool MergeOptions::IsValid(std::string* why) const {
   if (weighted_iterations < 0 || weighted_iterations > 20) return fail("weighted_iterations: need 0..20");
   if (!(weighted_low_code >= 1 && weighted_low_code + 8 <= weighted_high_code && weighted_high_code <= 254))
     return fail("weighted_low_code/weighted_high_code: need 1 <= low, low + 8 <= high <= 254 (8-bit codes)");
+  if (!(auto_shape_tolerance >= 0.0) || !std::isfinite(auto_shape_tolerance))
+    return fail("auto_shape_tolerance: need a finite value >= 0 (ln f units), got " + Num(auto_shape_tolerance));
   if (robertson_max_iterations < 1) return fail("robertson_max_iterations: need >= 1");
   if (!(robertson_threshold > 0.0)) return fail("robertson_threshold: need > 0");
   if (calibration_max_pixels < 0) return fail("calibration_max_pixels: need >= 0 (0 = all)");
@@ -92,6 +95,7 @@ nlohmann::json MergeOptionsToJson(const MergeOptions& o) {
           {"weighted_lambda", o.weighted_lambda},
           {"weighted_iterations", o.weighted_iterations},
           {"weighted_codes", {o.weighted_low_code, o.weighted_high_code}},
+          {"auto_shape_tolerance", o.auto_shape_tolerance},
           {"robertson_max_iterations", o.robertson_max_iterations},
           {"robertson_threshold", o.robertson_threshold},
           {"calibration_max_pixels", o.calibration_max_pixels},

@@ -1,6 +1,6 @@
 // Noise-weighted camera-response recovery (ResponseModel::kWeighted): Debevec & Malik's
 // least squares on the log response, g(z) = ln f(z), with three changes that matter on
-// 8-bit brackets (measured in bench/results/capture_response.md):
+// 8-bit brackets (measured in bench/results/capture-response/capture-response.md):
 //  - thousands of samples, not 70: each channel keeps the pixels with >= 2 codes inside
 //    the fit range, spread evenly over brightness (rank of the code sum, which rises with
 //    radiance whatever the curve), so every code is constrained by many equations; the

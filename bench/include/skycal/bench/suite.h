@@ -64,7 +64,8 @@ class SuiteRegistry {
   std::vector<Suite> suites_;
 };
 
-// render, fit, fit-day, fit-cie, fit-cie-study, fit-skies, fit-probe, fit-clouds, probe, capture, export, stress, clouds (suites.cc).
+// render, fit, fit-day, fit-cie, fit-cie-study, fit-skies, fit-probe, fit-clouds, probe, capture,
+// sky-segmentation, capture-chart, capture-stars, capture-response, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench

@@ -2,7 +2,7 @@
 // DESIGN.md 1.3: 7 exposures per frame, f/8, ISO ramped with the light, data kept linear).
 //
 //   auto brackets = LoadBrackets(paths, {});          // times, f-number, ISO from EXIF
-//   MergeOptions options;                             // Debevec response, hat weights
+//   MergeOptions options;                             // auto response, hat weights
 //   MergeResult r = MergeBrackets(brackets, options); // r.radiance, r.well_measured, r.report
 //
 // Units: the radiance is the camera's linearised value (0..1 = black..full scale) divided by
@@ -29,6 +29,8 @@ namespace skycal::capture {
 
 // How code values map to linear sensor values.
 enum class ResponseModel {
+  kAuto,       // recovered: `weighted` per channel first; when the channels' recovered curves have one
+               // shape (MergeOptions::auto_shape_tolerance), `debevec` instead (capture/src/camera_response.cc)
   kWeighted,   // recovered from the brackets: Debevec & Malik's log least squares over thousands of
                // samples with inverse-noise-variance weights (capture/src/weighted_response.cc)
   kDebevec,    // recovered from the brackets: Debevec & Malik 1997 least squares on sampled pixels
@@ -68,7 +70,12 @@ struct Bracket {
 };
 
 struct MergeOptions {
-  ResponseModel response = ResponseModel::kDebevec;
+  // auto: within 1.5x of the known-response merge (median and p90, once a colour chart
+  // balances the channels) on all 60 bracket sets of `skycal bench --suite capture-response`
+  // (5 unseen curves x 3..9 brackets x 1..3 EV), where debevec meets it on 56 and weighted on
+  // 49; it costs a weighted recovery plus, for one shape, a Debevec one (~0.1-0.3 s at 1024x512,
+  // once per calibration frame when a time-lapse reuses the curve).
+  ResponseModel response = ResponseModel::kAuto;
   // A fixed response (e.g. MergeResult::response_curve of an earlier merge), which skips
   // calibration and keeps a time-lapse on one scale: levels * 3 linear values, R G B
   // interleaved per code, levels = 256 (any bit depth: 16-bit codes are interpolated) or
@@ -88,11 +95,17 @@ struct MergeOptions {
   // passes and the codes fitted (the curve past them is extrapolated log-linearly).
   int weighted_samples = 8000;
   // 3e5 and 5 passes: the best worst case over lambda 1e3..3e6, 2..5 passes, 8000..60000
-  // samples on the bench's 4 shapes x 3 bracket sets (bench/results/capture_response.md).
+  // samples on the bench's 4 shapes x 3 bracket sets (bench/results/capture-response/capture-response.md).
   double weighted_lambda = 3e5;
   int weighted_iterations = 5;
   int weighted_low_code = 3;
   int weighted_high_code = 252;
+  // kAuto: the channels' curves count as one shape when the RMS over the fit codes of the
+  // difference of their recovered ln f (weighted), each channel's mean removed (the
+  // per-channel scale is a gauge), is at most this (natural log units). Measured (the
+  // capture-response suite): curves shared by the channels 0.005-0.042, three different
+  // curves 0.74-1.43; 0.15 is about the geometric middle (3.5x and 5x away).
+  double auto_shape_tolerance = 0.15;
   int robertson_max_iterations = 50;     // from a linear start it converges in ~25-35 (measured)
   double robertson_threshold = 0.001;    // Robertson: stop when the curve's mean |change of ln| per code is below
                                          // this (with opencv_calibration: OpenCV's criterion, default 0.01)
