@@ -60,7 +60,8 @@ class CloudStatsObjective {
     double* (*field)(clouds::CloudParams&);
     double min, max, scale;
   };
-  const std::vector<CloudStatsReference>& refs_;
+  // A copy (a few images): a caller's temporary {ref} would otherwise dangle.
+  std::vector<CloudStatsReference> refs_;
   CloudStatsScene scene_;
   clouds::CloudRenderer& renderer_;
   CloudStatsOptions options_;
