@@ -100,7 +100,11 @@ void main() {
   // stack per field), which cost ~20% of the render.
   CloudShadeParams p = load_params();
   int x = int(gl_GlobalInvocationID.x);
-  int y = int(gl_GlobalInvocationID.y);
+  // Workgroup row r draws tile row (r * stride) mod rows (gpu/workgroup_order.h: lavapipe's
+  // threads each take a contiguous block of workgroups; this spreads every block over the
+  // sky and the ground alike). uint arithmetic: rows * stride < 2^32 for any image we accept.
+  uint tile_row = (gl_WorkGroupID.y * uint(P[n + 2])) % gl_NumWorkGroups.y;
+  int y = int(tile_row * gl_WorkGroupSize.y + gl_LocalInvocationID.y);
   if (x >= width || y >= height) return;
   vec2 lat = trig[y];
   vec2 lon = trig[height + x];

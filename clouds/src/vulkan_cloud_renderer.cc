@@ -22,6 +22,7 @@
 #include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
+#include "skycal/gpu/workgroup_order.h"
 
 namespace skycal::spirv {
 extern const uint32_t clouds_latlong[];
@@ -60,6 +61,8 @@ class VulkanCloudRenderer final : public CloudRenderer {
     std::vector<float> params = PackCloudShade(shade);
     params.push_back(static_cast<float>(w));
     params.push_back(static_cast<float>(h));
+    const uint32_t tile_rows = (h + kLocalY - 1) / kLocalY;
+    params.push_back(static_cast<float>(gpu::WorkgroupRowStride(tile_rows)));  // exact: < 2^24
     Upload(kParams, params);
     UploadTextures(*scene.noise, *scene.weather);
 
@@ -81,7 +84,7 @@ class VulkanCloudRenderer final : public CloudRenderer {
       trig_filled_ = trig;
     }
     pipeline_.Map(kOutput, static_cast<size_t>(w) * h * 4 * sizeof(float), /*host_readback=*/true);
-    pipeline_.Dispatch((w + kLocalX - 1) / kLocalX, (h + kLocalY - 1) / kLocalY, 1);
+    pipeline_.Dispatch((w + kLocalX - 1) / kLocalX, tile_rows, 1);
 
     const float* out = static_cast<const float*>(pipeline_.Read(kOutput));
     CloudImage image;

@@ -9,3 +9,4 @@ SC_UNIFORM_VEC4(sun_radiance)   // rgb: disc centre radiance, cd/m^2; w: unused
 SC_UNIFORM_VEC4(ground)         // rgb: ground radiance, cd/m^2; w: unused
 SC_UNIFORM_VEC4(lut_grid)       // x: 1 - cos(theta_max); yzw: unused
 SC_UNIFORM_IVEC4(sizes)         // x: LUT columns (n_gamma); y: LUT rows (n_theta); z: image width; w: image height
+SC_UNIFORM_IVEC4(order)         // x: workgroup row stride (gpu/workgroup_order.h); yzw: unused

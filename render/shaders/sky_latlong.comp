@@ -37,7 +37,10 @@ void main() {
   // One image row per workgroup (local size (N, 1)): y is uniform across the workgroup,
   // so everything that depends only on the row (latitude, the LUT column and its loads)
   // is uniform too, and the compiler emits scalar loads instead of per-lane gathers.
-  int y = int(gl_WorkGroupID.y);
+  // Workgroup row r draws image row (r * stride) mod height (gpu/workgroup_order.h:
+  // lavapipe's threads each take a contiguous block of workgroups; this spreads each block
+  // over the sky and the ground alike).
+  int y = int((gl_WorkGroupID.y * uint(U.order.x)) % gl_NumWorkGroups.y);
   int width = U.sizes.z;
   int height = U.sizes.w;
 

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "resolved_sky.h"
+#include "skycal/gpu/workgroup_order.h"
 
 namespace skycal::render {
 
@@ -28,7 +29,7 @@ inline constexpr int kSkyUniformRecords = 0
 
 static_assert(std::is_standard_layout_v<SkyUniforms> && std::is_trivially_copyable_v<SkyUniforms>);
 static_assert(sizeof(SkyUniforms) == 16 * kSkyUniformRecords, "std140: one 16-byte record per member");
-static_assert(offsetof(SkyUniforms, model) == 16 && offsetof(SkyUniforms, sizes) == 16 * (kSkyUniformRecords - 1),
+static_assert(offsetof(SkyUniforms, model) == 16 && offsetof(SkyUniforms, order) == 16 * (kSkyUniformRecords - 1),
               "std140 offsets");
 
 // Packs resolved parameters (double) into the float uniform block.
@@ -48,6 +49,8 @@ inline SkyUniforms PackSkyUniforms(const SkyParamsD& p, int width, int height) {
   u.sizes[1] = p.lut_n_theta;
   u.sizes[2] = width;
   u.sizes[3] = height;
+  // One workgroup per image row (vulkan_renderer.cc): the stride over `height` rows.
+  u.order[0] = static_cast<int32_t>(gpu::WorkgroupRowStride(static_cast<uint32_t>(height)));
   return u;
 }
 
