@@ -10,6 +10,7 @@
 #include "bench_verb.h"
 #include "command_line.h"
 #include "skycal/bench/compare.h"
+#include "skycal/bench/last_suite_grids.h"
 #include "skycal/bench/fit_suite_grids.h"
 #include "skycal/bench/grid.h"
 #include "skycal/bench/pareto.h"
@@ -320,6 +321,68 @@ TEST(BenchStudySuites, CieStudyMarkdownFromHandMadeFits) {
   EXPECT_NE(md.find("type 3, 30°: 3.74"), std::string::npos) << md;  // the worst first
   EXPECT_NE(md.find("| 0.20 |"), std::string::npos) << md;     // median time per fit, s
   EXPECT_NE(md.find("**not met** (2.01%)"), std::string::npos) << md;
+}
+
+// fit-decisions (the retired bench_fit --decisions): every decision's on/off pair is two
+// cases of the grid, and the table pairs them: saved = off - on, change = on - off (pp).
+TEST(BenchLastSuites, FitDecisionsGridAndTableFromHandMadeCases) {
+  for (const bool quick : {false, true}) {
+    const FitDecisionsPlan p = FitDecisionsGridPlan(quick);
+    EXPECT_EQ(Label(p.grid.Defaults()), "variant=default");
+    EXPECT_EQ(p.width, quick ? 128 : 512);
+    EXPECT_EQ(p.runs, quick ? 1 : 3);
+    const std::vector<Settings> cases = p.grid.Expand();
+    ASSERT_EQ(cases.size(), 5u);
+    for (const DecisionSwitch& d : DecisionSwitches()) {
+      int on = 0, off = 0;
+      for (const Settings& st : cases) on += Get(st, "variant") == d.on, off += Get(st, "variant") == d.off;
+      EXPECT_EQ(on, 1) << d.row;
+      EXPECT_EQ(off, 1) << d.row;
+      EXPECT_NE(d.on, d.off) << d.row;
+    }
+  }
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("fit-decisions");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(s->pareto);
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  auto make = [](const std::string& variant, double ms, double rel) {
+    CaseResult c = MakeCase("fit-decisions", {{"variant", variant}}, T(ms, ms, ms, 3), rel, variant == "default");
+    c.extra = {{"skies", nlohmann::json::array({{{"sky", "CIE 12 sun 30"}, {"ms", ms}, {"rel_rmse", rel}, {"samples", 1000}}})},
+               {"samples_median", 196410.0},
+               {"below_horizon_saved_ms_median", 417.3}};
+    return c;
+  };
+  const std::string md = s->markdown({make("default", 400.0, 0.0200), make("polish", 650.0, 0.0205)});
+  // Ceres polish: on 400, off 650 -> saved 250 ms; change 2.00 - 2.05 = -0.05 pp.
+  EXPECT_NE(md.find("| CIE 12 sun 30 | 400 | 650 | 250 | 2 | 2.05 | -0.05 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| Ceres polish | 250 | -0.05 | measured (switched off) |"), std::string::npos) << md;
+  // The coarse-levels and overcast pairs lack a case: no row rather than a made-up one.
+  EXPECT_EQ(md.find("coarse pyramid levels skipped"), std::string::npos) << md;
+  EXPECT_NE(md.find("| pixels below the horizon not evaluated | 417.3 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("final level: 1.964e+05"), std::string::npos) << md;
+}
+
+// fit-clouds-process (the retired bench/fit_clouds.sh): relative (the default) and absolute.
+TEST(BenchLastSuites, FitCloudsProcessGridAndRegistration) {
+  EXPECT_EQ(FitCloudsProcessGridPlan(false).width, 512);
+  EXPECT_EQ(FitCloudsProcessGridPlan(true).width, 128);
+  const std::vector<Settings> cases = FitCloudsProcessGridPlan(false).grid.Expand();
+  ASSERT_EQ(cases.size(), 2u);
+  EXPECT_EQ(Label(cases[0]), "start=relative");
+  EXPECT_EQ(Label(cases[1]), "start=absolute");
+  EXPECT_EQ(Label(FitCloudsProcessGridPlan(false).grid.Defaults()), "start=relative");
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("fit-clouds-process");
+  ASSERT_NE(s, nullptr);
+  EXPECT_FALSE(s->pareto);  // the absolute start needs the truth: not a speed setting
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  CaseResult c = MakeCase("fit-clouds-process", {{"start", "relative"}}, T(2220, 2220, 2220, 1), 0.00079, true);
+  c.extra = {{"cpu_s", 2.63}, {"fit_time_s", 1.56}, {"cloud_pixels", 12265}, {"cloud_log_rmse_initial", 0.00035},
+             {"cloud_log_rmse_final", 0.00163}, {"clear_log_rmse", 8e-5}, {"solve", {{"iterations", 1}}}};
+  const std::string md = s->markdown({c});
+  EXPECT_NE(md.find("| 2.63 | 1.56 | 0.00035 | 0.00163 | 8e-05 | 1.226e+04 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("start=relative: clouds.solve {\"iterations\":1}"), std::string::npos) << md;
 }
 
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.
