@@ -25,6 +25,7 @@
 #include "probe_extract_verb.h"
 #include "skycal/core/exr_io.h"
 #include "image_compare.h"
+#include "suite_util.h"
 #include "render_verb.h"
 #include "verb_common.h"
 
@@ -383,6 +384,21 @@ TEST(BenchLastSuites, FitCloudsProcessGridAndRegistration) {
   const std::string md = s->markdown({c});
   EXPECT_NE(md.find("| 2.63 | 1.56 | 0.00035 | 0.00163 | 8e-05 | 1.226e+04 |"), std::string::npos) << md;
   EXPECT_NE(md.find("start=relative: clouds.solve {\"iterations\":1}"), std::string::npos) << md;
+}
+
+// The child-process runner of fit-clouds-process and fit-skies: a zero exit returns the CPU
+// seconds; a failing or missing command is a clear error naming the suite and the command.
+TEST(BenchLastSuites, RunProcessReportsCpuAndFailures) {
+  const double cpu = RunProcessCpuS("t", {"/bin/sh", "-c", "i=0; while [ $i -lt 20000 ]; do i=$((i+1)); done"});
+  EXPECT_GT(cpu, 0.0);  // a busy loop of ~50 ms: some CPU is counted
+  EXPECT_LT(cpu, 30.0);
+  try {
+    RunProcessCpuS("fit-x", {"/bin/sh", "-c", "exit 3"});
+    ADD_FAILURE() << "no error on exit 3";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fit-x: '/bin/sh -c exit 3' failed"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(RunProcessCpuS("fit-x", {"/nonexistent/skycal"}), Error);
 }
 
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.
