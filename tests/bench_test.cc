@@ -401,6 +401,43 @@ TEST(BenchLastSuites, RunProcessReportsCpuAndFailures) {
   EXPECT_THROW(RunProcessCpuS("fit-x", {"/nonexistent/skycal"}), Error);
 }
 
+// batch (the retired bench/batch_day.sh): five runs, warm the default. The day's sun at 70
+// deg N on the June solstice (declination 23.44 deg): lowest at midnight, 23.44 - (90 - 70)
+// = 3.44 deg; highest at noon, 90 - 70 + 23.44 = 43.44 deg: always above the horizon.
+TEST(BenchLastSuites, BatchGridAndTheDaySun) {
+  const BatchPlan full = BatchGridPlan(false), quick = BatchGridPlan(true);
+  EXPECT_EQ(full.frames, 96);
+  EXPECT_EQ(full.frames_per_job, 8);
+  EXPECT_EQ(quick.frames, 8);
+  EXPECT_EQ(quick.frames_per_job, 4);
+  ASSERT_EQ(full.grid.Expand().size(), 5u);
+  EXPECT_EQ(Label(full.grid.Defaults()), "run=warm");
+  double el = 0, az = 0;
+  BatchDaySun(12.0, &el, &az);
+  EXPECT_NEAR(el, 43.44, 1e-9);
+  EXPECT_NEAR(std::abs(az), 180.0, 1e-9);  // azimuth from north: due south at noon
+  BatchDaySun(0.0, &el, &az);
+  EXPECT_NEAR(el, 3.44, 1e-9);
+  EXPECT_NEAR(az, 0.0, 1e-9);  // due north at midnight
+  for (int i = 0; i < 96; ++i) {
+    BatchDaySun(24.0 * i / 96, &el, &az);
+    EXPECT_GE(el, 3.44 - 1e-9) << i;
+    EXPECT_LE(el, 43.44 + 1e-9) << i;
+  }
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("batch");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(s->pareto);
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  // A skipped Slurm case shows its reason, not a row of made-up numbers.
+  CaseResult skipped = MakeCase("batch", {{"run", "slurm"}}, T(0, 0, 0, 0), std::nan(""));
+  skipped.outcome = Outcome::kClearError;
+  skipped.message = "skipped: not root";
+  const std::string md = s->markdown({skipped});
+  EXPECT_NE(md.find("slurm: skipped: not root"), std::string::npos) << md;
+  EXPECT_EQ(md.find("| slurm |"), std::string::npos) << md;
+}
+
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.
 TEST(BenchImageCompare, AreaMeanAtNodesKeepsAConstantAndAveragesDetailAway) {
   ImageRGB flat(256, 128);

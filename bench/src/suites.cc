@@ -17,6 +17,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitProbeSuite());
   r.Add(FitCloudsSuite());
   r.Add(FitCloudsProcessSuite());
+  r.Add(BatchSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(SkySegmentationSuite());

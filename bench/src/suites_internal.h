@@ -19,6 +19,7 @@ Suite FitSkiesSuite();  // fit_skies_suite.cc
 Suite FitProbeSuite();  // fit_probe_suite.cc
 Suite FitCloudsSuite();  // fit_clouds_suite.cc
 Suite FitCloudsProcessSuite();  // fit_clouds_process_suite.cc
+Suite BatchSuite();    // batch_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
 Suite ExportSuite();   // export_suite.cc

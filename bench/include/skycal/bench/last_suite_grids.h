@@ -42,4 +42,18 @@ struct FitCloudsProcessPlan {
 };
 FitCloudsProcessPlan FitCloudsProcessGridPlan(bool quick);
 
+// batch: `skycal batch` on a synthetic day (`frames` frames of width x width/2 every
+// 24/frames h, the sun of 70 deg N at the June solstice: always above the horizon), rendered
+// (cpu) from a perturbed default preset and fitted from the default preset, --jobs `jobs`,
+// `frames_per_job` per chunk. Axis `run`: warm (the default), cold (--cold-start),
+// warm-ceres / cold-ceres (--no-linear-start), slurm (the warm run on a single-node cluster
+// started by tests/slurm_cluster.sh; root only, otherwise a clear "skipped: why" case).
+struct BatchPlan {
+  Grid grid;
+  int frames = 96, width = 128, jobs = 2, frames_per_job = 8;
+};
+BatchPlan BatchGridPlan(bool quick);
+// The sun of 70 deg N at the June solstice at hour h (solar time): elevation, azimuth (deg).
+void BatchDaySun(double hour, double* elevation_deg, double* azimuth_deg);
+
 }  // namespace skycal::bench

@@ -64,7 +64,7 @@ class SuiteRegistry {
   std::vector<Suite> suites_;
 };
 
-// render, fit, fit-day, fit-cie, fit-cie-study, fit-decisions, fit-skies, fit-probe, fit-clouds, fit-clouds-process, probe, capture, export, stress, clouds (suites.cc).
+// render, fit, fit-day, fit-cie, fit-cie-study, fit-decisions, fit-skies, fit-probe, fit-clouds, fit-clouds-process, batch, probe, capture, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench
