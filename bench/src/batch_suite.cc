@@ -65,8 +65,10 @@ void WriteDay(const std::filesystem::path& dir, const BatchPlan& plan, bool verb
     const double h = 24.0 * i / plan.frames;
     double el = 0.0, az = 0.0;
     BatchDaySun(h, &el, &az);
-    ro.sun_elevation_deg = el;
-    ro.sun_azimuth_deg = az;
+    // Rounded to 1e-4 deg as bench/batch_day.sh's sun path file was: the same frames, so the
+    // same fits (the Ceres path's iterations moved with the last digits).
+    ro.sun_elevation_deg = std::round(el * 1e4) / 1e4;
+    ro.sun_azimuth_deg = std::round(az * 1e4) / 1e4;
     ro.time_of_day_h = h;
     char name[32];
     std::snprintf(name, sizeof name, "frame%03d.exr", i);
