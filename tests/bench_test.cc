@@ -10,6 +10,7 @@
 #include "bench_verb.h"
 #include "command_line.h"
 #include "skycal/bench/compare.h"
+#include "skycal/bench/last_suite_grids.h"
 #include "skycal/bench/fit_suite_grids.h"
 #include "skycal/bench/grid.h"
 #include "skycal/bench/pareto.h"
@@ -24,6 +25,7 @@
 #include "probe_extract_verb.h"
 #include "skycal/core/exr_io.h"
 #include "image_compare.h"
+#include "suite_util.h"
 #include "render_verb.h"
 #include "verb_common.h"
 
@@ -327,6 +329,120 @@ TEST(BenchStudySuites, CieStudyMarkdownFromHandMadeFits) {
   EXPECT_NE(md.find("type 3, 30°: 3.74"), std::string::npos) << md;  // the worst first
   EXPECT_NE(md.find("| 0.20 |"), std::string::npos) << md;     // median time per fit, s
   EXPECT_NE(md.find("**not met** (2.01%)"), std::string::npos) << md;
+}
+
+// fit-decisions (the retired bench_fit --decisions): every decision's on/off pair is two
+// cases of the grid, and the table pairs them: saved = off - on, change = on - off (pp).
+TEST(BenchLastSuites, FitDecisionsGridAndTableFromHandMadeCases) {
+  for (const bool quick : {false, true}) {
+    const FitDecisionsPlan p = FitDecisionsGridPlan(quick);
+    EXPECT_EQ(Label(p.grid.Defaults()), "variant=default");
+    EXPECT_EQ(p.width, quick ? 128 : 512);
+    EXPECT_EQ(p.runs, quick ? 1 : 3);
+    const std::vector<Settings> cases = p.grid.Expand();
+    ASSERT_EQ(cases.size(), 5u);
+    for (const DecisionSwitch& d : DecisionSwitches()) {
+      int on = 0, off = 0;
+      for (const Settings& st : cases) on += Get(st, "variant") == d.on, off += Get(st, "variant") == d.off;
+      EXPECT_EQ(on, 1) << d.row;
+      EXPECT_EQ(off, 1) << d.row;
+      EXPECT_NE(d.on, d.off) << d.row;
+    }
+  }
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("fit-decisions");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(s->pareto);
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  auto make = [](const std::string& variant, double ms, double rel) {
+    CaseResult c = MakeCase("fit-decisions", {{"variant", variant}}, T(ms, ms, ms, 3), rel, variant == "default");
+    c.extra = {{"skies", nlohmann::json::array({{{"sky", "CIE 12 sun 30"}, {"ms", ms}, {"rel_rmse", rel}, {"samples", 1000}}})},
+               {"samples_median", 196410.0},
+               {"below_horizon_saved_ms_median", 417.3}};
+    return c;
+  };
+  const std::string md = s->markdown({make("default", 400.0, 0.0200), make("polish", 650.0, 0.0205)});
+  // Ceres polish: on 400, off 650 -> saved 250 ms; change 2.00 - 2.05 = -0.05 pp.
+  EXPECT_NE(md.find("| CIE 12 sun 30 | 400 | 650 | 250 | 2 | 2.05 | -0.05 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| Ceres polish | 250 | -0.05 | measured (switched off) |"), std::string::npos) << md;
+  // The coarse-levels and overcast pairs lack a case: no row rather than a made-up one.
+  EXPECT_EQ(md.find("coarse pyramid levels skipped"), std::string::npos) << md;
+  EXPECT_NE(md.find("| pixels below the horizon not evaluated | 417.3 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("final level: 1.964e+05"), std::string::npos) << md;
+}
+
+// fit-clouds-process (the retired bench/fit_clouds.sh): relative (the default) and absolute.
+TEST(BenchLastSuites, FitCloudsProcessGridAndRegistration) {
+  EXPECT_EQ(FitCloudsProcessGridPlan(false).width, 512);
+  EXPECT_EQ(FitCloudsProcessGridPlan(true).width, 128);
+  const std::vector<Settings> cases = FitCloudsProcessGridPlan(false).grid.Expand();
+  ASSERT_EQ(cases.size(), 2u);
+  EXPECT_EQ(Label(cases[0]), "start=relative");
+  EXPECT_EQ(Label(cases[1]), "start=absolute");
+  EXPECT_EQ(Label(FitCloudsProcessGridPlan(false).grid.Defaults()), "start=relative");
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("fit-clouds-process");
+  ASSERT_NE(s, nullptr);
+  EXPECT_FALSE(s->pareto);  // the absolute start needs the truth: not a speed setting
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  CaseResult c = MakeCase("fit-clouds-process", {{"start", "relative"}}, T(2220, 2220, 2220, 1), 0.00079, true);
+  c.extra = {{"cpu_s", 2.63}, {"fit_time_s", 1.56}, {"cloud_pixels", 12265}, {"cloud_log_rmse_initial", 0.00035},
+             {"cloud_log_rmse_final", 0.00163}, {"clear_log_rmse", 8e-5}, {"solve", {{"iterations", 1}}}};
+  const std::string md = s->markdown({c});
+  EXPECT_NE(md.find("| 2.63 | 1.56 | 0.00035 | 0.00163 | 8e-05 | 1.226e+04 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("start=relative: clouds.solve {\"iterations\":1}"), std::string::npos) << md;
+}
+
+// The child-process runner of fit-clouds-process and fit-skies: a zero exit returns the CPU
+// seconds; a failing or missing command is a clear error naming the suite and the command.
+TEST(BenchLastSuites, RunProcessReportsCpuAndFailures) {
+  const double cpu = RunProcessCpuS("t", {"/bin/sh", "-c", "i=0; while [ $i -lt 20000 ]; do i=$((i+1)); done"});
+  EXPECT_GT(cpu, 0.0);  // a busy loop of ~50 ms: some CPU is counted
+  EXPECT_LT(cpu, 30.0);
+  try {
+    RunProcessCpuS("fit-x", {"/bin/sh", "-c", "exit 3"});
+    ADD_FAILURE() << "no error on exit 3";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("fit-x: '/bin/sh -c exit 3' failed"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(RunProcessCpuS("fit-x", {"/nonexistent/skycal"}), Error);
+}
+
+// batch (the retired bench/batch_day.sh): five runs, warm the default. The day's sun at 70
+// deg N on the June solstice (declination 23.44 deg): lowest at midnight, 23.44 - (90 - 70)
+// = 3.44 deg; highest at noon, 90 - 70 + 23.44 = 43.44 deg: always above the horizon.
+TEST(BenchLastSuites, BatchGridAndTheDaySun) {
+  const BatchPlan full = BatchGridPlan(false), quick = BatchGridPlan(true);
+  EXPECT_EQ(full.frames, 96);
+  EXPECT_EQ(full.frames_per_job, 8);
+  EXPECT_EQ(quick.frames, 8);
+  EXPECT_EQ(quick.frames_per_job, 4);
+  ASSERT_EQ(full.grid.Expand().size(), 5u);
+  EXPECT_EQ(Label(full.grid.Defaults()), "run=warm");
+  double el = 0, az = 0;
+  BatchDaySun(12.0, &el, &az);
+  EXPECT_NEAR(el, 43.44, 1e-9);
+  EXPECT_NEAR(std::abs(az), 180.0, 1e-9);  // azimuth from north: due south at noon
+  BatchDaySun(0.0, &el, &az);
+  EXPECT_NEAR(el, 3.44, 1e-9);
+  EXPECT_NEAR(az, 0.0, 1e-9);  // due north at midnight
+  for (int i = 0; i < 96; ++i) {
+    BatchDaySun(24.0 * i / 96, &el, &az);
+    EXPECT_GE(el, 3.44 - 1e-9) << i;
+    EXPECT_LE(el, 43.44 + 1e-9) << i;
+  }
+  const SuiteRegistry registry = BuiltinSuites();
+  const Suite* s = registry.Find("batch");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(s->pareto);
+  ASSERT_TRUE(static_cast<bool>(s->markdown));
+  // A skipped Slurm case shows its reason, not a row of made-up numbers.
+  CaseResult skipped = MakeCase("batch", {{"run", "slurm"}}, T(0, 0, 0, 0), std::nan(""));
+  skipped.outcome = Outcome::kClearError;
+  skipped.message = "skipped: not root";
+  const std::string md = s->markdown({skipped});
+  EXPECT_NE(md.find("slurm: skipped: not root"), std::string::npos) << md;
+  EXPECT_EQ(md.find("| slurm |"), std::string::npos) << md;
 }
 
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.

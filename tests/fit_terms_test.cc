@@ -229,7 +229,7 @@ namespace {
 
 // Issue 9, skip decisions: the coarse levels' saving is estimated from this run when this
 // run solved the finest level (--polish): that level's measured time x the skipped levels'
-// share of its samples; without the polish the bench estimate (bench_fit --decisions).
+// share of its samples; without the polish the bench estimate (the fit-decisions suite).
 TEST(FitTerms, CoarseLevelsSavedIsEstimatedFromThisRunWhenThePolishRan) {
   // The arithmetic: 64 and 128 of 256 wide hold 1/16 + 1/4 of its samples.
   fit::FitDecision bench;
@@ -258,7 +258,7 @@ TEST(FitTerms, CoarseLevelsSavedIsEstimatedFromThisRunWhenThePolishRan) {
   };
   const fit::FitResult plain = fit::FitSky({ref}, render::LoadPreset(kDefaultPreset), o, *cpu);
   EXPECT_TRUE(plain.levels.empty());
-  EXPECT_EQ(coarse(plain).saved_ms_basis.rfind("estimated from bench_fit", 0), 0u) << coarse(plain).saved_ms_basis;
+  EXPECT_EQ(coarse(plain).saved_ms_basis.rfind("estimated from the fit-decisions bench suite", 0), 0u) << coarse(plain).saved_ms_basis;
   o.polish = true;
   const fit::FitResult polished = fit::FitSky({ref}, render::LoadPreset(kDefaultPreset), o, *cpu);
   ASSERT_EQ(polished.levels.size(), 1u);

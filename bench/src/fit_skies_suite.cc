@@ -76,23 +76,7 @@ std::vector<Sky> WriteSkies(const SuiteOptions& o, int width, const render::Pres
 // unless it exits 0.
 void RunFitProcess(const std::string& exe, const std::string& reference, const std::string& out) {
   std::filesystem::remove_all(out);
-  std::vector<std::string> args = {exe, "fit", "--quiet", "--reference", reference, "--out", out};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  const int rc = ::posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (rc != 0) throw Error("fit-skies: could not start '" + exe + "' (" + std::strerror(rc) + ")");
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw Error("fit-skies: '" + exe + " fit --reference " + reference + "' failed (status " + std::to_string(status) + ")");
+  RunProcessCpuS("fit-skies", {exe, "fit", "--quiet", "--reference", reference, "--out", out});
 }
 
 double MedianOf(std::vector<double> v) {

@@ -37,6 +37,15 @@ std::string CaseTable(const std::vector<CaseResult>& cases, const std::string& e
 // extra[key] as %.4g (scaled by `scale`, e.g. 100 for %), "-" when absent or not a number.
 std::string ExtraNumber(const CaseResult& c, const std::string& key, double scale = 1.0);
 
+// Runs args[0] with args[1..] (stdout and stderr to /dev/null) and waits for it: a user's
+// whole process, start-up and file writes included. Returns its CPU time (user + system,
+// seconds, from wait4's rusage). Throws skycal::Error naming `who` and the command unless it
+// exits 0.
+double RunProcessCpuS(const std::string& who, std::vector<std::string> args);
+// This binary's path (/proc/self/exe: the suites that run `skycal` itself); throws
+// skycal::Error naming `who` when it cannot be read.
+std::string SelfExecutable(const std::string& who);
+
 // One sky renderer per backend, keyed by the `backend` axis' values ("cpu", "vulkan").
 std::map<std::string, std::unique_ptr<render::SkyRenderer>> SkyRenderersByBackend();
 

@@ -12,9 +12,12 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitDaySuite());
   r.Add(FitCieSuite());
   r.Add(FitCieStudySuite());
+  r.Add(FitDecisionsSuite());
   r.Add(FitSkiesSuite());
   r.Add(FitProbeSuite());
   r.Add(FitCloudsSuite());
+  r.Add(FitCloudsProcessSuite());
+  r.Add(BatchSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(SkySegmentationSuite());

@@ -11,12 +11,15 @@ Suite FitSuite();      // fit_suite.cc
 Suite FitDaySuite();   // fit_day_suite.cc
 Suite FitCieSuite();   // fit_cie_suite.cc
 Suite FitCieStudySuite();  // fit_cie_study_suite.cc
+Suite FitDecisionsSuite();  // fit_decisions_suite.cc
 Suite SkySegmentationSuite();  // sky_segmentation_suite.cc
 Suite CaptureChartSuite();  // capture_chart_suite.cc
 Suite CaptureStarsSuite();  // capture_stars_suite.cc
 Suite FitSkiesSuite();  // fit_skies_suite.cc
 Suite FitProbeSuite();  // fit_probe_suite.cc
 Suite FitCloudsSuite();  // fit_clouds_suite.cc
+Suite FitCloudsProcessSuite();  // fit_clouds_process_suite.cc
+Suite BatchSuite();    // batch_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
 Suite CaptureResponseSuite();  // capture_response_suite.cc

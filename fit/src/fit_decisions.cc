@@ -15,9 +15,10 @@ std::string Number(double v) {
 }  // namespace
 
 const BenchDecisionCosts& MeasuredDecisionCosts() {
-  // bench_fit --decisions, 2026-11-24, this project's 2-core machine (shared, loaded):
-  // medians over its 3 skies (bench/results/fit_decisions.md). Re-run it and update these
-  // after changing the fit's stages.
+  // Measured by bench_fit --decisions (now `skycal bench --suite fit-decisions`, which
+  // reproduces its error digits), 2026-11-24, this project's 2-core machine (shared,
+  // loaded): medians over its 3 skies (bench/results/fit_decisions.md). Re-run the suite and
+  // update these after changing the fit's stages.
   static const BenchDecisionCosts costs{
       /*polish=*/{1432.8, -3.117e-4, 196410},
       /*coarse_levels=*/{689.2, -5.73e-6, 196410},
@@ -69,7 +70,7 @@ FitDecision DecisionFromBench(std::string what, std::string why, const BenchDeci
   d.why = std::move(why);
   const double ratio = bench.samples > 0 && samples > 0 ? static_cast<double>(samples) / bench.samples : 1.0;
   d.saved_ms = std::max(0.0, bench.saved_ms * ratio);
-  d.saved_ms_basis = "estimated from bench_fit --decisions (bench/results/fit_decisions.md, row '" + bench_row +
+  d.saved_ms_basis = "estimated from the fit-decisions bench suite (bench/results/fit_decisions.md, row '" + bench_row +
                      "'): median " + Number(bench.saved_ms) + " ms at " + std::to_string(bench.samples) +
                      " samples, scaled by this fit's " + std::to_string(samples);
   d.rel_rmse_change = bench.rel_rmse_change;
@@ -90,7 +91,7 @@ FitDecision SkippedLevelsFromThisRun(FitDecision from_bench, const std::vector<i
   d.saved_ms_basis = "estimated from this run: the finest level (" + std::to_string(finest_width) + " wide) took " +
                      Number(1e3 * finest_level_s) + " ms; the skipped levels hold " + Number(share) +
                      " of its samples (sum of (width / " + std::to_string(finest_width) +
-                     ")^2), at equal iterations per level. Cross-check, bench_fit --decisions scaled to this fit: " +
+                     ")^2), at equal iterations per level. Cross-check, the fit-decisions bench suite scaled to this fit: " +
                      bench_estimate;
   return d;
 }

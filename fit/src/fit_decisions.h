@@ -3,8 +3,8 @@
 //
 // Where the saving can be measured in the run, it is; where it cannot (the skipped work
 // never ran), it is estimated either from this run's measured cost per evaluated sample
-// or from bench_fit's measured cost of the decision switched off (bench/results/
-// fit_decisions.md, through FitOptions' switches), scaled by this fit's sample count.
+// or from the fit-decisions bench suite's measured cost of the decision switched off
+// (bench/results/fit_decisions.md, through FitOptions' switches), scaled by this fit's sample count.
 #pragma once
 #include <string>
 #include <vector>
@@ -14,14 +14,14 @@
 
 namespace skycal::fit {
 
-// What bench_fit --decisions measured for one decision switched off, median over its
+// What the fit-decisions bench suite measured for one decision switched off, median over its
 // skies (one 512x256 reference, ffxv-iso, default preset).
 struct BenchDecisionCost {
   double saved_ms = 0.0;         // fit time with the decision off minus with it on
   double rel_rmse_change = 0.0;  // rel RMSE with the skip minus without it (fraction)
   long long samples = 0;         // the final level's fitted samples (pixels x channels)
 };
-// Measured by `build/bench/bench_fit --decisions` (see bench/results/fit_decisions.md).
+// Measured by `skycal bench --suite fit-decisions` (see bench/results/fit_decisions.md).
 struct BenchDecisionCosts {
   BenchDecisionCost polish, coarse_levels, inseparable_overcast;
 };
@@ -33,7 +33,7 @@ const BenchDecisionCosts& MeasuredDecisionCosts();
 void AddPixelDecisions(const std::vector<Reference>& refs, int finest_width, double evaluation_s,
                        long long evaluated_samples, std::vector<FitDecision>* decisions);
 
-// A decision whose saving is bench_fit's measurement, scaled by samples / bench samples.
+// A decision whose saving is the fit-decisions suite's measurement, scaled by samples / bench samples.
 FitDecision DecisionFromBench(std::string what, std::string why, const BenchDecisionCost& bench,
                               const std::string& bench_row, long long samples);
 

@@ -64,8 +64,9 @@ class SuiteRegistry {
   std::vector<Suite> suites_;
 };
 
-// render, fit, fit-day, fit-cie, fit-cie-study, fit-skies, fit-probe, fit-clouds, probe, capture,
-// sky-segmentation, capture-chart, capture-stars, capture-response, export, stress, clouds (suites.cc).
+// render, fit, fit-day, fit-cie, fit-cie-study, fit-decisions, fit-skies, fit-probe, fit-clouds,
+// fit-clouds-process, batch, probe, capture, sky-segmentation, capture-chart, capture-stars,
+// capture-response, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench

@@ -53,7 +53,7 @@ struct FitOptions {
   int probe_quadrature_width = 128; // lat-long width of the model sky's irradiance quadrature
   bool fit_ground_albedo = true;    // fitted when probe samples face the ground
   double sun_visible_threshold = 0.25;  // the sun's share of the brightest sun-facing samples
-  // Skip decisions (fit.json `decisions`), each switchable so bench_fit can measure what
+  // Skip decisions (fit.json `decisions`), each switchable so the fit-decisions bench suite can measure what
   // it saves (bench/results/fit_decisions.md). Defaults: skip.
   // After the linear start, polish only the finest level (off: the whole pyramid runs).
   bool skip_coarse_levels = true;
