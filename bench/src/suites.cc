@@ -15,6 +15,8 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitSkiesSuite());
   r.Add(FitProbeSuite());
   r.Add(FitCloudsSuite());
+  r.Add(FitCloudStatsSuite());
+  r.Add(CloudStatsNoiseSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(SkySegmentationSuite());

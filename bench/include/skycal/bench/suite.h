@@ -64,7 +64,8 @@ class SuiteRegistry {
   std::vector<Suite> suites_;
 };
 
-// render, fit, fit-day, fit-cie, fit-cie-study, fit-skies, fit-probe, fit-clouds, probe, capture,
+// render, fit, fit-day, fit-cie, fit-cie-study, fit-skies, fit-probe, fit-clouds,
+// fit-cloud-stats, cloud-stats-noise, probe, capture,
 // sky-segmentation, capture-chart, capture-stars, capture-response, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
