@@ -277,8 +277,8 @@ CloudStatsNoisePlan CloudStatsNoiseGridPlan(bool quick) {
 Suite CloudStatsNoiseSuite() {
   Suite s;
   s.name = "cloud-stats-noise";
-  s.summary = "the cloud statistics' shape noise at the truth: covariance over 48 shape draws, the Jacobian pooled over "
-              "4 model maps, predicted parameter spread per weighting, 64x32 (--quick: 8 draws, 2 maps)";
+  s.summary = "the cloud statistics' shape noise at the truth: 48 shape draws, 4 model maps, 64x32 (--quick: 8 draws, "
+              "2 maps)";
   s.error_metric = "predicted sd of ln extinction (extinction + ambient fitted, bin-share weights, 1 reference, M model maps)";
   s.error_axis = "predicted sd of ln extinction";
   s.pareto = false;  // one setting

@@ -183,9 +183,8 @@ const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const s
 Suite FitCloudStatsSuite() {
   Suite s;
   s.name = "fit-cloud-stats";
-  s.summary = "the unknown-shapes cloud lighting fit (cloud statistics) over 5 seed pairs + the known-shapes control, "
-              "per configuration (references per fit, model weather maps, whitening, fitted set; --quick: default and "
-              "gls-2params, 1 pair + control at 64x32, <= 2 iterations)";
+  s.summary = "the unknown-shapes cloud lighting fit over 5 seed pairs + a control, per configuration (--quick: "
+              "2 configurations, 1 pair at 64x32)";
   s.error_metric = "median |fitted / truth - 1| of the fitted lighting parameters over the unknown-shape seed pairs";
   s.error_axis = "median |rel error| of the fitted lighting";
   s.markdown = [](const std::vector<CaseResult>& cases) {
