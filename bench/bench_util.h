@@ -1,4 +1,4 @@
-// The studies' (bench_fit --decisions, bench_cloud_stats) timing and machine block: the same
+// The studies' (bench_fit --decisions; the cloud statistics suites) timing and machine block: the same
 // code as `skycal bench` (skycal_bench), so there is one way to measure.
 #pragma once
 #include <algorithm>

@@ -4,11 +4,13 @@
 // --repeat). A fake suite with fixed numbers drives the verb end to end.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "bench_verb.h"
 #include "command_line.h"
+#include "skycal/bench/cloud_stats_suite_grids.h"
 #include "skycal/bench/compare.h"
 #include "skycal/bench/last_suite_grids.h"
 #include "skycal/bench/fit_suite_grids.h"
@@ -443,6 +445,81 @@ TEST(BenchLastSuites, BatchGridAndTheDaySun) {
   const std::string md = s->markdown({skipped});
   EXPECT_NE(md.find("slurm: skipped: not root"), std::string::npos) << md;
   EXPECT_EQ(md.find("| slurm |"), std::string::npos) << md;
+}
+
+// The suites that replaced bench_cloud_stats: the configurations its results files report
+// (each file exists), the quick plan, registration, and the seed-pair table from a
+// hand-made case (no render).
+TEST(BenchCloudStatsSuites, PlanRegistrationAndTable) {
+  const CloudStatsPlan full = FitCloudStatsPlan(false);
+  ASSERT_EQ(full.grid.Expand().size(), 10u);
+  EXPECT_EQ(Label(full.grid.Defaults()), "config=default");
+  EXPECT_EQ(full.pairs, 5);
+  EXPECT_EQ(full.width_override, 0);
+  EXPECT_EQ(full.iteration_cap, 0);
+  for (const CloudStatsConfig& c : full.configs) {
+    if (c.name == "default") continue;
+    EXPECT_TRUE(std::filesystem::exists(std::string(SKYCAL_SOURCE_DIR) + "/bench/results/" + c.results_file + ".md")) << c.name;
+    EXPECT_FALSE(c.fitted.empty()) << c.name;  // explicit: the options' default changed since the program ran
+  }
+  const CloudStatsConfig& gls = FindCloudStatsConfig(full, "gls-2params-3refs");
+  EXPECT_EQ(gls.references, 3);
+  EXPECT_EQ(gls.model_maps, 4);
+  EXPECT_EQ(gls.noise_draws, 24);
+  EXPECT_EQ(gls.fitted, (std::vector<std::string>{"extinction", "ambient_strength"}));
+  EXPECT_EQ(FindCloudStatsConfig(full, "noises-2params").model_noises, 4);
+  EXPECT_THROW(FindCloudStatsConfig(full, "nope"), Error);
+
+  const CloudStatsPlan quick = FitCloudStatsPlan(true);
+  ASSERT_EQ(quick.grid.Expand().size(), 2u);
+  EXPECT_EQ(Label(quick.grid.Defaults()), "config=default");
+  EXPECT_EQ(quick.pairs, 1);
+  EXPECT_EQ(quick.width_override, 64);
+  EXPECT_EQ(quick.iteration_cap, 2);
+  EXPECT_EQ(CloudStatsNoiseGridPlan(false).draws, 48);
+  EXPECT_EQ(CloudStatsNoiseGridPlan(false).model_maps, 4);
+  EXPECT_EQ(CloudStatsNoiseGridPlan(true).draws, 8);
+
+  const SuiteRegistry r = BuiltinSuites();
+  for (const char* name : {"fit-cloud-stats", "cloud-stats-noise"}) {
+    const Suite* s = r.Find(name);
+    ASSERT_NE(s, nullptr) << name;
+    EXPECT_TRUE(static_cast<bool>(s->markdown)) << name;
+    EXPECT_FALSE(s->error_metric.empty()) << name;
+    EXPECT_EQ(s->pareto, std::string(name) == "fit-cloud-stats") << name;
+  }
+
+  CaseResult c = MakeCase("fit-cloud-stats", {{"config", "default"}}, T(5000, 5000, 5000, 1), 0.095, true);
+  auto row = [](bool control, int k, double ext, double amb) {
+    nlohmann::json r = {{"control_known_shapes", control},
+                        {"reference_seeds", {1 + k, 11 + k}},
+                        {"model_seeds", control ? nlohmann::json{1 + k, 11 + k} : nlohmann::json{101 + k, 211 + k}},
+                        {"initial_cost", 0.316},
+                        {"final_cost", 0.296},
+                        {"iterations", 3},
+                        {"renders", 42},
+                        {"time_s", 1.84}};
+    for (const char* n : {"extinction", "phase_g1", "powder_strength", "ambient_strength"})
+      r["parameters"][n] = {{"rel_error", 0.0}};
+    r["parameters"]["extinction"]["rel_error"] = ext;
+    r["parameters"]["ambient_strength"]["rel_error"] = amb;
+    return r;
+  };
+  nlohmann::json spread;
+  for (const char* n : {"extinction", "phase_g1", "powder_strength", "ambient_strength"})
+    spread[n] = {{"median_abs_rel_error", 0.0}, {"max_abs_rel_error", 0.0}};
+  spread["extinction"] = {{"median_abs_rel_error", 0.095}, {"max_abs_rel_error", 0.095}};
+  c.extra = {{"runs", {row(true, 0, 0.001, -0.0004), row(false, 1, 0.095, 0.047)}},
+             {"spread", spread}, {"pairs", 1}, {"render_width", 64}, {"references_per_fit", 1},
+             {"model_weather_maps", 1}, {"model_renders", 2}, {"max_iterations", 2},
+             {"fitted", "extinction,ambient_strength"}, {"noise_draws", 0}, {"model_noise_textures", 1}};
+  const std::string md = r.Find("fit-cloud-stats")->markdown({c});
+  EXPECT_NE(md.find("## default (the default)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| control (same seeds) | +0.1% | +0.0% | +0.0% | -0.0% |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 2/12 vs 102/212 | +9.5% | +0.0% | +0.0% | +4.7% | 0.316 -> 0.296 | 3 | 42 | 1.8 |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| extinction | 9.5% | 9.5% |"), std::string::npos) << md;
+  EXPECT_NE(md.find("weighted by bin share"), std::string::npos) << md;
 }
 
 // The capture suite compares a coarse frame with the scene's area mean at the frame's nodes.

@@ -237,7 +237,7 @@ TEST(CloudStats, WhiteningDividesEachResidualByItsShapeNoise) {
 }
 
 // The start of every recovery: the truth x (extinction 1.3, g1 0.7, powder 0.7, ambient
-// 1.3), as in bench_cloud_stats.
+// 1.3), as in the fit-cloud-stats suite.
 clouds::CloudParams Perturbed(const clouds::CloudParams& truth) {
   clouds::CloudParams start = truth;
   start.extinction_per_m *= 1.3;

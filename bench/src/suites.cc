@@ -18,6 +18,8 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitCloudsSuite());
   r.Add(FitCloudsProcessSuite());
   r.Add(BatchSuite());
+  r.Add(FitCloudStatsSuite());
+  r.Add(CloudStatsNoiseSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(SkySegmentationSuite());

@@ -20,6 +20,8 @@ Suite FitProbeSuite();  // fit_probe_suite.cc
 Suite FitCloudsSuite();  // fit_clouds_suite.cc
 Suite FitCloudsProcessSuite();  // fit_clouds_process_suite.cc
 Suite BatchSuite();    // batch_suite.cc
+Suite FitCloudStatsSuite();  // fit_cloud_stats_suite.cc
+Suite CloudStatsNoiseSuite();  // cloud_stats_noise_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc
 Suite CaptureResponseSuite();  // capture_response_suite.cc

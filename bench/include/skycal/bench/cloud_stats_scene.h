@@ -1,6 +1,7 @@
 // The synthetic unknown-shapes scene of the cloud statistics fit (issue 11, regime 2),
-// shared by its test (tests/cloud_stats_test.cc) and its seed-pair benchmark
-// (bench/bench_cloud_stats.cc): the bundled default_cloudy preset, a reference rendered with
+// shared by its test (tests/cloud_stats_test.cc) and its benchmark suites
+// (`skycal bench --suite fit-cloud-stats,cloud-stats-noise`: bench/src/fit_cloud_stats_suite.cc,
+// cloud_stats_noise_suite.cc): the bundled default_cloudy preset, a reference rendered with
 // one noise seed and weather-map seed, and a model scene with another pair of seeds and
 // the same weather statistics (default_cloudy's procedural map: mean coverage 0.32,
 // contrast 3, 8 cells). Header-only: the test does not link the bench library.

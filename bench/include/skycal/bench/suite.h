@@ -65,8 +65,8 @@ class SuiteRegistry {
 };
 
 // render, fit, fit-day, fit-cie, fit-cie-study, fit-decisions, fit-skies, fit-probe, fit-clouds,
-// fit-clouds-process, batch, probe, capture, sky-segmentation, capture-chart, capture-stars,
-// capture-response, export, stress, clouds (suites.cc).
+// fit-clouds-process, fit-cloud-stats, cloud-stats-noise, batch, probe, capture, sky-segmentation,
+// capture-chart, capture-stars, capture-response, export, stress, clouds (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench

@@ -1,19 +1,21 @@
-// The shape noise of the cloud statistics (issue 11 regime 2), measured at the truth:
-// Σ, the covariance of the statistics over D single shape draws (independent weather maps of
-// the same weather statistics), and J, the Jacobian of the model's pooled statistics with
-// respect to the lighting (central differences through the renderer). A linearised fit of
-// R references (each one draw) against the model's mean of M draws moves the parameters by
-// A (e_model - e_ref), A = (J' W J)^-1 J' W, so their covariance is A Σ (1/R + 1/M) A' for
-// the objective's weights W (the sandwich: Σ need not be invertible). That predicts each
-// parameter's spread under shape noise, and the singular values of Σ^-1/2 J say which
-// directions the statistics separate at all.
+// Suite `cloud-stats-noise`: the shape noise of the cloud statistics (issue 11 regime 2),
+// measured at the truth — what `bench_cloud_stats noise` wrote (bench/results/cloud_stats_noise.md),
+// now a suite of `skycal bench`. Σ, the covariance of the statistics over D single shape draws
+// (independent weather maps of the same weather statistics), and J, the Jacobian of the
+// model's pooled statistics with respect to the lighting (central differences through the
+// renderer). A linearised fit of R references (each one draw) against the model's mean of M
+// draws moves the parameters by A (e_model - e_ref), A = (J' W J)^-1 J' W, so their
+// covariance is A Σ (1/R + 1/M) A' for the objective's weights W (the sandwich: Σ need not
+// be invertible). That predicts each parameter's spread under shape noise, and the singular
+// values of Σ^-1/2 J say which directions the statistics separate at all.
 //
-// `bench_cloud_stats noise [DRAWS (default 48)] [RENDER_WIDTH (default 64)] [MODEL_MAPS (default 4)] [OUT_STEM]`
-// writes OUT_STEM.md/.json (default bench/results/cloud_stats_noise).
+// One case (no setting swept: no Pareto front). Full: 48 draws, 64x32, M = 4 (the program's
+// defaults); --quick: 8 draws, M = 2. Error: the predicted sd of ln extinction for the default
+// fitted set (extinction + ambient), bin-share weights, R = 1, M = the model maps. The
+// program's `scan` mode (the cost along extinction of one pair, a debugging aid) is dropped.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,14 +23,17 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
-#include "bench_util.h"
+#include "../bench_util.h"
 #include "cloud_stats_objective.h"
 #include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/bench/cloud_stats_suite_grids.h"
 #include "skycal/core/error.h"
+#include "suite_util.h"
+#include "suites_internal.h"
+
+namespace skycal::bench {
 
 namespace {
-
-using namespace skycal;
 
 // The lighting fields the Jacobian covers (the fit's default four first).
 const std::vector<std::string> kFields = {"extinction",  "phase_g1",  "powder_strength",     "ambient_strength",
@@ -55,48 +60,51 @@ std::string Pct(double v) {
   return b;
 }
 
-}  // namespace
 
-int RunCloudStatsNoise(int argc, char** argv) {
-  const int draws = argc > 2 ? std::max(4, std::atoi(argv[2])) : 48;
+// The analysis at `plan`'s sizes: the Markdown of cloud_stats_noise.md and its numbers.
+struct NoiseAnalysis {
+  std::string markdown;
+  nlohmann::json numbers;
+  long long renders = 0;
+};
+
+NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRenderer& renderer, const SuiteOptions& o) {
+  const int draws = plan.draws, maps = plan.model_maps;
   fit::CloudStatsOptions options;
-  options.render_width = argc > 3 ? std::max(16, std::atoi(argv[3])) : 64;
-  options.render_height = options.render_width / 2;
-  const int maps = argc > 4 ? std::max(1, std::atoi(argv[4])) : 4;
-  const std::string stem = argc > 5 ? argv[5] : std::string(SKYCAL_SOURCE_DIR) + "/bench/results/cloud_stats_noise";
-  const std::string cache = bench::CloudStatsCacheDir();
-  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
+  options.render_width = plan.width;
+  options.render_height = plan.width / 2;
+  const std::string cache = CloudStatsCacheDir();
   options.fitted = kFields;
   options.model_renders = maps;
   // The reference only fixes the bins (its layout); the analysis draws its own shapes.
-  auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1, 11}, {101, 211}, 25.0, 30.0, options, *renderer, cache);
+  auto scene = MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1, 11}, {101, 211}, 25.0, 30.0, options, renderer, cache);
   std::vector<clouds::WeatherMap> model_maps, draw_maps;
   model_maps.push_back(scene.weather);
-  for (int e = 1; e < maps; ++e) model_maps.push_back(bench::CloudStatsWeather(211 + 1000 * e, scene.truth.weather_extent_m));
-  for (int d = 0; d < draws; ++d) draw_maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+  for (int e = 1; e < maps; ++e) model_maps.push_back(CloudStatsWeather(211 + 1000 * e, scene.truth.weather_extent_m));
+  for (int d = 0; d < draws; ++d) draw_maps.push_back(CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
   fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
   for (const auto& w : model_maps) model.weather_ensemble.push_back(&w);
   for (const auto& w : draw_maps) model.shape_draw_maps.push_back(&w);
   const std::vector<fit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
-  const fit::CloudStatsObjective obj(refs, model, *renderer, options);
+  const fit::CloudStatsObjective obj(refs, model, renderer, options);
   const int n = obj.num_residuals(), p = obj.num_parameters();
   const std::vector<double> x = obj.InitialX();
   // Σ over the draws.
   std::vector<std::vector<double>> v(draws, std::vector<double>(n));
   for (int d = 0; d < draws; ++d) {
     if (!obj.DrawStatistics(x.data(), d, v[d].data())) throw Error("shape draw failed");
-    if (d % 8 == 7) std::fprintf(stderr, "  %d/%d shape draws\n", d + 1, draws);
+    if (d % 8 == 7) o.Log("[cloud-stats-noise]   " + std::to_string(d + 1) + "/" + std::to_string(draws) + " shape draws");
   }
   // The same draws with another noise seed (the seed pairs' references use seeds 1-6, the
   // model 101-106): a difference of the means is a bias no number of draws averages away.
   const clouds::CloudNoise other_noise = clouds::LoadOrGenerateCloudNoise(1, cache);
   fit::CloudStatsScene model_other = model;
   model_other.noise = &other_noise;
-  const fit::CloudStatsObjective obj_other(refs, model_other, *renderer, options);
+  const fit::CloudStatsObjective obj_other(refs, model_other, renderer, options);
   std::vector<std::vector<double>> v_other(draws, std::vector<double>(n));
   for (int d = 0; d < draws; ++d)
     if (!obj_other.DrawStatistics(x.data(), d, v_other[d].data())) throw Error("shape draw failed");
-  std::fprintf(stderr, "  %d draws with noise seed 1\n", draws);
+  o.Log("[cloud-stats-noise]   " + std::to_string(draws) + " draws with noise seed 1");
   std::vector<double> m0(n);
   if (!obj.ModelStatistics(x.data(), m0.data())) throw Error("model render failed");
   // Keep the statistics every draw and the model have (a bin a draw leaves empty has no quantile).
@@ -134,7 +142,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
       const double dv = rp[keep[i]] - rm[keep[i]];
       J(i, j) = (std::isfinite(dv) ? dv : 0.0) / (hi - lo) * x[j];  // d stat / d ln p
     }
-    std::fprintf(stderr, "  Jacobian column %s\n", obj.Name(j).c_str());
+    o.Log("[cloud-stats-noise]   Jacobian column " + obj.Name(j));
   }
   // Weights: the first design's (bin shares), the diagonal GLS (1 / var), the shrunk full GLS.
   Eigen::VectorXd w_share(nk), var = S.diagonal();
@@ -154,8 +162,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
                                        {"all nine", {0, 1, 2, 3, 4, 5, 6, 7, 8}}};
   std::ostringstream md;
   md << "## Shape noise at the truth: predicted spread and what the statistics separate\n\n"
-     << "`build/bench/bench_cloud_stats noise " << draws << " " << options.render_width << " " << maps << "` ("
-     << options.render_width << "x" << options.render_height << " renders through " << renderer->Describe()
+     << "(" << draws << " draws, M = " << maps << "; " << options.render_width << "x" << options.render_height << " renders through " << renderer.Describe()
      << "; the default bins and quantiles). Σ: covariance of the " << nk << " statistics (of " << n
      << "; those every draw and the model fill) over " << draws
      << " single shape draws (weather-map seeds 5000+, the model's noise seed 101) at default_cloudy's lighting, sun 25 deg up. "
@@ -166,7 +173,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
      << ": " << draws << " draws cannot estimate a full " << nk << "x" << nk << " Σ). Singular values of "
      << "diag(Σ)^-1/2 J (per ln p; a direction with σ < 1 moves the statistics less than one draw's noise for "
      << "a 100% change).\n\n";
-  nlohmann::json out = {{"machine", bench::MachineJson()}, {"draws", draws}, {"statistics", nk}, {"model_maps", maps},
+  nlohmann::json out = {{"draws", draws}, {"statistics", nk}, {"model_maps", maps},
                         {"render_width", options.render_width}};
   // Per-statistic noise and signal (median over statistics) for the reading.
   std::vector<double> sds(nk);
@@ -188,7 +195,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
       const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
       fit::CloudStatsScene ms = model;
       ms.noise = &nz;
-      const fit::CloudStatsObjective o2(refs, ms, *renderer, options);
+      const fit::CloudStatsObjective o2(refs, ms, renderer, options);
       vs.emplace_back(n);
       if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
     }
@@ -214,7 +221,7 @@ int RunCloudStatsNoise(int argc, char** argv) {
        << "). The model renders ONE noise texture, so this part of the reference's shape noise is a fixed offset "
        << "that its ensemble of weather maps does not average.\n\n";
     out["noise_seed_sd_ratio_median"] = med;
-    std::fprintf(stderr, "  noise-seed draws: sd ratio median %.3g\n", med);
+    o.Log("[cloud-stats-noise]   noise-seed draws: sd ratio median " + FormatG(med));
   }
   md << "Median shape-noise sd of a statistic: " << sds[nk / 2] << " (log radiance / share); 10% / 90%: " << sds[nk / 10]
      << " / " << sds[9 * nk / 10] << ".\n\n";
@@ -256,49 +263,53 @@ int RunCloudStatsNoise(int argc, char** argv) {
     md << "\n";
     out["subsets"][sub.label] = js;
   }
-  std::ofstream(stem + ".md") << md.str();
-  std::ofstream(stem + ".json") << out.dump(2) << "\n";
-  std::fprintf(stderr, "wrote %s.md/.json (%lld renders)\n", stem.c_str(), obj.renders());
-  return 0;
+  return {md.str(), out, obj.renders()};
 }
 
-// `bench_cloud_stats scan K [WIDTH]`: the whitened cost of seed pair K (reference seeds
-// 1+K/11+K, model 101+K/211+K, 4 model maps, 24 noise draws) along extinction x 0.5 ... 1.5
-// of the truth, the other lighting at the truth: where the objective's minimum lies.
-int RunCloudStatsScan(int argc, char** argv) {
-  const int k = argc > 2 ? std::atoi(argv[2]) : 1;
-  fit::CloudStatsOptions options;
-  options.render_width = argc > 3 ? std::max(16, std::atoi(argv[3])) : 64;
-  options.render_height = options.render_width / 2;
-  options.fitted = {"extinction"};
-  options.model_renders = 4;
-  const std::string cache = bench::CloudStatsCacheDir();
-  const std::unique_ptr<clouds::CloudRenderer> renderer = bench::CreateCloudStatsRenderer();
-  const uint64_t uk = static_cast<uint64_t>(k);
-  auto scene = bench::MakeCloudStatsScene(SKYCAL_SOURCE_DIR, {1 + uk, 11 + uk}, {101 + uk, 211 + uk}, 25.0, 30.0, options,
-                                          *renderer, cache);
-  std::vector<clouds::WeatherMap> maps = {scene.weather}, draws;
-  for (int e = 1; e < 4; ++e) maps.push_back(bench::CloudStatsWeather(211 + uk + 1000 * e, scene.truth.weather_extent_m));
-  for (int d = 0; d < 24; ++d) draws.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
-  fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
-  for (const auto& w : maps) model.weather_ensemble.push_back(&w);
-  for (const auto& w : draws) model.shape_draw_maps.push_back(&w);
-  const std::vector<fit::CloudStatsReference> refs = {scene.reference};
-  for (int whiten : {0, 1}) {
-    fit::CloudStatsOptions o = options;
-    o.noise_draws = whiten ? 24 : 0;
-    const fit::CloudStatsObjective obj(refs, model, *renderer, o);
-    std::vector<double> r(obj.num_residuals());
-    const double x0 = obj.InitialX()[0];
-    std::printf("pair %d, %s: cost along extinction / truth:", k, whiten ? "whitened" : "bin shares");
-    for (double f = 0.5; f <= 1.51; f += 0.1) {
-      const double x = x0 * f;
-      double c = 0.0;
-      if (obj.Evaluate(&x, r.data()))
-        for (double v : r) c += 0.5 * v * v;
-      std::printf(" %.2f:%.4g", f, c);
-    }
-    std::printf("\n");
-  }
-  return 0;
+}  // namespace
+
+CloudStatsNoisePlan CloudStatsNoiseGridPlan(bool quick) {
+  CloudStatsNoisePlan p;
+  if (quick) p.draws = 8, p.model_maps = 2;
+  return p;
 }
+
+Suite CloudStatsNoiseSuite() {
+  Suite s;
+  s.name = "cloud-stats-noise";
+  s.summary = "the cloud statistics' shape noise at the truth: 48 shape draws, 4 model maps, 64x32 (--quick: 8 draws, "
+              "2 maps)";
+  s.error_metric = "predicted sd of ln extinction (extinction + ambient fitted, bin-share weights, 1 reference, M model maps)";
+  s.error_axis = "predicted sd of ln extinction";
+  s.pareto = false;  // one setting
+  s.markdown = [](const std::vector<CaseResult>& cases) {
+    std::string md = "`skycal bench --suite cloud-stats-noise` (bench/src/cloud_stats_noise_suite.cc; numbers in `results.json`).\n\n";
+    for (const CaseResult& c : cases)
+      md += c.extra.contains("markdown") ? c.extra["markdown"].get<std::string>() : "Case " + c.name + ": " + c.message + "\n";
+    return md;
+  };
+  s.run = [](const SuiteOptions& o) {
+    const CloudStatsNoisePlan plan = CloudStatsNoiseGridPlan(o.quick);
+    Grid grid;
+    grid.axes = {{"draws", {std::to_string(plan.draws)}, std::to_string(plan.draws)}};
+    const std::unique_ptr<clouds::CloudRenderer> renderer = CreateCloudStatsRenderer();
+    return RunGrid("cloud-stats-noise", grid, o, [&](CaseResult& c) {
+      NoiseAnalysis a;
+      c.time = Measure([&] { a = AnalyseShapeNoise(plan, *renderer, o); }, 0, 1);  // one run: the renders dominate
+      const auto& sd = a.numbers["subsets"]["extinction + ambient"]["predicted_sd_ln"]["bin shares"]
+                                 ["1x" + std::to_string(plan.model_maps)];
+      c.error = sd.at(0).get<double>();
+      if (!std::isfinite(c.error)) {
+        c.outcome = Outcome::kNonFinite;
+        c.message = "non-finite predicted sd";
+      }
+      c.extra = a.numbers;
+      c.extra["markdown"] = a.markdown;
+      c.extra["renders"] = a.renders;
+      c.extra["width"] = plan.width;
+    });
+  };
+  return s;
+}
+
+}  // namespace skycal::bench

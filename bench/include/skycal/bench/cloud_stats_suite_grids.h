@@ -1,0 +1,48 @@
+// The plan of the `fit-cloud-stats` and `cloud-stats-noise` suites (the retired
+// bench_cloud_stats program's seed pairs and shape-noise analysis), public so
+// tests/bench_test.cc can check it without rendering.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "skycal/bench/grid.h"
+
+namespace skycal::bench {
+
+// One configuration of the unknown-shapes cloud lighting fit (fit/include/skycal/fit/cloud_stats.h),
+// as one of the program's results files reported it. 0 in width/renders/iterations: the
+// CloudStatsOptions default.
+struct CloudStatsConfig {
+  std::string name;             // the `config` axis value
+  int width = 0;                // render width (px; height = width / 2)
+  int references = 1;           // references per fit (> 1: no control pair)
+  int model_maps = 1;           // weather maps the model pools (shape draws per evaluation)
+  int model_renders = 0;        // model renders per evaluation
+  int max_iterations = 0;
+  std::vector<std::string> fitted;  // empty: the options' default
+  int noise_draws = 0;          // whitening draws (0: bin-share weights)
+  int model_noises = 1;         // noise textures the model cycles through
+  std::string results_file;     // bench/results/<file>.md the program wrote for it ("" for none)
+  std::string program_args;     // the retired program's arguments after PAIRS STEM
+};
+
+struct CloudStatsPlan {
+  Grid grid;                             // one axis, `config`; default: `default`
+  std::vector<CloudStatsConfig> configs;  // the grid's values, in order
+  int pairs = 5;                         // unknown-shape seed pairs per case (k = 1..pairs)
+  int width_override = 0;                // --quick: every config at this width (0: the config's)
+  int iteration_cap = 0;                 // --quick: at most this many iterations (0: none)
+};
+// Full: 9 configurations x 5 pairs; --quick: `default` and `gls-2params`, 1 pair + the
+// control at 64x32, at most 2 iterations.
+CloudStatsPlan FitCloudStatsPlan(bool quick);
+// The configuration named `name` of `plan`; throws skycal::Error when absent.
+const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const std::string& name);
+
+// cloud-stats-noise: shape draws, render width, model maps (full: the program's defaults).
+struct CloudStatsNoisePlan {
+  int draws = 48, width = 64, model_maps = 4;
+};
+CloudStatsNoisePlan CloudStatsNoiseGridPlan(bool quick);
+
+}  // namespace skycal::bench
