@@ -38,12 +38,16 @@ bool CloudRenderRequest::IsValid(std::string* why) const {
 }
 
 namespace {
-// Throws naming `origin` and `what` unless v holds n values, each finite and in [lo, hi].
-void CheckValues(const std::vector<float>& v, size_t n, float lo, float hi, const std::string& origin,
-                 const std::string& what) {
+// Throws naming `origin` and `what` unless v holds n values.
+void CheckSize(const std::vector<float>& v, size_t n, const std::string& origin, const std::string& what) {
   if (v.size() != n) {
     throw Error(origin + ": " + what + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
   }
+}
+// ... and each value finite and in [lo, hi].
+void CheckValues(const std::vector<float>& v, size_t n, float lo, float hi, const std::string& origin,
+                 const std::string& what) {
+  CheckSize(v, n, origin, what);
   for (size_t i = 0; i < v.size(); ++i) {
     if (!std::isfinite(v[i]) || v[i] < lo || v[i] > hi) {
       throw Error(origin + ": " + what + " value " + std::to_string(i) + " = " + std::to_string(v[i]) +
@@ -55,11 +59,6 @@ constexpr size_t kBaseValues = size_t{CloudNoise::kBaseSize} * CloudNoise::kBase
 constexpr size_t kDetailValues = size_t{CloudNoise::kDetailSize} * CloudNoise::kDetailSize * CloudNoise::kDetailSize * 3;
 constexpr size_t kCurlValues = size_t{CloudNoise::kCurlSize} * CloudNoise::kCurlSize * 3;
 
-void CheckNoiseSize(const std::vector<float>& v, size_t n, const std::string& origin, const std::string& what) {
-  if (v.size() != n) {
-    throw Error(origin + ": " + what + " has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
-  }
-}
 }  // namespace
 
 void ValidateCloudNoise(const CloudNoise& noise, const std::string& origin) {
@@ -76,9 +75,9 @@ void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, c
   if (noise.sha256.empty()) {
     ValidateCloudNoise(noise, origin);
   } else {
-    CheckNoiseSize(noise.base, kBaseValues, origin, "base noise");
-    CheckNoiseSize(noise.detail, kDetailValues, origin, "detail noise");
-    CheckNoiseSize(noise.curl, kCurlValues, origin, "curl noise");
+    CheckSize(noise.base, kBaseValues, origin, "base noise");
+    CheckSize(noise.detail, kDetailValues, origin, "detail noise");
+    CheckSize(noise.curl, kCurlValues, origin, "curl noise");
   }
   // Powers of two: the shared source wraps texel indices with a mask (cloud_textures.glsl.h).
   auto power_of_two = [](int n) { return n > 0 && (n & (n - 1)) == 0; };
