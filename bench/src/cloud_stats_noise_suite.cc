@@ -23,7 +23,6 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
-#include "../bench_util.h"
 #include "cloud_stats_objective.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"

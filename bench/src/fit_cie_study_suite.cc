@@ -59,13 +59,6 @@ nlohmann::json ErrorBreakdown(const fit::Reference& ref, const ImageRGB& fit) {
   return {{"circumsolar_3_15deg", rms(0)}, {"horizon_0_10deg", rms(1)}, {"rest", rms(2)}};
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 std::string Percent(double v) { return FormatFixed(100.0 * v, 2); }
 
 std::string ElevKey(double e) { return FormatG(e, 6); }

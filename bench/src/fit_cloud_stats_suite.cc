@@ -18,7 +18,6 @@
 #include <cmath>
 #include <memory>
 
-#include "../bench_util.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"
 #include "skycal/core/error.h"

@@ -26,6 +26,9 @@ std::vector<CaseResult> RunGrid(const std::string& suite, const Grid& grid, cons
 std::string FormatG(double v, int digits = 3);  // %.*g
 std::string FormatFixed(double v, int decimals);  // %.*f
 
+// The median of v (the mean of the middle two for an even count); NaN when v is empty.
+double Median(std::vector<double> v);
+
 // A Markdown table of `cases`, one row each: the case's name, its median time (ms) and
 // error, then one column per (header, value) pair; values from `extra` via ExtraNumber.
 struct TableColumn {
