@@ -21,9 +21,10 @@ struct FlowOptions {
 
 // Forward flow of `b` relative to `a` (and nothing else): per pixel of the full frames,
 // (dx, dy) in pixels such that a(x, y) ~ b(x + dx, y + dy). Log luminance tonemapped to 8
-// bits over the two frames' common range, OpenCV DIS (medium preset), longitude wrapped.
-// Exposed for tests.
-std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b);
+// bits over the two frames' common range, OpenCV DIS (medium preset), longitude wrapped;
+// above 40 deg elevation from DIS in the zenith cap's polar view (zenith_cap.h; off only
+// for the tests' control). Exposed for tests.
+std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b, bool zenith_cap = true);
 
 nlohmann::json RunFlowImpl(const FlowOptions& options);
 FlowOptions ParseFlowArgs(int argc, char** argv);

@@ -40,12 +40,17 @@ struct Epe {
 };
 
 // End-point error (full-resolution pixels) of forward vectors in texture space over the
-// sky rows (elevation above 14 deg, where the clouds are) of a qw x qh field.
+// sky rows from 14 deg (where the clouds are) to 40 deg elevation of a qw x qh field. Above
+// 40 deg the flow comes from the zenith cap's polar view (zenith_cap.h), where a lat-long
+// shift is a rotation plus a radial stretch of the image — and at this render's time the
+// sky up there is clear, a smooth gradient whose motion the frames cannot pin down (any
+// vector along its isophotes matches). The cap is measured on clouds moved by the wind,
+// with a ground truth, in flow_wind_test.cc.
 Epe EndPointError(const std::vector<float>& u, const std::vector<float>& v, int qw, int qh, int w, int h) {
   std::vector<double> e;
   double seam = 0.0;
   int seam_n = 0;
-  for (int y = 1; y < qh * 4 / 9; ++y)
+  for (int y = qh * 9 / 32; y < qh * 4 / 9; ++y)
     for (int x = 0; x < qw; ++x) {
       const size_t i = static_cast<size_t>(y) * qw + x;
       const double d = std::hypot(u[i] * (w - 1) - kDx, v[i] * (h - 1) - kDy);
@@ -86,9 +91,10 @@ TEST(Flow, CloudsMovedByAKnownShiftAreRecovered) {
   std::vector<float> fu(qw * qh), fv(qw * qh);
   for (int i = 0; i < qw * qh; ++i) fu[i] = v.image.pixels[3 * i], fv[i] = v.image.pixels[3 * i + 1];
   const Epe epe = EndPointError(fu, fv, qw, qh, 256, 128);
-  std::cout << "[flow] forward end-point error over the sky above 14 deg: median " << epe.median << " px, mean "
+  std::cout << "[flow] forward end-point error over the sky at 14..40 deg: median " << epe.median << " px, mean "
             << epe.mean << " px, at the seam " << epe.seam_mean << " px (shift " << kDx << ", " << kDy << " px)\n";
-  // Measured 0.015 / 0.017 / 0.019 px (DIS on 8-bit log luminance; whole-pixel shifts):
+  // Measured 0.020 / 0.019 / 0.018 px (DIS on 8-bit log luminance; whole-pixel shifts; over
+  // the whole sky above 14 deg before the zenith cap 0.015 / 0.017 / 0.019 px):
   // bounds with a margin of ~5x.
   EXPECT_LT(epe.median, 0.1);
   EXPECT_LT(epe.mean, 0.3);
