@@ -168,7 +168,7 @@ nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset,
 }  // namespace
 
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<CloudStatsPhoto>& photos,
-                                     const fit::FitResult& sky, const fs::path& fit_dir) {
+                                     const fit::FitResult& sky, const fs::path& fit_dir, CloudStatsPresetUpdate* update) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   fit::CloudStatsOptions so;
@@ -455,6 +455,24 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     panels.references.push_back(std::move(rf));
   }
   WriteFitPanels(fit_dir.string(), panel_refs, panels);
+  if (update) {
+    update->params = res.params;
+    update->weather = maps[0];
+    update->sun_illuminance_lux = cloud_preset.sun_illuminance_lux;
+    update->sun_tint_rgb = cloud_preset.sun_tint_rgb;
+    // A visible disc peaks thousands of times above the sky around it (`sky` 4,700x, `city`
+    // 5,200x through overcast); a sun behind terrain leaves a glow (`dawn` 8x).
+    constexpr double kVisibleDiscPeakOverSky = 100.0;
+    double weakest = INFINITY;
+    for (const PhotoData& d : data) weakest = std::min(weakest, d.sun_check["peak_over_background"].get<double>());
+    update->sun_measured = o.sun == "photo" && weakest >= kVisibleDiscPeakOverSky;
+    update->sun_why = o.sun != "photo" ? "--cloud-stats-sun model: the clouds were lit by the sky fit's sun"
+                      : update->sun_measured
+                          ? "the photo's disc, measured (peak " + FormatNumber(weakest) + "x the sky ring around it)"
+                          : "the photo's disc is not visible (peak " + FormatNumber(weakest) + "x the sky ring, under " +
+                                FormatNumber(kVisibleDiscPeakOverSky) + "x): what lit the clouds is no measurement of "
+                                "the sun; the preset keeps the sky fit's, and its clouds, lit by it, render brighter than fitted";
+  }
   return {{"term", "cloud statistics (unknown shapes): weighted quantiles of log radiance per (sun angle x elevation x "
                    "opacity) bin, model pooled over an ensemble of weather maps"},
           {"shared_with_atmosphere", o.sun == "photo"
@@ -488,6 +506,30 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
                                    "fitted model's median radiance of their bin (the photo's cloud map places them)"},
                      {"model_sr", "per render (the pooled weight divided by the renders)"}}},
           {"references", per_ref}};
+}
+
+nlohmann::json AttachCloudStats(const CloudStatsPresetUpdate& update, const fs::path& preset_json, render::Preset* preset) {
+  clouds::CloudParams p = update.params;
+  const std::string weather_name = preset_json.stem().string() + ".weather.exr";
+  clouds::SaveWeatherMap(update.weather, (preset_json.parent_path() / weather_name).string());
+  p.weather_map = weather_name;
+  preset->clouds_json = clouds::CloudSectionToJson(p).dump();
+  const nlohmann::json record = {
+      {"clouds_section", "the fitted cloud lighting; weather_map " + weather_name +
+                             ": noise at the matched mean coverage (the photo's shapes are unknown, its cover is not)"},
+      {"weather_map", weather_name},
+      {"sun_illuminance_lux", {{"sky_fit", preset->sun_illuminance_lux}, {"clouds_lit_by", update.sun_illuminance_lux}}},
+      {"sun_tint_rgb", {{"sky_fit", preset->sun_tint_rgb}, {"clouds_lit_by", update.sun_tint_rgb}}},
+      {"sun_written", update.sun_measured ? "clouds_lit_by" : "sky_fit"},
+      {"why", update.sun_why + (update.sun_measured ? std::string(": the preset takes it, so it renders what was fitted "
+                                                                  "(the sky's radiance does not depend on the sun's "
+                                                                  "illuminance; the disc, the ground and the clouds do)")
+                                                    : std::string())}};
+  if (update.sun_measured) {
+    preset->sun_illuminance_lux = update.sun_illuminance_lux;
+    preset->sun_tint_rgb = update.sun_tint_rgb;
+  }
+  return record;
 }
 
 }  // namespace skycal::cli

@@ -7,6 +7,7 @@
 // model's mean cloud opacity equals the photo's mean cloud probability over the sky.
 // Writes fit.json's `cloud_stats` object and fit/<ref>.clouds.{reference,fit,error}.png.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -14,8 +15,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_textures.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
+#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 
@@ -58,11 +62,37 @@ struct CloudStatsPhoto {
   std::vector<float> cloud_probability;
 };
 
+// What the statistics fit hands the fitted preset so that it renders what was fitted: the
+// cloud lighting with a weather map at the matched coverage (the first of the model's
+// ensemble: the photo's shapes are unknown, its cover and lighting are not), and the sun
+// that lit the model's clouds (the photo's, with --cloud-stats-sun photo: the sky itself
+// does not depend on the sun's illuminance, only the disc, the ground and the clouds do).
+struct CloudStatsPresetUpdate {
+  clouds::CloudParams params;
+  clouds::WeatherMap weather;
+  double sun_illuminance_lux = 0.0;
+  std::array<double, 3> sun_tint_rgb{};
+  // Whether that sun is a measurement the preset should take: the photo's disc seen on
+  // every reference (its peak at least kVisibleDiscPeakOverSky x the sky ring around it).
+  // Not on `dawn` (the sun behind the ridge: peak 8x the ring, against 4,700x on `sky`).
+  bool sun_measured = false;
+  std::string sun_why;
+};
+
 // Runs the statistics fit over `photos` (one lighting for all of them) with the sky fit's
-// preset and exposures; writes the panels into `fit_dir`; returns fit.json's `cloud_stats`.
+// preset and exposures; writes the panels into `fit_dir`; returns fit.json's `cloud_stats`
+// and, when `update` is given, what the fitted preset takes from it.
 // Throws skycal::Error naming the reference when its size is not a multiple of the
 // statistics' size or it has no cloud to fit.
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<CloudStatsPhoto>& photos,
-                                     const fit::FitResult& sky, const std::filesystem::path& fit_dir);
+                                     const fit::FitResult& sky, const std::filesystem::path& fit_dir,
+                                     CloudStatsPresetUpdate* update = nullptr);
+
+// Writes the statistics fit into the fitted preset: its `clouds` section (the fitted lighting,
+// weather_map naming <stem>.weather.exr written beside preset.json) and the sun that lit the
+// clouds (illuminance and tint). Returns fit.json's `cloud_stats.preset` record: what changed,
+// from what to what, and why.
+nlohmann::json AttachCloudStats(const CloudStatsPresetUpdate& update, const std::filesystem::path& preset_json,
+                                render::Preset* preset);
 
 }  // namespace skycal::cli

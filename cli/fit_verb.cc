@@ -252,7 +252,9 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     summary["clouds"]["mode"] = "stats";
     summary["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by statistics "
                                     "of the cloud pixels (fit.json's cloud_stats)";
-    summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit");
+    CloudStatsPresetUpdate update;
+    summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit", &update);
+    summary["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result.preset);
   }
   if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
   const nlohmann::json provenance = {{"provenance",

@@ -122,8 +122,27 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   // The "sky fit's render" here is the photo itself: against it nothing would be cloud. Told
   // that fit missed its clear pixels by 60%, the default `fitted` expectation is not used.
   p.sky.references[0].errors.rel_rmse = 0.6;
-  const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir);
+  CloudStatsPresetUpdate update;
+  const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir, &update);
   EXPECT_EQ(j["references"][0]["cloud_probability"]["refined"], false);
+  // The fitted preset takes the fit: its clouds section carries the lighting fit.json reports
+  // and names a weather map written beside it; its sun is the one that lit the clouds only
+  // when the photo's disc was seen.
+  render::Preset preset = p.sky.preset;
+  const nlohmann::json rec = AttachCloudStats(update, dir / "fitted.json", &preset);
+  const nlohmann::json section = nlohmann::json::parse(preset.clouds_json);
+  EXPECT_DOUBLE_EQ(section["scattering_albedo"]["value"].get<double>(), j["parameters"]["scattering_albedo"]["value"].get<double>());
+  EXPECT_DOUBLE_EQ(section["ambient_strength"]["value"].get<double>(), j["parameters"]["ambient_strength"]["value"].get<double>());
+  EXPECT_EQ(rec["weather_map"], "fitted.weather.exr");
+  EXPECT_TRUE(fs::exists(dir / "fitted.weather.exr"));
+  EXPECT_EQ(update.weather.width, 256);
+  EXPECT_EQ(rec["sun_written"], update.sun_measured ? "clouds_lit_by" : "sky_fit");
+  EXPECT_DOUBLE_EQ(preset.sun_illuminance_lux, update.sun_measured ? update.sun_illuminance_lux : p.sky.preset.sun_illuminance_lux);
+  // Control: a disc the fit saw is written.
+  update.sun_measured = true;
+  update.sun_illuminance_lux = 1234.0;
+  AttachCloudStats(update, dir / "fitted.json", &preset);
+  EXPECT_DOUBLE_EQ(preset.sun_illuminance_lux, 1234.0);
   // Coverage first: regula falsi ends with the model's mean opacity within 0.005 of the photo's or
   // after 8 steps (at 32x16 the opacity is a coarse function of the coverage: 0.05 allowed).
   const double target = j["coverage"]["photo_mean_cloud_probability"], got = j["coverage"]["model_mean_opacity"];

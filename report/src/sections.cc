@@ -253,6 +253,23 @@ std::string FitSection(const FitRecord& f, const std::string& anchor, PageCounts
                 p.held ? E(p.why.empty() ? std::string("held") : p.why) : std::string(f.clouds_fitted ? "fitted" : "-")});
     h += "</table>\n";
   }
+  for (const FitRecord::CloudStatsPanel& p : f.cloud_stats_panels) {
+    h += "<h3>Cloud statistics of " + E(p.name) + " (fit --clouds stats)</h3>\n<div class=\"triptych\">\n";
+    h += "<figure>" + EmbedPng(p.image_reference, "cloud statistics reference " + p.name, "image", counts) +
+         "<figcaption>reference (the sky pixels the statistics see)</figcaption></figure>\n";
+    h += "<figure>" + EmbedPng(p.image_fit, "cloud statistics fit of " + p.name, "image", counts) +
+         "<figcaption>the atmosphere where clear; where cloud, the fitted model's median radiance of the pixel's (sun "
+         "angle, elevation, opacity) bin: the photo's cloud map places the clouds, the lighting is the model's"
+         "</figcaption></figure>\n";
+    h += "<figure>" + EmbedPng(p.image_error, "cloud statistics error of " + p.name, "image", counts) +
+         "<figcaption>(fit &minus; reference) / reference, luminance <span class=\"bar\"></span> &minus;20% &hellip; "
+         "+20%</figcaption></figure>\n</div>\n<table class=\"kv\">\n";
+    h += Row({"whole sky, the atmosphere alone", Percent(p.atmosphere_rel_rmse) + " rel RMSE, " +
+                                                     FormatNumber(p.atmosphere_log_rmse) + " log RMSE"});
+    h += Row({"whole sky, with the cloud statistics", Percent(p.clouds_rel_rmse) + " rel RMSE, " +
+                                                          FormatNumber(p.clouds_log_rmse) + " log RMSE"});
+    h += "</table>\n";
+  }
   if (!f.decisions.empty()) {
     h += "<h3>Decisions (what the fit did not evaluate, and what that saved)</h3>\n<table>\n" +
          Row({"what", "why", "saved (ms)", "basis", "rel RMSE change", "basis"}, true);

@@ -54,6 +54,25 @@ std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, 
   return fs::is_regular_file(p) ? p.string() : std::string();
 }
 
+// The `parameters` object of fit.json's `clouds` or `cloud_stats`: per cloud-lighting
+// field value, initial, unit, held and why.
+void ReadCloudParameters(const JsonAt& parent, std::vector<FitRecord::CloudParameter>* out) {
+  const auto params = parent.Optional("parameters");
+  if (!params) return;
+  params->RequireObject();
+  for (const auto& item : params->value.items()) {
+    const JsonAt q = params->Child(item.key());
+    FitRecord::CloudParameter cp;
+    cp.name = item.key();
+    cp.unit = q.OptionalString("unit").value_or("");
+    cp.value = q.Number("value");
+    cp.initial = q.OptionalNumber("initial").value_or(NAN);
+    if (const auto b = q.Optional("held")) cp.held = b->Boolean();
+    cp.why = q.OptionalString("why").value_or("");
+    out->push_back(std::move(cp));
+  }
+}
+
 ReferenceRecord ReadReference(const fs::path& dir, const JsonAt& r) {
   ReferenceRecord rec;
   rec.name = r.String("name");
@@ -191,19 +210,26 @@ FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
       if (const auto i = px->Optional("initial")) f.cloud_pixels_log_rmse_initial = i->OptionalNumber("log_rmse");
       if (const auto e = px->Optional("final")) f.cloud_pixels_log_rmse_final = e->OptionalNumber("log_rmse");
     }
-    if (const auto params = c->Optional("parameters")) {
-      params->RequireObject();
-      for (const auto& item : params->value.items()) {
-        const std::string name = item.key();
-        const JsonAt q = params->Child(name);
-        FitRecord::CloudParameter cp;
-        cp.name = name;
-        cp.unit = q.OptionalString("unit").value_or("");
-        cp.value = q.Number("value");
-        cp.initial = q.OptionalNumber("initial").value_or(NAN);
-        if (const auto b = q.Optional("held")) cp.held = b->Boolean();
-        cp.why = q.OptionalString("why").value_or("");
-        f.cloud_parameters.push_back(std::move(cp));
+    ReadCloudParameters(*c, &f.cloud_parameters);
+  }
+  if (const auto cs = j.Optional("cloud_stats")) {
+    f.clouds_fitted = true;
+    ReadCloudParameters(*cs, &f.cloud_parameters);
+    if (const auto refs = cs->Optional("references")) {
+      for (size_t i = 0; i < refs->Size(); ++i) {
+        const JsonAt r = refs->Index(i);
+        FitRecord::CloudStatsPanel p;
+        p.name = r.String("name");
+        const auto images = r.Optional("images");
+        p.image_reference = ImagePath(dir, images, "reference", p.name + ".clouds");
+        p.image_fit = ImagePath(dir, images, "fit", p.name + ".clouds");
+        p.image_error = ImagePath(dir, images, "error", p.name + ".clouds");
+        const JsonAt e = r.Child("errors");
+        p.atmosphere_rel_rmse = e.Child("atmosphere_only").Child("whole_sky").Number("rel_rmse");
+        p.atmosphere_log_rmse = e.Child("atmosphere_only").Child("whole_sky").Number("log_rmse");
+        p.clouds_rel_rmse = e.Child("with_cloud_statistics").Child("whole_sky").Number("rel_rmse");
+        p.clouds_log_rmse = e.Child("with_cloud_statistics").Child("whole_sky").Number("log_rmse");
+        f.cloud_stats_panels.push_back(std::move(p));
       }
     }
   }

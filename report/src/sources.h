@@ -67,6 +67,15 @@ struct FitRecord {
   std::string clouds_decision;
   std::optional<double> cloud_pixels_log_rmse_initial, cloud_pixels_log_rmse_final;
   std::vector<CloudParameter> cloud_parameters;
+  // fit.json's `cloud_stats` (fit --clouds stats: photographs, whose cloud shapes are
+  // unknown): its parameters fill cloud_parameters; per reference the panels (reference |
+  // the atmosphere where clear, the fitted bins' median cloud radiance where cloud | error)
+  // and the whole-sky errors without and with the cloud statistics.
+  struct CloudStatsPanel {
+    std::string name, image_reference, image_fit, image_error;
+    double atmosphere_rel_rmse = 0.0, atmosphere_log_rmse = 0.0, clouds_rel_rmse = 0.0, clouds_log_rmse = 0.0;
+  };
+  std::vector<CloudStatsPanel> cloud_stats_panels;
 };
 
 struct ExportRecord {
