@@ -10,12 +10,13 @@
 #
 # Which frame gets which fit (datasets/README.md describes the frames):
 #   sunrise, sunset  clear: the atmosphere, with the hand-drawn masks of trees and buildings
-#   sky              partly cloudy: the atmosphere on the clear pixels (--cloud-mask)
-#   city             overcast, no sun direction: not fitted (the cloud fit will take it)
+#   sky, dawn, city  cloudy: fit --clouds stats — the atmosphere on the clear pixels, the cloud
+#                    lighting from the statistics of the cloud pixels (sun detected for dawn,
+#                    behind its ridge, and for city, through overcast)
 #   forest, night    canopy / night sky: no sky model applies; not fitted
-#   dawn             sun behind the ridge, no known direction: not fitted
 #   probe            no bundled frame shows a gray ball: no probe fit (README: "probe-extract")
-# The sources record no time of day; nominal times (sunrise 06:30, sky 13:00, sunset 19:30)
+# The sources record no time of day; nominal times (dawn 06:00, sunrise 06:30, city 11:00,
+# sky 13:00, sunset 19:30)
 # order the keyframes along the sun's course and are labelled nominal in the log.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -42,24 +43,22 @@ fit_clear() {  # NAME HOURS: the atmosphere on a clear sky, buildings and trees 
   log "fit $1 (clear; mask $MASKS/$1_mask.exr; nominal time $2 h)"
   "$SKYCAL" fit --quiet --reference "$REAL/$1.exr" --mask "$MASKS/$1_mask.exr" --time "$2" --out "$OUT/$1"
 }
-fit_cloudy() {  # NAME HOURS: a cloudy sky
-  log "fit $1 (cloudy; nominal time $2 h)"
-  # >>> CLOUD LIGHTING FIT PLUGS IN HERE (issue 11): fit the clouds' lighting together with the
-  # >>> atmosphere. Until it exists, the atmosphere alone is fitted to the clear pixels between
-  # >>> the clouds (--cloud-mask: cloud probability >= 0.5 left out).
-  "$SKYCAL" fit --quiet --reference "$REAL/$1.exr" --cloud-mask --time "$2" --out "$OUT/$1"
+fit_cloudy() {  # NAME HOURS: a cloudy sky: the atmosphere on its clear pixels, the clouds' lighting by statistics
+  log "fit $1 (cloudy: --clouds stats; nominal time $2 h)"
+  "$SKYCAL" fit --quiet --reference "$REAL/$1.exr" --clouds stats --time "$2" --out "$OUT/$1"
 }
 
+fit_cloudy dawn 6
 fit_clear sunrise 6.5
+fit_cloudy city 11
 fit_cloudy sky 13
 fit_clear sunset 19.5
-log "not fitted: city (overcast, no sun direction: the cloud fit will take it), forest (under a canopy),"
-log "  night (no sky model for a night sky), dawn (sun behind the ridge: no known direction)"
+log "not fitted: forest (under a canopy), night (no sky model for a night sky)"
 log "probe: no bundled frame shows a gray ball (see the README's probe-extract and fit --probe)"
 T_FIT=$(now)
 
-"$SKYCAL" export --preset "$OUT/sunrise/preset.json" --preset "$OUT/sky/preset.json" \
-  --preset "$OUT/sunset/preset.json" --out "$OUT/game"
+"$SKYCAL" export --preset "$OUT/dawn/preset.json" --preset "$OUT/sunrise/preset.json" --preset "$OUT/city/preset.json" \
+  --preset "$OUT/sky/preset.json" --preset "$OUT/sunset/preset.json" --out "$OUT/game"
 T_EXPORT=$(now)
 
 "$SKYCAL" report "$OUT" --out "$OUT/report.html" --title "skycal: the bundled real skies, fitted and exported"
