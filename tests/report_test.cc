@@ -278,5 +278,45 @@ TEST(ReportInput, CloudLightingTableFromFitJson) {
   EXPECT_NE(ErrorOf(s / "fit").find("clouds.parameters.extinction.value"), std::string::npos) << ErrorOf(s / "fit");
 }
 
+// fit --clouds stats (photographs): fit.json's cloud_stats gives the parameter table and,
+// per reference, the panels and the whole-sky errors without and with the statistics.
+TEST(ReportInput, CloudStatisticsOfAPhotoFromFitJson) {
+  ScratchDir s("report_cloud_stats");
+  WriteMinimalFit(s.path() / "fit", {{"name", "sky"}, {"rel_rmse", 0.17}, {"log_rmse", 0.2}});
+  fs::create_directories(s.path() / "fit/fit");
+  // A 1x1 RGB PNG (its bytes written out: the report only embeds them).
+  const std::string png("\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x01\x00\x00\x00\x01\x08\x02"
+                        "\x00\x00\x00\x90\x77\x53\xde\x00\x00\x00\x0c\x49\x44\x41\x54\x78\x9c\x63\x68\x68\x68\x00\x00\x03\x04"
+                        "\x01\x81\x4b\xd3\xd2\x10\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+                        69);
+  for (const char* k : {"reference", "fit", "error"}) WriteText(s / ("fit/fit/sky.clouds." + std::string(k) + ".png"), png);
+  nlohmann::json j = nlohmann::json::parse(testing::Slurp(s / "fit/fit.json"));
+  auto errors = [](double rel, double log) { return nlohmann::json{{"whole_sky", {{"rel_rmse", rel}, {"log_rmse", log}}}}; };
+  j["clouds"] = {{"mode", "stats"}, {"decision", "--clouds stats: the cloud lighting by statistics"}};
+  j["cloud_stats"] = {
+      {"parameters",
+       {{"scattering_albedo", {{"value", 0.987}, {"unit", "1"}, {"initial", 1.0}, {"held", false}}},
+        {"phase_g1", {{"value", 0.5}, {"unit", "1"}, {"initial", 0.5}, {"held", true}, {"why", "not recoverable"}}}}},
+      {"references",
+       {{{"name", "sky"},
+         {"errors", {{"atmosphere_only", errors(0.337, 0.35)}, {"with_cloud_statistics", errors(0.278, 0.298)}}},
+         {"images",
+          {{"reference", "fit/sky.clouds.reference.png"}, {"fit", "fit/sky.clouds.fit.png"}, {"error", "fit/sky.clouds.error.png"}}}}}}};
+  WriteText(s / "fit/fit.json", j.dump());
+  report::WriteReport(s / "fit", {});
+  const std::string html = testing::Slurp(s / "fit/report.html");
+  EXPECT_NE(html.find("<td>scattering_albedo</td><td>0.987</td><td>1</td><td>1</td><td>fitted</td>"), std::string::npos);
+  EXPECT_NE(html.find("<td>phase_g1</td><td>0.5</td><td>0.5</td><td>1</td><td>not recoverable</td>"), std::string::npos);
+  EXPECT_NE(html.find("Cloud statistics of sky (fit --clouds stats)"), std::string::npos);
+  EXPECT_NE(html.find("33.7% rel RMSE, 0.35 log RMSE"), std::string::npos);
+  EXPECT_NE(html.find("27.8% rel RMSE, 0.298 log RMSE"), std::string::npos);
+  EXPECT_NE(html.find("alt=\"cloud statistics fit of sky\""), std::string::npos);
+  // A panel fit.json lists but that is not there: named by its field.
+  fs::remove(s.path() / "fit/fit/sky.clouds.error.png");
+  fs::remove(s.path() / "fit/report.html");
+  const std::string e = ErrorOf(s / "fit");
+  EXPECT_NE(e.find("cloud_stats.references[0].images.error"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace skycal
