@@ -7,6 +7,7 @@
 
 #include "fit_report.h"
 #include "lighting_basis_renderer.h"
+#include "cloud_sun_scale.h"
 #include "photo_sun.h"
 #include "render_clouds.h"
 #include "skycal/capture/cloud_mask.h"
@@ -44,6 +45,10 @@ bool FitCloudStatsOptions::IsValid(std::string* why) const {
   }
   if (probability != "fitted" && probability != "initial") {
     *why = "--cloud-stats-probability '" + probability + "' (expected fitted or initial)";
+    return false;
+  }
+  if (sun_scale != "fit" && sun_scale != "off") {
+    *why = "--cloud-stats-sun-scale '" + sun_scale + "' (expected fit or off)";
     return false;
   }
   if (max_iterations < 0 || max_iterations > 200) {
@@ -161,8 +166,14 @@ nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset,
           {"disc_pixels", ps.disc_pixels},
           {"peak_over_background", ps.peak / std::max(ps.background[1], 1e-30)},
           {"clipped", ps.clipped()},
+          {"direct_to_diffuse", ps.direct_to_diffuse()},
+          {"clean_disc", ps.clean_disc()},
+          {"saturated", ps.saturated()},
           {"note", "the photo's disc + blur within 3 deg above the median of a 4-6 deg ring, divided by the exposure; "
-                   "clipped: more than 2 disc pixels within 0.1% of the peak (a lower bound then)"}};
+                   "clipped: more than 2 disc pixels within 0.1% of the peak at the frame's own resolution; "
+                   "direct_to_diffuse: the disc's light on a horizontal surface over the sky's outside it (green); "
+                   "saturated (the disc a lower bound): clipped, or a clean disc (peak >= 100x its ring) with "
+                   "direct_to_diffuse < 0.5, which an unveiled sun does not give"}};
 }
 
 }  // namespace
@@ -345,19 +356,91 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   for (const PhotoData& d : data) refs.push_back(d.stats_ref);
   fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
   for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
-  Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters (" +
-                 std::to_string(o.renders) + " renders of " + std::to_string(o.maps) + " weather maps per evaluation, " +
-                 std::to_string(o.width) + "x" + std::to_string(o.width / 2) + ", at most " +
-                 std::to_string(o.max_iterations) + " iterations)");
+  const bool fit_sun = o.sun_scale == "fit";
+  if (fit_sun) {  // the albedo held physical; the sun's scale takes its place (below)
+    so.fitted.erase(std::remove(so.fitted.begin(), so.fitted.end(), "scattering_albedo"), so.fitted.end());
+    scene.initial.scattering_albedo = kPhysicalCloudAlbedo;
+  }
+  Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters" +
+                 (fit_sun ? " and the sun's scale" : "") + " (" + std::to_string(o.renders) + " renders of " +
+                 std::to_string(o.maps) + " weather maps per evaluation, " + std::to_string(o.width) + "x" +
+                 std::to_string(o.width / 2) + ", at most " + std::to_string(o.max_iterations) + " iterations)");
   // When only the linear lighting (albedo, ambient) is fitted, each draw of shapes is
-  // marched three times and every evaluation after that is a weighted sum of those
-  // (lighting_basis_renderer.h); otherwise every evaluation marches.
+  // marched three times (four with a sun scale) and every evaluation after that is a weighted
+  // sum of those (lighting_basis_renderer.h); otherwise every evaluation marches.
   const bool linear = std::all_of(so.fitted.begin(), so.fitted.end(), [](const std::string& n) {
     return n == "scattering_albedo" || n == "ambient_strength";
   });
+  if (fit_sun && !linear) throw Error("--cloud-stats-sun-scale fit needs the linear lighting alone (albedo, ambient)");
   LightingBasisCloudRenderer basis(*renderer, static_cast<int>(refs.size()) * o.renders + 1);
   clouds::CloudRenderer& fit_renderer = linear ? static_cast<clouds::CloudRenderer&>(basis) : *renderer;
-  const fit::CloudStatsResult res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+  fit::CloudStatsResult res;
+  nlohmann::json sun_scale_json;
+  if (!fit_sun) {
+    res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+  } else {
+    // The profile over s: at each s the ambient fitted from the best ambient so far. The disc
+    // bounds s from below where every photo's disc is a lower bound (saturated).
+    const bool saturated =
+        o.sun == "photo" && std::all_of(data.begin(), data.end(), [](const PhotoData& d) { return d.sun_check["saturated"].get<bool>(); });
+    SunScaleSearchOptions ss;
+    ss.lower = saturated ? 1.0 : 0.1;
+    ss.upper = std::min(sky.preset.sun_illuminance_lux, 2.0e5) / cloud_preset.sun_illuminance_lux;
+    if (!(ss.upper > ss.lower)) ss.upper = ss.lower * 1.5;
+    std::vector<double> iterations;
+    const auto t0 = std::chrono::steady_clock::now();
+    double best_cost = INFINITY;
+    const SunScaleSearch found = MinimizeOverSunScale(
+        [&](double sc) {
+          basis.set_sun_scale(sc);
+          fit::CloudStatsScene at = scene;
+          if (best_cost < INFINITY) at.initial.ambient_strength = res.params.ambient_strength;
+          fit::CloudStatsResult r = fit::FitCloudStats(refs, at, fit_renderer, so);
+          iterations.push_back(r.iterations);
+          Log("fit", "clouds stats: sun scale " + FormatNumber(sc) + ": ambient " + FormatNumber(r.params.ambient_strength) +
+                         ", cost " + FormatNumber(r.final_cost) + " (" + std::to_string(r.iterations) + " iterations)");
+          const double cost = r.final_cost;
+          if (cost < best_cost) {
+            best_cost = cost;
+            res = std::move(r);
+          }
+          return cost;
+        },
+        ss);
+    const double search_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    basis.set_sun_scale(found.scale);
+    res.time_s = search_s;
+    const double measured = cloud_preset.sun_illuminance_lux;
+    cloud_preset.sun_illuminance_lux = measured * found.scale;
+    nlohmann::json profile = nlohmann::json::array();
+    for (size_t i = 0; i < found.scales.size(); ++i)
+      profile.push_back({{"scale", found.scales[i]}, {"cost", found.costs[i]}, {"iterations", iterations[i]}});
+    nlohmann::json model_sun = nlohmann::json::array();
+    for (const PhotoData& d : data) model_sun.push_back(d.sun_check["model_lux"][1]);
+    sun_scale_json = {
+        {"measured_lux", measured},
+        {"scale", found.scale},
+        {"fitted_lux", cloud_preset.sun_illuminance_lux},
+        {"sky_fit_sun_lux_green", model_sun},
+        {"lower_bound", ss.lower},
+        {"upper_bound", ss.upper},
+        {"at_lower_bound", found.at_lower},
+        {"at_upper_bound", found.at_upper},
+        {"scattering_albedo_held", kPhysicalCloudAlbedo},
+        {"evaluations", found.scales.size()},
+        {"time_s", search_s},
+        {"profile", profile},
+        {"why",
+         std::string("the albedo of cloud water droplets is ~1 in the visible (Hansen & Travis 1974): held at ") +
+             FormatNumber(kPhysicalCloudAlbedo) + "; the statistics then fit the clouds' direct light as a scale on the " +
+             (o.sun == "photo" ? "photo's measured sun" : "fitted preset's sun") + " (the ambient fitted at each scale, "
+             "the cost's minimum over the scale found by a grid over ln s and golden sections)" +
+             (saturated ? "; the disc is saturated (sun_check), a lower bound: s >= 1" : "; s >= 0.1") +
+             "; s <= the sky fit's own sun over the measured one (upper_bound)"}};
+    Log("fit", "clouds stats: the clouds' sun " + FormatNumber(found.scale) + " x the measured " + FormatNumber(measured) +
+                   " lux = " + FormatNumber(cloud_preset.sun_illuminance_lux) + " lux (" +
+                   std::to_string(found.scales.size()) + " statistics fits, " + FormatNumber(search_s) + " s)");
+  }
   const long long marches = linear ? basis.marches() : res.renders;
   Log("fit", "clouds stats: cost " + FormatNumber(res.initial_cost) + " -> " + FormatNumber(res.final_cost) + ", " +
                  std::to_string(res.renders) + " evaluations' renders (" + std::to_string(marches) + " marched), " +
@@ -368,6 +451,9 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     params[p.name] = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
     if (p.held) params[p.name]["why"] = p.why_held;
   }
+  if (fit_sun)
+    params["scattering_albedo"]["why"] = "water droplets' physical single-scattering albedo in the visible (Hansen & Travis 1974); "
+                                         "the sun's scale is fitted instead (sun_scale)";
   nlohmann::json per_ref = nlohmann::json::array();
   const int nq = static_cast<int>(so.quantiles.size());
   const int mid = nq / 2;  // the median of the default {0.25, 0.5, 0.75}
@@ -466,6 +552,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
           {"cloud_sun_illuminance_lux", cloud_preset.sun_illuminance_lux},
           {"cloud_sun_tint_rgb", cloud_preset.sun_tint_rgb},
           {"direct_light_lux_at_albedo_1", res.params.scattering_albedo * cloud_preset.sun_illuminance_lux},
+          {"sun_scale", fit_sun ? sun_scale_json : nlohmann::json(nullptr)},
           {"render_size", {o.width, o.width / 2}},
           {"weather_maps", o.maps},
           {"renders_per_evaluation", o.renders},

@@ -40,6 +40,14 @@ struct FitCloudStatsOptions {
   // minimum) when the sky fit matches its clear pixels within 50% rel RMSE (not an overcast
   // frame's); "initial": --cloud-mask's probability (the bundled preset's clear sky) as is.
   std::string probability = "fitted";
+  // --cloud-stats-sun-scale: "fit": the albedo held at water droplets' physical value
+  // (kPhysicalCloudAlbedo) and a scale s on the sun above fitted with the ambient (in this
+  // objective the albedo and a sun scale are one degree of freedom: L = C + a s D + a k A);
+  // s >= 1 when the photo's disc is a lower bound (PhotoSun::saturated), else >= 0.1; s <= the
+  // sky fit's own sun over the measured one (the clouds get no more than the sun a clear
+  // atmosphere of that brightness has). "off": s = 1 and the albedo fitted (the behaviour
+  // before; it sat at its bound 1 on `sky` and `city`).
+  std::string sun_scale = "fit";
   // What a photograph's statistics can fit: the brightness of cloud against the clear sky
   // (scattering_albedo: the exposure is fixed by the clear pixels, so it is no longer traded
   // against it) and the ambient. Held at the bundled default_cloudy's values: the phase lobe
@@ -47,9 +55,16 @@ struct FitCloudStatsOptions {
   // even with the model pooled over 4 weather maps: bench/results/cloud_stats_seed_pairs_ensemble.md)
   // and extinction (the coverage match sets the opacity with it; fitted on dawn it ran to 0:
   // clouds that vanish leave their bins empty, and an empty bin adds no residual).
+  // With sun_scale "fit" the albedo leaves this list (held physical).
   std::vector<std::string> fitted = {"scattering_albedo", "ambient_strength"};
   bool IsValid(std::string* why) const;
 };
+
+// Single-scattering albedo of cloud water droplets in the visible: absorption by liquid water
+// at 0.4-0.7 um is so weak (imaginary refractive index ~1e-9) that droplets of ~10 um scatter
+// all but ~1e-5 of what they extinguish (Hansen & Travis 1974, "Light scattering in planetary
+// atmospheres"; Bohren & Huffman, "Absorption and Scattering of Light by Small Particles").
+constexpr double kPhysicalCloudAlbedo = 0.9999;
 
 // The sky-pixel classes of the automatic segmentation and cloud probability, per reference
 // at its full size: probability as ApplyCloudMask used it.

@@ -297,7 +297,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
                      "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
                      "             [--clouds auto|on|off|stats] [--cloud-preset P.json] [--cloud-time S]\n"
                      "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]\n"
-                     "             [--cloud-stats-sun photo|model] [--cloud-stats-probability fitted|initial]");
+                     "             [--cloud-stats-sun photo|model] [--cloud-stats-probability fitted|initial]\n"
+                     "             [--cloud-stats-sun-scale fit|off]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
@@ -360,6 +361,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Text("--cloud-stats-probability", &c.cloud_stats.probability, "fitted|initial",
           "--clouds stats: the cloud probability's clear-sky expectation: also the sky fit's own\n"
           "render (cloud where both say so; default fitted) or --cloud-mask's alone (initial)");
+  cl.Text("--cloud-stats-sun-scale", &c.cloud_stats.sun_scale, "fit|off",
+          "--clouds stats: fit: albedo held at water's physical 0.9999, a scale on the sun (>= 1 where\n"
+          "the disc is saturated) fitted with the ambient (default); off: the sun as measured, albedo fitted");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;
