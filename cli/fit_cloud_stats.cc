@@ -178,6 +178,71 @@ nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset,
 
 }  // namespace
 
+nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool user_mask, std::vector<fit::Reference>* refs,
+                                          std::vector<std::vector<float>>* probability, const fit::FitResult& sky,
+                                          const std::function<void()>& refit) {
+  nlohmann::json j = {{"threshold_released_fraction", kSkyRefitReleasedFraction}, {"refitted", false}};
+  if (o.probability != "fitted") {
+    j["why"] = "--cloud-stats-probability initial: the first mask stays";
+    return j;
+  }
+  if (user_mask) {
+    j["why"] = "a --mask is given: its pixels and the cloud mask's are both user-masked, none released";
+    return j;
+  }
+  bool any = false;
+  nlohmann::json per_ref = nlohmann::json::array();
+  for (size_t r = 0; r < refs->size(); ++r) {
+    fit::Reference& ref = (*refs)[r];
+    std::vector<float>& p = (*probability)[r];
+    const double rel = sky.references[r].errors.rel_rmse;
+    nlohmann::json rj = {{"name", ref.name}, {"sky_fit_clear_rel_rmse", rel}};
+    if (!(rel <= kMaxSkyFitRelForProbability)) {
+      rj["released_pixels"] = 0;
+      rj["why"] = "the sky fit misses its clear pixels by more than 50%: no clear-sky expectation";
+      per_ref.push_back(rj);
+      continue;
+    }
+    const capture::CloudMask against_fit =
+        capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
+    const std::vector<double> angle_edges = {0.0, 20.0, 45.0, 90.0, 180.0};
+    rj["sun_angle_edges_deg"] = angle_edges;
+    rj["initial_cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(p, ref, angle_edges);
+    long long released = 0;
+    const long long sky_before = ref.counts.sky + ref.counts.user_masked;
+    for (size_t i = 0; i < p.size(); ++i) {
+      const float q = std::min(p[i], against_fit.probability[i]);
+      if (ref.pixel_class[i] == fit::PixelClass::kUserMasked && p[i] >= 0.5f && q < 0.5f) {
+        ref.pixel_class[i] = fit::PixelClass::kSky;
+        ++released;
+      }
+      p[i] = q;
+    }
+    ref.counts.sky += released;
+    ref.counts.user_masked -= released;
+    const double fraction = sky_before > 0 ? static_cast<double>(released) / sky_before : 0.0;
+    rj["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(p, ref, angle_edges);
+    rj["released_pixels"] = released;
+    rj["released_fraction"] = fraction;
+    any = any || fraction > kSkyRefitReleasedFraction;
+    per_ref.push_back(rj);
+  }
+  j["references"] = per_ref;
+  if (!any) {
+    j["why"] = "no reference's mask changed by more than the threshold";
+    return j;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  refit();
+  j["refitted"] = true;
+  j["time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["why"] = "the cloud mask against the sky fit's own render released more than the threshold of a reference's sky "
+             "pixels: the atmosphere fitted once more on them (from the first fit's preset)";
+  Log("fit", "clouds stats: the refined cloud mask released pixels to the sky fit: refitted the atmosphere in " +
+                 FormatNumber(j["time_s"].get<double>()) + " s");
+  return j;
+}
+
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<CloudStatsPhoto>& photos,
                                      const fit::FitResult& sky, const fs::path& fit_dir) {
   std::string why;
@@ -217,9 +282,10 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     // A sky fit that misses its own clear pixels by more than half (an overcast frame: `city`,
     // 536% on the few it had) is no clear-sky expectation: the initial probability stays.
     const double sky_fit_rel = sky.references[r].errors.rel_rmse;
-    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability;
+    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability && !photos[r].refined;
     d.probability_json["sky_fit_clear_rel_rmse"] = sky_fit_rel;
-    d.probability_json["refined"] = refine;
+    d.probability_json["refined"] = refine || photos[r].refined;
+    if (photos[r].refined) d.probability_json["refined_against"] = "the first sky fit (before the sky refit: sky_refit)";
     if (refine) {
       const capture::CloudMask refit =
           capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
