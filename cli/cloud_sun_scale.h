@@ -13,8 +13,8 @@ namespace skycal::cli {
 struct SunScaleSearchOptions {
   double lower = 0.1, upper = 30.0;  // bounds of s (lower 1 where the disc is a lower bound)
   int grid_points = 5;               // over ln s, bounds included (>= 3)
-  double tolerance_ln = 0.02;        // stop when the next vertex is this close (ln s) to a known point
-  int max_evaluations = 12;
+  double tolerance_ln = 0.05;        // stop when the next vertex is this close (ln s) to a known point
+  int max_evaluations = 10;
   bool IsValid(std::string* why) const;
 };
 
