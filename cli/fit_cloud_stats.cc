@@ -148,6 +148,15 @@ nlohmann::json CloudPixelsBySunAngle(const std::vector<float>& p, const fit::Ref
   return n;
 }
 
+// The cloud probability against `rendered` (a sky fit's render) as well: a pixel is cloud
+// where both clear-sky expectations say so (the minimum).
+std::vector<float> AlsoAgainst(const fit::Reference& ref, const ImageRGB& rendered, const std::vector<float>& p) {
+  const capture::CloudMask m = capture::EstimateCloudProbability(ref.radiance, rendered, ref.sun_dir, {});
+  std::vector<float> q(p.size());
+  for (size_t i = 0; i < p.size(); ++i) q[i] = std::min(p[i], m.probability[i]);
+  return q;
+}
+
 // The photo's sun against the model's, in model units (the photo divided by the sky fit's
 // exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
 // without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
@@ -203,15 +212,14 @@ nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool us
       per_ref.push_back(rj);
       continue;
     }
-    const capture::CloudMask against_fit =
-        capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
+    const std::vector<float> refined = AlsoAgainst(ref, sky.references[r].rendered, p);
     const std::vector<double> angle_edges = {0.0, 20.0, 45.0, 90.0, 180.0};
     rj["sun_angle_edges_deg"] = angle_edges;
     rj["initial_cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(p, ref, angle_edges);
     long long released = 0;
     const long long sky_before = ref.counts.sky + ref.counts.user_masked;
     for (size_t i = 0; i < p.size(); ++i) {
-      const float q = std::min(p[i], against_fit.probability[i]);
+      const float q = refined[i];
       if (ref.pixel_class[i] == fit::PixelClass::kUserMasked && p[i] >= 0.5f && q < 0.5f) {
         ref.pixel_class[i] = fit::PixelClass::kSky;
         ++released;
@@ -287,9 +295,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     d.probability_json["refined"] = refine || photos[r].refined;
     if (photos[r].refined) d.probability_json["refined_against"] = "the first sky fit (before the sky refit: sky_refit)";
     if (refine) {
-      const capture::CloudMask refit =
-          capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
-      for (size_t i = 0; i < d.probability.size(); ++i) d.probability[i] = std::min(d.probability[i], refit.probability[i]);
+      d.probability = AlsoAgainst(ref, sky.references[r].rendered, d.probability);
       d.probability_json["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(d.probability, ref, angle_edges);
     }
     d.whole = ref;
