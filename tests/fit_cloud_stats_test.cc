@@ -5,6 +5,7 @@
 // bench/results/cloud_photos.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -64,6 +65,13 @@ TEST(FitCloudStats, CommandLine) {
                                    "--cloud-stats-probability", "initial", "--out", "d"});
   EXPECT_EQ(c2.cloud_stats.sun, "model");
   EXPECT_EQ(c2.cloud_stats.probability, "initial");
+  EXPECT_EQ(c.cloud_stats.sun_scale, "fit");
+  EXPECT_EQ(Parse({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-sun-scale", "off", "--out", "d"}).cloud_stats.sun_scale,
+            "off");
+  o = FitCloudStatsOptions{};
+  o.sun_scale = "free";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-sun-scale 'free'"), std::string::npos) << why;
   o = FitCloudStatsOptions{};
   o.sun = "disc";
   EXPECT_FALSE(o.IsValid(&why));
@@ -173,6 +181,54 @@ TEST(FitCloudStats, WiringAtASmallSize) {
     EXPECT_NE(std::string(e.what()).find("synthetic.exr"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("--cloud-stats-width 48"), std::string::npos) << e.what();
   }
+}
+
+// The sky refit on the refined mask (RefineCloudMaskAndRefitSky): against a "sky fit" that is
+// the photo itself no pixel is cloud, so every cloud pixel of the first mask is released to the
+// sky fit and the atmosphere refitted once; controls: a sky fit missing its clear pixels by 60%,
+// a user --mask and --cloud-stats-probability initial release nothing and do not refit.
+TEST(FitCloudStats, RefinedMaskReleasesPixelsAndRefitsTheSky) {
+  SyntheticPhoto p;
+  long long cloud = 0;
+  for (auto c : p.ref.pixel_class) cloud += c == fit::PixelClass::kUserMasked;
+  ASSERT_GT(cloud, 20);
+  p.ref.counts.user_masked = cloud;
+  auto run = [&](FitCloudStatsOptions o, bool user_mask, double rel, int* refits, fit::Reference* ref,
+                 std::vector<float>* prob) {
+    *ref = p.ref;
+    *prob = p.probability;
+    std::vector<fit::Reference> refs = {*ref};
+    std::vector<std::vector<float>> probs = {*prob};
+    fit::FitResult sky = p.sky;
+    sky.references[0].errors.rel_rmse = rel;
+    const nlohmann::json j = RefineCloudMaskAndRefitSky(o, user_mask, &refs, &probs, sky, [&] { ++*refits; });
+    *ref = refs[0];
+    *prob = probs[0];
+    return j;
+  };
+  int refits = 0;
+  fit::Reference ref;
+  std::vector<float> prob;
+  nlohmann::json j = run({}, false, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 1);
+  EXPECT_EQ(j["refitted"], true);
+  EXPECT_EQ(j["references"][0]["released_pixels"].get<long long>(), cloud);
+  EXPECT_EQ(ref.counts.user_masked, 0);
+  EXPECT_EQ(std::count(ref.pixel_class.begin(), ref.pixel_class.end(), fit::PixelClass::kUserMasked), 0);
+  EXPECT_LT(*std::max_element(prob.begin(), prob.end()), 0.5f);
+  // Controls.
+  refits = 0;
+  j = run({}, false, 0.6, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  EXPECT_EQ(j["references"][0]["released_pixels"].get<long long>(), 0);
+  EXPECT_EQ(ref.counts.user_masked, cloud);
+  j = run({}, true, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  FitCloudStatsOptions initial;
+  initial.probability = "initial";
+  j = run(initial, false, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  EXPECT_EQ(j["refitted"], false);
 }
 
 // The photo's sun (cli/photo_sun.h): a disc of known illuminance spread over a few pixels
