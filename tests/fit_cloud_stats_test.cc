@@ -188,11 +188,37 @@ TEST(FitCloudStats, WiringAtASmallSize) {
 // sky fit and the atmosphere refitted once; controls: a sky fit missing its clear pixels by 60%,
 // a user --mask and --cloud-stats-probability initial release nothing and do not refit.
 TEST(FitCloudStats, RefinedMaskReleasesPixelsAndRefitsTheSky) {
-  SyntheticPhoto p;
+  // A 64x32 blue sky gradient (no march needed), a band the first mask called cloud.
+  struct {
+    fit::Reference ref;
+    fit::FitResult sky;
+    std::vector<float> probability;
+  } p;
+  p.ref.path = p.ref.name = "gradient";
+  p.ref.radiance = ImageRGB(64, 32);
+  p.ref.sun_dir = {0.0, std::sin(30.0 * M_PI / 180.0), std::cos(30.0 * M_PI / 180.0)};
+  p.ref.pixel_class.assign(64 * 32, fit::PixelClass::kSky);
+  p.probability.assign(64 * 32, 0.0f);
   long long cloud = 0;
-  for (auto c : p.ref.pixel_class) cloud += c == fit::PixelClass::kUserMasked;
-  ASSERT_GT(cloud, 20);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const size_t i = static_cast<size_t>(y) * 64 + x;
+      const float b = static_cast<float>(0.05 + 0.01 * y);
+      p.ref.radiance.at(x, y, 0) = 0.3f * b;
+      p.ref.radiance.at(x, y, 1) = 0.6f * b;
+      p.ref.radiance.at(x, y, 2) = b;
+      if (latlong::Latitude(y, 32) <= 0.0) {
+        p.ref.pixel_class[i] = fit::PixelClass::kBelowHorizon;
+      } else if (y >= 8 && y < 12) {
+        p.ref.pixel_class[i] = fit::PixelClass::kUserMasked;
+        p.probability[i] = 0.8f;
+        ++cloud;
+      }
+    }
   p.ref.counts.user_masked = cloud;
+  fit::ReferenceFit rf;
+  rf.rendered = p.ref.radiance;  // the sky fit matches the photo: against it nothing is cloud
+  p.sky.references.push_back(rf);
   auto run = [&](FitCloudStatsOptions o, bool user_mask, double rel, int* refits, fit::Reference* ref,
                  std::vector<float>* prob) {
     *ref = p.ref;
