@@ -7,6 +7,7 @@
 
 #include "fit_report.h"
 #include "lighting_basis_renderer.h"
+#include "cloud_sun_scale.h"
 #include "photo_sun.h"
 #include "render_clouds.h"
 #include "skycal/capture/cloud_mask.h"
@@ -44,6 +45,10 @@ bool FitCloudStatsOptions::IsValid(std::string* why) const {
   }
   if (probability != "fitted" && probability != "initial") {
     *why = "--cloud-stats-probability '" + probability + "' (expected fitted or initial)";
+    return false;
+  }
+  if (sun_scale != "fit" && sun_scale != "off") {
+    *why = "--cloud-stats-sun-scale '" + sun_scale + "' (expected fit or off)";
     return false;
   }
   if (max_iterations < 0 || max_iterations > 200) {
@@ -143,6 +148,15 @@ nlohmann::json CloudPixelsBySunAngle(const std::vector<float>& p, const fit::Ref
   return n;
 }
 
+// The cloud probability against `rendered` (a sky fit's render) as well: a pixel is cloud
+// where both clear-sky expectations say so (the minimum).
+std::vector<float> AlsoAgainst(const fit::Reference& ref, const ImageRGB& rendered, const std::vector<float>& p) {
+  const capture::CloudMask m = capture::EstimateCloudProbability(ref.radiance, rendered, ref.sun_dir, {});
+  std::vector<float> q(p.size());
+  for (size_t i = 0; i < p.size(); ++i) q[i] = std::min(p[i], m.probability[i]);
+  return q;
+}
+
 // The photo's sun against the model's, in model units (the photo divided by the sky fit's
 // exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
 // without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
@@ -161,11 +175,81 @@ nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset,
           {"disc_pixels", ps.disc_pixels},
           {"peak_over_background", ps.peak / std::max(ps.background[1], 1e-30)},
           {"clipped", ps.clipped()},
+          {"direct_to_diffuse", ps.direct_to_diffuse()},
+          {"clean_disc", ps.clean_disc()},
+          {"saturated", ps.saturated()},
           {"note", "the photo's disc + blur within 3 deg above the median of a 4-6 deg ring, divided by the exposure; "
-                   "clipped: more than 2 disc pixels within 0.1% of the peak (a lower bound then)"}};
+                   "clipped: more than 2 disc pixels within 0.1% of the peak at the frame's own resolution; "
+                   "direct_to_diffuse: the disc's light on a horizontal surface over the sky's outside it (green); "
+                   "saturated (the disc a lower bound): clipped, or a clean disc (peak >= 100x its ring) with "
+                   "direct_to_diffuse < 0.5, which an unveiled sun does not give"}};
 }
 
 }  // namespace
+
+nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool user_mask, std::vector<fit::Reference>* refs,
+                                          std::vector<std::vector<float>>* probability, const fit::FitResult& sky,
+                                          const std::function<void()>& refit) {
+  nlohmann::json j = {{"threshold_released_fraction", kSkyRefitReleasedFraction}, {"refitted", false}};
+  if (o.probability != "fitted") {
+    j["why"] = "--cloud-stats-probability initial: the first mask stays";
+    return j;
+  }
+  if (user_mask) {
+    j["why"] = "a --mask is given: its pixels and the cloud mask's are both user-masked, none released";
+    return j;
+  }
+  bool any = false;
+  nlohmann::json per_ref = nlohmann::json::array();
+  for (size_t r = 0; r < refs->size(); ++r) {
+    fit::Reference& ref = (*refs)[r];
+    std::vector<float>& p = (*probability)[r];
+    const double rel = sky.references[r].errors.rel_rmse;
+    nlohmann::json rj = {{"name", ref.name}, {"sky_fit_clear_rel_rmse", rel}};
+    if (!(rel <= kMaxSkyFitRelForProbability)) {
+      rj["released_pixels"] = 0;
+      rj["why"] = "the sky fit misses its clear pixels by more than 50%: no clear-sky expectation";
+      per_ref.push_back(rj);
+      continue;
+    }
+    const std::vector<float> refined = AlsoAgainst(ref, sky.references[r].rendered, p);
+    const std::vector<double> angle_edges = {0.0, 20.0, 45.0, 90.0, 180.0};
+    rj["sun_angle_edges_deg"] = angle_edges;
+    rj["initial_cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(p, ref, angle_edges);
+    long long released = 0;
+    const long long sky_before = ref.counts.sky + ref.counts.user_masked;
+    for (size_t i = 0; i < p.size(); ++i) {
+      const float q = refined[i];
+      if (ref.pixel_class[i] == fit::PixelClass::kUserMasked && p[i] >= 0.5f && q < 0.5f) {
+        ref.pixel_class[i] = fit::PixelClass::kSky;
+        ++released;
+      }
+      p[i] = q;
+    }
+    ref.counts.sky += released;
+    ref.counts.user_masked -= released;
+    const double fraction = sky_before > 0 ? static_cast<double>(released) / sky_before : 0.0;
+    rj["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(p, ref, angle_edges);
+    rj["released_pixels"] = released;
+    rj["released_fraction"] = fraction;
+    any = any || fraction > kSkyRefitReleasedFraction;
+    per_ref.push_back(rj);
+  }
+  j["references"] = per_ref;
+  if (!any) {
+    j["why"] = "no reference's mask changed by more than the threshold";
+    return j;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  refit();
+  j["refitted"] = true;
+  j["time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  j["why"] = "the cloud mask against the sky fit's own render released more than the threshold of a reference's sky "
+             "pixels: the atmosphere fitted once more on them (from the first fit's preset)";
+  Log("fit", "clouds stats: the refined cloud mask released pixels to the sky fit: refitted the atmosphere in " +
+                 FormatNumber(j["time_s"].get<double>()) + " s");
+  return j;
+}
 
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<CloudStatsPhoto>& photos,
                                      const fit::FitResult& sky, const fs::path& fit_dir, CloudStatsPresetUpdate* update) {
@@ -206,13 +290,12 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     // A sky fit that misses its own clear pixels by more than half (an overcast frame: `city`,
     // 536% on the few it had) is no clear-sky expectation: the initial probability stays.
     const double sky_fit_rel = sky.references[r].errors.rel_rmse;
-    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability;
+    const bool refine = o.probability == "fitted" && sky_fit_rel <= kMaxSkyFitRelForProbability && !photos[r].refined;
     d.probability_json["sky_fit_clear_rel_rmse"] = sky_fit_rel;
-    d.probability_json["refined"] = refine;
+    d.probability_json["refined"] = refine || photos[r].refined;
+    if (photos[r].refined) d.probability_json["refined_against"] = "the first sky fit (before the sky refit: sky_refit)";
     if (refine) {
-      const capture::CloudMask refit =
-          capture::EstimateCloudProbability(ref.radiance, sky.references[r].rendered, ref.sun_dir, {});
-      for (size_t i = 0; i < d.probability.size(); ++i) d.probability[i] = std::min(d.probability[i], refit.probability[i]);
+      d.probability = AlsoAgainst(ref, sky.references[r].rendered, d.probability);
       d.probability_json["cloud_pixels_by_sun_angle"] = CloudPixelsBySunAngle(d.probability, ref, angle_edges);
     }
     d.whole = ref;
@@ -345,19 +428,91 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   for (const PhotoData& d : data) refs.push_back(d.stats_ref);
   fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
   for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
-  Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters (" +
-                 std::to_string(o.renders) + " renders of " + std::to_string(o.maps) + " weather maps per evaluation, " +
-                 std::to_string(o.width) + "x" + std::to_string(o.width / 2) + ", at most " +
-                 std::to_string(o.max_iterations) + " iterations)");
+  const bool fit_sun = o.sun_scale == "fit";
+  if (fit_sun) {  // the albedo held physical; the sun's scale takes its place (below)
+    so.fitted.erase(std::remove(so.fitted.begin(), so.fitted.end(), "scattering_albedo"), so.fitted.end());
+    scene.initial.scattering_albedo = kPhysicalCloudAlbedo;
+  }
+  Log("fit", "clouds stats: fitting " + std::to_string(so.fitted.size()) + " lighting parameters" +
+                 (fit_sun ? " and the sun's scale" : "") + " (" + std::to_string(o.renders) + " renders of " +
+                 std::to_string(o.maps) + " weather maps per evaluation, " + std::to_string(o.width) + "x" +
+                 std::to_string(o.width / 2) + ", at most " + std::to_string(o.max_iterations) + " iterations)");
   // When only the linear lighting (albedo, ambient) is fitted, each draw of shapes is
-  // marched three times and every evaluation after that is a weighted sum of those
-  // (lighting_basis_renderer.h); otherwise every evaluation marches.
+  // marched three times (four with a sun scale) and every evaluation after that is a weighted
+  // sum of those (lighting_basis_renderer.h); otherwise every evaluation marches.
   const bool linear = std::all_of(so.fitted.begin(), so.fitted.end(), [](const std::string& n) {
     return n == "scattering_albedo" || n == "ambient_strength";
   });
+  if (fit_sun && !linear) throw Error("--cloud-stats-sun-scale fit needs the linear lighting alone (albedo, ambient)");
   LightingBasisCloudRenderer basis(*renderer, static_cast<int>(refs.size()) * o.renders + 1);
   clouds::CloudRenderer& fit_renderer = linear ? static_cast<clouds::CloudRenderer&>(basis) : *renderer;
-  const fit::CloudStatsResult res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+  fit::CloudStatsResult res;
+  nlohmann::json sun_scale_json;
+  if (!fit_sun) {
+    res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+  } else {
+    // The profile over s: at each s the ambient fitted from the best ambient so far. The disc
+    // bounds s from below where every photo's disc is a lower bound (saturated).
+    const bool saturated =
+        o.sun == "photo" && std::all_of(data.begin(), data.end(), [](const PhotoData& d) { return d.sun_check["saturated"].get<bool>(); });
+    SunScaleSearchOptions ss;
+    ss.lower = saturated ? 1.0 : 0.1;
+    ss.upper = std::min(sky.preset.sun_illuminance_lux, 2.0e5) / cloud_preset.sun_illuminance_lux;
+    if (!(ss.upper > ss.lower)) ss.upper = ss.lower * 1.5;
+    std::vector<double> iterations;
+    const auto t0 = std::chrono::steady_clock::now();
+    double best_cost = INFINITY;
+    const SunScaleSearch found = MinimizeOverSunScale(
+        [&](double sc) {
+          basis.set_sun_scale(sc);
+          fit::CloudStatsScene at = scene;
+          if (best_cost < INFINITY) at.initial.ambient_strength = res.params.ambient_strength;
+          fit::CloudStatsResult r = fit::FitCloudStats(refs, at, fit_renderer, so);
+          iterations.push_back(r.iterations);
+          Log("fit", "clouds stats: sun scale " + FormatNumber(sc) + ": ambient " + FormatNumber(r.params.ambient_strength) +
+                         ", cost " + FormatNumber(r.final_cost) + " (" + std::to_string(r.iterations) + " iterations)");
+          const double cost = r.final_cost;
+          if (cost < best_cost) {
+            best_cost = cost;
+            res = std::move(r);
+          }
+          return cost;
+        },
+        ss);
+    const double search_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    basis.set_sun_scale(found.scale);
+    res.time_s = search_s;
+    const double measured = cloud_preset.sun_illuminance_lux;
+    cloud_preset.sun_illuminance_lux = measured * found.scale;
+    nlohmann::json profile = nlohmann::json::array();
+    for (size_t i = 0; i < found.scales.size(); ++i)
+      profile.push_back({{"scale", found.scales[i]}, {"cost", found.costs[i]}, {"iterations", iterations[i]}});
+    nlohmann::json model_sun = nlohmann::json::array();
+    for (const PhotoData& d : data) model_sun.push_back(d.sun_check["model_lux"][1]);
+    sun_scale_json = {
+        {"measured_lux", measured},
+        {"scale", found.scale},
+        {"fitted_lux", cloud_preset.sun_illuminance_lux},
+        {"sky_fit_sun_lux_green", model_sun},
+        {"lower_bound", ss.lower},
+        {"upper_bound", ss.upper},
+        {"at_lower_bound", found.at_lower},
+        {"at_upper_bound", found.at_upper},
+        {"scattering_albedo_held", kPhysicalCloudAlbedo},
+        {"evaluations", found.scales.size()},
+        {"time_s", search_s},
+        {"profile", profile},
+        {"why",
+         std::string("the albedo of cloud water droplets is ~1 in the visible (Hansen & Travis 1974): held at ") +
+             FormatNumber(kPhysicalCloudAlbedo) + "; the statistics then fit the clouds' direct light as a scale on the " +
+             (o.sun == "photo" ? "photo's measured sun" : "fitted preset's sun") + " (the ambient fitted at each scale, "
+             "the cost's minimum over the scale found by a grid over ln s and golden sections)" +
+             (saturated ? "; the disc is saturated (sun_check), a lower bound: s >= 1" : "; s >= 0.1") +
+             "; s <= the sky fit's own sun over the measured one (upper_bound)"}};
+    Log("fit", "clouds stats: the clouds' sun " + FormatNumber(found.scale) + " x the measured " + FormatNumber(measured) +
+                   " lux = " + FormatNumber(cloud_preset.sun_illuminance_lux) + " lux (" +
+                   std::to_string(found.scales.size()) + " statistics fits, " + FormatNumber(search_s) + " s)");
+  }
   const long long marches = linear ? basis.marches() : res.renders;
   Log("fit", "clouds stats: cost " + FormatNumber(res.initial_cost) + " -> " + FormatNumber(res.final_cost) + ", " +
                  std::to_string(res.renders) + " evaluations' renders (" + std::to_string(marches) + " marched), " +
@@ -368,6 +523,9 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     params[p.name] = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
     if (p.held) params[p.name]["why"] = p.why_held;
   }
+  if (fit_sun)
+    params["scattering_albedo"]["why"] = "water droplets' physical single-scattering albedo in the visible (Hansen & Travis 1974); "
+                                         "the sun's scale is fitted instead (sun_scale)";
   nlohmann::json per_ref = nlohmann::json::array();
   const int nq = static_cast<int>(so.quantiles.size());
   const int mid = nq / 2;  // the median of the default {0.25, 0.5, 0.75}
@@ -465,13 +623,19 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     constexpr double kVisibleDiscPeakOverSky = 100.0;
     double weakest = INFINITY;
     for (const PhotoData& d : data) weakest = std::min(weakest, d.sun_check["peak_over_background"].get<double>());
-    update->sun_measured = o.sun == "photo" && weakest >= kVisibleDiscPeakOverSky;
+    const bool seen = weakest >= kVisibleDiscPeakOverSky;
+    // The preset takes the sun that lit the clouds when it is a measurement (the disc seen)
+    // or a fit (--cloud-stats-sun-scale fit: the clouds' brightness sets it, within bounds
+    // from the disc): either way it is the sun this fit stands for.
+    update->sun_measured = o.sun == "photo" && (seen || fit_sun);
+    const std::string disc = "the photo's disc " + std::string(seen ? "seen" : "not seen") + " (peak " +
+                             FormatNumber(weakest) + "x the sky ring around it; seen from " +
+                             FormatNumber(kVisibleDiscPeakOverSky) + "x)";
     update->sun_why = o.sun != "photo" ? "--cloud-stats-sun model: the clouds were lit by the sky fit's sun"
-                      : update->sun_measured
-                          ? "the photo's disc, measured (peak " + FormatNumber(weakest) + "x the sky ring around it)"
-                          : "the photo's disc is not visible (peak " + FormatNumber(weakest) + "x the sky ring, under " +
-                                FormatNumber(kVisibleDiscPeakOverSky) + "x): what lit the clouds is no measurement of "
-                                "the sun; the preset keeps the sky fit's, and its clouds, lit by it, render brighter than fitted";
+                      : fit_sun        ? disc + "; the sun's scale fitted to the clouds (sun_scale)"
+                      : seen           ? disc + ": its measured sun"
+                                       : disc + ": what lit the clouds is no measurement of the sun; the preset keeps "
+                                                "the sky fit's, and its clouds, lit by it, render brighter than fitted";
   }
   return {{"term", "cloud statistics (unknown shapes): weighted quantiles of log radiance per (sun angle x elevation x "
                    "opacity) bin, model pooled over an ensemble of weather maps"},
@@ -484,6 +648,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
           {"cloud_sun_illuminance_lux", cloud_preset.sun_illuminance_lux},
           {"cloud_sun_tint_rgb", cloud_preset.sun_tint_rgb},
           {"direct_light_lux_at_albedo_1", res.params.scattering_albedo * cloud_preset.sun_illuminance_lux},
+          {"sun_scale", fit_sun ? sun_scale_json : nlohmann::json(nullptr)},
           {"render_size", {o.width, o.width / 2}},
           {"weather_maps", o.maps},
           {"renders_per_evaluation", o.renders},

@@ -151,6 +151,12 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   auto renderer = render::CreateRenderer(fo.backend);
   Log("fit", "objective backend: " + renderer->Describe());
   cloudfit::SkyCloudFit joint = RunSkyCloudFit(co, refs, init, fo, *renderer, probe_ptrs, cloud_shapes.get());
+  nlohmann::json sky_refit;
+  if (cs.enabled)  // the cloud mask against the sky fit's own render; the atmosphere refitted if it moved
+    sky_refit = RefineCloudMaskAndRefitSky(cs, !o.fit.mask_path.empty(), &refs, &cloud_probability, joint.sky, [&] {
+      const render::Preset first = joint.sky.preset;
+      joint = RunSkyCloudFit(co, refs, first, fo, *renderer, probe_ptrs, cloud_shapes.get());
+    });
   fit::FitResult& result = joint.sky;
   result.preset.name = fs::path(o.out_dir).filename().string();
   if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
@@ -248,13 +254,17 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   summary["clouds"] = CloudReportJson(co, joint);
   if (cs.enabled) {
     std::vector<CloudStatsPhoto> photos;
-    for (size_t r = 0; r < refs.size(); ++r) photos.push_back({&refs[r], cloud_probability[r]});
+    for (size_t r = 0; r < refs.size(); ++r) {
+      const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
+      photos.push_back({&refs[r], cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
+    }
     summary["clouds"]["mode"] = "stats";
     summary["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by statistics "
                                     "of the cloud pixels (fit.json's cloud_stats)";
     CloudStatsPresetUpdate update;
     summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit", &update);
     summary["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result.preset);
+    summary["cloud_stats"]["sky_refit"] = sky_refit;
   }
   if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
   const nlohmann::json provenance = {{"provenance",
@@ -299,7 +309,8 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
                      "             [--mask MASK.exr] [--init PRESET.json] --out DIR [--json]\n"
                      "             [--clouds auto|on|off|stats] [--cloud-preset P.json] [--cloud-time S]\n"
                      "             [--cloud-stats-width PX] [--cloud-stats-maps N] [--cloud-stats-iterations N]\n"
-                     "             [--cloud-stats-sun photo|model] [--cloud-stats-probability fitted|initial]");
+                     "             [--cloud-stats-sun photo|model] [--cloud-stats-probability fitted|initial]\n"
+                     "             [--cloud-stats-sun-scale fit|off]");
   FitCommandLine c;
   FitVerbOptions& o = c.options;
   fit::FitOptions& f = o.fit;
@@ -362,6 +373,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Text("--cloud-stats-probability", &c.cloud_stats.probability, "fitted|initial",
           "--clouds stats: the cloud probability's clear-sky expectation: also the sky fit's own\n"
           "render (cloud where both say so; default fitted) or --cloud-mask's alone (initial)");
+  cl.Text("--cloud-stats-sun-scale", &c.cloud_stats.sun_scale, "fit|off",
+          "--clouds stats: fit: albedo held at water's physical 0.9999, a scale on the sun (>= 1 where\n"
+          "the disc is saturated) fitted with the ambient (default); off: the sun as measured, albedo fitted");
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;

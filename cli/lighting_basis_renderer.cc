@@ -1,9 +1,11 @@
 #include "lighting_basis_renderer.h"
 
+#include <cmath>
 #include <cstring>
 #include <tuple>
 
 #include "skycal/core/error.h"
+#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 namespace {
@@ -49,6 +51,41 @@ std::string LightingBasisCloudRenderer::Describe() const {
   return inner_.Describe() + ", albedo and ambient from a cached 3-render basis per draw of shapes";
 }
 
+void LightingBasisCloudRenderer::set_sun_scale(double s) {
+  if (!(s > 0.0 && std::isfinite(s)))
+    throw Error("lighting basis renderer: sun scale " + std::to_string(s) + " (expected a finite number > 0)");
+  sun_scale_ = s;
+}
+
+LightingBasisCloudRenderer::~LightingBasisCloudRenderer() = default;
+
+// C, D and A of one draw of shapes: three marches.
+std::unique_ptr<LightingBasisCloudRenderer::Basis> LightingBasisCloudRenderer::March(
+    const clouds::CloudScene& scene, const clouds::CloudRenderRequest& request) {
+  auto b = std::make_unique<Basis>();
+  b->scene = scene;
+  b->params = NonLinearPart(*scene.params);
+  b->scene.params = &b->params;
+  b->request = request;
+  clouds::CloudParams p = b->params;  // a = 0, k = 0
+  clouds::CloudScene s = scene;
+  s.params = &p;
+  b->c = inner_.Render(s, request);
+  p.scattering_albedo = 1.0;  // a = 1, k = 0: C + D
+  b->d = inner_.Render(s, request);
+  p.ambient_strength = 1.0;  // a = 1, k = 1: C + D + A
+  b->a = inner_.Render(s, request);
+  marches_ += 3;
+  auto& cp = b->c.radiance.pixels;
+  auto& dp = b->d.radiance.pixels;
+  auto& ap = b->a.radiance.pixels;
+  for (size_t i = 0; i < cp.size(); ++i) {
+    ap[i] -= dp[i];  // A
+    dp[i] -= cp[i];  // D
+  }
+  return b;
+}
+
 clouds::CloudImage LightingBasisCloudRenderer::Render(const clouds::CloudScene& scene,
                                                       const clouds::CloudRenderRequest& request) {
   if (!scene.params) throw Error("cloud render: incomplete scene");
@@ -61,32 +98,19 @@ clouds::CloudImage LightingBasisCloudRenderer::Render(const clouds::CloudScene& 
       break;
     }
   if (!basis) {
-    auto b = std::make_unique<Basis>();
-    b->scene = scene;
-    b->params = NonLinearPart(*scene.params);
-    b->scene.params = &b->params;
-    b->request = request;
-    clouds::CloudParams p = b->params;  // a = 0, k = 0
-    clouds::CloudScene s = scene;
-    s.params = &p;
-    b->c = inner_.Render(s, request);
-    p.scattering_albedo = 1.0;  // a = 1, k = 0: C + D
-    b->d = inner_.Render(s, request);
-    p.ambient_strength = 1.0;  // a = 1, k = 1: C + D + A
-    b->a = inner_.Render(s, request);
-    marches_ += 3;
-    auto& cp = b->c.radiance.pixels;
-    auto& dp = b->d.radiance.pixels;
-    auto& ap = b->a.radiance.pixels;
-    for (size_t i = 0; i < cp.size(); ++i) {
-      ap[i] -= dp[i];  // A
-      dp[i] -= cp[i];  // D
-    }
+    auto b = March(scene, request);
     if (static_cast<int>(cache_.size()) >= max_entries_) cache_.erase(cache_.begin());
     cache_.push_back(std::move(b));
     basis = cache_.back().get();
   } else {
     ++synthesized_;
+  }
+  if (sun_scale_ != 1.0 && !basis->half) {
+    basis->half_sun = std::make_unique<render::Preset>(*basis->scene.preset);
+    basis->half_sun->sun_illuminance_lux *= 0.5;
+    clouds::CloudScene half = basis->scene;
+    half.preset = basis->half_sun.get();
+    basis->half = March(half, basis->request);
   }
   const double a = scene.params->scattering_albedo, ak = a * scene.params->ambient_strength;
   clouds::CloudImage out;
@@ -96,7 +120,17 @@ clouds::CloudImage LightingBasisCloudRenderer::Render(const clouds::CloudScene& 
   auto& op = out.radiance.pixels;
   const auto& dp = basis->d.radiance.pixels;
   const auto& ap = basis->a.radiance.pixels;
-  for (size_t i = 0; i < op.size(); ++i) op[i] = static_cast<float>(op[i] + a * dp[i] + ak * ap[i]);
+  const double t = 2.0 * (sun_scale_ - 1.0);  // L(s E) = L(E) + t (L(E) - L(E / 2))
+  const Basis* h = sun_scale_ != 1.0 ? basis->half.get() : nullptr;
+  for (size_t i = 0; i < op.size(); ++i) {
+    const double full = op[i] + a * dp[i] + ak * ap[i];
+    if (!h) {
+      op[i] = static_cast<float>(full);
+      continue;
+    }
+    const double half = h->c.radiance.pixels[i] + a * h->d.radiance.pixels[i] + ak * h->a.radiance.pixels[i];
+    op[i] = static_cast<float>(full + t * (full - half));
+  }
   return out;
 }
 

@@ -15,6 +15,10 @@ bool PhotoSunOptions::IsValid(std::string* why) const {
     *why = "photo sun: expected 0 < disc_deg < ring_inner_deg < ring_outer_deg <= 45 deg";
     return false;
   }
+  if (!(clean_peak_over_background >= 1.0) || !(saturated_direct_to_diffuse >= 0.0)) {
+    *why = "photo sun: expected clean_peak_over_background >= 1 and saturated_direct_to_diffuse >= 0";
+    return false;
+  }
   return true;
 }
 
@@ -30,13 +34,17 @@ PhotoSun MeasurePhotoSun(const ImageRGB& img, const std::array<double, 3>& sun, 
   };
   std::vector<Px> disc;
   std::vector<float> ring[3];
+  double diffuse = 0.0;
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) {
       const auto v = latlong::PixelDirection(x, y, img.width, img.height);
       const double c = v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2];
       if (c >= cos_disc) {
         disc.push_back({x, y, latlong::PixelSolidAngle(x, y, img.width, img.height)});
-      } else if (c <= cos_in && c >= cos_out) {
+        continue;
+      }
+      if (v[1] > 0.0) diffuse += img.at(x, y, 1) * v[1] * latlong::PixelSolidAngle(x, y, img.width, img.height);
+      if (c <= cos_in && c >= cos_out) {
         for (int ch = 0; ch < 3; ++ch) ring[ch].push_back(img.at(x, y, ch));
       }
     }
@@ -56,6 +64,10 @@ PhotoSun MeasurePhotoSun(const ImageRGB& img, const std::array<double, 3>& sun, 
     }
   }
   s.disc_pixels = static_cast<int>(disc.size());
+  s.direct_horizontal = s.illuminance[1] * std::max(sun[1], 0.0);
+  s.diffuse_horizontal = diffuse;
+  s.clean_peak_over_background = o.clean_peak_over_background;
+  s.saturated_direct_to_diffuse = o.saturated_direct_to_diffuse;
   for (const Px& p : disc)
     for (int ch = 0; ch < 3; ++ch)
       if (img.at(p.x, p.y, ch) >= 0.999 * s.peak) {

@@ -5,9 +5,11 @@
 // bench/results/cloud_photos.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
+#include "cloud_sun_scale.h"
 #include "fit_cloud_stats.h"
 #include "fit_verb.h"
 #include "lighting_basis_renderer.h"
@@ -15,6 +17,7 @@
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 namespace {
@@ -62,6 +65,13 @@ TEST(FitCloudStats, CommandLine) {
                                    "--cloud-stats-probability", "initial", "--out", "d"});
   EXPECT_EQ(c2.cloud_stats.sun, "model");
   EXPECT_EQ(c2.cloud_stats.probability, "initial");
+  EXPECT_EQ(c.cloud_stats.sun_scale, "fit");
+  EXPECT_EQ(Parse({"--reference", "a.exr", "--clouds", "stats", "--cloud-stats-sun-scale", "off", "--out", "d"}).cloud_stats.sun_scale,
+            "off");
+  o = FitCloudStatsOptions{};
+  o.sun_scale = "free";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--cloud-stats-sun-scale 'free'"), std::string::npos) << why;
   o = FitCloudStatsOptions{};
   o.sun = "disc";
   EXPECT_FALSE(o.IsValid(&why));
@@ -150,7 +160,17 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   EXPECT_NEAR(got, target, 0.05);
   EXPECT_EQ(j["parameters"]["phase_g1"]["held"], true);
   EXPECT_EQ(j["parameters"]["extinction"]["held"], true);
-  EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], false);
+  // The albedo held at water's physical value, the sun's scale fitted in its place with the
+  // ambient: bounds [0.1 (the synthetic disc is no lower bound), the sky fit's sun / the
+  // measured one].
+  EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], true);
+  EXPECT_DOUBLE_EQ(j["parameters"]["scattering_albedo"]["value"].get<double>(), kPhysicalCloudAlbedo);
+  EXPECT_EQ(j["parameters"]["ambient_strength"]["held"], false);
+  const auto& ss = j["sun_scale"];
+  EXPECT_GE(ss["scale"].get<double>(), ss["lower_bound"].get<double>());
+  EXPECT_LE(ss["scale"].get<double>(), ss["upper_bound"].get<double>());
+  EXPECT_NEAR(ss["fitted_lux"].get<double>(), ss["measured_lux"].get<double>() * ss["scale"].get<double>(), 1e-6 * ss["fitted_lux"].get<double>());
+  EXPECT_GE(ss["evaluations"].get<int>(), 5);  // the grid at least
   EXPECT_EQ(j["render_size"][0], 32);
   const auto& r = j["references"][0];
   // The "atmosphere-only" image is the photo itself: zero error everywhere; the statistics'
@@ -180,6 +200,80 @@ TEST(FitCloudStats, WiringAtASmallSize) {
     EXPECT_NE(std::string(e.what()).find("synthetic.exr"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("--cloud-stats-width 48"), std::string::npos) << e.what();
   }
+}
+
+// The sky refit on the refined mask (RefineCloudMaskAndRefitSky): against a "sky fit" that is
+// the photo itself no pixel is cloud, so every cloud pixel of the first mask is released to the
+// sky fit and the atmosphere refitted once; controls: a sky fit missing its clear pixels by 60%,
+// a user --mask and --cloud-stats-probability initial release nothing and do not refit.
+TEST(FitCloudStats, RefinedMaskReleasesPixelsAndRefitsTheSky) {
+  // A 64x32 blue sky gradient (no march needed), a band the first mask called cloud.
+  struct {
+    fit::Reference ref;
+    fit::FitResult sky;
+    std::vector<float> probability;
+  } p;
+  p.ref.path = p.ref.name = "gradient";
+  p.ref.radiance = ImageRGB(64, 32);
+  p.ref.sun_dir = {0.0, std::sin(30.0 * M_PI / 180.0), std::cos(30.0 * M_PI / 180.0)};
+  p.ref.pixel_class.assign(64 * 32, fit::PixelClass::kSky);
+  p.probability.assign(64 * 32, 0.0f);
+  long long cloud = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const size_t i = static_cast<size_t>(y) * 64 + x;
+      const float b = static_cast<float>(0.05 + 0.01 * y);
+      p.ref.radiance.at(x, y, 0) = 0.3f * b;
+      p.ref.radiance.at(x, y, 1) = 0.6f * b;
+      p.ref.radiance.at(x, y, 2) = b;
+      if (latlong::Latitude(y, 32) <= 0.0) {
+        p.ref.pixel_class[i] = fit::PixelClass::kBelowHorizon;
+      } else if (y >= 8 && y < 12) {
+        p.ref.pixel_class[i] = fit::PixelClass::kUserMasked;
+        p.probability[i] = 0.8f;
+        ++cloud;
+      }
+    }
+  p.ref.counts.user_masked = cloud;
+  fit::ReferenceFit rf;
+  rf.rendered = p.ref.radiance;  // the sky fit matches the photo: against it nothing is cloud
+  p.sky.references.push_back(rf);
+  auto run = [&](FitCloudStatsOptions o, bool user_mask, double rel, int* refits, fit::Reference* ref,
+                 std::vector<float>* prob) {
+    *ref = p.ref;
+    *prob = p.probability;
+    std::vector<fit::Reference> refs = {*ref};
+    std::vector<std::vector<float>> probs = {*prob};
+    fit::FitResult sky = p.sky;
+    sky.references[0].errors.rel_rmse = rel;
+    const nlohmann::json j = RefineCloudMaskAndRefitSky(o, user_mask, &refs, &probs, sky, [&] { ++*refits; });
+    *ref = refs[0];
+    *prob = probs[0];
+    return j;
+  };
+  int refits = 0;
+  fit::Reference ref;
+  std::vector<float> prob;
+  nlohmann::json j = run({}, false, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 1);
+  EXPECT_EQ(j["refitted"], true);
+  EXPECT_EQ(j["references"][0]["released_pixels"].get<long long>(), cloud);
+  EXPECT_EQ(ref.counts.user_masked, 0);
+  EXPECT_EQ(std::count(ref.pixel_class.begin(), ref.pixel_class.end(), fit::PixelClass::kUserMasked), 0);
+  EXPECT_LT(*std::max_element(prob.begin(), prob.end()), 0.5f);
+  // Controls.
+  refits = 0;
+  j = run({}, false, 0.6, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  EXPECT_EQ(j["references"][0]["released_pixels"].get<long long>(), 0);
+  EXPECT_EQ(ref.counts.user_masked, cloud);
+  j = run({}, true, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  FitCloudStatsOptions initial;
+  initial.probability = "initial";
+  j = run(initial, false, 0.1, &refits, &ref, &prob);
+  EXPECT_EQ(refits, 0);
+  EXPECT_EQ(j["refitted"], false);
 }
 
 // The photo's sun (cli/photo_sun.h): a disc of known illuminance spread over a few pixels
@@ -216,6 +310,65 @@ TEST(FitCloudStats, PhotoSunRecoversADiscOnASky) {
   EXPECT_TRUE(MeasurePhotoSun(img, sun).clipped());
 }
 
+// Saturation by energy (PhotoSun::saturated): on a uniform sky of radiance L the diffuse
+// horizontal light is pi L (less the 3-deg disc's cap, ~0.2%), the disc's direct light E sin(40 deg).
+TEST(FitCloudStats, PhotoSunSaturatedWhenTooWeakForItsSky) {
+  const int w = 512, h = 256;
+  const std::array<double, 3> sun = {0.0, std::sin(40.0 * M_PI / 180.0), std::cos(40.0 * M_PI / 180.0)};
+  const auto p = latlong::PixelPosition(sun, w, h);
+  const int x0 = static_cast<int>(std::floor(p[0])), y0 = static_cast<int>(std::floor(p[1]));
+  auto sky_with_disc = [&](double sky, double e) {
+    ImageRGB img(w, h);
+    for (float& v : img.pixels) v = static_cast<float>(sky);
+    for (int c = 0; c < 3; ++c) img.at(x0, y0, c) += static_cast<float>(e / latlong::PixelSolidAngle(x0, y0, w, h));
+    return MeasurePhotoSun(img, sun);
+  };
+  const double direct = 4000.0 * std::sin(40.0 * M_PI / 180.0);
+  const PhotoSun bright = sky_with_disc(1000.0, 4000.0);
+  EXPECT_NEAR(bright.direct_to_diffuse(), direct / (M_PI * 1000.0), 0.01 * direct / (M_PI * 1000.0));
+  EXPECT_TRUE(bright.clean_disc());
+  EXPECT_FALSE(bright.saturated());  // 0.82 >= 0.5
+  EXPECT_FALSE(bright.clipped());    // one pixel: no plateau
+  const PhotoSun weak = sky_with_disc(3000.0, 4000.0);  // 0.27 < 0.5: the disc cannot be the sun
+  EXPECT_NEAR(weak.direct_to_diffuse(), direct / (M_PI * 3000.0), 0.01 * direct / (M_PI * 3000.0));
+  EXPECT_TRUE(weak.clean_disc());
+  EXPECT_TRUE(weak.saturated());
+  // Control: a veiled sun (the disc under 100x its sky, seen through cloud) is weak for its
+  // sky by nature: not called saturated.
+  const PhotoSun veiled = sky_with_disc(3000.0, 10.0);
+  EXPECT_FALSE(veiled.clean_disc());
+  EXPECT_FALSE(veiled.saturated());
+}
+
+// The sun scale's search (cli/cloud_sun_scale.h): a smooth profile's minimum, one with a kink
+// (as where the ambient reaches its bound), and a minimum at a bound.
+TEST(FitCloudStats, SunScaleSearchFindsTheProfileMinimum) {
+  SunScaleSearchOptions o;
+  o.lower = 0.1;
+  o.upper = 100.0;
+  const double truth = std::log(3.7);
+  auto smooth = [&](double s) { const double d = std::log(s) - truth; return 1.0 + d * d + 0.3 * d * d * d * d; };
+  SunScaleSearch r = MinimizeOverSunScale(smooth, o);
+  EXPECT_NEAR(std::log(r.scale), truth, 0.03);
+  EXPECT_LE(r.scales.size(), 12u);
+  EXPECT_FALSE(r.at_lower || r.at_upper);
+  EXPECT_EQ(r.scales.size(), r.costs.size());
+  // A kink: steeper on one side (ambient at its bound beyond the minimum).
+  auto kink = [&](double s) { const double d = std::log(s) - truth; return d < 0.0 ? -0.5 * d : 3.0 * d; };
+  r = MinimizeOverSunScale(kink, o);
+  EXPECT_NEAR(std::log(r.scale), truth, 0.1);
+  // Falling over the whole range: the lower bound is the answer, and said so.
+  r = MinimizeOverSunScale([](double s) { return s; }, o);
+  EXPECT_DOUBLE_EQ(r.scale, 0.1);
+  EXPECT_TRUE(r.at_lower);
+  // Control: the answer follows the cost's minimum when it moves (0.5 instead of 3.7).
+  auto moved = [&](double s) { const double d = std::log(s) - std::log(0.5); return d * d; };
+  EXPECT_NEAR(std::log(MinimizeOverSunScale(moved, o).scale), std::log(0.5), 0.03);
+  o.lower = 2.0;
+  o.upper = 1.0;
+  EXPECT_THROW(MinimizeOverSunScale(smooth, o), Error);
+}
+
 // The lighting basis (cli/lighting_basis_renderer.h): albedo and ambient from three cached
 // marches equal a march at those values; anything else marches anew.
 TEST(FitCloudStats, LightingBasisEqualsAMarch) {
@@ -249,10 +402,24 @@ TEST(FitCloudStats, LightingBasisEqualsAMarch) {
   // Control: a different lighting differs by far more than the tolerance.
   c.ambient_strength = 1.0;
   EXPECT_GT(max_rel(raw.Render(scene, req), marched), 1e-2);
+  // The sun's scale: one more march (half the sun) splits D; 1.5 x the sun equals a march
+  // of the preset with 1.5 x its sun_illuminance_lux (192 klux: within the preset's bound).
+  basis.set_sun_scale(0.4);
+  const clouds::CloudImage sun_synth = basis.Render(scene, req);
+  EXPECT_EQ(basis.marches(), 6);  // the same three at half the sun
+  render::Preset brighter = p.scene.preset;
+  brighter.sun_illuminance_lux *= 0.4;
+  clouds::CloudScene bright_scene = scene;
+  bright_scene.preset = &brighter;
+  const clouds::CloudImage sun_marched = raw.Render(bright_scene, req);
+  EXPECT_LT(max_rel(sun_synth, sun_marched), 1e-4);
+  EXPECT_GT(max_rel(marched, sun_marched), 1e-2);  // control: the sun's scale shows
+  EXPECT_THROW(basis.set_sun_scale(0.0), Error);
+  basis.set_sun_scale(1.0);
   // A non-linear field (the extinction) marches a new basis.
   c.extinction_per_m *= 1.1;
   basis.Render(scene, req);
-  EXPECT_EQ(basis.marches(), 6);
+  EXPECT_EQ(basis.marches(), 9);
   // The coverage match marches without light samples: the transmittance does not use them.
   clouds::CloudRenderRequest dark = req;
   dark.march.light_samples = 0;
