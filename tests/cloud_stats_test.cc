@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
+
+#include <Eigen/Dense>
 
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/core/error.h"
@@ -107,6 +110,16 @@ TEST(CloudStats, BadOptionsAndReferencesAreNamed) {
   o.noise_draws = 2;  // too few draws for an sd
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("noise_draws"), std::string::npos);
+  o = {};
+  o.noise_covariance = "shrunk";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("noise_covariance = 'shrunk' (expected diagonal or full)"), std::string::npos) << why;
+  o = {};
+  o.noise_shrinkage = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("noise_shrinkage"), std::string::npos) << why;
+  o.noise_shrinkage = -1.0;  // estimated
+  EXPECT_TRUE(o.IsValid(&why)) << why;
 }
 
 struct Fixture {
@@ -234,6 +247,65 @@ TEST(CloudStats, WhiteningDividesEachResidualByItsShapeNoise) {
   ASSERT_GT(present.size(), 5u);
   std::nth_element(present.begin(), present.begin() + present.size() / 2, present.end());
   EXPECT_GT(present[present.size() / 2], 2.0 * o.noise_sd_floor);
+}
+
+// The full GLS inside the objective: with a covariance set from draws (synthetic numbers
+// here: no render needed for them), Evaluate's squared norm is dᵀ (Σ (1 + 1/M))^-1 d for
+// d = model - reference, Σ recomputed here from the draws by hand (sample covariance, fixed
+// λ, floored variances; a statistic one draw leaves empty: uncorrelated, variance
+// (1e3 floor)²). Control: the diagonal whitening of the same d is a different number.
+TEST(CloudStats, FullWhiteningIsTheGlsCostOfTheDraws) {
+  Fixture f;
+  CloudStatsOptions o;
+  auto scene = f.Scene({1, 11}, {101, 211}, &o);
+  const std::vector<CloudStatsReference> refs = {scene.reference};
+  const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  CloudStatsObjective obj(refs, model, *f.renderer, o);
+  const int n = obj.num_residuals();
+  const std::vector<double> x = obj.InitialX();
+  std::vector<double> stats(n);
+  ASSERT_TRUE(obj.ModelStatistics(x.data(), stats.data()));
+  // 12 draws: a common factor (correlated statistics) plus independent parts, scale 0.1.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<std::vector<double>> draws(12, std::vector<double>(n));
+  for (auto& d : draws) {
+    const double common = g(rng);
+    for (int k = 0; k < n; ++k) d[k] = 0.1 * (0.8 * common + 0.6 * g(rng)) * (1.0 + (k % 5));
+  }
+  const int absent = 3;
+  draws[5][absent] = std::nan("");
+  const double lambda = 0.3;
+  EXPECT_EQ(obj.SetNoiseCovariance(draws, lambda), lambda);
+  ASSERT_TRUE(obj.full_whitening());
+  std::vector<double> r(n);
+  ASSERT_TRUE(obj.Evaluate(x.data(), r.data()));
+  Eigen::VectorXd d(n);
+  for (int k = 0; k < n; ++k)
+    d(k) = std::isnan(stats[k]) ? o.empty_bin_log_residual : stats[k] - obj.ReferenceStatistics()[k];
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if (i == absent || j == absent) continue;
+      double mi = 0.0, mj = 0.0, c = 0.0;
+      for (const auto& v : draws) mi += v[i] / 12.0, mj += v[j] / 12.0;
+      for (const auto& v : draws) c += (v[i] - mi) * (v[j] - mj) / 11.0;
+      sigma(i, j) = i == j ? std::max(c, o.noise_sd_floor * o.noise_sd_floor) : (1.0 - lambda) * c;
+    }
+  sigma(absent, absent) = std::pow(1e3 * o.noise_sd_floor, 2);
+  sigma *= 1.0 + 1.0 / o.model_renders;
+  const double gls = d.dot(sigma.ldlt().solve(d));
+  double norm2 = 0.0;
+  for (double v : r) norm2 += v * v;
+  EXPECT_NEAR(norm2, gls, 1e-8 * gls);
+  // Control: the diagonal whitening of the same statistics.
+  CloudStatsObjective diag(refs, model, *f.renderer, o);
+  diag.SetNoiseSd(diag.NoiseSd(draws));
+  ASSERT_TRUE(diag.Evaluate(x.data(), r.data()));
+  double diag2 = 0.0;
+  for (double v : r) diag2 += v * v;
+  std::cout << "[cloud stats] GLS cost " << gls << ", diagonal " << diag2 << "\n";
+  EXPECT_GT(std::abs(diag2 - gls), 0.1 * gls);
 }
 
 // The start of every recovery: the truth x (extinction 1.3, g1 0.7, powder 0.7, ambient

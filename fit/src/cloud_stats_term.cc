@@ -172,6 +172,8 @@ CloudStatsResult FitCloudStats(const std::vector<CloudStatsReference>& refs, con
     std::nth_element(sd.begin(), sd.begin() + sd.size() / 2, sd.end());
     res.noise_draws = options.noise_draws;
     res.median_noise_sd = sd[sd.size() / 2];
+    res.noise_covariance = obj.full_whitening() ? "full" : "diagonal";
+    res.noise_shrinkage = obj.noise_shrinkage();
   }
   res.renders = obj.renders();
   res.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -79,6 +79,18 @@ struct CloudStatsOptions {
   // its share of the reference's cloud (the first design).
   int noise_draws = 0;        // [0, 256]; >= 4 when on
   double noise_sd_floor = 0.02;  // lower bound of a statistic's sd (log radiance or share)
+  // The whitening's covariance (with noise_draws > 0). "diagonal": each residual divided by
+  // its statistic's sd (above). "full": a generalised least squares with the statistics' full
+  // covariance over the draws, shrunk toward its diagonal, Σ = (1 - λ) S + λ diag(S) (D draws
+  // cannot estimate a full covariance of ~100 statistics), each variance floored as above:
+  // Ceres sees the fixed linear map r' = L^-1 r, Σ (1 + 1/M) = L Lᵀ, so the cost is
+  // rᵀ Σ^-1 r and statistics that move together with the shapes (a bin's quantiles and
+  // channels, neighbouring bins) count once (fit/src/shape_noise_covariance.h).
+  std::string noise_covariance = "diagonal";
+  // λ of the "full" covariance: in [0, 1] fixed, or -1: estimated from the draws (Schäfer &
+  // Strimmer 2005, the Ledoit-Wolf optimum for a diagonal target; at least 1e-3 when the
+  // draws are fewer than the statistics, so Σ stays positive definite).
+  double noise_shrinkage = -1.0;
   int render_width = 256, render_height = 128;  // pixels of the model's render per reference
   clouds::MarchOptions march;
   bool IsValid(std::string* why) const;
@@ -113,6 +125,11 @@ struct CloudStatsScene {
   // the weather ensemble (or `weather`) continued past the model's own renders (wind moves a
   // 60 km map 18 km a step: after a few steps the draws repeat shapes, so give maps here).
   std::vector<const clouds::WeatherMap*> shape_draw_maps;
+  // The 3D noise textures of the shape draws: draw d renders shape_draw_noises[d % size]
+  // (empty: `noise`). The noise texture is a shape draw too (its statistics' sd across seeds
+  // is 0.75x that across weather maps, bench/results/cloud_stats_noise.md): give several here
+  // and the measured shape noise holds it.
+  std::vector<const clouds::CloudNoise*> shape_draw_noises;
   // The model's ensemble of noise textures: when non-empty, model render m uses
   // noise_textures[m % size] (`noise` stays the texture of the shape draws). The 3D noise is a
   // shape draw too: its density distribution moves the opacity distribution the way
@@ -174,6 +191,10 @@ struct CloudStatsResult {
   // noise sd (log radiance / share); the residuals were divided by it (whitened).
   int noise_draws = 0;
   double median_noise_sd = 0.0;
+  // The whitening: "none" (bin-share weights), "diagonal" or "full" (options.noise_covariance),
+  // and the full covariance's shrinkage λ toward its diagonal (0 otherwise).
+  std::string noise_covariance = "none";
+  double noise_shrinkage = 0.0;
 };
 
 // Fits the lighting of `scene.initial` so the model's statistics match the references'.
