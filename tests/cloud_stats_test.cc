@@ -4,6 +4,7 @@
 // perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -183,9 +184,13 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
     // Held by default: the shape noise cannot separate it (the measured spread is named).
     g1 |= n.block == "clouds.phase_g1" && n.reason.find("not separable") != std::string::npos;
   }
+  bool extinction = false;
+  for (const auto& n : skipped)
+    extinction |= n.block == "clouds.extinction" && n.reason.find("not determined") != std::string::npos;
   EXPECT_TRUE(g2);
   EXPECT_TRUE(g1);
-  EXPECT_EQ(skipped.size(), 14u);  // 16 lighting fields, 2 fitted (extinction, ambient_strength)
+  EXPECT_TRUE(extinction);  // held by default since the regime-2 seed pairs (cloud_stats.h)
+  EXPECT_EQ(skipped.size(), 15u);  // 16 lighting fields, 1 fitted (ambient_strength)
   FitState state;
   LevelContext level;
   ceres::Problem problem;
@@ -194,7 +199,7 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   const long long n = term->AddTo(problem, state, level);
   EXPECT_GT(n, 0);
   EXPECT_EQ(problem.NumParameterBlocks(), 1);
-  EXPECT_EQ(problem.NumParameters(), 2);
+  EXPECT_EQ(problem.NumParameters(), 1);
   EXPECT_EQ(problem.NumResiduals(), n);
   EXPECT_EQ(term->result().params.extinction_per_m, scene.truth.extinction_per_m);
 }
@@ -380,6 +385,63 @@ TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
   const double cost_start = FitCloudStats({scene.reference}, at_start, *f.renderer, o).initial_cost;
   std::cout << "[cloud stats] cost at the truth " << cost_truth << ", at the start " << cost_start << "\n";
   EXPECT_LT(cost_truth, cost_start);
+}
+
+// Regime 2 (issue 11): ONE unknown-shapes seed pair — the reference rendered with noise /
+// weather seeds 2/12, the model with 102/212 (and weather maps 1212, 2212, 3212) — the
+// default fitted set (ambient_strength) from 30% off, whitened by the diagonal shape noise
+// of 24 draws (weather maps 5000-5023 x noise textures 7001-7006), 64x32, 4 model renders, at
+// most 8 iterations: exactly the case `diag-ambient` of
+//   build/skycal bench --suite fit-cloud-stats-gls --out DIR   (bench/results/cloud-stats-gls/)
+// (pair 1 there: +5.7%). Its 5 pairs spread 3.4-28.7% (median 7.4%): the tolerance is the
+// worst x 1.5 = 43%.
+constexpr double kRegime2AmbientTolerance = 1.5 * 0.287;
+
+struct Regime2Fit {
+  CloudStatsResult result;
+  clouds::CloudParams truth;
+};
+Regime2Fit FitRegime2Pair(Fixture& f, const std::vector<clouds::CloudNoise>& draw_textures, double ambient_start,
+                          int max_iterations) {
+  CloudStatsOptions o;
+  o.model_renders = 4;
+  o.max_iterations = max_iterations;
+  o.noise_draws = 24;
+  o.noise_covariance = "diagonal";
+  auto scene = f.Scene({2, 12}, {102, 212}, &o);
+  clouds::CloudParams start = scene.truth;
+  start.ambient_strength *= ambient_start;
+  std::vector<clouds::WeatherMap> ensemble = {scene.weather}, maps;
+  for (int e = 1; e < 4; ++e) ensemble.push_back(bench::CloudStatsWeather(212 + 1000 * e, scene.truth.weather_extent_m));
+  CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
+  for (const auto& w : ensemble) model.weather_ensemble.push_back(&w);
+  for (int d = 0; d < o.noise_draws; ++d) maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+  for (const auto& w : maps) model.shape_draw_maps.push_back(&w);
+  for (const auto& t : draw_textures) model.shape_draw_noises.push_back(&t);
+  Regime2Fit out{FitCloudStats({scene.reference}, model, *f.renderer, o), scene.truth};
+  std::cout << "[cloud stats] regime 2: " << out.result.termination << ", " << out.result.renders << " renders, "
+            << out.result.time_s << " s\n";
+  return out;
+}
+
+TEST(CloudStats, Regime2UnknownShapesRecoverTheAmbient) {
+  ASSERT_EQ(CloudStatsOptions{}.fitted, std::vector<std::string>{"ambient_strength"});  // the default the bench measured
+  Fixture f;
+  std::vector<clouds::CloudNoise> textures;
+  for (uint64_t seed = 7001; seed <= 7006; ++seed) textures.push_back(clouds::LoadOrGenerateCloudNoise(seed, f.cache));
+  const Regime2Fit fit = FitRegime2Pair(f, textures, 1.3, 8);
+  EXPECT_EQ(fit.result.noise_covariance, "diagonal");
+  const double ambient = std::abs(fit.result.params.ambient_strength / fit.truth.ambient_strength - 1.0);
+  std::cout << "[cloud stats] regime 2: ambient " << ambient << "\n";
+  EXPECT_LT(ambient, kRegime2AmbientTolerance);
+  EXPECT_GT(fit.result.iterations, 1);  // it moved (the start is 30% off)
+  // Control: a start far outside the tolerance (2x) that the fit is not allowed to leave
+  // (0 iterations) fails the bound. (Tried first: the extinction held 40% low, a mis-specified
+  // lighting left unfitted: ambient lands 23% off, inside the 43%: the bound cannot see that.)
+  const Regime2Fit stuck = FitRegime2Pair(f, textures, 2.0, 0);
+  const double ambient_stuck = std::abs(stuck.result.params.ambient_strength / stuck.truth.ambient_strength - 1.0);
+  std::cout << "[cloud stats] regime 2 control: ambient " << ambient_stuck << "\n";
+  EXPECT_GT(ambient_stuck, kRegime2AmbientTolerance);
 }
 
 // A bin the reference fills and the render leaves empty: no residual by default (the old

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <tuple>
 
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"
@@ -145,7 +146,7 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
                         {"noise_covariance", res.noise_covariance},
                         {"noise_shrinkage", res.noise_shrinkage},
                         {"termination", res.termination}};
-  std::string line = "[fit-cloud-stats]   pair " + std::to_string(k) + (control ? " (control)" : "") + ":";
+  std::string line = "[cloud-stats seed pairs]   pair " + std::to_string(k) + (control ? " (control)" : "") + ":";
   for (const auto& [name, f] : StartFactors()) {
     clouds::CloudParams fitted = res.params, truth = scene.truth;
     const double t = *Spec(name).field(truth), v = *Spec(name).field(fitted);
@@ -153,7 +154,7 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
         {"truth", t}, {"start", *Spec(name).field(start)}, {"fitted", v}, {"rel_error", (v - t) / t}};
     line += " " + name + " " + SignedPct((v - t) / t);
   }
-  o.Log(line + ", " + FormatG(res.time_s) + " s");
+  o.Log(line + ", " + FormatG(res.time_s) + " s, " + std::to_string(res.renders) + " renders");
   return row;
 }
 
@@ -209,12 +210,25 @@ CloudStatsPlan FitCloudStatsGlsPlan(bool quick) {
                gls("diag-2params-low", kTwo, "diagonal", 0.7),     gls("full-2params-low", kTwo, "full", 0.7),
                gls("diag-ambient", kAmbient, "diagonal", 1.3),     gls("full-ambient", kAmbient, "full", 1.3),
                gls("full-albedo-ambient", kAlbedoAmbient, "full", 1.3)};
-  if (quick) {
-    p.configs = {p.configs[1], p.configs[5]};
-    p.pairs = 1;
-    p.iteration_cap = 2;
+  // The recovery test's own settings (tests/cloud_stats_test.cc, Regime2*): 2 model renders,
+  // 8 draws over 2 noise textures, at most 4 iterations — its tolerance is this case's spread.
+  const std::tuple<const char*, std::vector<std::string>, const char*> tests[] = {
+      {"test-ambient", kAmbient, "full"},
+      {"test-albedo-ambient", kAlbedoAmbient, "full"},
+      {"test-diag-ambient", kAmbient, "diagonal"}};
+  for (const auto& [name, fitted, covariance] : tests) {
+    CloudStatsConfig c = gls(name, fitted, covariance, 1.3);
+    c.model_maps = 2;
+    c.model_renders = 2;
+    c.max_iterations = 4;
+    c.noise_draws = 8;
+    c.draw_noises = 2;
+    p.configs.push_back(c);
   }
-  Axis axis{"config", {}, p.configs.back().name};
+  // --quick: the recovery test's cheap settings only (5 pairs each: their spread is the test's tolerance).
+  if (quick) p.configs.erase(p.configs.begin(), p.configs.end() - 3);
+  // The default: the library's default fitted set (ambient alone) with its best whitening.
+  Axis axis{"config", {}, quick ? std::string("test-diag-ambient") : std::string("diag-ambient")};
   for (const auto& c : p.configs) axis.values.push_back(c.name);
   p.grid.axes = {axis};
   return p;
