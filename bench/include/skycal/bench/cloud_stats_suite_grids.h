@@ -45,8 +45,9 @@ CloudStatsPlan FitCloudStatsPlan(bool quick);
 // fit-cloud-stats-gls: the full GLS against the diagonal whitening on the same draws (24
 // weather maps x 6 noise textures), 5 pairs + the control at 64x32: extinction + ambient
 // from above (1.3x) and below (0.7x) the true extinction, ambient alone, albedo + ambient
-// The test-* cases are the recovery test's cheaper settings (2 model renders, 8 draws over 2
-// noise textures, at most 4 iterations); --quick runs only them, 5 pairs each.
+// The test-* cases are cheaper settings tried for the recovery test (2 model renders, 8 draws
+// over 2 noise textures, at most 4 iterations; too wide a spread: the test runs diag-ambient's);
+// --quick runs only them, 5 pairs each.
 CloudStatsPlan FitCloudStatsGlsPlan(bool quick);
 // The configuration named `name` of `plan`; throws skycal::Error when absent.
 const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const std::string& name);
