@@ -363,7 +363,7 @@ Suite FitCloudStatsSuite() {
 Suite FitCloudStatsGlsSuite() {
   return SeedPairSuite("fit-cloud-stats-gls",
                        "the full GLS against the diagonal whitening, same draws, 5 seed pairs + a control at 64x32 "
-                       "(--quick: 2 configurations, 1 pair, 2 iterations)",
+                       "(--quick: the 3 cheaper test-* settings, 5 pairs each)",
                        FitCloudStatsGlsPlan);
 }
 
