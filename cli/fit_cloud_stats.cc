@@ -665,6 +665,10 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
           {"marched_renders", marches},
           {"renderer", fit_renderer.Describe()},
           {"singular_values", res.singular_values},
+          {"whitening", {{"covariance", res.noise_covariance},
+                         {"draws", res.noise_draws},
+                         {"shrinkage", res.noise_shrinkage},
+                         {"median_noise_sd", res.median_noise_sd}}},
           {"termination", res.termination},
           {"time_s", res.time_s},
           {"notes", {{"fit image", "clear pixels: the atmosphere's fit; cloud pixels: by their cloud membership, the "

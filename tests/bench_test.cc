@@ -480,13 +480,27 @@ TEST(BenchCloudStatsSuites, PlanRegistrationAndTable) {
   EXPECT_EQ(CloudStatsNoiseGridPlan(false).model_maps, 4);
   EXPECT_EQ(CloudStatsNoiseGridPlan(true).draws, 8);
 
+  // fit-cloud-stats-gls: diagonal and full whitening on the same draws (24 maps x 6 noise textures).
+  const CloudStatsPlan gls_plan = FitCloudStatsGlsPlan(false);
+  ASSERT_EQ(gls_plan.grid.Expand().size(), 10u);
+  EXPECT_EQ(gls_plan.pairs, 5);
+  for (const CloudStatsConfig& c : gls_plan.configs) {
+    const bool test = c.name.rfind("test-", 0) == 0;  // the recovery test's settings
+    EXPECT_EQ(c.noise_draws, test ? 8 : 24) << c.name;
+    EXPECT_EQ(c.draw_noises, test ? 2 : 6) << c.name;
+    EXPECT_EQ(c.covariance, c.name.find("diag") != std::string::npos ? "diagonal" : "full") << c.name;
+  }
+  EXPECT_EQ(FindCloudStatsConfig(gls_plan, "full-2params-low").extinction_start, 0.7);
+  EXPECT_EQ(FitCloudStatsGlsPlan(true).grid.Expand().size(), 3u);
+  EXPECT_EQ(FitCloudStatsGlsPlan(true).pairs, 5);
+
   const SuiteRegistry r = BuiltinSuites();
-  for (const char* name : {"fit-cloud-stats", "cloud-stats-noise"}) {
+  for (const char* name : {"fit-cloud-stats", "fit-cloud-stats-gls", "cloud-stats-noise"}) {
     const Suite* s = r.Find(name);
     ASSERT_NE(s, nullptr) << name;
     EXPECT_TRUE(static_cast<bool>(s->markdown)) << name;
     EXPECT_FALSE(s->error_metric.empty()) << name;
-    EXPECT_EQ(s->pareto, std::string(name) == "fit-cloud-stats") << name;
+    EXPECT_EQ(s->pareto, std::string(name) != "cloud-stats-noise") << name;
   }
 
   CaseResult c = MakeCase("fit-cloud-stats", {{"config", "default"}}, T(5000, 5000, 5000, 1), 0.095, true);
@@ -516,7 +530,8 @@ TEST(BenchCloudStatsSuites, PlanRegistrationAndTable) {
   const std::string md = r.Find("fit-cloud-stats")->markdown({c});
   EXPECT_NE(md.find("## default (the default)"), std::string::npos) << md;
   EXPECT_NE(md.find("| control (same seeds) | +0.1% | +0.0% | +0.0% | -0.0% |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| 2/12 vs 102/212 | +9.5% | +0.0% | +0.0% | +4.7% | 0.316 -> 0.296 | 3 | 42 | 1.8 |"),
+  // Rows written before the albedo column have "-" there.
+  EXPECT_NE(md.find("| 2/12 vs 102/212 | +9.5% | +0.0% | +0.0% | +4.7% | - | 0.316 -> 0.296 | 3 | 42 | 1.8 |"),
             std::string::npos) << md;
   EXPECT_NE(md.find("| extinction | 9.5% | 9.5% |"), std::string::npos) << md;
   EXPECT_NE(md.find("weighted by bin share"), std::string::npos) << md;

@@ -1,11 +1,16 @@
 // The unknown-shapes cloud lighting objective (fit/include/skycal/fit/cloud_stats.h): the
 // statistics' identities, bad input, and the honest recovery test: a reference rendered
 // with one noise seed and weather map, the fit rendering with different seeds, from a
-// perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md.
+// perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md and (regime 2)
+// bench/results/cloud-stats-gls/.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <random>
+
+#include <Eigen/Dense>
 
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/core/error.h"
@@ -107,6 +112,16 @@ TEST(CloudStats, BadOptionsAndReferencesAreNamed) {
   o.noise_draws = 2;  // too few draws for an sd
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("noise_draws"), std::string::npos);
+  o = {};
+  o.noise_covariance = "shrunk";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("noise_covariance = 'shrunk' (expected diagonal or full)"), std::string::npos) << why;
+  o = {};
+  o.noise_shrinkage = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("noise_shrinkage"), std::string::npos) << why;
+  o.noise_shrinkage = -1.0;  // estimated
+  EXPECT_TRUE(o.IsValid(&why)) << why;
 }
 
 struct Fixture {
@@ -170,9 +185,13 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
     // Held by default: the shape noise cannot separate it (the measured spread is named).
     g1 |= n.block == "clouds.phase_g1" && n.reason.find("not separable") != std::string::npos;
   }
+  bool extinction = false;
+  for (const auto& n : skipped)
+    extinction |= n.block == "clouds.extinction" && n.reason.find("not determined") != std::string::npos;
   EXPECT_TRUE(g2);
   EXPECT_TRUE(g1);
-  EXPECT_EQ(skipped.size(), 14u);  // 16 lighting fields, 2 fitted (extinction, ambient_strength)
+  EXPECT_TRUE(extinction);  // held by default since the regime-2 seed pairs (cloud_stats.h)
+  EXPECT_EQ(skipped.size(), 15u);  // 16 lighting fields, 1 fitted (ambient_strength)
   FitState state;
   LevelContext level;
   ceres::Problem problem;
@@ -181,7 +200,7 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   const long long n = term->AddTo(problem, state, level);
   EXPECT_GT(n, 0);
   EXPECT_EQ(problem.NumParameterBlocks(), 1);
-  EXPECT_EQ(problem.NumParameters(), 2);
+  EXPECT_EQ(problem.NumParameters(), 1);
   EXPECT_EQ(problem.NumResiduals(), n);
   EXPECT_EQ(term->result().params.extinction_per_m, scene.truth.extinction_per_m);
 }
@@ -234,6 +253,65 @@ TEST(CloudStats, WhiteningDividesEachResidualByItsShapeNoise) {
   ASSERT_GT(present.size(), 5u);
   std::nth_element(present.begin(), present.begin() + present.size() / 2, present.end());
   EXPECT_GT(present[present.size() / 2], 2.0 * o.noise_sd_floor);
+}
+
+// The full GLS inside the objective: with a covariance set from draws (synthetic numbers
+// here: no render needed for them), Evaluate's squared norm is dᵀ (Σ (1 + 1/M))^-1 d for
+// d = model - reference, Σ recomputed here from the draws by hand (sample covariance, fixed
+// λ, floored variances; a statistic one draw leaves empty: uncorrelated, variance
+// (1e3 floor)²). Control: the diagonal whitening of the same d is a different number.
+TEST(CloudStats, FullWhiteningIsTheGlsCostOfTheDraws) {
+  Fixture f;
+  CloudStatsOptions o;
+  auto scene = f.Scene({1, 11}, {101, 211}, &o);
+  const std::vector<CloudStatsReference> refs = {scene.reference};
+  const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  CloudStatsObjective obj(refs, model, *f.renderer, o);
+  const int n = obj.num_residuals();
+  const std::vector<double> x = obj.InitialX();
+  std::vector<double> stats(n);
+  ASSERT_TRUE(obj.ModelStatistics(x.data(), stats.data()));
+  // 12 draws: a common factor (correlated statistics) plus independent parts, scale 0.1.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<std::vector<double>> draws(12, std::vector<double>(n));
+  for (auto& d : draws) {
+    const double common = g(rng);
+    for (int k = 0; k < n; ++k) d[k] = 0.1 * (0.8 * common + 0.6 * g(rng)) * (1.0 + (k % 5));
+  }
+  const int absent = 3;
+  draws[5][absent] = std::nan("");
+  const double lambda = 0.3;
+  EXPECT_EQ(obj.SetNoiseCovariance(draws, lambda), lambda);
+  ASSERT_TRUE(obj.full_whitening());
+  std::vector<double> r(n);
+  ASSERT_TRUE(obj.Evaluate(x.data(), r.data()));
+  Eigen::VectorXd d(n);
+  for (int k = 0; k < n; ++k)
+    d(k) = std::isnan(stats[k]) ? o.empty_bin_log_residual : stats[k] - obj.ReferenceStatistics()[k];
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      if (i == absent || j == absent) continue;
+      double mi = 0.0, mj = 0.0, c = 0.0;
+      for (const auto& v : draws) mi += v[i] / 12.0, mj += v[j] / 12.0;
+      for (const auto& v : draws) c += (v[i] - mi) * (v[j] - mj) / 11.0;
+      sigma(i, j) = i == j ? std::max(c, o.noise_sd_floor * o.noise_sd_floor) : (1.0 - lambda) * c;
+    }
+  sigma(absent, absent) = std::pow(1e3 * o.noise_sd_floor, 2);
+  sigma *= 1.0 + 1.0 / o.model_renders;
+  const double gls = d.dot(sigma.ldlt().solve(d));
+  double norm2 = 0.0;
+  for (double v : r) norm2 += v * v;
+  EXPECT_NEAR(norm2, gls, 1e-8 * gls);
+  // Control: the diagonal whitening of the same statistics.
+  CloudStatsObjective diag(refs, model, *f.renderer, o);
+  diag.SetNoiseSd(diag.NoiseSd(draws));
+  ASSERT_TRUE(diag.Evaluate(x.data(), r.data()));
+  double diag2 = 0.0;
+  for (double v : r) diag2 += v * v;
+  std::cout << "[cloud stats] GLS cost " << gls << ", diagonal " << diag2 << "\n";
+  EXPECT_GT(std::abs(diag2 - gls), 0.1 * gls);
 }
 
 // The start of every recovery: the truth x (extinction 1.3, g1 0.7, powder 0.7, ambient
@@ -295,8 +373,10 @@ TEST(CloudStats, KnownShapesControlRecoversTheTruth) {
 
 // Unknown shapes (other noise and weather seeds): the objective at the truth is below the
 // objective at the perturbed start (the statistics point toward the truth; measured 0.377
-// vs 0.486). Not a recovery bound: from one reference the fit lands 13-100% off over seed
-// pairs (bench/results/cloud_stats_seed_pairs.md), a tolerance that would test nothing.
+// vs 0.486 when written; 0.434 vs 0.443 now, the same on main before the full GLS: a thin
+// margin). Not a recovery bound: with the first design's weights the fit lands 13-100% off
+// over seed pairs (bench/results/cloud_stats_seed_pairs.md);
+// the bound is Regime2UnknownShapesRecoverTheAmbient's, with the whitening.
 TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
   Fixture f;
   CloudStatsOptions o;
@@ -308,6 +388,72 @@ TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
   const double cost_start = FitCloudStats({scene.reference}, at_start, *f.renderer, o).initial_cost;
   std::cout << "[cloud stats] cost at the truth " << cost_truth << ", at the start " << cost_start << "\n";
   EXPECT_LT(cost_truth, cost_start);
+}
+
+// Regime 2 (issue 11): ONE unknown-shapes seed pair — the reference rendered with noise /
+// weather seeds 2/12, the model with 102/212 (and weather maps 1212, 2212, 3212) — the
+// default fitted set (ambient_strength) from 30% off, whitened by the diagonal shape noise
+// of 24 draws (weather maps 5000-5023 x noise textures 7001-7006), 64x32, 4 model renders, at
+// most 8 iterations: exactly the case `diag-ambient` of
+//   build/skycal bench --suite fit-cloud-stats-gls --out DIR   (bench/results/cloud-stats-gls/)
+// (pair 1 there: +5.7%). Its 5 pairs spread 3.4-28.7% (median 7.4%): the tolerance is the
+// worst x 1.5 = 43%.
+constexpr double kRegime2AmbientTolerance = 1.5 * 0.287;
+
+// The pair's scene, built once for the fit and its control (each noise texture is 34 MB:
+// ~0.4 s to load and check).
+struct Regime2Pair {
+  CloudStatsOptions o;
+  bench::CloudStatsSyntheticScene scene;
+  std::vector<clouds::WeatherMap> ensemble, maps;
+  std::vector<clouds::CloudNoise> textures;
+  explicit Regime2Pair(Fixture& f) {
+    o.model_renders = 4;
+    o.noise_draws = 24;
+    o.noise_covariance = "diagonal";
+    scene = f.Scene({2, 12}, {102, 212}, &o);
+    ensemble.push_back(scene.weather);
+    for (int e = 1; e < 4; ++e) ensemble.push_back(bench::CloudStatsWeather(212 + 1000 * e, scene.truth.weather_extent_m));
+    for (int d = 0; d < o.noise_draws; ++d) maps.push_back(bench::CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
+    for (uint64_t seed = 7001; seed <= 7006; ++seed) textures.push_back(clouds::LoadOrGenerateCloudNoise(seed, f.cache));
+  }
+  // |fitted ambient / truth - 1| from the truth x ambient_start.
+  double AmbientError(Fixture& f, double ambient_start, int max_iterations, CloudStatsResult* result) const {
+    CloudStatsOptions run = o;
+    run.max_iterations = max_iterations;
+    // The control (0 iterations) does not move, so it needs no whitening: its 24 draws are saved.
+    if (max_iterations == 0) run.noise_draws = 0;
+    clouds::CloudParams start = scene.truth;
+    start.ambient_strength *= ambient_start;
+    CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
+    for (const auto& w : ensemble) model.weather_ensemble.push_back(&w);
+    for (const auto& w : maps) model.shape_draw_maps.push_back(&w);
+    for (const auto& t : textures) model.shape_draw_noises.push_back(&t);
+    *result = FitCloudStats({scene.reference}, model, *f.renderer, run);
+    std::cout << "[cloud stats] regime 2: " << result->termination << ", " << result->renders << " renders, "
+              << result->time_s << " s\n";
+    return std::abs(result->params.ambient_strength / scene.truth.ambient_strength - 1.0);
+  }
+};
+
+TEST(CloudStats, Regime2UnknownShapesRecoverTheAmbient) {
+  ASSERT_EQ(CloudStatsOptions{}.fitted, std::vector<std::string>{"ambient_strength"});  // the default the bench measured
+  Fixture f;
+  const Regime2Pair pair(f);
+  CloudStatsResult fit;
+  const double ambient = pair.AmbientError(f, 1.3, 8, &fit);
+  std::cout << "[cloud stats] regime 2: ambient " << ambient << "\n";
+  EXPECT_EQ(fit.noise_covariance, "diagonal");
+  EXPECT_EQ(fit.noise_draws, 24);
+  EXPECT_LT(ambient, kRegime2AmbientTolerance);
+  EXPECT_GT(fit.iterations, 1);  // it moved (the start is 30% off)
+  // Control: a start far outside the tolerance (2x) that the fit is not allowed to leave
+  // (0 iterations) fails the bound. (Tried first: the extinction held 40% low, a mis-specified
+  // lighting left unfitted: ambient lands 23% off, inside the 43%: the bound cannot see that.)
+  CloudStatsResult stuck;
+  const double ambient_stuck = pair.AmbientError(f, 2.0, 0, &stuck);
+  std::cout << "[cloud stats] regime 2 control: ambient " << ambient_stuck << "\n";
+  EXPECT_GT(ambient_stuck, kRegime2AmbientTolerance);
 }
 
 // A bin the reference fills and the render leaves empty: no residual by default (the old

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <tuple>
 
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"
@@ -31,11 +32,14 @@ namespace {
 constexpr double kSunElevationDeg = 25.0, kSunAzimuthDeg = 30.0;
 const std::vector<std::string> kFour = {"extinction", "phase_g1", "powder_strength", "ambient_strength"};
 const std::vector<std::string> kTwo = {"extinction", "ambient_strength"};
+const std::vector<std::string> kAmbient = {"ambient_strength"};
+const std::vector<std::string> kAlbedoAmbient = {"scattering_albedo", "ambient_strength"};
 
 // Start: the truth times these factors (clamped into the spec's bounds), fitted parameters only.
 const std::vector<std::pair<std::string, double>>& StartFactors() {
   static const std::vector<std::pair<std::string, double>> f = {
-      {"extinction", 1.3}, {"phase_g1", 0.7}, {"powder_strength", 0.7}, {"ambient_strength", 1.3}};
+      {"extinction", 1.3}, {"phase_g1", 0.7}, {"powder_strength", 0.7}, {"ambient_strength", 1.3},
+      {"scattering_albedo", 0.7}};
   return f;
 }
 
@@ -66,7 +70,19 @@ fit::CloudStatsOptions OptionsFor(const CloudStatsPlan& plan, const CloudStatsCo
   if (plan.iteration_cap > 0) o.max_iterations = std::min(o.max_iterations, plan.iteration_cap);
   if (!cfg.fitted.empty()) o.fitted = cfg.fitted;
   o.noise_draws = cfg.noise_draws;
+  o.noise_covariance = cfg.covariance;
   return o;
+}
+
+// The whitening's description for a case's header (older results have no covariance).
+std::string Whitening(const nlohmann::json& x) {
+  if (x["noise_draws"].get<int>() == 0 || !x.contains("noise_covariance")) return "";
+  return "; covariance " + x["noise_covariance"].get<std::string>() +
+         (x["noise_covariance"] == "full" ? " (shrunk toward the diagonal, λ estimated per fit)" : "") +
+         ", draws over " +
+         (x["draw_noise_textures"].get<int>() > 0 ? std::to_string(x["draw_noise_textures"].get<int>()) + " noise textures"
+                                                  : std::string("the model's noise texture")) +
+         "; extinction start " + FormatG(x["extinction_start"].get<double>()) + "x the truth";
 }
 
 // One seed pair's fit (k = 0: the control) -> its row.
@@ -82,7 +98,7 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
   for (const auto& [name, f] : StartFactors()) {
     if (std::find(options.fitted.begin(), options.fitted.end(), name) == options.fitted.end()) continue;
     const auto& s = Spec(name);
-    *s.field(start) = std::clamp(*s.field(scene.truth) * f, s.min, s.max);
+    *s.field(start) = std::clamp(*s.field(scene.truth) * (name == "extinction" ? cfg.extinction_start : f), s.min, s.max);
   }
   fit::CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
   std::vector<clouds::WeatherMap> ensemble, noise_maps;
@@ -94,6 +110,10 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
   }
   for (int d = 0; d < options.noise_draws; ++d) noise_maps.push_back(CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
   for (const auto& w : noise_maps) model.shape_draw_maps.push_back(&w);
+  std::vector<clouds::CloudNoise> draw_textures;
+  for (int i = 0; i < cfg.draw_noises; ++i)
+    draw_textures.push_back(clouds::LoadOrGenerateCloudNoise(7001 + static_cast<uint64_t>(i), cache));
+  for (const auto& t : draw_textures) model.shape_draw_noises.push_back(&t);
   std::vector<clouds::CloudNoise> textures;
   if (!control && cfg.model_noises > 1) {
     for (int i = 1; i < cfg.model_noises; ++i)
@@ -123,8 +143,10 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
                         {"singular_values", res.singular_values},
                         {"noise_draws", res.noise_draws},
                         {"median_noise_sd", res.median_noise_sd},
+                        {"noise_covariance", res.noise_covariance},
+                        {"noise_shrinkage", res.noise_shrinkage},
                         {"termination", res.termination}};
-  std::string line = "[fit-cloud-stats]   pair " + std::to_string(k) + (control ? " (control)" : "") + ":";
+  std::string line = "[cloud-stats seed pairs]   pair " + std::to_string(k) + (control ? " (control)" : "") + ":";
   for (const auto& [name, f] : StartFactors()) {
     clouds::CloudParams fitted = res.params, truth = scene.truth;
     const double t = *Spec(name).field(truth), v = *Spec(name).field(fitted);
@@ -132,7 +154,7 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
         {"truth", t}, {"start", *Spec(name).field(start)}, {"fitted", v}, {"rel_error", (v - t) / t}};
     line += " " + name + " " + SignedPct((v - t) / t);
   }
-  o.Log(line + ", " + FormatG(res.time_s) + " s");
+  o.Log(line + ", " + FormatG(res.time_s) + " s, " + std::to_string(res.renders) + " renders");
   return row;
 }
 
@@ -173,27 +195,69 @@ CloudStatsPlan FitCloudStatsPlan(bool quick) {
   return p;
 }
 
+CloudStatsPlan FitCloudStatsGlsPlan(bool quick) {
+  CloudStatsPlan p;
+  // The same 24 whitening draws (weather maps 5000+d, noise textures 7001 + d % 6) for every
+  // case: diagonal and full whitening differ only in the covariance.
+  auto gls = [](const char* name, std::vector<std::string> fitted, const char* covariance, double extinction_start) {
+    CloudStatsConfig c{name, 64, 1, 4, 4, 8, std::move(fitted), 24, 1, "", ""};
+    c.covariance = covariance;
+    c.draw_noises = 6;
+    c.extinction_start = extinction_start;
+    return c;
+  };
+  p.configs = {gls("diag-2params", kTwo, "diagonal", 1.3),         gls("full-2params", kTwo, "full", 1.3),
+               gls("diag-2params-low", kTwo, "diagonal", 0.7),     gls("full-2params-low", kTwo, "full", 0.7),
+               gls("diag-ambient", kAmbient, "diagonal", 1.3),     gls("full-ambient", kAmbient, "full", 1.3),
+               gls("full-albedo-ambient", kAlbedoAmbient, "full", 1.3)};
+  // Cheaper settings tried for the recovery test (tests/cloud_stats_test.cc, Regime2*): 2 model
+  // renders, 8 draws over 2 noise textures, at most 4 iterations.
+  const std::tuple<const char*, std::vector<std::string>, const char*> tests[] = {
+      {"test-ambient", kAmbient, "full"},
+      {"test-albedo-ambient", kAlbedoAmbient, "full"},
+      {"test-diag-ambient", kAmbient, "diagonal"}};
+  for (const auto& [name, fitted, covariance] : tests) {
+    CloudStatsConfig c = gls(name, fitted, covariance, 1.3);
+    c.model_maps = 2;
+    c.model_renders = 2;
+    c.max_iterations = 4;
+    c.noise_draws = 8;
+    c.draw_noises = 2;
+    p.configs.push_back(c);
+  }
+  // --quick: the cheaper settings only, 5 pairs each (~2 min). Tried for the recovery test:
+  // their spread (worst 73% on ambient) is too wide for a tolerance, so the test runs `diag-ambient`.
+  if (quick) p.configs.erase(p.configs.begin(), p.configs.end() - 3);
+  // The default: the library's default fitted set (ambient alone) with its best whitening.
+  Axis axis{"config", {}, quick ? std::string("test-diag-ambient") : std::string("diag-ambient")};
+  for (const auto& c : p.configs) axis.values.push_back(c.name);
+  p.grid.axes = {axis};
+  return p;
+}
+
 const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const std::string& name) {
   for (const auto& c : plan.configs)
     if (c.name == name) return c;
   throw Error("fit-cloud-stats: no configuration '" + name + "'");
 }
 
-Suite FitCloudStatsSuite() {
+namespace {
+
+// The seed-pair suite over `plan_of(quick)`'s configurations (fit-cloud-stats and fit-cloud-stats-gls).
+Suite SeedPairSuite(const std::string& suite_name, const std::string& summary, CloudStatsPlan (*plan_of)(bool)) {
   Suite s;
-  s.name = "fit-cloud-stats";
-  s.summary = "the unknown-shapes cloud lighting fit over 5 seed pairs + a control, per configuration (--quick: "
-              "2 configurations, 1 pair at 64x32)";
+  s.name = suite_name;
+  s.summary = summary;
   s.error_metric = "median |fitted / truth - 1| of the fitted lighting parameters over the unknown-shape seed pairs";
   s.error_axis = "median |rel error| of the fitted lighting";
-  s.markdown = [](const std::vector<CaseResult>& cases) {
+  s.markdown = [suite_name](const std::vector<CaseResult>& cases) {
     std::string md =
         "# Cloud lighting from statistics, unknown shapes: seed pairs\n\n"
-        "`skycal bench --suite fit-cloud-stats` (bench/src/fit_cloud_stats_suite.cc; numbers in `results.json`). "
+        "`skycal bench --suite " + suite_name + "` (bench/src/fit_cloud_stats_suite.cc; numbers in `results.json`). "
         "Reference: default_cloudy's lighting, sun 25 deg up at azimuth 30, noise seed / weather seed as listed; the fit "
-        "renders with the other seeds (other shapes, the same weather statistics) from the truth x (extinction 1.3, g1 0.7, "
-        "powder 0.7, ambient 1.3) for the fitted parameters, the others held at the truth. Relative error (fitted - truth) "
-        "/ truth. Times on a shared machine (noisy).\n\n" +
+        "renders with the other seeds (other shapes, the same weather statistics) from the truth x (extinction 1.3 unless "
+        "the case says otherwise, g1 0.7, powder 0.7, ambient 1.3, albedo 0.7) for the fitted parameters, the others held at "
+        "the truth. Relative error (fitted - truth) / truth. Times on a shared machine (noisy).\n\n" +
         CaseTable(cases, "median abs rel error", {{"pairs", [](const CaseResult& c) { return ExtraNumber(c, "pairs"); }}});
     for (const CaseResult& c : cases) {
       if (!c.extra.contains("runs")) continue;
@@ -207,32 +271,35 @@ Suite FitCloudStatsSuite() {
             (x["noise_draws"].get<int>() > 0 ? "whitened by the shape noise of " + std::to_string(x["noise_draws"].get<int>()) +
                                                    " draws at the start"
                                              : std::string("weighted by bin share")) +
-            "; model noise textures " + std::to_string(x["model_noise_textures"].get<int>()) + ".\n\n" +
-            "| pair (noise/weather) | extinction | g1 | powder | ambient | cost start -> end | iterations | renders | "
-            "time (s) |\n|---|---|---|---|---|---|---|---|---|\n";
+            "; model noise textures " + std::to_string(x["model_noise_textures"].get<int>()) + Whitening(x) + ".\n\n" +
+            "| pair (noise/weather) | extinction | g1 | powder | ambient | albedo | cost start -> end | iterations | renders | "
+            "time (s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
       for (const auto& r : x["runs"]) {
         const auto seeds = [&](const char* key) {
           return std::to_string(r[key][0].get<uint64_t>()) + "/" + std::to_string(r[key][1].get<uint64_t>());
         };
         md += "| " + (r["control_known_shapes"].get<bool>() ? std::string("control (same seeds)")
                                                             : seeds("reference_seeds") + " vs " + seeds("model_seeds"));
-        for (const auto& [name, f] : StartFactors()) md += " | " + SignedPct(r["parameters"][name]["rel_error"].get<double>());
+        for (const auto& [name, f] : StartFactors())
+          md += " | " + (r["parameters"].contains(name) ? SignedPct(r["parameters"][name]["rel_error"].get<double>())
+                                                        : std::string("-"));
         md += " | " + FormatG(r["initial_cost"].get<double>()) + " -> " + FormatG(r["final_cost"].get<double>()) + " | " +
               std::to_string(r["iterations"].get<int>()) + " | " + std::to_string(r["renders"].get<long long>()) + " | " +
               FormatFixed(r["time_s"].get<double>(), 1) + " |\n";
       }
       md += "\n| spread over the unknown-shape pairs | median abs | max abs |\n|---|---|---|\n";
       for (const auto& [name, f] : StartFactors())
-        md += "| " + name + " | " + FormatFixed(100.0 * x["spread"][name]["median_abs_rel_error"].get<double>(), 1) +
+        if (x["spread"].contains(name))
+          md += "| " + name + " | " + FormatFixed(100.0 * x["spread"][name]["median_abs_rel_error"].get<double>(), 1) +
               "% | " + FormatFixed(100.0 * x["spread"][name]["max_abs_rel_error"].get<double>(), 1) + "% |\n";
     }
     return md;
   };
-  s.run = [](const SuiteOptions& o) {
-    const CloudStatsPlan plan = FitCloudStatsPlan(o.quick);
+  s.run = [suite_name, plan_of](const SuiteOptions& o) {
+    const CloudStatsPlan plan = plan_of(o.quick);
     const std::string cache = CloudStatsCacheDir();
     const std::unique_ptr<clouds::CloudRenderer> renderer = CreateCloudStatsRenderer();
-    return RunGrid("fit-cloud-stats", plan.grid, o, [&](CaseResult& c) {
+    return RunGrid(suite_name, plan.grid, o, [&](CaseResult& c) {
       const CloudStatsConfig& cfg = FindCloudStatsConfig(plan, Get(c.settings, "config"));
       const fit::CloudStatsOptions options = OptionsFor(plan, cfg);
       nlohmann::json runs = nlohmann::json::array();
@@ -272,6 +339,9 @@ Suite FitCloudStatsSuite() {
                  {"max_iterations", options.max_iterations},
                  {"fitted", Join(options.fitted)},
                  {"noise_draws", options.noise_draws},
+                 {"noise_covariance", options.noise_covariance},
+                 {"draw_noise_textures", cfg.draw_noises},
+                 {"extinction_start", cfg.extinction_start},
                  {"model_noise_textures", cfg.model_noises},
                  {"renderer", renderer->Describe()},
                  {"results_file", cfg.results_file},
@@ -279,6 +349,22 @@ Suite FitCloudStatsSuite() {
     });
   };
   return s;
+}
+
+}  // namespace
+
+Suite FitCloudStatsSuite() {
+  return SeedPairSuite("fit-cloud-stats",
+                       "the unknown-shapes cloud lighting fit over 5 seed pairs + a control, per configuration (--quick: "
+                       "2 configurations, 1 pair at 64x32)",
+                       FitCloudStatsPlan);
+}
+
+Suite FitCloudStatsGlsSuite() {
+  return SeedPairSuite("fit-cloud-stats-gls",
+                       "the full GLS against the diagonal whitening, same draws, 5 seed pairs + a control at 64x32 "
+                       "(--quick: the 3 cheaper test-* settings, 5 pairs each)",
+                       FitCloudStatsGlsPlan);
 }
 
 }  // namespace skycal::bench

@@ -19,6 +19,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(FitCloudsProcessSuite());
   r.Add(BatchSuite());
   r.Add(FitCloudStatsSuite());
+  r.Add(FitCloudStatsGlsSuite());
   r.Add(CloudStatsNoiseSuite());
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());

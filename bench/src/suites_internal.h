@@ -21,6 +21,7 @@ Suite FitCloudsSuite();  // fit_clouds_suite.cc
 Suite FitCloudsProcessSuite();  // fit_clouds_process_suite.cc
 Suite BatchSuite();    // batch_suite.cc
 Suite FitCloudStatsSuite();  // fit_cloud_stats_suite.cc
+Suite FitCloudStatsGlsSuite();  // fit_cloud_stats_suite.cc
 Suite CloudStatsNoiseSuite();  // cloud_stats_noise_suite.cc
 Suite ProbeSuite();    // probe_suite.cc
 Suite CaptureSuite();  // capture_suite.cc

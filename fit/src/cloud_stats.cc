@@ -5,7 +5,10 @@
 #include <limits>
 #include <numeric>
 
+#include <Eigen/Core>
+
 #include "cloud_stats_objective.h"
+#include "shape_noise_covariance.h"
 #include "skycal/clouds/composite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
@@ -113,6 +116,15 @@ bool CloudStatsOptions::IsValid(std::string* why) const {
   }
   if (!(noise_sd_floor > 0.0 && noise_sd_floor <= 10.0)) {
     *why = "cloud stats: noise_sd_floor = " + std::to_string(noise_sd_floor) + " (expected (0, 10] log radiance)";
+    return false;
+  }
+  if (noise_covariance != "diagonal" && noise_covariance != "full") {
+    *why = "cloud stats: noise_covariance = '" + noise_covariance + "' (expected diagonal or full)";
+    return false;
+  }
+  if (!(noise_shrinkage == -1.0 || (noise_shrinkage >= 0.0 && noise_shrinkage <= 1.0))) {
+    *why = "cloud stats: noise_shrinkage = " + std::to_string(noise_shrinkage) +
+           " (expected a fixed shrinkage in [0, 1], or -1: estimated from the draws)";
     return false;
   }
   if (fitted.empty()) {
@@ -291,9 +303,15 @@ CloudStatsObjective::CloudStatsObjective(const std::vector<CloudStatsReference>&
                       std::sqrt((ref.weight[ref.Bin(sb, eb, 0)] + ref.weight[ref.Bin(sb, eb, 1)]) / total);
     }
   }
+  for (const clouds::CloudNoise* nz : scene.shape_draw_noises)
+    if (!nz) throw Error("cloud stats: a null noise texture in the scene's shape_draw_noises");
   if (options.noise_draws > 0) {
     const std::vector<double> x = InitialX();
-    SetNoiseSd(EstimateNoiseSd(x.data(), options.noise_draws));
+    const std::vector<std::vector<double>> draws = NoiseDraws(x.data(), options.noise_draws);
+    if (options.noise_covariance == "full")
+      SetNoiseCovariance(draws, options.noise_shrinkage);
+    else
+      SetNoiseSd(NoiseSd(draws));
   }
 }
 
@@ -318,54 +336,105 @@ void CloudStatsObjective::SetNoiseSd(const std::vector<double>& sd) {
   noise_sd_.resize(sd.size());
   const double pooled = std::sqrt(1.0 + 1.0 / options_.model_renders);
   for (size_t k = 0; k < sd.size(); ++k) {
-    noise_sd_[k] = std::max(std::isfinite(sd[k]) ? sd[k] : 1e3 * options_.noise_sd_floor, options_.noise_sd_floor);
+    noise_sd_[k] = std::max(std::isfinite(sd[k]) ? sd[k] : kAbsentSdFactor * options_.noise_sd_floor, options_.noise_sd_floor);
     weights_[k] = 1.0 / (noise_sd_[k] * pooled);
   }
 }
 
-std::vector<double> CloudStatsObjective::EstimateNoiseSd(const double* x, int draws) const {
+std::vector<std::vector<double>> CloudStatsObjective::NoiseDraws(const double* x, int draws) const {
+  std::vector<std::vector<double>> v(draws, std::vector<double>(num_residuals_));
+  for (int d = 0; d < draws; ++d)
+    if (!DrawStatistics(x, d, v[d].data())) throw Error("cloud stats: shape draw " + std::to_string(d) + " failed to render");
+  return v;
+}
+
+std::vector<double> CloudStatsObjective::NoiseSd(const std::vector<std::vector<double>>& draws) const {
   const int n = num_residuals_;
-  std::vector<double> sum(n, 0.0), sum2(n, 0.0), v(n);
-  std::vector<int> count(n, 0);
-  for (int d = 0; d < draws; ++d) {
-    if (!DrawStatistics(x, d, v.data())) throw Error("cloud stats: shape draw " + std::to_string(d) + " failed to render");
-    for (int k = 0; k < n; ++k)
-      if (std::isfinite(v[k])) {
-        sum[k] += v[k];
-        sum2[k] += v[k] * v[k];
-        ++count[k];
-      }
-  }
+  const int count = static_cast<int>(draws.size());
   std::vector<double> sd(n);
   for (int k = 0; k < n; ++k) {
+    double sum = 0.0, sum2 = 0.0;
+    bool all = count >= 2;
+    for (const auto& v : draws) {
+      all = all && std::isfinite(v[k]);
+      sum += v[k];
+      sum2 += v[k] * v[k];
+    }
     // A statistic some draw leaves empty comes and goes with the shapes (and with the
     // parameters): it makes the cost jump, so it counts for nothing.
-    if (count[k] < draws) {
-      sd[k] = 1e3 * options_.noise_sd_floor;
+    if (!all) {
+      sd[k] = kAbsentSdFactor * options_.noise_sd_floor;
       continue;
     }
-    const double mean = sum[k] / count[k];
-    sd[k] = std::sqrt(std::max(0.0, (sum2[k] - count[k] * mean * mean) / (count[k] - 1)));
+    const double mean = sum / count;
+    sd[k] = std::sqrt(std::max(0.0, (sum2 - count * mean * mean) / (count - 1)));
   }
   return sd;
+}
+
+std::vector<double> CloudStatsObjective::EstimateNoiseSd(const double* x, int draws) const {
+  return NoiseSd(NoiseDraws(x, draws));
+}
+
+double CloudStatsObjective::SetNoiseCovariance(const std::vector<std::vector<double>>& draws, double shrinkage) {
+  const int n = num_residuals_, count = static_cast<int>(draws.size());
+  if (count < 2) throw Error("cloud stats: a full noise covariance needs at least 2 draws, got " + std::to_string(count));
+  for (const auto& v : draws)
+    if (static_cast<int>(v.size()) != n)
+      throw Error("cloud stats: a draw of " + std::to_string(v.size()) + " statistics for " + std::to_string(n));
+  // The statistics every draw fills share one covariance; the others are uncorrelated with
+  // a variance that makes them count for nothing (as the diagonal whitening does).
+  std::vector<int> present;
+  for (int k = 0; k < n; ++k)
+    if (std::all_of(draws.begin(), draws.end(), [&](const auto& v) { return std::isfinite(v[k]); })) present.push_back(k);
+  const int np = static_cast<int>(present.size());
+  Eigen::MatrixXd X(count, np);
+  for (int d = 0; d < count; ++d)
+    for (int i = 0; i < np; ++i) X(d, i) = draws[d][present[i]];
+  double lambda = shrinkage;
+  if (lambda < 0.0) {
+    lambda = np >= 2 ? DiagonalTargetShrinkage(X) : 1.0;
+    // Fewer draws than statistics: S is singular and λ = 0 would leave Σ singular too.
+    if (count <= np) lambda = std::max(lambda, 1e-3);
+  }
+  const double floor2 = options_.noise_sd_floor * options_.noise_sd_floor;
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(n, n);
+  if (np > 0) {
+    Eigen::MatrixXd S = ShrinkTowardDiagonal(SampleCovariance(X), lambda);
+    for (int i = 0; i < np; ++i) S(i, i) = std::max(S(i, i), floor2);
+    for (int i = 0; i < np; ++i)
+      for (int j = 0; j < np; ++j) sigma(present[i], present[j]) = S(i, j);
+  }
+  std::vector<double> sd(n, kAbsentSdFactor * options_.noise_sd_floor);
+  for (int i = 0; i < np; ++i) sd[present[i]] = std::sqrt(sigma(present[i], present[i]));
+  for (int k = 0; k < n; ++k)
+    if (sigma(k, k) == 0.0) sigma(k, k) = sd[k] * sd[k];
+  // The reference is one draw, the model the mean of M: the difference has (1 + 1/M) Σ.
+  sigma *= 1.0 + 1.0 / options_.model_renders;
+  SetNoiseSd(sd);  // the per-statistic sd and diagonal weights, for the reading
+  whitener_ = std::make_shared<const CovarianceWhitener>(sigma);
+  shrinkage_ = lambda;
+  return lambda;
 }
 
 bool CloudStatsObjective::DrawStatistics(const double* x, int draw, double* values) const {
   const clouds::CloudParams p = ParamsAt(x);
   const int e = static_cast<int>(scene_.shape_draw_maps.size());
+  CloudStatsScene sd = scene_;
+  if (!scene_.shape_draw_noises.empty()) sd.noise = scene_.shape_draw_noises[draw % scene_.shape_draw_noises.size()];
   for (size_t r = 0; r < refs_.size(); ++r) {
     CloudStatsRender rr;
     try {
       if (e > 0) {
-        rr = RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (draw / e) * options_.model_time_step_s,
+        rr = RenderForCloudStats(refs_[r], sd, p, renderer_, options_, (draw / e) * options_.model_time_step_s,
                                  scene_.shape_draw_maps[draw % e]);
       } else {
         // Past the model's own renders: index M' + draw of the same scheme.
         const int me = std::max<int>(1, static_cast<int>(scene_.weather_ensemble.size()));
         const int m = (options_.model_renders + me - 1) / me * me + draw;
         rr = scene_.weather_ensemble.empty()
-                 ? RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, m * options_.model_time_step_s)
-                 : RenderForCloudStats(refs_[r], scene_, p, renderer_, options_, (m / me) * options_.model_time_step_s,
+                 ? RenderForCloudStats(refs_[r], sd, p, renderer_, options_, m * options_.model_time_step_s)
+                 : RenderForCloudStats(refs_[r], sd, p, renderer_, options_, (m / me) * options_.model_time_step_s,
                                        scene_.weather_ensemble[m % me]);
       }
     } catch (const Error&) {
@@ -439,9 +508,11 @@ bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vect
   for (int k = 0; k < num_residuals_; ++k) {
     // A bin the model leaves empty (NaN quantiles) costs options_.empty_bin_log_residual log
     // units per quantile (0 by default: then only the share residual sees it).
-    residuals[k] = weights_[k] * (std::isnan(model[k]) ? options_.empty_bin_log_residual : model[k] - ref_values_[k]);
+    const double d = std::isnan(model[k]) ? options_.empty_bin_log_residual : model[k] - ref_values_[k];
+    residuals[k] = whitener_ ? d : weights_[k] * d;
     if (!std::isfinite(residuals[k])) return false;
   }
+  if (whitener_) whitener_->Apply(residuals, residuals);  // r' = L^-1 r: the full GLS
   return true;
 }
 

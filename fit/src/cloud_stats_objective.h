@@ -2,12 +2,15 @@
 // x (the free lighting fields, each divided by its scale) -> renders -> statistics ->
 // residuals. The Ceres cost (cloud_stats_term.h) and FitCloudStats share it.
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "skycal/fit/cloud_stats.h"
 
 namespace skycal::fit {
+
+class CovarianceWhitener;  // shape_noise_covariance.h
 
 class CloudStatsObjective {
  public:
@@ -50,6 +53,18 @@ class CloudStatsObjective {
   // floor: it then counts for nothing). Throws when a render fails.
   std::vector<double> EstimateNoiseSd(const double* x, int draws) const;
   const std::vector<double>& noise_sd() const { return noise_sd_; }
+  // The statistics of draws 0..draws-1 at x ([draw][statistic], NaN where a draw leaves a
+  // bin empty; throws when a render fails), and their sd per statistic as EstimateNoiseSd.
+  std::vector<std::vector<double>> NoiseDraws(const double* x, int draws) const;
+  std::vector<double> NoiseSd(const std::vector<std::vector<double>>& draws) const;
+  // The full GLS (options.noise_covariance "full"): Σ, the covariance of the statistics over
+  // `draws`, shrunk toward its diagonal by `shrinkage` (< 0: estimated, Schäfer-Strimmer;
+  // shape_noise_covariance.h), each variance floored at options.noise_sd_floor²; a statistic
+  // some draw leaves empty is uncorrelated with variance (1e3 floor)². From then on Evaluate
+  // returns r' = L^-1 (model - reference) with Σ (1 + 1/M) = L Lᵀ. Returns the λ used.
+  double SetNoiseCovariance(const std::vector<std::vector<double>>& draws, double shrinkage);
+  bool full_whitening() const { return whitener_ != nullptr; }
+  double noise_shrinkage() const { return shrinkage_; }
 
   const std::vector<CloudStatistics>& reference_stats() const { return ref_stats_; }
   long long renders() const { return renders_; }
@@ -72,6 +87,9 @@ class CloudStatsObjective {
   int num_residuals_ = 0;
   std::vector<double> ref_values_, weights_, noise_sd_;
   std::vector<int> offsets_;  // per reference: its first residual
+  std::shared_ptr<const CovarianceWhitener> whitener_;  // the full GLS's L^-1 (null: diagonal weights)
+  double shrinkage_ = 0.0;
+  static constexpr double kAbsentSdFactor = 1e3;  // x noise_sd_floor: a statistic some draw leaves empty
   mutable long long renders_ = 0;
   // Flattens statistics of reference r pooled over `images` renders into the residual layout.
   void Flatten(int r, const CloudStatistics& s, int images, double* values) const;

@@ -28,8 +28,9 @@ std::string WhyHeld(const std::string& name) {
     return "not separable from one sky's statistics: shape noise alone predicts an sd of 136% (75% whitened); "
            "5 seed pairs land 64-134% off (median over three weightings; at a bound in most pairs)";
   if (name == "extinction")
-    return "biased by the cloud shapes: the noise texture's density moves the opacity distribution as extinction "
-           "does; 5 seed pairs land 27-41% off (median) although weather-map noise alone predicts 10%";
+    return "not determined by one sky's statistics with unknown shapes: over 5 seed pairs the fit stays on its "
+           "start's side of the truth (from 1.3x: +5..+39%, from 0.7x: -17..-44%, full GLS) and drags the ambient "
+           "13-20% off with it (bench/results/cloud_stats_gls.md); a photo's coverage match sets the opacity with it";
   if (name == "powder_view_fade") return "only its product with powder_strength shows in the statistics";
   if (name == "rain_absorption") return "no precipitation in the weather map: no rain pixel constrains it";
   if (name == "ambient_height_bias" || name == "ground_bounce")
@@ -172,6 +173,8 @@ CloudStatsResult FitCloudStats(const std::vector<CloudStatsReference>& refs, con
     std::nth_element(sd.begin(), sd.begin() + sd.size() / 2, sd.end());
     res.noise_draws = options.noise_draws;
     res.median_noise_sd = sd[sd.size() / 2];
+    res.noise_covariance = obj.full_whitening() ? "full" : "diagonal";
+    res.noise_shrinkage = obj.noise_shrinkage();
   }
   res.renders = obj.renders();
   res.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

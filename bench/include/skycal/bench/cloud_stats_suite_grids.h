@@ -24,6 +24,12 @@ struct CloudStatsConfig {
   int model_noises = 1;         // noise textures the model cycles through
   std::string results_file;     // bench/results/<file>.md the program wrote for it ("" for none)
   std::string program_args;     // the retired program's arguments after PAIRS STEM
+  // The whitening's covariance (CloudStatsOptions::noise_covariance: "diagonal" or "full",
+  // λ estimated), the noise textures its draws cycle through (seeds 7001..7000+N; 0: the
+  // model's one texture), and the fitted extinction's start as a multiple of the truth.
+  std::string covariance = "diagonal";
+  int draw_noises = 0;
+  double extinction_start = 1.3;
 };
 
 struct CloudStatsPlan {
@@ -36,6 +42,13 @@ struct CloudStatsPlan {
 // Full: 9 configurations x 5 pairs; --quick: `default` and `gls-2params`, 1 pair + the
 // control at 64x32, at most 2 iterations.
 CloudStatsPlan FitCloudStatsPlan(bool quick);
+// fit-cloud-stats-gls: the full GLS against the diagonal whitening on the same draws (24
+// weather maps x 6 noise textures), 5 pairs + the control at 64x32: extinction + ambient
+// from above (1.3x) and below (0.7x) the true extinction, ambient alone, albedo + ambient
+// The test-* cases are cheaper settings tried for the recovery test (2 model renders, 8 draws
+// over 2 noise textures, at most 4 iterations; too wide a spread: the test runs diag-ambient's);
+// --quick runs only them, 5 pairs each.
+CloudStatsPlan FitCloudStatsGlsPlan(bool quick);
 // The configuration named `name` of `plan`; throws skycal::Error when absent.
 const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const std::string& name);
 

@@ -53,18 +53,22 @@ struct CloudStatsOptions {
   // and a parameter that empties bins can escape: extinction ran to 0 on the photo `dawn`).
   double empty_bin_log_residual = 0.0;
   // The lighting parameters fitted (clouds.* names of CloudParameterSpecs()); every other
-  // field is held at the initial value, and cloud_stats / fit.json say why. The default set:
-  // the two whose signatures stand above the statistics' shape noise (singular values of
-  // diag(Σ)^-1/2 J per ln p of 32 and 9.4 at 64x32, bench/results/cloud_stats_noise.md).
-  // phase_g1 and powder_strength are held: from one sky the shape noise alone predicts an
-  // sd of 84% and 136% for them, and 5 seed pairs land 38-134% off (median over three
-  // weightings; bench/results/cloud_stats_seed_pairs.md, "Shape noise"); with known shapes they are
-  // recovered (fit them then). The silver-lining lobe (phase_g2, phase_blend: 164-1,076%
-  // predicted), albedo (an overall scale with the sun and the exposure), powder_view_fade,
-  // rain_absorption (no rain in a fair-weather photo), ambient_height_bias and ground_bounce
-  // (traded against ambient_strength), the multiple-scattering octaves and atmosphere_blend
-  // are held too.
-  std::vector<std::string> fitted = {"extinction", "ambient_strength"};
+  // field is held at the initial value, and cloud_stats / fit.json say why. The default: the
+  // one field one sky's statistics recover with unknown shapes, ambient_strength (5 seed
+  // pairs at 64x32, the others held at the truth: median 7.4% / worst 28.7% with the
+  // diagonal whitening; `skycal bench --suite fit-cloud-stats-gls`,
+  // bench/results/cloud_stats_gls.md). extinction is held (as the photo path holds it, where
+  // the coverage match sets the opacity with it): the fits stay on their start's side of the
+  // truth — from 1.3x: +5..+39% (median 29%), from 0.7x: -17..-44% (median 23%), full GLS —
+  // and drag ambient 13-20% (median) along. phase_g1 and powder_strength are held: from one
+  // sky the shape noise alone predicts an sd of 84% and 136% for them, and 5 seed pairs land
+  // 38-134% off (median over three weightings; bench/results/cloud_stats_seed_pairs.md,
+  // "Shape noise"). scattering_albedo with ambient: a pair lands 24% / 62% off (the same
+  // bench). With known shapes all are recovered (fit them then). The silver-lining lobe
+  // (phase_g2, phase_blend: 164-1,076% predicted), powder_view_fade, rain_absorption (no rain
+  // in a fair-weather photo), ambient_height_bias and ground_bounce (traded against
+  // ambient_strength), the multiple-scattering octaves and atmosphere_blend are held too.
+  std::vector<std::string> fitted = {"ambient_strength"};
   // Central-difference step per parameter, as a fraction of its (max - min) range.
   double relative_step = 2e-3;
   int max_iterations = 25;
@@ -79,6 +83,18 @@ struct CloudStatsOptions {
   // its share of the reference's cloud (the first design).
   int noise_draws = 0;        // [0, 256]; >= 4 when on
   double noise_sd_floor = 0.02;  // lower bound of a statistic's sd (log radiance or share)
+  // The whitening's covariance (with noise_draws > 0). "diagonal": each residual divided by
+  // its statistic's sd (above). "full": a generalised least squares with the statistics' full
+  // covariance over the draws, shrunk toward its diagonal, Σ = (1 - λ) S + λ diag(S) (D draws
+  // cannot estimate a full covariance of ~100 statistics), each variance floored as above:
+  // Ceres sees the fixed linear map r' = L^-1 r, Σ (1 + 1/M) = L Lᵀ, so the cost is
+  // rᵀ Σ^-1 r and statistics that move together with the shapes (a bin's quantiles and
+  // channels, neighbouring bins) count once (fit/src/shape_noise_covariance.h).
+  std::string noise_covariance = "diagonal";
+  // λ of the "full" covariance: in [0, 1] fixed, or -1: estimated from the draws (Schäfer &
+  // Strimmer 2005, the Ledoit-Wolf optimum for a diagonal target; at least 1e-3 when the
+  // draws are fewer than the statistics, so Σ stays positive definite).
+  double noise_shrinkage = -1.0;
   int render_width = 256, render_height = 128;  // pixels of the model's render per reference
   clouds::MarchOptions march;
   bool IsValid(std::string* why) const;
@@ -113,6 +129,11 @@ struct CloudStatsScene {
   // the weather ensemble (or `weather`) continued past the model's own renders (wind moves a
   // 60 km map 18 km a step: after a few steps the draws repeat shapes, so give maps here).
   std::vector<const clouds::WeatherMap*> shape_draw_maps;
+  // The 3D noise textures of the shape draws: draw d renders shape_draw_noises[d % size]
+  // (empty: `noise`). The noise texture is a shape draw too (its statistics' sd across seeds
+  // is 0.75x that across weather maps, bench/results/cloud_stats_noise.md): give several here
+  // and the measured shape noise holds it.
+  std::vector<const clouds::CloudNoise*> shape_draw_noises;
   // The model's ensemble of noise textures: when non-empty, model render m uses
   // noise_textures[m % size] (`noise` stays the texture of the shape draws). The 3D noise is a
   // shape draw too: its density distribution moves the opacity distribution the way
@@ -174,6 +195,10 @@ struct CloudStatsResult {
   // noise sd (log radiance / share); the residuals were divided by it (whitened).
   int noise_draws = 0;
   double median_noise_sd = 0.0;
+  // The whitening: "none" (bin-share weights), "diagonal" or "full" (options.noise_covariance),
+  // and the full covariance's shrinkage λ toward its diagonal (0 otherwise).
+  std::string noise_covariance = "none";
+  double noise_shrinkage = 0.0;
 };
 
 // Fits the lighting of `scene.initial` so the model's statistics match the references'.
