@@ -4,7 +4,12 @@
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/cloud_textures.h"
+#include "skycal/core/image.h"
 #include "skycal/render/preset.h"
+
+namespace skycal::bench {
+struct SuiteOptions;
+}
 
 namespace skycal::bench {
 
@@ -18,5 +23,28 @@ struct CloudBenchScene {
 
 // Throws skycal::Error when the bundled preset or its weather map is unreadable.
 CloudBenchScene LoadDefaultCloudyScene();  // clouds_suite.cc
+
+// The march of a `march` axis value (clouds_suite.cc): "game" (the defaults), "naive"
+// (every optimisation off), "no-X" (the game's with optimisation X off: cheap-march,
+// step-back, return-to-cheap, opacity-stop, cheap-light, far-light) or "naive+X" (the naive
+// march with X on: cheap-march (with the game's step back and return to cheap),
+// cheap-march-no-step-back, opacity-stop, cheap-light, far-light). Throws skycal::Error on
+// another name.
+clouds::MarchOptions CloudMarchVariant(const std::string& name);
+
+// The clouds suites' converged reference at error_req's size and sun (clouds_suite.cc):
+// the double CPU march with every optimisation off, 1,024 primary steps at every elevation,
+// the light integral on the sun ray (64 samples over 8 km, no cone, no far sample; 256 and
+// 16 with o.quick), composited over the clear sky without the sun disc.
+struct ConvergedCloudReference {
+  ImageRGB sky;                // clear sky, no disc
+  clouds::CloudImage clouds;   // the converged march
+  ImageRGB truth;              // sky x T + clouds
+};
+ConvergedCloudReference MakeConvergedCloudReference(const CloudBenchScene& scene, const clouds::CloudRenderRequest& error_req,
+                                                    const SuiteOptions& o);
+
+// CPU time of this process so far (all threads, lavapipe's included), ms.
+double ProcessCpuMs();
 
 }  // namespace skycal::bench
