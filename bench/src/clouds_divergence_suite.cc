@@ -106,7 +106,7 @@ Suite CloudsDivergenceSuite() {
   s.run = [](const SuiteOptions& o) {
     const CloudBenchScene scene = LoadDefaultCloudyScene();
     Grid grid;
-    grid.axes = {{"march", {"naive", "game", "no-cheap-light"}, "game"}};
+    grid.axes = {{"march", {"naive", "game", "no-cheap-light", "cheap-light-0.6"}, "game"}};
     clouds::CloudRenderRequest req;
     req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);  // the clouds suite's scene
     req.width = o.quick ? 64 : 512;
