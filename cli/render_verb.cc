@@ -219,7 +219,7 @@ RenderOptions ParseRenderArgs(int argc, char** argv) {
   VerbCommandLine cl("render", "skycal render: render a sky preset to a lat-long EXR",
                      "  skycal render [--preset P.json] (--sun-elevation DEG --sun-azimuth DEG | --sun-dir X,Y,Z)\n"
                      "                [--size WxH] [--backend vulkan|cpu] --out OUT.exr [--png OUT.png] [--json]\n"
-                     "                [--clouds [--weather-map W.exr] [--cloud-time S] [--cloud-steps Z,H] [--cloud-naive]]",
+                     "                [--clouds [--weather-map W.exr] [--cloud-time S] [--cloud-steps Z,H] [--cloud-cheap-light-opacity O] [--cloud-naive]]",
                      "Output units: cd/m^2 per channel, scene-linear Rec.709.");
   RenderOptions o;
   std::optional<std::string> sun_dir, size, backend, ground;
