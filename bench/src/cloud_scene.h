@@ -9,6 +9,7 @@
 
 namespace skycal::bench {
 struct SuiteOptions;
+struct CaseResult;
 }
 
 namespace skycal::bench {
@@ -44,7 +45,24 @@ struct ConvergedCloudReference {
 ConvergedCloudReference MakeConvergedCloudReference(const CloudBenchScene& scene, const clouds::CloudRenderRequest& error_req,
                                                     const SuiteOptions& o);
 
+// The composite's error against ref.truth at the same size, per pixel as RelRmse weighs it
+// (solid angle, three channels, pixels above the horizon with positive finite values), split
+// into c.extra (clouds_error_suite.cc): e2_elev_{0_5,5_15,15_45,45_90} by elevation (deg) and
+// e2_{clear,thin,medium,thick} by the reference's T (>= 0.99, 0.7-0.99, 0.1-0.7, < 0.1), each
+// the part's squared error in %^2 (each split sums to (100 RelRmse)^2);
+// rel_rmse_cloud_pixels and mean_rel_error_cloud_pixels over the pixels with T < 0.99.
+void CloudErrorParts(const ConvergedCloudReference& ref, const ImageRGB& composite, CaseResult& c);
+
 // CPU time of this process so far (all threads, lavapipe's included), ms.
 double ProcessCpuMs();
+
+// The clouds suites' view: sun at 25 deg elevation, 40 deg azimuth; width x width/2 pixels.
+clouds::CloudRenderRequest CloudSuiteRequest(int width);
+
+// Times `repeats` renders of `request` after o.warmup untimed ones into c.time (wall), and
+// their median process CPU time per render into c.extra["cpu_time_ms"]: on a machine shared
+// with other jobs the CPU time measures the work, the wall time the share of the cores.
+void TimeCloudRender(clouds::CloudRenderer& renderer, const CloudBenchScene& scene, const clouds::CloudRenderRequest& request,
+                     const SuiteOptions& o, int repeats, CaseResult& c);
 
 }  // namespace skycal::bench

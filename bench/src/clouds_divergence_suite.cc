@@ -107,25 +107,13 @@ Suite CloudsDivergenceSuite() {
     const CloudBenchScene scene = LoadDefaultCloudyScene();
     Grid grid;
     grid.axes = {{"march", {"naive", "game", "no-cheap-light", "cheap-light-0.6"}, "game"}};
-    clouds::CloudRenderRequest req;
-    req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);  // the clouds suite's scene
-    req.width = o.quick ? 64 : 512;
-    req.height = req.width / 2;
+    const clouds::CloudRenderRequest req = CloudSuiteRequest(o.quick ? 64 : 512);
     std::unique_ptr<clouds::CloudRenderer> vulkan = clouds::CreateVulkanCloudRenderer();
     const int repeats = o.Repeats(o.quick ? 2 : 5);
     return RunGrid("clouds-divergence", grid, o, [&](CaseResult& c) {
       clouds::CloudRenderRequest r = req;
       r.march = CloudMarchVariant(Get(c.settings, "march"));
-      std::vector<double> cpu_ms;
-      c.time = Measure(
-          [&] {
-            const double cpu0 = ProcessCpuMs();
-            vulkan->Render(scene.View(), r);
-            cpu_ms.push_back(ProcessCpuMs() - cpu0);
-          },
-          o.warmup, repeats);
-      cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
-      c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+      TimeCloudRender(*vulkan, scene, r, o, repeats, c);
       const Work w = CountWork(scene, r);
       c.extra["iterations"] = w.iterations;
       c.extra["texel_loads"] = w.loads;

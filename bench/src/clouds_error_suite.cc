@@ -48,11 +48,9 @@ const Band kBands[] = {{"e2_elev_0_5", 0.0, 5.0}, {"e2_elev_5_15", 5.0, 15.0}, {
 // Reference transmittance T: clear (>= 0.99), thin (0.7..0.99), medium (0.1..0.7), thick (< 0.1).
 const Band kOpacity[] = {{"e2_clear", 0.99, 1.01}, {"e2_thin", 0.7, 0.99}, {"e2_medium", 0.1, 0.7}, {"e2_thick", -1.0, 0.1}};
 
-// The composite's error against the truth at the same size, per pixel as RelRmse weighs it
-// (solid angle, three channels, pixels above the horizon with positive finite values),
-// split: each part's share of the squared error (in %^2: the parts sum to error^2), the
-// error over cloud pixels alone and its mean signed relative error there.
-void ErrorParts(const ConvergedCloudReference& ref, const ImageRGB& composite, CaseResult& c) {
+}  // namespace
+
+void CloudErrorParts(const ConvergedCloudReference& ref, const ImageRGB& composite, CaseResult& c) {
   const ImageRGB& truth = ref.truth;
   std::map<std::string, double> part;
   double wsum = 0.0, cloud_sum = 0.0, cloud_w = 0.0, cloud_signed = 0.0;
@@ -88,6 +86,8 @@ void ErrorParts(const ConvergedCloudReference& ref, const ImageRGB& composite, C
   c.extra["mean_rel_error_cloud_pixels"] = cloud_w > 0.0 ? cloud_signed / cloud_w : 0.0;
 }
 
+namespace {
+
 // The suite's table: per row the errors, the points it adds over the naive march, and where
 // its squared error sits.
 std::string ErrorTable(const std::vector<CaseResult>& cases) {
@@ -122,13 +122,8 @@ Suite CloudsErrorSuite() {
     const CloudBenchScene scene = LoadDefaultCloudyScene();
     Grid grid;
     grid.axes = {{"march", o.quick ? std::vector<std::string>{"naive", "game", "no-cheap-light"} : ErrorMarches(), "game"}};
-    clouds::CloudRenderRequest error_req;
-    error_req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
-    error_req.width = o.quick ? 64 : 256;
-    error_req.height = error_req.width / 2;
-    clouds::CloudRenderRequest time_req = error_req;
-    time_req.width = o.quick ? 128 : 512;
-    time_req.height = time_req.width / 2;
+    const clouds::CloudRenderRequest error_req = CloudSuiteRequest(o.quick ? 64 : 256);
+    const clouds::CloudRenderRequest time_req = CloudSuiteRequest(o.quick ? 128 : 512);
     const ConvergedCloudReference ref = MakeConvergedCloudReference(scene, error_req, o);
     std::unique_ptr<clouds::CloudRenderer> vulkan = clouds::CreateVulkanCloudRenderer();
     const int repeats = o.Repeats(o.quick ? 3 : 5);
@@ -136,22 +131,13 @@ Suite CloudsErrorSuite() {
       clouds::CloudRenderRequest er = error_req, tr = time_req;
       er.march = tr.march = CloudMarchVariant(Get(c.settings, "march"));
       const ImageRGB composite = clouds::CompositeClouds(ref.sky, vulkan->Render(scene.View(), er));
-      std::vector<double> cpu_ms;
-      c.time = Measure(
-          [&] {
-            const double cpu0 = ProcessCpuMs();
-            vulkan->Render(scene.View(), tr);
-            cpu_ms.push_back(ProcessCpuMs() - cpu0);
-          },
-          o.warmup, repeats);
-      cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
-      c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+      TimeCloudRender(*vulkan, scene, tr, o, repeats, c);
       if (!AllFinite(composite)) {
         c.outcome = Outcome::kNonFinite;
         c.message = "non-finite composite";
       }
       c.error = RelRmse(ref.truth, composite, 0.0);
-      ErrorParts(ref, composite, c);
+      CloudErrorParts(ref, composite, c);
       c.extra["device"] = vulkan->Describe();
     });
   };

@@ -142,6 +142,28 @@ ConvergedCloudReference MakeConvergedCloudReference(const CloudBenchScene& scene
   return ref;
 }
 
+clouds::CloudRenderRequest CloudSuiteRequest(int width) {
+  clouds::CloudRenderRequest r;
+  r.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
+  r.width = width;
+  r.height = width / 2;
+  return r;
+}
+
+void TimeCloudRender(clouds::CloudRenderer& renderer, const CloudBenchScene& scene, const clouds::CloudRenderRequest& request,
+                     const SuiteOptions& o, int repeats, CaseResult& c) {
+  std::vector<double> cpu_ms;
+  c.time = Measure(
+      [&] {
+        const double cpu0 = ProcessCpuMs();
+        renderer.Render(scene.View(), request);
+        cpu_ms.push_back(ProcessCpuMs() - cpu0);
+      },
+      o.warmup, repeats);
+  cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
+  c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+}
+
 CloudBenchScene LoadDefaultCloudyScene() {
   const std::string path = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
   CloudBenchScene s;
@@ -185,13 +207,8 @@ Suite CloudsSuite() {
       return "";
     };
 
-    clouds::CloudRenderRequest error_req;
-    error_req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
-    error_req.width = o.quick ? 64 : 256;
-    error_req.height = error_req.width / 2;
-    clouds::CloudRenderRequest time_req = error_req;
-    time_req.width = o.quick ? 128 : 512;
-    time_req.height = time_req.width / 2;
+    const clouds::CloudRenderRequest error_req = CloudSuiteRequest(o.quick ? 64 : 256);
+    const clouds::CloudRenderRequest time_req = CloudSuiteRequest(o.quick ? 128 : 512);
 
     const ConvergedCloudReference ref = MakeConvergedCloudReference(scene, error_req, o);
     const ImageRGB& sky = ref.sky;
@@ -216,16 +233,7 @@ Suite CloudsSuite() {
       // on a machine shared with other jobs the CPU time measures the work where the wall
       // time measures the share of the cores the process got (bench_cloud_march's second
       // column, now here).
-      std::vector<double> cpu_ms;
-      c.time = Measure(
-          [&] {
-            const double cpu0 = ProcessCpuMs();
-            r.Render(scene.View(), tr);
-            cpu_ms.push_back(ProcessCpuMs() - cpu0);
-          },
-          o.warmup, repeats);
-      cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
-      c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+      TimeCloudRender(r, scene, tr, o, repeats, c);
       if (!AllFinite(composite)) {
         c.outcome = Outcome::kNonFinite;
         c.message = "non-finite composite";
