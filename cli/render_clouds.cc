@@ -30,6 +30,10 @@ clouds::MarchOptions CloudMarchOptions(const CloudOptions& o) {
     m.light_samples = ParseInteger(*o.light_samples, "--cloud-light-samples");
     if (!m.IsValid(&why)) throw Error("--cloud-light-samples: " + why);
   }
+  if (o.cheap_light_opacity) {
+    m.cheap_light_opacity = ParseNumber(*o.cheap_light_opacity, "--cloud-cheap-light-opacity");
+    if (!m.IsValid(&why)) throw Error("--cloud-cheap-light-opacity: " + why);
+  }
   return m;
 }
 

@@ -26,6 +26,7 @@
 #include "export_verb.h"
 #include "probe_extract_verb.h"
 #include "skycal/core/exr_io.h"
+#include "cloud_scene.h"
 #include "image_compare.h"
 #include "suite_util.h"
 #include "render_verb.h"
@@ -809,3 +810,44 @@ TEST(BenchVerb, CompareReadsTwoResultsFiles) {
   o.compare = {dir / "a.json", dir / "c.json"};
   EXPECT_THROW(cli::RunBenchImpl(o, FakeRegistry()), Error);
 }
+
+namespace skycal::bench {
+namespace {
+
+// The clouds-error suite's split of the squared error: each split (elevation bands, the
+// reference's opacity classes) sums to the whole error squared (RelRmse's, in %^2); the
+// cloud-pixel error sees only pixels with T < 0.99. Control: an error planted in a clear
+// pixel only shows in e2_clear and leaves the cloud-pixel error 0.
+TEST(BenchCloudsError, SquaredErrorSplitsSumToTheWhole) {
+  ConvergedCloudReference ref;
+  ref.truth = ImageRGB(32, 16);
+  ref.clouds.transmittance.assign(32 * 16, 1.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 32; ++x) {
+      for (int c = 0; c < 3; ++c) ref.truth.at(x, y, c) = 1.0f + 0.1f * static_cast<float>((x * 7 + y * 3 + c) % 11);
+      ref.clouds.transmittance[static_cast<size_t>(y) * 32 + x] = static_cast<float>((x + 2 * y) % 5) * 0.25f;  // 0 .. 1
+    }
+  ImageRGB image = ref.truth;
+  for (size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] *= 1.0f + 0.02f * static_cast<float>(i % 7) - 0.05f;
+  CaseResult c;
+  CloudErrorParts(ref, image, c);
+  const double whole = 1e4 * std::pow(RelRmse(ref.truth, image, 0.0), 2);
+  double bands = 0.0, classes = 0.0;
+  for (const char* k : {"e2_elev_0_5", "e2_elev_5_15", "e2_elev_15_45", "e2_elev_45_90"}) bands += c.extra.value(k, 0.0);
+  for (const char* k : {"e2_clear", "e2_thin", "e2_medium", "e2_thick"}) classes += c.extra.value(k, 0.0);
+  EXPECT_NEAR(bands, whole, 1e-9 * whole);
+  EXPECT_NEAR(classes, whole, 1e-9 * whole);
+  EXPECT_GT(c.extra["rel_rmse_cloud_pixels"].get<double>(), 0.0);
+
+  ImageRGB one = ref.truth;  // the control: one clear pixel (T = 1) 10% too bright
+  ASSERT_EQ(ref.clouds.transmittance[2 * 32 + 0], 1.0f);
+  for (int ch = 0; ch < 3; ++ch) one.at(0, 2, ch) *= 1.1f;
+  CaseResult d;
+  CloudErrorParts(ref, one, d);
+  EXPECT_GT(d.extra.value("e2_clear", 0.0), 0.0);
+  EXPECT_EQ(d.extra.value("e2_thin", 0.0) + d.extra.value("e2_medium", 0.0) + d.extra.value("e2_thick", 0.0), 0.0);
+  EXPECT_EQ(d.extra["rel_rmse_cloud_pixels"].get<double>(), 0.0);
+}
+
+}  // namespace
+}  // namespace skycal::bench

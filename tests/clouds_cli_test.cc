@@ -92,6 +92,8 @@ TEST(CloudsCli, BadCloudInputNamesTheFieldAndWritesNothing) {
       {"unknown field", "--preset " + misspelt, "did you mean 'extinction'"},
       {"zero steps", "--cloud-steps 0,128", "steps_zenith"},
       {"a million steps", "--cloud-steps 64,1000000", "steps_horizon"},
+      {"cheap light opacity 2", "--cloud-cheap-light-opacity 2", "cheap_light_opacity = 2"},
+      {"cheap light opacity not a number", "--cloud-cheap-light-opacity half", "--cloud-cheap-light-opacity"},
       {"map without --clouds", "--weather-map x.exr", "need --clouds"},
   };
   for (const BadCase& c : cases) {

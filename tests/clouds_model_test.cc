@@ -427,6 +427,44 @@ TEST(CloudsModel, CoverageZeroCompositesToTheClearSky) {
   }
 }
 
+// --cloud-cheap-light-opacity (MarchOptions::cheap_light_opacity, issue 10's added error):
+// the threshold picks which lit samples take base-shape-only light samples and nothing else.
+// Identities: at 1 no sample passes it (opacity 1 - T > 1 never holds), so the image equals
+// the one without cheap light samples bit for bit; between 0.3 and 0.6 the transmittance is
+// the same bit for bit (light samples never change the primary march), pixels whose
+// opacity stays <= 0.3 are unchanged, and some cloudy pixel changes (the control: the
+// shortcut is taken at all in this scene).
+TEST(CloudsModel, CheapLightOpacityChangesOnlyTheLightPastIt) {
+  Fixture f;
+  f.noise = testing::SinusoidCloudNoise();
+  f.weather = testing::PatchyWeather(0.6f, 0.5f);
+  f.request.width = 64;
+  f.request.height = 32;
+  f.request.sun_dir = {0.0, std::sin(25.0 * kPi / 180.0), std::cos(25.0 * kPi / 180.0)};
+  auto render = [&](bool cheap, double opacity) {
+    f.request.march = MarchOptions{};
+    f.request.march.cheap_light = cheap;
+    f.request.march.cheap_light_opacity = opacity;
+    return CreateCpuCloudRenderer(CloudPrecision::kFloat, 2)->Render(f.scene(), f.request);
+  };
+  const CloudImage off = render(false, 0.3), at1 = render(true, 1.0), hzd = render(true, 0.3), at06 = render(true, 0.6);
+  EXPECT_EQ(at1.radiance.pixels, off.radiance.pixels);
+  EXPECT_EQ(at1.transmittance, off.transmittance);
+  EXPECT_EQ(at06.transmittance, hzd.transmittance);
+  int changed = 0, thin = 0;
+  for (size_t i = 0; i < hzd.transmittance.size(); ++i) {
+    bool differs = false;
+    for (int c = 0; c < 3; ++c) differs = differs || hzd.radiance.pixels[3 * i + c] != at06.radiance.pixels[3 * i + c];
+    if (hzd.transmittance[i] >= 0.7f) {
+      ++thin;
+      EXPECT_FALSE(differs) << "pixel " << i << " (T " << hzd.transmittance[i] << ")";
+    }
+    changed += differs;
+  }
+  EXPECT_GT(thin, 0);
+  EXPECT_GT(changed, 0);
+}
+
 TEST(CloudsModel, CompositeIsSkyTimesTransmittancePlusClouds) {
   ImageRGB sky(2, 1);
   sky.pixels = {1, 2, 3, 4, 5, 6};

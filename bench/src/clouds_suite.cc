@@ -39,29 +39,6 @@ namespace {
 // The light_step axis value of the game's default march (MarchOptions::light_step_m), in m.
 const std::string kDefaultLightStep = std::to_string(static_cast<int>(clouds::MarchOptions().light_step_m));
 
-// The march settings of the `march` axis: the game's, the naive march, or the game's with
-// one optimisation off.
-clouds::MarchOptions MarchFor(const std::string& name) {
-  clouds::MarchOptions m;
-  if (name == "game") return m;
-  if (name == "naive") return clouds::MarchOptions::Naive();
-  if (name == "no-cheap-march") m.cheap_march = false;
-  else if (name == "no-step-back") m.step_back = false;
-  else if (name == "no-return-to-cheap") m.empty_to_cheap = 0;
-  else if (name == "no-opacity-stop") m.opacity_stop = false;
-  else if (name == "no-cheap-light") m.cheap_light = false;
-  else if (name == "no-far-light") m.far_light = false;
-  else throw Error("clouds suite: unknown march setting '" + name + "'");
-  return m;
-}
-
-// CPU time of this process so far (all threads), ms.
-double ProcessCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
 // "64/128" -> zenith and horizon primary steps.
 void SetSteps(clouds::MarchOptions& m, const std::string& steps) {
   const size_t slash = steps.find('/');
@@ -77,6 +54,115 @@ void SetLightSamples(clouds::MarchOptions& m, int samples) {
 }
 
 }  // namespace
+
+double ProcessCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+clouds::MarchOptions CloudMarchVariant(const std::string& name) {
+  clouds::MarchOptions m;
+  if (name == "game") return m;
+  if (name == "naive") return clouds::MarchOptions::Naive();
+  if (name.rfind("naive+", 0) == 0) {  // one optimisation on top of the naive march
+    clouds::MarchOptions n = clouds::MarchOptions::Naive();
+    const std::string on = name.substr(6);
+    if (on == "cheap-march") {  // the whole cheap march, as the game runs it
+      n.cheap_march = true;
+      n.step_back = m.step_back;
+      n.empty_to_cheap = m.empty_to_cheap;
+    } else if (on == "cheap-march-no-step-back") {
+      n.cheap_march = true;
+      n.empty_to_cheap = m.empty_to_cheap;
+    } else if (on == "opacity-stop") {
+      n.opacity_stop = true;
+    } else if (on == "cheap-light") {
+      n.cheap_light = true;
+    } else if (on == "far-light") {
+      n.far_light = true;
+    } else {
+      throw Error("clouds suite: unknown march setting '" + name + "'");
+    }
+    return n;
+  }
+  // Candidates for less added error, the game's march with one number changed:
+  // "cheap-light-X" (cheap light samples from opacity X, HZD: 0.3), "far-light-Xm" (the far
+  // light sample X metres away), "no-cheap-no-far-light" (both light shortcuts off).
+  if (name.rfind("cheap-light-", 0) == 0) {
+    m.cheap_light_opacity = std::stod(name.substr(12));
+    return m;
+  }
+  if (name.rfind("far-light-", 0) == 0 && name.back() == 'm') {
+    m.far_light_distance_m = std::stod(name.substr(10, name.size() - 11));
+    return m;
+  }
+  if (name == "no-cheap-no-far-light") {
+    m.cheap_light = m.far_light = false;
+    return m;
+  }
+  if (name == "no-cheap-march") m.cheap_march = false;
+  else if (name == "no-step-back") m.step_back = false;
+  else if (name == "no-return-to-cheap") m.empty_to_cheap = 0;
+  else if (name == "no-opacity-stop") m.opacity_stop = false;
+  else if (name == "no-cheap-light") m.cheap_light = false;
+  else if (name == "no-far-light") m.far_light = false;
+  else throw Error("clouds suite: unknown march setting '" + name + "'");
+  return m;
+}
+
+ConvergedCloudReference MakeConvergedCloudReference(const CloudBenchScene& scene, const clouds::CloudRenderRequest& error_req,
+                                                    const SuiteOptions& o) {
+  // The light integral along the sun ray itself (no cone), in full density, out to 8 km
+  // (the layer's far side for a sun >= 18 deg; samples outside the layer add nothing),
+  // with no far sample; 1,024 primary steps at every elevation.
+  clouds::MarchOptions converged = clouds::MarchOptions::Naive();
+  converged.steps_zenith = converged.steps_horizon = o.quick ? 256 : 1024;
+  converged.light_samples = o.quick ? 16 : 64;
+  converged.light_step_m = 8000.0 / converged.light_samples;
+  converged.far_light = false;
+  converged.cone_spread = 0.0;
+
+  ConvergedCloudReference ref;
+  auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
+  render::RenderRequest sky_req;
+  sky_req.sun_dir = error_req.sun_dir;
+  sky_req.width = error_req.width;
+  sky_req.height = error_req.height;
+  sky_req.sun_disc = false;  // the disc would dominate the rel error where clouds leave it visible
+  ref.sky = sky_renderer->Render(scene.preset, sky_req);
+  std::unique_ptr<clouds::CloudRenderer> cpu = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
+  o.Log("[clouds] reference: cpu double, " + std::to_string(converged.steps_zenith) + " steps, " +
+        std::to_string(converged.light_samples) + " light samples, " + std::to_string(error_req.width) + "x" +
+        std::to_string(error_req.height));
+  clouds::CloudRenderRequest ref_req = error_req;
+  ref_req.march = converged;
+  ref.clouds = cpu->Render(scene.View(), ref_req);
+  ref.truth = clouds::CompositeClouds(ref.sky, ref.clouds);
+  return ref;
+}
+
+clouds::CloudRenderRequest CloudSuiteRequest(int width) {
+  clouds::CloudRenderRequest r;
+  r.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
+  r.width = width;
+  r.height = width / 2;
+  return r;
+}
+
+void TimeCloudRender(clouds::CloudRenderer& renderer, const CloudBenchScene& scene, const clouds::CloudRenderRequest& request,
+                     const SuiteOptions& o, int repeats, CaseResult& c) {
+  std::vector<double> cpu_ms;
+  c.time = Measure(
+      [&] {
+        const double cpu0 = ProcessCpuMs();
+        renderer.Render(scene.View(), request);
+        cpu_ms.push_back(ProcessCpuMs() - cpu0);
+      },
+      o.warmup, repeats);
+  cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
+  c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+}
 
 CloudBenchScene LoadDefaultCloudyScene() {
   const std::string path = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
@@ -121,46 +207,20 @@ Suite CloudsSuite() {
       return "";
     };
 
-    clouds::CloudRenderRequest error_req;
-    error_req.sun_dir = latlong::DirectionFromElevationAzimuthDeg(25.0, 40.0);
-    error_req.width = o.quick ? 64 : 256;
-    error_req.height = error_req.width / 2;
-    clouds::CloudRenderRequest time_req = error_req;
-    time_req.width = o.quick ? 128 : 512;
-    time_req.height = time_req.width / 2;
+    const clouds::CloudRenderRequest error_req = CloudSuiteRequest(o.quick ? 64 : 256);
+    const clouds::CloudRenderRequest time_req = CloudSuiteRequest(o.quick ? 128 : 512);
 
-    // The converged reference: the light integral along the sun ray itself (no cone), in
-    // full density, out to 8 km (the layer's far side for a sun >= 18 deg; samples outside
-    // the layer add nothing), with no far sample; 1,024 primary steps at every elevation.
-    clouds::MarchOptions converged = clouds::MarchOptions::Naive();
-    converged.steps_zenith = converged.steps_horizon = o.quick ? 256 : 1024;
-    converged.light_samples = o.quick ? 16 : 64;
-    converged.light_step_m = 8000.0 / converged.light_samples;
-    converged.far_light = false;
-    converged.cone_spread = 0.0;
-
-    auto sky_renderer = render::CreateRenderer(render::Backend::kCpu);
-    render::RenderRequest sky_req;
-    sky_req.sun_dir = error_req.sun_dir;
-    sky_req.width = error_req.width;
-    sky_req.height = error_req.height;
-    sky_req.sun_disc = false;  // the disc would dominate the rel error where clouds leave it visible
-    const ImageRGB sky = sky_renderer->Render(scene.preset, sky_req);
-
+    const ConvergedCloudReference ref = MakeConvergedCloudReference(scene, error_req, o);
+    const ImageRGB& sky = ref.sky;
+    const clouds::CloudImage& reference = ref.clouds;
+    const ImageRGB& truth = ref.truth;
     std::unique_ptr<clouds::CloudRenderer> cpu = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
     std::unique_ptr<clouds::CloudRenderer> vulkan = clouds::CreateVulkanCloudRenderer();
-    o.Log("[clouds] reference: cpu double, " + std::to_string(converged.steps_zenith) + " steps, " +
-          std::to_string(converged.light_samples) + " light samples, " + std::to_string(error_req.width) + "x" +
-          std::to_string(error_req.height));
-    clouds::CloudRenderRequest ref_req = error_req;
-    ref_req.march = converged;
-    const clouds::CloudImage reference = cpu->Render(scene.View(), ref_req);
-    const ImageRGB truth = clouds::CompositeClouds(sky, reference);
 
     const int repeats = o.Repeats(o.quick ? 3 : 5);
     return RunGrid("clouds", grid, o, [&](CaseResult& c) {
       clouds::CloudRenderer& r = Get(c.settings, "backend") == "cpu" ? *cpu : *vulkan;
-      clouds::MarchOptions m = MarchFor(Get(c.settings, "march"));
+      clouds::MarchOptions m = CloudMarchVariant(Get(c.settings, "march"));
       SetSteps(m, Get(c.settings, "steps"));
       SetLightSamples(m, std::stoi(Get(c.settings, "light_samples")));
       if (Get(c.settings, "light_step") != kDefaultLightStep)  // the cone's length scaled, the sample count kept
@@ -173,16 +233,7 @@ Suite CloudsSuite() {
       // on a machine shared with other jobs the CPU time measures the work where the wall
       // time measures the share of the cores the process got (bench_cloud_march's second
       // column, now here).
-      std::vector<double> cpu_ms;
-      c.time = Measure(
-          [&] {
-            const double cpu0 = ProcessCpuMs();
-            r.Render(scene.View(), tr);
-            cpu_ms.push_back(ProcessCpuMs() - cpu0);
-          },
-          o.warmup, repeats);
-      cpu_ms.erase(cpu_ms.begin(), cpu_ms.begin() + std::min<size_t>(cpu_ms.size() - 1, static_cast<size_t>(o.warmup)));
-      c.extra["cpu_time_ms"] = FromSamples(cpu_ms).median_ms;
+      TimeCloudRender(r, scene, tr, o, repeats, c);
       if (!AllFinite(composite)) {
         c.outcome = Outcome::kNonFinite;
         c.message = "non-finite composite";

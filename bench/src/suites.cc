@@ -29,6 +29,8 @@ SuiteRegistry BuiltinSuites() {
   r.Add(CaptureResponseSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
+  r.Add(CloudsErrorSuite());
+  r.Add(CloudsDivergenceSuite());
   r.Add(CloudsSuite());
   return r;
 }

@@ -28,6 +28,8 @@ Suite CaptureSuite();  // capture_suite.cc
 Suite CaptureResponseSuite();  // capture_response_suite.cc
 Suite ExportSuite();   // export_suite.cc
 Suite StressSuite();   // stress_suite.cc
+Suite CloudsErrorSuite();  // clouds_error_suite.cc
+Suite CloudsDivergenceSuite();  // clouds_divergence_suite.cc
 Suite CloudsSuite();   // clouds_suite.cc
 
 // datasets/presets/default_clear.json of this checkout.
