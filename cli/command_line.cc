@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include <CLI/CLI.hpp>
+
 #include "skycal/core/error.h"
 
 namespace skycal::cli {
@@ -28,6 +30,8 @@ bool ParseFinite(const std::string& text, double* value) {
   return !text.empty() && end == text.c_str() + text.size() && std::isfinite(*value);
 }
 
+CLI::Validator AsValidator(ValueCheck check) { return CLI::Validator(std::move(check), ""); }
+
 // "--name=value" -> "--name"; anything else unchanged.
 std::string OptionNameOf(const std::string& token) { return token.substr(0, token.find('=')); }
 
@@ -40,33 +44,27 @@ bool WantsHelp(int argc, char** argv) {
   return false;
 }
 
-CLI::Validator FiniteNumber() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        double v;
-        return ParseFinite(text, &v) ? std::string() : "expected a finite number, got '" + text + "'";
-      },
-      "");
+ValueCheck FiniteNumber() {
+  return [](std::string& text) -> std::string {
+    double v;
+    return ParseFinite(text, &v) ? std::string() : "expected a finite number, got '" + text + "'";
+  };
 }
 
-CLI::Validator NumberIn(double lo, double hi, const std::string& expected) {
-  return CLI::Validator(
-      [lo, hi, expected](std::string& text) -> std::string {
-        double v;
-        if (!ParseFinite(text, &v)) return "expected a finite number, got '" + text + "'";
-        return v >= lo && v <= hi ? std::string() : expected + ", got " + text;
-      },
-      "");
+ValueCheck NumberIn(double lo, double hi, const std::string& expected) {
+  return [lo, hi, expected](std::string& text) -> std::string {
+    double v;
+    if (!ParseFinite(text, &v)) return "expected a finite number, got '" + text + "'";
+    return v >= lo && v <= hi ? std::string() : expected + ", got " + text;
+  };
 }
 
-CLI::Validator IntegerIn(double lo, double hi, const std::string& expected) {
-  return CLI::Validator(
-      [lo, hi, expected](std::string& text) -> std::string {
-        double v;
-        if (!ParseFinite(text, &v)) return "expected a finite number, got '" + text + "'";
-        return v == std::floor(v) && v >= lo && v <= hi ? std::string() : expected + ", got " + text;
-      },
-      "");
+ValueCheck IntegerIn(double lo, double hi, const std::string& expected) {
+  return [lo, hi, expected](std::string& text) -> std::string {
+    double v;
+    if (!ParseFinite(text, &v)) return "expected a finite number, got '" + text + "'";
+    return v == std::floor(v) && v >= lo && v <= hi ? std::string() : expected + ", got " + text;
+  };
 }
 
 VerbCommandLine::VerbCommandLine(const std::string& verb, const std::string& about, const std::string& synopsis,
@@ -77,60 +75,87 @@ VerbCommandLine::VerbCommandLine(const std::string& verb, const std::string& abo
   app_->footer(footer);
 }
 
-CLI::Option* VerbCommandLine::Text(const std::string& name, std::string* target, const std::string& metavar,
-                                   const std::string& help) {
-  return app_->add_option(name, *target, help)->type_name(metavar);
+VerbCommandLine::~VerbCommandLine() = default;
+
+CommandLineOption* CommandLineOption::check(ValueCheck check) {
+  option_->check(AsValidator(std::move(check)));
+  return this;
 }
 
-CLI::Option* VerbCommandLine::Text(const std::string& name, std::optional<std::string>* target,
-                                   const std::string& metavar, const std::string& help) {
-  return app_->add_option_function<std::string>(name, [target](const std::string& v) { *target = v; }, help)
-      ->type_name(metavar);
+CommandLineOption* CommandLineOption::group(const std::string& name) {
+  option_->group(name);
+  return this;
 }
 
-CLI::Option* VerbCommandLine::Number(const std::string& name, double* target, const std::string& metavar,
-                                     const std::string& help) {
-  return app_->add_option(name, *target, help)->type_name(metavar)->check(FiniteNumber());
+CommandLineOption* VerbCommandLine::Registered(CLI::Option* option) {
+  options_.push_back(std::make_unique<CommandLineOption>(option));
+  return options_.back().get();
 }
 
-CLI::Option* VerbCommandLine::Number(const std::string& name, std::optional<double>* target,
-                                     const std::string& metavar, const std::string& help) {
-  return app_->add_option_function<double>(name, [target](const double& v) { *target = v; }, help)
-      ->type_name(metavar)
-      ->check(FiniteNumber());
+CommandLineOption* VerbCommandLine::Text(const std::string& name, std::string* target, const std::string& metavar,
+                                         const std::string& help) {
+  CLI::Option* option = app_->add_option(name, *target, help);
+  option->type_name(metavar);
+  return Registered(option);
 }
 
-CLI::Option* VerbCommandLine::Integer(const std::string& name, int* target, double lo, double hi,
-                                      const std::string& expected, const std::string& metavar,
-                                      const std::string& help) {
+CommandLineOption* VerbCommandLine::Text(const std::string& name, std::optional<std::string>* target,
+                                         const std::string& metavar, const std::string& help) {
+  CLI::Option* option =
+      app_->add_option_function<std::string>(name, [target](const std::string& v) { *target = v; }, help);
+  option->type_name(metavar);
+  return Registered(option);
+}
+
+CommandLineOption* VerbCommandLine::Number(const std::string& name, double* target, const std::string& metavar,
+                                           const std::string& help) {
+  CLI::Option* option = app_->add_option(name, *target, help);
+  option->type_name(metavar)->check(AsValidator(FiniteNumber()));
+  return Registered(option);
+}
+
+CommandLineOption* VerbCommandLine::Number(const std::string& name, std::optional<double>* target,
+                                           const std::string& metavar, const std::string& help) {
+  CLI::Option* option = app_->add_option_function<double>(name, [target](const double& v) { *target = v; }, help);
+  option->type_name(metavar)->check(AsValidator(FiniteNumber()));
+  return Registered(option);
+}
+
+CommandLineOption* VerbCommandLine::Integer(const std::string& name, int* target, double lo, double hi,
+                                            const std::string& expected, const std::string& metavar,
+                                            const std::string& help) {
   // Read as a double (so 1e2 counts as 100, as the number options do); the validator has
   // checked it is an integer in [lo, hi] before the cast.
-  return app_->add_option_function<double>(name, [target](const double& v) { *target = static_cast<int>(v); }, help)
-      ->type_name(metavar)
-      ->check(IntegerIn(lo, hi, expected));
+  CLI::Option* option =
+      app_->add_option_function<double>(name, [target](const double& v) { *target = static_cast<int>(v); }, help);
+  option->type_name(metavar)->check(AsValidator(IntegerIn(lo, hi, expected)));
+  return Registered(option);
 }
 
-CLI::Option* VerbCommandLine::Flag(const std::string& name, bool* target, const std::string& help) {
+CommandLineOption* VerbCommandLine::Flag(const std::string& name, bool* target, const std::string& help) {
   // CLI11's flags take the last of repeats and accept --flag=false: ours are given once, bare.
-  return app_->add_flag(name, *target, help)
-      ->multi_option_policy(CLI::MultiOptionPolicy::Throw)
-      ->disable_flag_override();
+  CLI::Option* option = app_->add_flag(name, *target, help);
+  option->multi_option_policy(CLI::MultiOptionPolicy::Throw)->disable_flag_override();
+  return Registered(option);
 }
 
-CLI::Option* VerbCommandLine::Repeatable(const std::string& name, std::vector<std::string>* target,
-                                         const std::string& metavar, const std::string& help) {
+CommandLineOption* VerbCommandLine::Repeatable(const std::string& name, std::vector<std::string>* target,
+                                               const std::string& metavar, const std::string& help) {
   // One value per occurrence (`--reference a b` leaves `b` a stray argument, an error).
-  return app_->add_option(name, *target, help)
-      ->type_name(metavar)
+  CLI::Option* option = app_->add_option(name, *target, help);
+  option->type_name(metavar)
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
       ->allow_extra_args(false);
+  return Registered(option);
 }
 
-CLI::Option* VerbCommandLine::List(const std::string& name, std::vector<std::string>* target,
-                                   const std::string& metavar, const std::string& help) {
+CommandLineOption* VerbCommandLine::List(const std::string& name, std::vector<std::string>* target,
+                                         const std::string& metavar, const std::string& help) {
   // A vector option's CLI11 default: one or more values per occurrence, occurrences collect.
-  return app_->add_option(name, *target, help)->type_name(metavar)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  CLI::Option* option = app_->add_option(name, *target, help);
+  option->type_name(metavar)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  return Registered(option);
 }
 
 std::string VerbCommandLine::Help() const { return app_->help(); }
