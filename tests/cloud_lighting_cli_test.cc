@@ -1,4 +1,4 @@
-// `skycal fit --clouds` and `skycal export` through the binary (issue 11): a clear reference
+// `skycal fit --clouds` and `skycal export` through the binary (docs/cloud-fitting.md): a clear reference
 // never marches clouds and holds every cloud parameter; --clouds on on a clear reference
 // and a cloud preset with an out-of-bounds field fail with a clear message and write
 // nothing; a cloudy reference rendered with the bundled cloudy preset's shapes and

@@ -1,4 +1,4 @@
-// Fitting the cloud lighting (issue 11, regime 1: known shapes). A reference rendered (or
+// Fitting the cloud lighting (docs/cloud-fitting.md, regime 1: known shapes). A reference rendered (or
 // photographed) with clouds whose shapes are known -- noise seed, weather map, wind time --
 // is compared with the sky + clouds composite exposure x (L_sky T + L_cloud); Ceres tunes
 // the 14 lighting parameters of the clouds section (cloud_lighting_params.h): values

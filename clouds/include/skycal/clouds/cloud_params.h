@@ -3,7 +3,7 @@
 // Every field of CloudParams has one row in CloudParameterSpecs() (name, unit, bounds,
 // default, description): the JSON reader, the writer and the validator all read that
 // table, as render::PresetParameterSpecs does for the sky. The lighting fields are what
-// the cloud lighting fit (issue 11) tunes. Sources: Schneider 2015, "The Real-time
+// the cloud lighting fit (docs/cloud-fitting.md) tunes. Sources: Schneider 2015, "The Real-time
 // Volumetric Cloudscapes of Horizon Zero Dawn" (geometry, shape, Beer-Powder, march);
 // Hillaire 2016, "Physically Based Sky, Atmosphere and Cloud Rendering in Frostbite"
 // (energy-conserving integration, multiple-scattering octaves after Wrenninge et al.).
