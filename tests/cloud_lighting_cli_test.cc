@@ -100,8 +100,8 @@ TEST(CloudLightingCli, OutOfBoundsCloudPresetFieldIsNamed) {
 // parameters come back within 0.1%, the held ones stay exactly at it (measured 6e-5 at
 // most; 0.1% leaves room for the float renders). With the default ffxv-iso at this size the
 // isotropic table, free where the clouds hide the sky, changes the light the clouds
-// receive: 2.9% log error at the true lighting and free parameters up to 5% off (README
-// "Fitting the cloud lighting").
+// receive: 2.9% log error at the true lighting and free parameters up to 5% off
+// (docs/cloud-fitting.md, regime 1).
 TEST(CloudLightingCli, CloudyReferenceFitsAndExportsCloudKeyframes) {
   ScratchDir dir("cloudfit-cli-cloudy");
   const std::string ref = Reference(dir, true);
