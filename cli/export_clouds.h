@@ -1,4 +1,4 @@
-// The clouds part of `skycal export` (issue 11): per preset with a `clouds` section,
+// The clouds part of `skycal export` (docs/cloud-fitting.md, "Export"): per preset with a `clouds` section,
 // GAME_DIR/<preset>/clouds.json (every field with its unit, bounds and description: the
 // fitted lighting included) and its weather map copied to GAME_DIR/<preset>/weather.exr;
 // over the timed presets with clouds and the day fits, GAME_DIR/cloud_keyframes.csv and .json: the shape

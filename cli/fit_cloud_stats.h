@@ -1,5 +1,5 @@
 // `skycal fit --clouds stats`: the cloud lighting of photographs, whose cloud shapes no noise
-// reproduces (issue 11, regime 3). The clear pixels fit the atmosphere (--cloud-mask is
+// reproduces (docs/cloud-fitting.md, regime 3). The clear pixels fit the atmosphere (--cloud-mask is
 // implied: cloud probability >= 0.5 leaves the sky fit); then the cloud pixels fit the
 // lighting by statistics (fit/include/skycal/fit/cloud_stats.h) against renders lit by the
 // fitted atmosphere's own sun and ambient (shared: the cloud render takes both from the

@@ -1,4 +1,4 @@
-// The clouds part of `skycal fit` (issue 11): --clouds auto|on|off, the known shapes
+// The clouds part of `skycal fit` (docs/cloud-fitting.md): --clouds auto|on|off, the known shapes
 // (--cloud-preset, --cloud-time), the decision, the joint fit through
 // cloudfit::FitSkyAndClouds, and fit.json's `clouds` object. Kept apart from fit_verb.cc
 // so the sky-only verb reads as before.

@@ -1,4 +1,4 @@
-// `skycal probe-extract`: the gray diffuse probe (DESIGN.md 1.3) measured in a linear EXR
+// `skycal probe-extract`: the gray diffuse probe (Wood, Forza Horizon 3 skies, GDC) measured in a linear EXR
 // photograph: the ball found (or given), its radiance binned by world surface normal
 // (capture/probe.h, orthographic), written as a samples JSON for `skycal fit --probe`.
 #pragma once

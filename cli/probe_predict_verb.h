@@ -1,4 +1,4 @@
-// `skycal probe-predict`: the gray diffuse probe (DESIGN.md 1.3) predicted from a preset:
+// `skycal probe-predict`: the gray diffuse probe (Wood, Forza Horizon 3 skies, GDC) predicted from a preset:
 // irradiance on the up normal and on Fibonacci-sphere normals (sky by quadrature over a
 // disc-less render + the analytic sun term), ball radiance, SH-9 and its error.
 #pragma once

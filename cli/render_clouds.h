@@ -23,7 +23,7 @@ struct CloudOptions {
   std::optional<std::string> light_samples;  // --cloud-light-samples N
   bool naive = false;                    // --cloud-naive: every march optimisation off
   // --cloud-cheap-light-opacity O: opacity (1) past which light samples are base-shape only
-  // (HZD: 0.3, the default; 0.6 halves the added error at the same lavapipe time, README).
+  // (HZD: 0.3, the default; 0.6 halves the added error at the same lavapipe time, docs/benchmarks.md).
   std::optional<std::string> cheap_light_opacity;
 };
 

@@ -2,7 +2,7 @@
 // R coverage, G precipitation, B type), written as the RGB EXR that a preset's
 // `clouds.weather_map` names and `render --weather-map` reads — the starting point a
 // lighting artist paints over. Same generator (clouds::NoiseWeatherMap) as the bundled
-// default_cloudy.weather.exr, which predates this verb (README "Bundled data").
+// default_cloudy.weather.exr, which predates this verb (docs/file-formats.md "Bundled data").
 #pragma once
 #include <string>
 

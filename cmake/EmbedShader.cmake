@@ -3,7 +3,7 @@
 # Compiles a GLSL compute shader to SPIR-V with glslc at build time and embeds the words
 # as a C array (glslc -mfmt=c). A DEPFILE makes edits to #included model sources
 # (render/model/*.glsl.h and any INCLUDE_DIRS, e.g. clouds/model) rebuild the shader.
-# libshaderc is not used: its Debian 12 package has an ABI mismatch (DESIGN.md section 4).
+# libshaderc is not used: its Debian 12 package has an ABI mismatch (docs/architecture.md).
 function(skycal_embed_shader)
   cmake_parse_arguments(ARG "" "TARGET;SOURCE;NAME" "INCLUDE_DIRS" ${ARGN})
   set(include_flags -I "${PROJECT_SOURCE_DIR}/render/model")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Does lane divergence cap HZD's cloud-march optimisations on lavapipe (issue 10)? Runs the
+# Does lane divergence cap HZD's cloud-march optimisations on lavapipe (docs/benchmarks.md)? Runs the
 # `clouds-divergence` bench suite (naive, game, game without cheap light samples and with
 # cheap light samples from opacity 0.6 at
 # 512x256, each a median of REPEATS renders after a warm-up) in separate processes that

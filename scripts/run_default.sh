@@ -14,7 +14,7 @@
 #                    lighting from the statistics of the cloud pixels (sun detected for dawn,
 #                    behind its ridge, and for city, through overcast)
 #   forest, night    canopy / night sky: no sky model applies; not fitted
-#   probe            no bundled frame shows a gray ball: no probe fit (README: "probe-extract")
+#   probe            no bundled frame shows a gray ball: no probe fit (docs/cli.md: "probe-extract")
 # The sources record no time of day; nominal times (dawn 06:00, sunrise 06:30, city 11:00,
 # sky 13:00, sunset 19:30)
 # order the keyframes along the sun's course and are labelled nominal in the log.

@@ -3,7 +3,7 @@
 # (with LeakSanitizer) and UndefinedBehaviorSanitizer: gcc, -O1 -g, skycal's own targets
 # instrumented (cmake/Sanitizers.cmake), system libraries as packaged, into build-asan/.
 # Any sanitizer report fails the test that triggered it. Suppressions: third-party code
-# only, each justified, in scripts/sanitizers/ (README.md "Sanitizers").
+# only, each justified, in scripts/sanitizers/ (docs/testing.md "Sanitizers").
 #
 #   bash scripts/sanitize.sh [CTEST ARGS...]     e.g. bash scripts/sanitize.sh -R Rig
 set -euo pipefail

@@ -1,4 +1,4 @@
-// `skycal fit --clouds` and `skycal export` through the binary (issue 11): a clear reference
+// `skycal fit --clouds` and `skycal export` through the binary (docs/cloud-fitting.md): a clear reference
 // never marches clouds and holds every cloud parameter; --clouds on on a clear reference
 // and a cloud preset with an out-of-bounds field fail with a clear message and write
 // nothing; a cloudy reference rendered with the bundled cloudy preset's shapes and
@@ -100,8 +100,8 @@ TEST(CloudLightingCli, OutOfBoundsCloudPresetFieldIsNamed) {
 // parameters come back within 0.1%, the held ones stay exactly at it (measured 6e-5 at
 // most; 0.1% leaves room for the float renders). With the default ffxv-iso at this size the
 // isotropic table, free where the clouds hide the sky, changes the light the clouds
-// receive: 2.9% log error at the true lighting and free parameters up to 5% off (README
-// "Fitting the cloud lighting").
+// receive: 2.9% log error at the true lighting and free parameters up to 5% off
+// (docs/cloud-fitting.md, regime 1).
 TEST(CloudLightingCli, CloudyReferenceFitsAndExportsCloudKeyframes) {
   ScratchDir dir("cloudfit-cli-cloudy");
   const std::string ref = Reference(dir, true);

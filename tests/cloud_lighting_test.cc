@@ -1,4 +1,4 @@
-// The cloud lighting fit with known shapes (issue 11, regime 1): the Jet Jacobian against
+// The cloud lighting fit with known shapes (docs/cloud-fitting.md, regime 1): the Jet Jacobian against
 // central differences (GradientChecker) with a control that must fail, the conditioning's
 // hold rule, and recovery of every separable lighting parameter through the Vulkan render
 // from a start 30% off, noiseless (<= 1%) and with 2% pixel noise (<= 3%).
@@ -280,7 +280,7 @@ TEST(CloudLighting, RecoversSeparableParametersWithTwoPercentNoise) {
   }
 }
 
-// A day (issue 11): three references at sun elevations 15, 25 and 40 deg, 8, 10 and 12 h,
+// A day (docs/cloud-fitting.md): three references at sun elevations 15, 25 and 40 deg, 8, 10 and 12 h,
 // whose lighting varies linearly over the day (the free parameters of the single-reference
 // recovery, each by +-5% per 2 h; the albedo by 0.5%), rendered through Vulkan with 2%
 // Gaussian pixel noise; every free parameter starts 30% off (the same start for each

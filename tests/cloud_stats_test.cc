@@ -390,7 +390,7 @@ TEST(CloudStats, UnknownShapesPointTowardTheTruth) {
   EXPECT_LT(cost_truth, cost_start);
 }
 
-// Regime 2 (issue 11): ONE unknown-shapes seed pair — the reference rendered with noise /
+// Regime 2 (docs/cloud-fitting.md): ONE unknown-shapes seed pair — the reference rendered with noise /
 // weather seeds 2/12, the model with 102/212 (and weather maps 1212, 2212, 3212) — the
 // default fitted set (ambient_strength) from 30% off, whitened by the diagonal shape noise
 // of 24 draws (weather maps 5000-5023 x noise textures 7001-7006), 64x32, 4 model renders, at

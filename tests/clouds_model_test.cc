@@ -427,7 +427,7 @@ TEST(CloudsModel, CoverageZeroCompositesToTheClearSky) {
   }
 }
 
-// --cloud-cheap-light-opacity (MarchOptions::cheap_light_opacity, issue 10's added error):
+// --cloud-cheap-light-opacity (MarchOptions::cheap_light_opacity; the added error: docs/benchmarks.md):
 // the threshold picks which lit samples take base-shape-only light samples and nothing else.
 // Identities: at 1 no sample passes it (opacity 1 - T > 1 never holds), so the image equals
 // the one without cheap light samples bit for bit; between 0.3 and 0.6 the transmittance is
@@ -477,7 +477,7 @@ TEST(CloudsModel, CompositeIsSkyTimesTransmittancePlusClouds) {
   EXPECT_THROW(CompositeClouds(sky, c), Error);
 }
 
-// The lighting fit (issue 11) differentiates the model: the shared source instantiates on
+// The lighting fit (docs/cloud-fitting.md) differentiates the model: the shared source instantiates on
 // ceres::Jet, and its derivatives of a whole march with respect to lighting parameters
 // match central finite differences of the double model (relative 1e-5: the step h = 1e-6
 // relative leaves truncation ~h^2 and rounding ~1e-16/h ~ 1e-10).

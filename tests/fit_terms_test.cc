@@ -74,8 +74,8 @@ TEST(FitTerms, CeresPathThroughTermsGivesTheLutOfBefore) {
     ASSERT_EQ(j["levels"].size(), 1u);
     EXPECT_EQ(j["levels"][0]["iterations"].get<int>(), 16);
     ExpectDigest(p.luts.rayleigh, 105259095.55361749, 6009495313564.7607, "polish rayleigh");
-    // Re-taken when LinearSky summed a row's normal matrix by feature moments (issue 9,
-    // the day's speed): the same sums in another order moved the Mie table by 2e-10 and
+    // Re-taken when LinearSky summed a row's normal matrix by feature moments (docs/fitting.md,
+    // "A day's linear start"): the same sums in another order moved the Mie table by 2e-10 and
     // 7e-10 relative (the other tables and g unchanged at 1e-12).
     ExpectDigest(p.luts.mie, 9630228.150845457, 102797095794.87816, "polish mie");
     ExpectDigest(p.luts.isotropic, 2729036.7442824771, 2178182921.4094958, "polish isotropic");

@@ -1,4 +1,4 @@
-// skycal flow on clouds moved by the wind (issue 14): the bundled cloudy sky rendered at
+// skycal flow on clouds moved by the wind (docs/game-frames.md): the bundled cloudy sky rendered at
 // two cloud times `dt` apart, so the clouds drift by wind x dt over the layer's curved
 // shell and deform in the image (nearer clouds move more pixels than farther ones). The
 // ground truth per pixel comes from the density field itself (clouds/model, not the

@@ -1,5 +1,5 @@
 // Camera-response recovery on tone curves the code has never seen (tests/response_shapes.h;
-// issue 14's target): brackets of a real sky through each curve, with photon, read and
+// the 1.5x target of docs/capture.md): brackets of a real sky through each curve, with photon, read and
 // 0.6 DN code noise and clipping; the merge through the recovered curve (`weighted`) is
 // compared with the merge through the true curve, median and p90 relative error after one
 // global scale. The full table (5 shapes x 12 bracket sets) is bench/results/capture-response/capture-response.md.

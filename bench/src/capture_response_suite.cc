@@ -1,5 +1,5 @@
 // Suite `capture-response`: camera-response recovery against the known-response merge
-// (issue 14; what bench_response measured). Brackets of the real sunset sky
+// (docs/capture.md; what bench_response measured). Brackets of the real sunset sky
 // (tests/synthetic_brackets.h; 1024x512, 512x256 with --quick) through tone curves the merge
 // code has never seen (tests/response_shapes.h), 3..9 brackets 1..3 EV apart, photon + read
 // noise and 0.6 DN of code noise, clipping. Each set is merged through the true curve (the

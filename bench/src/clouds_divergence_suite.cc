@@ -1,5 +1,5 @@
 // Suite `clouds-divergence`: how much of the naive march's cost HZD's optimisations remove,
-// on lavapipe and on an ideal machine that branches per pixel (issue 10's 3x target). Per
+// on lavapipe and on an ideal machine that branches per pixel (the 3x target of docs/benchmarks.md). Per
 // march (naive, game, ...): the Vulkan render time at 512x256 (wall and process CPU time),
 // and from the float CPU twin of the shader (same decisions per pixel) the work per pixel:
 // march iterations (one density evaluation each), texel loads (a cheap base-only sample

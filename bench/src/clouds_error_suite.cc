@@ -1,4 +1,4 @@
-// Suite `clouds-error`: where the game march's added error comes from (issue 10). The
+// Suite `clouds-error`: where the game march's added error comes from (docs/benchmarks.md). The
 // clouds suite's scene, converged reference and error (rel RMSE of the composite above the
 // horizon), for the naive march, the game's, each HZD optimisation switched on alone on top
 // of the naive march and off alone from the game's settings, and the candidate settings that

@@ -1,4 +1,4 @@
-// Suite `clouds`: run time against error of the Horizon Zero Dawn cloud march (issue 10's
+// Suite `clouds`: run time against error of the Horizon Zero Dawn cloud march (docs/benchmarks.md's
 // benchmark). Scene: the bundled default_cloudy preset (its clouds section and weather
 // map), noise seed 1, sun 25 deg elevation. Error: solid-angle weighted rel RMSE of the
 // composite (clear sky x T + clouds) above the horizon against a converged reference —

@@ -1,5 +1,5 @@
 // Suite `fit`: one sky fitted from the bundled default preset (where a user starts,
-// DESIGN.md section 6) on clear skies the preset was not built from (CIE general skies,
+// docs/benchmarks.md) on clear skies the preset was not built from (CIE general skies,
 // another atmosphere's bake) and the CIE sky again with a building and a cloud, 256x128.
 // Grid: linear start on/off x robust loss x backend x the Ceres polish (a skip decision of
 // the linear start) x pyramid levels (with the other defaults) x Jacobians (analytic, or central differences: the baseline, run only

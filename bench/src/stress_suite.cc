@@ -1,4 +1,4 @@
-// Suite `stress`: numerical stability across the pipeline (issue 12). Each case feeds one
+// Suite `stress`: numerical stability across the pipeline (docs/benchmarks.md). Each case feeds one
 // hostile or extreme input and checks every output number is finite; a clear skycal::Error
 // is a pass (the tool refused and said why), a non-finite output or another exception is a
 // failure. Fits also record convergence. Areas:

@@ -1,4 +1,4 @@
-// Cloud lighting: the terms the fit (issue 11) tunes, written smooth (no max/branch kinks
+// Cloud lighting: the terms the fit (docs/cloud-fitting.md) tunes, written smooth (no max/branch kinks
 // in the parameters) so that a ceres::Jet instantiation has meaningful derivatives.
 // Sources: Schneider 2015 (Beer's law, Henyey-Greenstein silver lining, Beer-Powder with
 // its view-angle fade, rain absorption, ambient rising with height); Hillaire 2016,

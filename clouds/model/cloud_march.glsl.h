@@ -19,7 +19,7 @@ struct CloudResult {
   Scalar transmittance;   // 1
   int full_samples;       // full-density samples taken (for measurement)
   int iterations;         // march iterations, one density sample each (for measurement:
-                          // lavapipe runs 8 pixels' loops in lockstep, README)
+                          // lavapipe runs 8 pixels' loops in lockstep, docs/benchmarks.md)
 };
 
 // A fixed kernel of 6 unit-ish offsets spreading the light samples over the cone

@@ -1,4 +1,4 @@
-// The probe term of the joint fit (DESIGN.md 1.3: Forza Horizon 3's gray ball; the diffuse
+// The probe term of the joint fit (Forza Horizon 3's gray ball: Wood, GDC; the diffuse
 // sphere of Debevec et al., "Capturing Light Probes in the Sun", 2003): one Ceres residual
 // block per probed reference, one residual per (probe sample, channel).
 //

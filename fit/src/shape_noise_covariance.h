@@ -1,4 +1,4 @@
-// The shape noise of the cloud statistics as a full covariance (issue 11, regime 2): what
+// The shape noise of the cloud statistics as a full covariance (docs/cloud-fitting.md, regime 2): what
 // the generalised least-squares objective of cloud_stats.h whitens with. From D draws of the
 // statistics (each a render with other cloud shapes: weather maps and 3D noise textures), the
 // sample covariance S is shrunk toward its own diagonal,

@@ -6,7 +6,7 @@
 // luminance weights give cd/m^2). Angles in radians. Directions are unit vectors in the
 // lat-long frame of core/latlong.h (+Y up).
 //
-// Sky (Final Fantasy XV, DESIGN.md 1.1, seeds/002):
+// Sky (Miyamoto & Driancourt, "Rendering Techniques of Final Fantasy XV", SIGGRAPH 2016):
 //   L_lut = LutR(ts, gv) * phaseR(mu) + LutM(ts, gv) * phaseM(mu, g) [+ LutI(ts, gv) / (4 pi)]
 // ts = sun zenith angle, gv = view zenith angle, mu = cos(view, sun). The LUTs hold
 // "radiance per unit phase function" (cd/m^2 * sr); each phase function integrates to 1

@@ -1,4 +1,4 @@
-// The synthetic unknown-shapes scene of the cloud statistics fit (issue 11, regime 2),
+// The synthetic unknown-shapes scene of the cloud statistics fit (docs/cloud-fitting.md, regime 2),
 // shared by its test (tests/cloud_stats_test.cc) and its benchmark suites
 // (`skycal bench --suite fit-cloud-stats,cloud-stats-noise`: bench/src/fit_cloud_stats_suite.cc,
 // cloud_stats_noise_suite.cc): the bundled default_cloudy preset, a reference rendered with

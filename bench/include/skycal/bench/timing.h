@@ -1,6 +1,6 @@
 // Wall-clock timing of one benchmark case: warm-up runs (not kept), then repeats; the
 // median is the number reported, min and max its spread (the noise `bench --compare` uses).
-// Milliseconds throughout. DESIGN.md section 6: medians of repeats, ratios in one run.
+// Milliseconds throughout. Medians of repeats, ratios in one run (docs/benchmarks.md).
 #pragma once
 #include <functional>
 #include <vector>

@@ -1,5 +1,5 @@
 // Merging exposure brackets into one linear HDR image (the first step of `skycal capture`,
-// DESIGN.md 1.3: 7 exposures per frame, f/8, ISO ramped with the light, data kept linear).
+// Wood, Forza Horizon 3 skies, GDC: 7 exposures per frame, f/8, ISO ramped with the light, data kept linear).
 //
 //   auto brackets = LoadBrackets(paths, {});          // times, f-number, ISO from EXIF
 //   MergeOptions options;                             // auto response, hat weights

@@ -1,4 +1,4 @@
-// The gray diffuse probe (DESIGN.md 1.3): a matte gray ball photographed in every frame.
+// The gray diffuse probe (Wood, Forza Horizon 3 skies, GDC): a matte gray ball photographed in every frame.
 // Its radiance, binned by surface normal, is what the sky + sun must reproduce ("diffuse
 // probe + key light = this value"); its maximum luminance (the Forza statistic) dips to the
 // ambient level when the sun is behind cloud; and, as in Debevec et al. 2003 ("Capturing

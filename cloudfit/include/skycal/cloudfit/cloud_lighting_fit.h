@@ -1,4 +1,4 @@
-// Fitting the cloud lighting (issue 11, regime 1: known shapes). A reference rendered (or
+// Fitting the cloud lighting (docs/cloud-fitting.md, regime 1: known shapes). A reference rendered (or
 // photographed) with clouds whose shapes are known -- noise seed, weather map, wind time --
 // is compared with the sky + clouds composite exposure x (L_sky T + L_cloud); Ceres tunes
 // the 14 lighting parameters of the clouds section (cloud_lighting_params.h): values
@@ -51,7 +51,7 @@ struct CloudLightingOptions {
   // Cloud pixels whose Jacobian rows (Jet marches, ~15 double marches each) the fit uses;
   // all of them when there are fewer. One Jet march of the game's march costs ~2-4 ms at
   // 512x256 on this machine: 256 samples keep one Jacobian ~0.5-1 s on two cores
-  // (README "Fitting the cloud lighting").
+  // (docs/cloud-fitting.md, regime 1).
   int samples = 256;
   // Pixels whose transmittance through the known shapes (at the start) is below this are
   // cloud pixels: they leave the sky terms and join the cloud term (the composite models

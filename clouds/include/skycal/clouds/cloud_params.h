@@ -3,7 +3,7 @@
 // Every field of CloudParams has one row in CloudParameterSpecs() (name, unit, bounds,
 // default, description): the JSON reader, the writer and the validator all read that
 // table, as render::PresetParameterSpecs does for the sky. The lighting fields are what
-// the cloud lighting fit (issue 11) tunes. Sources: Schneider 2015, "The Real-time
+// the cloud lighting fit (docs/cloud-fitting.md) tunes. Sources: Schneider 2015, "The Real-time
 // Volumetric Cloudscapes of Horizon Zero Dawn" (geometry, shape, Beer-Powder, march);
 // Hillaire 2016, "Physically Based Sky, Atmosphere and Cloud Rendering in Frostbite"
 // (energy-conserving integration, multiple-scattering octaves after Wrenninge et al.).
@@ -109,7 +109,7 @@ struct MarchOptions {
   // Metres between light samples. 240 m, not the 120 m of a first reading of the talk: 6 x
   // 120 m covers 720 m toward the sun, less than a cumulus is deep at a low sun, so the
   // clouds came out too bright; against a converged light integral the clouds suite measures
-  // 13.2% rel RMSE at 240 m vs 30.1% at 120 m for +8% time (README "Volumetric clouds").
+  // 13.2% rel RMSE at 240 m vs 30.1% at 120 m for +8% time (docs/benchmarks.md, "Clouds on lavapipe").
   double light_step_m = 240.0;
   double far_light_distance_m = 3000.0;  // the far (distant-shadow) light sample
   // Light sample i sits light_step x (i + 1) x cone_spread off the sun ray (a fixed

@@ -1,5 +1,5 @@
 // Compositing clouds over the sky: L = L_sky T + L_cloud per pixel and channel, the
-// separate step issue 10 asks for (with coverage 0, T = 1 and L_cloud = 0 exactly, so the
+// a separate step (docs/cloud-model.md, "Output"; with coverage 0, T = 1 and L_cloud = 0 exactly, so the
 // composite equals the clear sky bit for bit).
 #pragma once
 #include "skycal/clouds/cloud_renderer.h"

@@ -1,4 +1,4 @@
-// The cloud lighting fit where the cloud SHAPES are unknown (issue 11, regime 2: what a
+// The cloud lighting fit where the cloud SHAPES are unknown (docs/cloud-fitting.md, regime 2: what a
 // photograph is). Noise cannot reproduce a photo's clouds pixel by pixel, so the objective
 // compares statistics that do not need them: per bin of (angle from the sun, elevation,
 // opacity class), weighted quantiles of the log radiance of cloud pixels, per channel, of
@@ -72,7 +72,7 @@ struct CloudStatsOptions {
   // Central-difference step per parameter, as a fraction of its (max - min) range.
   double relative_step = 2e-3;
   int max_iterations = 25;
-  // Whitening by the shape noise (a generalised least-squares objective; issue 11 regime 2,
+  // Whitening by the shape noise (a generalised least-squares objective; docs/cloud-fitting.md regime 2,
   // bench/results/cloud_stats_seed_pairs.md measures it). With noise_draws D > 0 the
   // objective renders D single shape draws of the model at its start (the scene's
   // shape_draw_maps, else its weather maps at further wind times), takes each statistic's

@@ -48,7 +48,7 @@ struct FitOptions {
   // The gray probe (when a reference has samples, see FitSky). Each probed reference's
   // probe residuals together weigh probe_weight times that reference's sky pixels (both
   // are solid-angle / pixel-count normalised squared log errors): why 0.1, and what other
-  // values do, in README "Joint sky and probe fit" and bench/results/probe_weight.md.
+  // values do, in docs/fitting.md "Joint sky and probe fit" and bench/results/probe_weight.md.
   double probe_weight = 0.1;
   int probe_quadrature_width = 128; // lat-long width of the model sky's irradiance quadrature
   bool fit_ground_albedo = true;    // fitted when probe samples face the ground

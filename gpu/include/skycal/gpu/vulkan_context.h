@@ -1,6 +1,6 @@
 // Vulkan instance, device and queue, created once and shared by every pipeline of the
 // process (the sky's and the clouds'). Plain C API (vulkan.h): vulkan.hpp is slow to
-// compile (DESIGN.md). Include only from renderer sources, never from a public header of
+// compile (docs/architecture.md). Include only from renderer sources, never from a public header of
 // render/ or clouds/.
 #pragma once
 #include <vulkan/vulkan.h>

@@ -1,6 +1,6 @@
 // The 15 CIE standard general skies (CIE S 011/E:2003 = ISO 15469:2004, "Spatial
 // distribution of daylight - CIE standard general sky"), used by the CIE benchmark and tests as references
-// independent of the game's sky model (DESIGN.md section 6).
+// independent of the game's sky model (docs/benchmarks.md, "How measurements are taken").
 //
 // Relative luminance of a sky element (dimensionless, 1 at the zenith):
 //   L / Lz = f(chi) phi(Z) / (f(Zs) phi(0))

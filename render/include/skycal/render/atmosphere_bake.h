@@ -1,7 +1,7 @@
 // Offline, physically based baker for the sky model's LUTs (render/model/sky_model.glsl.h).
 //
 // Final Fantasy XV generated its LUTs offline by least-squares fitting to ray-traced
-// skies (DESIGN.md 1.1, seeds/002). This baker does the ray tracing for a clear, single-
+// skies (Miyamoto & Driancourt, SIGGRAPH 2016). This baker does the ray tracing for a clear, single-
 // scattering Earth atmosphere and factors the phase functions out, which is what the
 // bundled default preset ships with (the fit then refines those tables against photos).
 //

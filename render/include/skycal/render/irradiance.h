@@ -1,4 +1,4 @@
-// Predicting the gray diffuse probe (DESIGN.md 1.3: "diffuse probe + key light = this
+// Predicting the gray diffuse probe (Wood, Forza Horizon 3 skies, GDC: "diffuse probe + key light = this
 // value") from the sky model: irradiance on a diffuse ball's surface normals, by direct
 // quadrature over a lat-long render and by order-2 spherical harmonics.
 //
