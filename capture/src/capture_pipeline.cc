@@ -1,15 +1,9 @@
-#include "capture_verb.h"
+#include "skycal/capture/capture_pipeline.h"
 
 #include <chrono>
 #include <cmath>
 #include <iostream>
-#include <sstream>
 
-#include "chart_verb.h"
-#include "command_line.h"
-#include "option_values.h"
-#include "render_verb.h"
-#include "stars_verb.h"
 #include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/rig.h"
 #include "skycal/capture/solar_position.h"
@@ -18,17 +12,23 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
+#include "skycal/core/file_safety.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
 #include "skycal/render/renderer.h"
-#include "verb_common.h"
 
-namespace skycal::cli {
+namespace skycal::capture {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+void Log(const std::string& message) { std::cerr << "[capture] " << message << std::endl; }
+// Progress lines: only with options.verbose (the bench runs the pipeline many times).
+void Progress(const CaptureOptions& o, const std::string& line) {
+  if (o.verbose) Log(line);
+}
 
 // The bracket-merge flags of a pixel as a 0/1 "measured well" image, RGB-replicated, so the
 // same unwrap carries it into the lat-long.
@@ -42,7 +42,7 @@ ImageRGB PlaneAsImage(const std::vector<float>& plane, int w, int h) {
 
 std::array<double, 3> CaptureOptions::CameraRotationDeg() const {
   if (camera_ypr_deg) return *camera_ypr_deg;
-  if (lens.model == capture::LensModel::kLatLong) return {0.0, 0.0, 0.0};
+  if (lens.model == LensModel::kLatLong) return {0.0, 0.0, 0.0};
   return {0.0, 90.0, 0.0};
 }
 
@@ -68,15 +68,15 @@ bool CaptureOptions::IsValid(std::string* why) const {
            "other lens flags";
     return false;
   }
-  if (lens.model == capture::LensModel::kLatLong && !lens_flags.empty()) {
+  if (lens.model == LensModel::kLatLong && !lens_flags.empty()) {
     *why = "--lens latlong: " + joined(lens_flags) +
            " describe a fisheye's image circle; a lat-long input has none (it spans 360 x 180 degrees, its "
            "centre and radius follow from its size). Drop them, or give the fisheye model with --lens";
     return false;
   }
-  if (kb_given && lens.model != capture::LensModel::kKannalaBrandt) {
+  if (kb_given && lens.model != LensModel::kKannalaBrandt) {
     *why = std::string("--kb-k: Kannala-Brandt coefficients need --lens kannala-brandt (got --lens ") +
-           capture::LensModelName(lens.model) + ")";
+           LensModelName(lens.model) + ")";
     return false;
   }
   if (!brackets.empty() && brackets.size() < 2) {
@@ -121,7 +121,7 @@ bool CaptureOptions::IsValid(std::string* why) const {
            ": the chart's 3x3 already takes camera RGB to lin_rec709; drop one of them";
     return false;
   }
-  if (!remove_stars && !(stars == capture::StarRemovalOptions{})) {
+  if (!remove_stars && !(stars == StarRemovalOptions{})) {
     *why = "--star-window, --star-sigma, --star-contrast, --star-max-pixels: only with --remove-stars "
            "(without it no star is removed and they would do nothing)";
     return false;
@@ -130,10 +130,22 @@ bool CaptureOptions::IsValid(std::string* why) const {
   return merge.IsValid(why);
 }
 
+
+nlohmann::json ChartSummary(const ColorCorrection& c) {
+  const nlohmann::json j = ColorCorrectionToJson(c);
+  return {{"label", c.label},
+          {"source", c.source},
+          {"matrix", c.matrix},
+          {"delta_e2000_before", {{"mean", j["delta_e2000"]["before"]["mean"]}, {"max", j["delta_e2000"]["before"]["max"]}}},
+          {"delta_e2000_after", {{"mean", j["delta_e2000"]["after"]["mean"]}, {"max", j["delta_e2000"]["after"]["max"]}}},
+          {"detection", c.detection.is_object() ? c.detection.value("method", std::string()) : std::string("read")}};
+}
+
 namespace {
+
 // The chart correction of this capture, or nothing: read (--color-correction) or fitted from
 // the chart image through the merge's response curve (--chart).
-std::optional<capture::ColorCorrection> CaptureColorCorrection(const CaptureOptions& o,
+std::optional<ColorCorrection> CaptureColorCorrection(const CaptureOptions& o,
                                                                const std::vector<float>& response_curve) {
   if (!o.color_correction_path.empty()) {
     nlohmann::json j;
@@ -142,144 +154,179 @@ std::optional<capture::ColorCorrection> CaptureColorCorrection(const CaptureOpti
     } catch (const nlohmann::json::exception& e) {
       throw Error(o.color_correction_path + ": --color-correction: not valid JSON (" + e.what() + ")");
     }
-    return capture::ColorCorrectionFromJson(j, o.color_correction_path);
+    return ColorCorrectionFromJson(j, o.color_correction_path);
   }
   if (o.chart_path.empty()) return std::nullopt;
-  capture::ChartOptions chart;
+  ChartOptions chart;
   chart.corners = o.chart_corners;
-  return capture::CorrectionFromChartImage(o.chart_path, response_curve, chart, o.chart_label);
+  return CorrectionFromChartImage(o.chart_path, response_curve, chart, o.chart_label);
 }
-}  // namespace
 
-nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
-  // Progress lines on stderr unless o.verbose is off (the bench runs the verb many times).
-  const auto progress = [&o](const std::string& line) {
-    if (o.verbose) Log("capture", line);
-  };
+// Stage 0: what is known before any heavy work: the rig's cameras, the outputs checked
+// against every input, and the sun by NREL SPA (a bad time or place is refused here).
+struct CapturePlan {
+  std::vector<RigCamera> rig_cameras;
+  std::optional<SpaResult> spa;
+  SpaInput spa_input;
+};
+
+CapturePlan PlanCapture(const CaptureOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  CapturePlan plan;
   // Inputs first (the rig names its cameras' images): --out must replace none of them.
   std::vector<NamedPath> inputs;
   for (const auto& p : o.brackets) inputs.push_back({"--brackets", p});
   if (!o.chart_path.empty()) inputs.push_back({"--chart", o.chart_path});
   if (!o.color_correction_path.empty()) inputs.push_back({"--color-correction", o.color_correction_path});
-  std::vector<capture::RigCamera> rig_cameras;
   if (!o.rig_path.empty()) {
     inputs.push_back({"--rig", o.rig_path});
-    rig_cameras = capture::ReadRigFile(o.rig_path);
-    for (const auto& cam : rig_cameras) inputs.push_back({"--rig " + o.rig_path + " camera '" + cam.name + "' image", cam.image});
+    plan.rig_cameras = ReadRigFile(o.rig_path);
+    for (const auto& cam : plan.rig_cameras)
+      inputs.push_back({"--rig " + o.rig_path + " camera '" + cam.name + "' image", cam.image});
   }
   RefuseOutputsOverInputs({{"--out", o.out}}, inputs);
   { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
-  // The sun by SPA first: a bad time or place is refused before any heavy work.
-  std::optional<capture::SpaResult> spa;
-  capture::SpaInput spa_input;
   if (!o.time_iso.empty()) {
-    spa_input = capture::ParseIso8601(o.time_iso, "--time");
-    spa_input.latitude_deg = *o.latitude_deg;
-    spa_input.longitude_deg = *o.longitude_deg;
-    spa = capture::ComputeSolarPosition(spa_input);
+    plan.spa_input = ParseIso8601(o.time_iso, "--time");
+    plan.spa_input.latitude_deg = *o.latitude_deg;
+    plan.spa_input.longitude_deg = *o.longitude_deg;
+    plan.spa = ComputeSolarPosition(plan.spa_input);
   }
-  nlohmann::json stages = nlohmann::json::object();
-  nlohmann::json skipped = nlohmann::json::array();
-  nlohmann::json sources = nlohmann::json::array();
-  const auto t0 = Clock::now();
+  return plan;
+}
 
-  // 1. Merge (single camera) or load the rig's HDR images.
-  std::vector<capture::RigCamera> cameras;
+// Stage 1's result: each camera with its HDR image and its "measured well" image.
+struct CameraImages {
+  std::vector<RigCamera> cameras;
   std::vector<ImageRGB> images, measured;
   double exposure_scale = 1.0;
   nlohmann::json merge_report;
   std::vector<float> response_curve;  // the merge's, for a chart image of the same camera
-  if (!o.brackets.empty()) {
-    nlohmann::json load_report;
-    const auto brackets = capture::LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
-    capture::MergeResult merged = capture::MergeBrackets(brackets, o.merge);
-    exposure_scale = merged.exposure_scale;
-    merge_report = merged.report;
-    response_curve = merged.response_curve;
-    capture::RigCamera cam;
-    cam.lens = o.lens;
-    cam.width = merged.radiance.width;
-    cam.height = merged.radiance.height;
-    if (!o.lens_center_given) {
-      cam.lens.center_x = 0.5 * (cam.width - 1);
-      cam.lens.center_y = 0.5 * (cam.height - 1);
-    }
-    if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
-    if (cam.lens.model == capture::LensModel::kLatLong) cam.lens = capture::LatLongLens(cam.width, cam.height);
-    if (!cam.lens.IsValid(&why, cam.width, cam.height)) throw Error("lens: " + why);
-    const std::array<double, 3> ypr = o.CameraRotationDeg();
-    cam.rotation = capture::RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
-    if (cam.lens.model == capture::LensModel::kLatLong && !o.camera_ypr_deg)
-      progress("--lens latlong: camera rotation = identity (the input is already a world lat-long)");
-    cam.name = "camera";
-    measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
-    images.push_back(std::move(merged.radiance));
-    cameras.push_back(cam);
-    for (const auto& p : o.brackets) sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
-    progress("merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
-                       " pixels no exposure measured well)");
-  } else {
-    cameras = rig_cameras;
-    for (const auto& cam : cameras) {
-      ExrRGB exr = ReadExrRGB(cam.image);
-      measured.push_back(PlaneAsImage(std::vector<float>(static_cast<size_t>(exr.image.width) * exr.image.height, 1.0f),
+  nlohmann::json sources = nlohmann::json::array();
+};
+
+// The single camera of --brackets: its lens completed from the merged image's size.
+RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
+  std::string why;
+  RigCamera cam;
+  cam.lens = o.lens;
+  cam.width = width;
+  cam.height = height;
+  if (!o.lens_center_given) {
+    cam.lens.center_x = 0.5 * (cam.width - 1);
+    cam.lens.center_y = 0.5 * (cam.height - 1);
+  }
+  if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
+  if (cam.lens.model == LensModel::kLatLong) cam.lens = LatLongLens(cam.width, cam.height);
+  if (!cam.lens.IsValid(&why, cam.width, cam.height)) throw Error("lens: " + why);
+  const std::array<double, 3> ypr = o.CameraRotationDeg();
+  cam.rotation = RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
+  if (cam.lens.model == LensModel::kLatLong && !o.camera_ypr_deg)
+    Progress(o, "--lens latlong: camera rotation = identity (the input is already a world lat-long)");
+  cam.name = "camera";
+  return cam;
+}
+
+// Stage 1, one camera: the brackets merged to radiance.
+CameraImages MergeStage(const CaptureOptions& o) {
+  CameraImages r;
+  nlohmann::json load_report;
+  const auto brackets = LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
+  MergeResult merged = MergeBrackets(brackets, o.merge);
+  r.exposure_scale = merged.exposure_scale;
+  r.merge_report = merged.report;
+  r.response_curve = merged.response_curve;
+  const RigCamera cam = BracketCamera(o, merged.radiance.width, merged.radiance.height);
+  r.measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
+  r.images.push_back(std::move(merged.radiance));
+  r.cameras.push_back(cam);
+  for (const auto& p : o.brackets) r.sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
+  Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
+                  " pixels no exposure measured well)");
+  return r;
+}
+
+// Stage 1, a rig: each camera's HDR EXR as it is (every pixel measured well).
+CameraImages LoadRigStage(const std::vector<RigCamera>& rig_cameras, nlohmann::json* skipped) {
+  CameraImages r;
+  r.cameras = rig_cameras;
+  for (const auto& cam : r.cameras) {
+    ExrRGB exr = ReadExrRGB(cam.image);
+    r.measured.push_back(PlaneAsImage(std::vector<float>(static_cast<size_t>(exr.image.width) * exr.image.height, 1.0f),
                                       exr.image.width, exr.image.height));
-      images.push_back(std::move(exr.image));
-      sources.push_back({{"path", cam.image}, {"sha256", Sha256OfFile(cam.image)}});
-    }
-    skipped.push_back({{"stage", "merge"}, {"reason", "--rig: the cameras' images are HDR already"}});
+    r.images.push_back(std::move(exr.image));
+    r.sources.push_back({{"path", cam.image}, {"sha256", Sha256OfFile(cam.image)}});
   }
-  const auto t1 = Clock::now();
-  stages["merge_ms"] = Ms(t0, t1);
+  skipped->push_back({{"stage", "merge"}, {"reason", "--rig: the cameras' images are HDR already"}});
+  return r;
+}
 
-  // 2. Colour: camera space -> the working space (scene-linear Rec.709): the chart's 3x3, or OCIO.
-  nlohmann::json color_summary;
-  const std::optional<capture::ColorCorrection> chart = CaptureColorCorrection(o, response_curve);
-  if (chart) {
-    for (ImageRGB& img : images) capture::ApplyColorCorrection(chart->matrix, &img);
-    color_summary = ChartSummary(*chart);
-    Log("capture", "colour chart correction (" + (o.chart_path.empty() ? o.color_correction_path : o.chart_path) +
-                       ") applied: chart mean CIEDE2000 " +
-                       std::to_string(color_summary["delta_e2000_before"]["mean"].get<double>()) + " -> " +
-                       std::to_string(color_summary["delta_e2000_after"]["mean"].get<double>()));
+// Stage 2: camera space -> the working space (scene-linear Rec.709): the chart's 3x3, or OCIO.
+struct ColourResult {
+  std::optional<ColorCorrection> chart;
+  nlohmann::json summary;
+};
+
+ColourResult ColourStage(const CaptureOptions& o, const std::vector<float>& response_curve,
+                         std::vector<ImageRGB>* images, nlohmann::json* skipped) {
+  ColourResult r;
+  r.chart = CaptureColorCorrection(o, response_curve);
+  if (r.chart) {
+    for (ImageRGB& img : *images) ApplyColorCorrection(r.chart->matrix, &img);
+    r.summary = ChartSummary(*r.chart);
+    Log("colour chart correction (" + (o.chart_path.empty() ? o.color_correction_path : o.chart_path) +
+        ") applied: chart mean CIEDE2000 " + std::to_string(r.summary["delta_e2000_before"]["mean"].get<double>()) +
+        " -> " + std::to_string(r.summary["delta_e2000_after"]["mean"].get<double>()));
   } else if (o.input_colorspace != "lin_rec709") {
-    for (ImageRGB& img : images) color::ConvertColorspace(img, o.input_colorspace, "lin_rec709");
+    for (ImageRGB& img : *images) color::ConvertColorspace(img, o.input_colorspace, "lin_rec709");
   } else {
-    skipped.push_back({{"stage", "colour"}, {"reason", "input already lin_rec709"}});
+    skipped->push_back({{"stage", "colour"}, {"reason", "input already lin_rec709"}});
   }
-  const auto t2 = Clock::now();
-  stages["colour_ms"] = Ms(t1, t2);
+  return r;
+}
 
-  // 3. Unwrap / stitch.
-  std::vector<std::pair<capture::RigCamera, const ImageRGB*>> views, measured_views;
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    views.push_back({cameras[i], &images[i]});
-    measured_views.push_back({cameras[i], &measured[i]});
-  }
+// Stage 3: the cameras unwrapped / stitched to the lat-long, stars removed on request.
+struct UnwrapResult {
+  ImageRGB frame, measured_frame;
   std::vector<float> coverage;
-  ImageRGB frame = capture::UnwrapToLatLong(views, o.width, o.height, &coverage);
-  const ImageRGB measured_frame = capture::UnwrapToLatLong(measured_views, o.width, o.height, nullptr);
-  std::optional<capture::StarRemovalResult> stars;
-  if (o.remove_stars) {
-    stars = capture::RemoveStars(frame, o.stars);
-    frame = std::move(stars->image);
-    Log("capture", "removed " + std::to_string(stars->stars) + " stars (" + std::to_string(stars->pixels_replaced) +
-                       " pixels replaced by their neighbourhood's median)");
-  }
-  const auto t3 = Clock::now();
-  stages["unwrap_ms"] = Ms(t2, t3);
+  std::optional<StarRemovalResult> stars;
+};
 
-  // 4. The sun: SPA and detection; the camera heading from the two when both exist.
-  nlohmann::json sun = nlohmann::json::object();
-  std::optional<std::array<double, 3>> sun_dir;
+UnwrapResult UnwrapStage(const CaptureOptions& o, const CameraImages& cams) {
+  std::vector<std::pair<RigCamera, const ImageRGB*>> views, measured_views;
+  for (size_t i = 0; i < cams.cameras.size(); ++i) {
+    views.push_back({cams.cameras[i], &cams.images[i]});
+    measured_views.push_back({cams.cameras[i], &cams.measured[i]});
+  }
+  UnwrapResult r;
+  r.frame = UnwrapToLatLong(views, o.width, o.height, &r.coverage);
+  r.measured_frame = UnwrapToLatLong(measured_views, o.width, o.height, nullptr);
+  if (o.remove_stars) {
+    r.stars = RemoveStars(r.frame, o.stars);
+    r.frame = std::move(r.stars->image);
+    Log("removed " + std::to_string(r.stars->stars) + " stars (" + std::to_string(r.stars->pixels_replaced) +
+        " pixels replaced by their neighbourhood's median)");
+  }
+  return r;
+}
+
+// Stage 4: the sun: SPA and detection; the camera heading from the two when both exist.
+struct SunResult {
+  nlohmann::json summary = nlohmann::json::object();
+  std::optional<std::array<double, 3>> direction;
+};
+
+SunResult SunStage(const CaptureOptions& o, const std::optional<SpaResult>& spa, const ImageRGB& frame,
+                   nlohmann::json* skipped) {
+  SunResult r;
+  nlohmann::json& sun = r.summary;
   if (spa) {
-    sun_dir = capture::SunDirectionInFrame(*spa, o.north_longitude_deg);
+    r.direction = SunDirectionInFrame(*spa, o.north_longitude_deg);
     sun["spa"] = {{"zenith_deg", spa->zenith_deg}, {"azimuth_deg", spa->azimuth_deg}};
   }
   std::string detect_why;
-  if (auto d = capture::DetectSun(frame, &detect_why)) {
+  if (auto d = DetectSun(frame, &detect_why)) {
     sun["detected"] = {{"direction", d->direction},
                        {"elevation_deg", latlong::ElevationDeg(d->direction)},
                        {"azimuth_deg", latlong::AzimuthDeg(d->direction)},
@@ -287,219 +334,136 @@ nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
                        {"contrast", d->contrast}};
     if (spa) {
       // Heading: how far the rig's longitude 0 is from where north was assumed.
-      double offset = latlong::AzimuthDeg(d->direction) - latlong::AzimuthDeg(*sun_dir);
+      double offset = latlong::AzimuthDeg(d->direction) - latlong::AzimuthDeg(*r.direction);
       offset = std::remainder(offset, 360.0);
       sun["camera_heading_offset_deg"] = offset;
       sun["suggested_north_longitude_deg"] = std::remainder(o.north_longitude_deg + offset, 360.0);
-      progress("camera heading: the detected sun is " + std::to_string(offset) +
-                         " deg of longitude from the SPA sun; --north-longitude " +
-                         std::to_string(sun["suggested_north_longitude_deg"].get<double>()) + " aligns them");
+      Progress(o, "camera heading: the detected sun is " + std::to_string(offset) +
+                      " deg of longitude from the SPA sun; --north-longitude " +
+                      std::to_string(sun["suggested_north_longitude_deg"].get<double>()) + " aligns them");
     } else {
-      sun_dir = d->direction;
+      r.direction = d->direction;
     }
   } else {
     sun["detection"] = "no distinct sun: " + detect_why;
   }
-  if (!sun_dir) skipped.push_back({{"stage", "sunDirection"}, {"reason", "no --time/--lat/--lon and no sun detected"}});
-  const auto t4 = Clock::now();
-  stages["sun_ms"] = Ms(t3, t4);
+  if (!r.direction)
+    skipped->push_back({{"stage", "sunDirection"}, {"reason", "no --time/--lat/--lon and no sun detected"}});
+  return r;
+}
 
-  // 5. Masks and the frame.
+// Stage 5: the mask planes: valid (covered and measured well), below the horizon, stars
+// (when removed) and cloud probability (colour against the clear-sky model at this sun).
+struct MaskResult {
+  std::vector<ExrPlane> planes;
+  long long valid_count = 0;
+};
+
+MaskResult MaskStage(const CaptureOptions& o, const UnwrapResult& u, SunResult* sun, nlohmann::json* stages,
+                     nlohmann::json* skipped) {
   const size_t n = static_cast<size_t>(o.width) * o.height;
   ExrPlane valid{"mask.valid", std::vector<float>(n, 0.0f)}, below{"mask.belowHorizon", std::vector<float>(n, 0.0f)};
-  long long valid_count = 0;
+  MaskResult r;
   for (int y = 0; y < o.height; ++y) {
     const bool under = latlong::Latitude(y, o.height) <= 0.0;
     for (int x = 0; x < o.width; ++x) {
       const size_t i = static_cast<size_t>(y) * o.width + x;
-      const bool ok = coverage[i] > 0.0f && measured_frame.pixels[3 * i] > 0.5f;
+      const bool ok = u.coverage[i] > 0.0f && u.measured_frame.pixels[3 * i] > 0.5f;
       valid.values[i] = ok ? 1.0f : 0.0f;
       below.values[i] = under ? 1.0f : 0.0f;
-      valid_count += ok;
+      r.valid_count += ok;
     }
   }
-  // Cloud probability: colour against the clear-sky model at this sun (bundled preset).
-  std::vector<ExrPlane> planes = {valid, below};
-  if (stars) planes.push_back({"mask.stars", std::vector<float>(stars->mask.begin(), stars->mask.end())});
-  if (sun_dir) {
-    render::RenderRequest req;
-    req.sun_dir = *sun_dir;
-    req.width = o.width;
-    req.height = o.height;
-    req.sun_disc = false;
-    const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(DefaultPresetPath()), req);
-    const capture::CloudMask cm = capture::EstimateCloudProbability(frame, clear, sun_dir, {});
-    planes.push_back({"mask.cloud", cm.probability});
-    sun["cloud_offset_ln_rb"] = cm.clear_offset;
-    stages["cloudy_pixels"] = cm.cloudy_pixels;
-  } else {
-    skipped.push_back({{"stage", "cloud mask"}, {"reason", "needs the sun direction for the clear-sky expectation"}});
+  r.planes = {valid, below};
+  if (u.stars) r.planes.push_back({"mask.stars", std::vector<float>(u.stars->mask.begin(), u.stars->mask.end())});
+  if (!sun->direction) {
+    skipped->push_back({{"stage", "cloud mask"}, {"reason", "needs the sun direction for the clear-sky expectation"}});
+    return r;
   }
-  const auto t_mask = Clock::now();
-  stages["mask_ms"] = Ms(t4, t_mask);
+  render::RenderRequest req;
+  req.sun_dir = *sun->direction;
+  req.width = o.width;
+  req.height = o.height;
+  req.sun_disc = false;
+  const std::string preset =
+      o.clear_sky_preset.empty() ? std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json" : o.clear_sky_preset;
+  const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(preset), req);
+  const CloudMask cm = EstimateCloudProbability(u.frame, clear, sun->direction, {});
+  r.planes.push_back({"mask.cloud", cm.probability});
+  sun->summary["cloud_offset_ln_rb"] = cm.clear_offset;
+  (*stages)["cloudy_pixels"] = cm.cloudy_pixels;
+  return r;
+}
+
+// Stage 6's metadata: the frame's EXR attributes (sun, time and place, exposure scale,
+// sources, lens, colour correction, units, version).
+ExrAttributes FrameAttributes(const CaptureOptions& o, const CapturePlan& plan, const SunResult& sun,
+                              const CameraImages& cams, const ColourResult& colour) {
   ExrAttributes attrs;
   attrs.envmap_latlong = true;
-  if (sun_dir) {
-    attrs.v3fs["sunDirection"] = {static_cast<float>((*sun_dir)[0]), static_cast<float>((*sun_dir)[1]),
-                                  static_cast<float>((*sun_dir)[2])};
+  if (sun.direction) {
+    const std::array<double, 3>& d = *sun.direction;
+    attrs.v3fs["sunDirection"] = {static_cast<float>(d[0]), static_cast<float>(d[1]), static_cast<float>(d[2])};
   }
-  if (spa) {
+  if (plan.spa) {
     attrs.strings["skycalCaptureTime"] = o.time_iso;
     attrs.floats["skycalLatitudeDeg"] = static_cast<float>(*o.latitude_deg);
     attrs.floats["skycalLongitudeDeg"] = static_cast<float>(*o.longitude_deg);
-    const double local_h = spa_input.hour + spa_input.minute / 60.0 + spa_input.second / 3600.0;
-    attrs.floats["skycalTimeOfDay"] = static_cast<float>(local_h);
+    const SpaInput& t = plan.spa_input;
+    attrs.floats["skycalTimeOfDay"] = static_cast<float>(t.hour + t.minute / 60.0 + t.second / 3600.0);
   }
-  attrs.floats["skycalExposureScale"] = static_cast<float>(exposure_scale);
-  attrs.strings["skycalSources"] = sources.dump();
-  attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(capture::LensModelName(o.lens.model)) : "rig " + o.rig_path;
+  attrs.floats["skycalExposureScale"] = static_cast<float>(cams.exposure_scale);
+  attrs.strings["skycalSources"] = cams.sources.dump();
+  attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(LensModelName(o.lens.model)) : "rig " + o.rig_path;
   if (o.rig_path.empty()) {
     const std::array<double, 3> ypr = o.CameraRotationDeg();
     attrs.v3fs["skycalCameraRotationDeg"] = {static_cast<float>(ypr[0]), static_cast<float>(ypr[1]), static_cast<float>(ypr[2])};
   }
-  if (chart) attrs.strings["skycalColorCorrection"] = capture::ColorCorrectionToJson(*chart).dump();
+  if (colour.chart) attrs.strings["skycalColorCorrection"] = ColorCorrectionToJson(*colour.chart).dump();
   attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
   attrs.strings["skycalVersion"] = kSkycalVersion;
-  WriteExrRGBWithPlanes(o.out, frame, planes, attrs);
+  return attrs;
+}
+
+}  // namespace
+
+nlohmann::json RunCapturePipeline(const CaptureOptions& o) {
+  const CapturePlan plan = PlanCapture(o);
+  nlohmann::json stages = nlohmann::json::object(), skipped = nlohmann::json::array();
+  const auto t0 = Clock::now();
+  CameraImages cams = o.brackets.empty() ? LoadRigStage(plan.rig_cameras, &skipped) : MergeStage(o);
+  const auto t1 = Clock::now();
+  stages["merge_ms"] = Ms(t0, t1);
+  const ColourResult colour = ColourStage(o, cams.response_curve, &cams.images, &skipped);
+  const auto t2 = Clock::now();
+  stages["colour_ms"] = Ms(t1, t2);
+  const UnwrapResult unwrapped = UnwrapStage(o, cams);
+  const auto t3 = Clock::now();
+  stages["unwrap_ms"] = Ms(t2, t3);
+  SunResult sun = SunStage(o, plan.spa, unwrapped.frame, &skipped);
+  const auto t4 = Clock::now();
+  stages["sun_ms"] = Ms(t3, t4);
+  const MaskResult masks = MaskStage(o, unwrapped, &sun, &stages, &skipped);
+  const auto t_mask = Clock::now();
+  stages["mask_ms"] = Ms(t4, t_mask);
+  WriteExrRGBWithPlanes(o.out, unwrapped.frame, masks.planes, FrameAttributes(o, plan, sun, cams, colour));
   const auto t5 = Clock::now();
   stages["write_ms"] = Ms(t_mask, t5);
   stages["total_ms"] = Ms(t0, t5);
-  progress("wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
-                     std::to_string(valid_count) + " valid pixels, " + std::to_string(Ms(t0, t5)) + " ms)");
+  Progress(o, "wrote " + o.out + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", " +
+                  std::to_string(masks.valid_count) + " valid pixels, " + std::to_string(Ms(t0, t5)) + " ms)");
   return {{"out", o.out},
           {"size", {o.width, o.height}},
-          {"cameras", static_cast<int>(cameras.size())},
-          {"valid_pixels", valid_count},
-          {"exposure_scale", exposure_scale},
-          {"sun", sun},
-          {"merge", merge_report},
-          {"color_correction", color_summary},
-          {"stars", stars ? stars->ToJson() : nlohmann::json()},
+          {"cameras", static_cast<int>(cams.cameras.size())},
+          {"valid_pixels", masks.valid_count},
+          {"exposure_scale", cams.exposure_scale},
+          {"sun", sun.summary},
+          {"merge", cams.merge_report},
+          {"color_correction", colour.summary},
+          {"stars", unwrapped.stars ? unwrapped.stars->ToJson() : nlohmann::json()},
           {"stages", stages},
           {"skipped", skipped},
-          {"sources", sources}};
+          {"sources", cams.sources}};
 }
 
-CaptureOptions ParseCaptureArgs(int argc, char** argv) {
-  VerbCommandLine cl(
-      "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
-      "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response auto|debevec|weighted|robertson|linear|srgb]\n"
-      "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
-      "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
-      "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
-      "                 [--input-colorspace NAME | --color-correction CORRECTION.json | --chart IMG [--chart-corners ...]]\n"
-      "                 [--remove-stars [--star-window PX] [--star-sigma K] [--star-contrast C] [--star-max-pixels N]]\n"
-      "                 [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]\n"
-      "                 [--size WxH] --out FRAME.exr [--json]",
-      "Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.");
-  CaptureOptions o;
-  std::optional<std::string> exposure_times, response, lens, lens_center, kb_k, vignetting, rotation, size, chart_corners;
-  std::optional<double> lens_fov, lens_radius;
-  bool json = false;
-  cl.List("--brackets", &o.brackets, "IMG",
-          "8/16-bit images of one camera, one per exposure (repeat the flag or list them)");
-  cl.Text("--exposure-times", &exposure_times, "T,...",
-          "seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from\n"
-          "EXIF put frames of a time-lapse on one scale)");
-  cl.Text("--response", &response, "NAME",
-          "camera response: auto (default: weighted's per-channel curves, or debevec's when\n"
-          "the channels' curves have one shape; README \"Capture: lat-long brackets and\n"
-          "camera-response recovery\"), debevec, weighted, robertson (recovered), linear, srgb");
-  cl.Text("--lens", &lens, "NAME",
-          "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
-          "stereographic or kannala-brandt");
-  cl.Number("--lens-fov-deg", &lens_fov, "F", "lens field of view in degrees (default 180)");
-  cl.Text("--lens-center", &lens_center, "X,Y", "lens centre in pixels (default: the image centre)");
-  cl.Number("--lens-radius", &lens_radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
-  cl.Text("--kb-k", &kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
-  cl.Text("--vignetting", &vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
-  cl.Text("--camera-rotation", &rotation, "Y,P,R",
-          "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
-          "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"
-          "panorama is already the world's lat-long)");
-  cl.Text("--rig", &o.rig_path, "RIG.json",
-          "several cameras (format: capture/include/skycal/capture/rig.h; each camera's\n"
-          "image is an HDR EXR, e.g. merged by an earlier capture of that camera with\n"
-          "--lens latlong... or any linear EXR); replaces --brackets and the lens flags");
-  cl.Text("--input-colorspace", &o.input_colorspace, "CS",
-          "OCIO colour space of the camera data (default lin_rec709; $OCIO or\n"
-          "config/skycal.ocio), converted to lin_rec709");
-  cl.Text("--color-correction", &o.color_correction_path, "CORRECTION.json",
-          "a colour-chart correction from skycal chart (camera RGB -> lin_rec709), applied\n"
-          "to the merged image and stored in the frame (skycalColorCorrection)");
-  cl.Text("--chart", &o.chart_path, "IMG",
-          "fit the colour-chart correction now from this image of a ColorChecker Classic\n"
-          "through the same camera (a bracket: linearised by this merge's response; or\n"
-          "an EXR), then apply and store it as --color-correction does");
-  cl.Text("--chart-corners", &chart_corners, "X1,Y1,...",
-          "--chart's corners in pixels (patch 1 first, clockwise); default: detected (OpenCV mcc)");
-  cl.Text("--chart-label", &o.chart_label, "TEXT", "which exposure set --chart belongs to, e.g. nd (stored)");
-  cl.Flag("--remove-stars", &o.remove_stars,
-          "night frames: remove the stars from the lat-long (as skycal stars; mask.stars\n"
-          "channel: 1 where replaced)");
-  RegisterStarOptions(cl, &o.stars);
-  cl.Text("--time", &o.time_iso, "ISO8601", "capture time with its UTC offset; with --lat and --lon: the sun by NREL SPA");
-  cl.Number("--lat", &o.latitude_deg, "DEG", "capture latitude, degrees, north positive");
-  cl.Number("--lon", &o.longitude_deg, "DEG", "capture longitude, degrees, east positive");
-  cl.Number("--north-longitude", &o.north_longitude_deg, "DEG", "lat-long longitude that points to geographic north (default 0)");
-  cl.Text("--size", &size, "WxH", "output lat-long in pixels (default 2048x1024)");
-  cl.Text("--out", &o.out, "FRAME.exr",
-          "reference frame (required): R, G, B radiance + mask.valid, mask.belowHorizon and (with a\n"
-          "sun) mask.cloud (probability) channels,\n"
-          "sunDirection, time, place, exposure scale, sources, lens");
-  cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");
-  cl.Parse(argc, argv);
-  if (chart_corners) o.chart_corners = ParseChartCorners(*chart_corners, "--chart-corners");
-  if (exposure_times) o.exposure_times_s = ParseNumberList(*exposure_times, "--exposure-times");
-  if (response) o.merge.response = capture::ParseResponseModel(*response, "--response");
-  if (lens) {
-    auto m = capture::LensModelFromName(*lens);
-    if (!m) throw Error("--lens: unknown model '" + *lens + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
-    o.lens.model = *m;
-    o.lens_model_given = true;
-  }
-  if (lens_fov) {
-    o.lens.fov_deg = *lens_fov;
-    o.lens_fov_given = true;
-  }
-  if (lens_center) {
-    const auto v = ParseNumberList(*lens_center, "--lens-center");
-    if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
-    o.lens.center_x = v[0];
-    o.lens.center_y = v[1];
-    o.lens_center_given = true;
-  }
-  if (lens_radius) {
-    o.lens.radius_px = *lens_radius;
-    o.lens_radius_given = true;
-  }
-  if (kb_k) {
-    const auto v = ParseNumberList(*kb_k, "--kb-k");
-    if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
-    for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
-    o.kb_given = true;
-  }
-  if (vignetting) {
-    const auto v = ParseNumberList(*vignetting, "--vignetting");
-    if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
-    for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
-    o.vignetting_given = true;
-  }
-  if (rotation) {
-    const auto v = ParseNumberList(*rotation, "--camera-rotation");
-    if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
-    o.camera_ypr_deg = std::array<double, 3>{v[0], v[1], v[2]};
-  }
-  if (size) {
-    const auto wh = ParseSize(*size, "--size");
-    o.width = wh[0];
-    o.height = wh[1];
-  }
-  return o;
-}
-
-int RunCapture(int argc, char** argv) {
-  return RunVerb("capture", WantsJson(argc, argv), [&]() { return RunCaptureImpl(ParseCaptureArgs(argc, argv)); });
-}
-
-}  // namespace skycal::cli
+}  // namespace skycal::capture

@@ -1,25 +1,26 @@
-#include "flow_verb.h"
+#include "skycal/capture/optical_flow.h"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-#include "command_line.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/zenith_cap.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
-#include "verb_common.h"
-#include "zenith_cap.h"
 
-namespace skycal::cli {
+namespace skycal::capture {
 namespace {
+
+void Log(const std::string& message) { std::cerr << "[flow] " << message << std::endl; }
 
 double LogLuminance(const ImageRGB& img, size_t i) {
   const double l = 0.2126 * img.pixels[3 * i] + 0.7152 * img.pixels[3 * i + 1] + 0.0722 * img.pixels[3 * i + 2];
@@ -157,91 +158,98 @@ std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b, bool zenith_c
   return out;
 }
 
-nlohmann::json RunFlowImpl(const FlowOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw Error(why);
-  const std::filesystem::path exr(o.out);
-  const std::string png = std::filesystem::path(exr).replace_extension(".png").string();
-  const std::string sidecar = std::filesystem::path(exr).replace_extension(".json").string();
-  RefuseOutputsOverInputs({{"--out", o.out}, {"--out's 8-bit image", png}, {"--out's sidecar", sidecar}},
-                          {{"frame A", o.a}, {"frame B", o.b}});
-  const capture::LatLongFrame fa = capture::ReadLatLongFrame(o.a), fb = capture::ReadLatLongFrame(o.b);
-  const int w = fa.radiance.width, h = fa.radiance.height;
-  if (fb.radiance.width != w || fb.radiance.height != h) {
-    throw Error(o.b + ": frame is " + std::to_string(fb.radiance.width) + "x" + std::to_string(fb.radiance.height) +
-                ", but " + o.a + " is " + std::to_string(w) + "x" + std::to_string(h) +
-                ": consecutive frames of a time-lapse must share one size");
-  }
-  const int qw = std::max(2, w / o.scale), qh = std::max(2, h / o.scale);
-  Log("flow", o.a + " -> " + o.b + ": " + std::to_string(w) + "x" + std::to_string(h) + ", vectors at " +
-                  std::to_string(qw) + "x" + std::to_string(qh));
-  const std::vector<float> fwd = DenseFlow(fa.radiance, fb.radiance), bwd = DenseFlow(fb.radiance, fa.radiance);
-  // Texture space (u: fraction of the width's longitude span, v: of the height), area-
-  // averaged to the vectors' resolution.
+namespace {
+
+// The two directions' vectors in texture space (u: fraction of the width's longitude span,
+// v: of the height), area-averaged to qw x qh, with each component's range.
+struct QuantizedFlow {
+  cv::Mat vectors;  // CV_32FC4: forward u, v, backward u, v
+  double mins[4], maxs[4];
+};
+
+QuantizedFlow TextureSpaceFlow(const std::vector<float>& fwd, const std::vector<float>& bwd, int w, int h, int qw, int qh) {
   cv::Mat full(h, w, CV_32FC4);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const size_t i = 2 * (static_cast<size_t>(y) * w + x);
       full.at<cv::Vec4f>(y, x) = {fwd[i] / (w - 1.0f), fwd[i + 1] / (h - 1.0f), bwd[i] / (w - 1.0f), bwd[i + 1] / (h - 1.0f)};
     }
-  cv::Mat quarter;
-  cv::resize(full, quarter, cv::Size(qw, qh), 0, 0, cv::INTER_AREA);
-  const char* names[4] = {"forward_u", "forward_v", "backward_u", "backward_v"};
-  double mins[4], maxs[4];
+  QuantizedFlow q;
+  cv::resize(full, q.vectors, cv::Size(qw, qh), 0, 0, cv::INTER_AREA);
   for (int c = 0; c < 4; ++c) {
-    mins[c] = INFINITY;
-    maxs[c] = -INFINITY;
+    q.mins[c] = INFINITY;
+    q.maxs[c] = -INFINITY;
     for (int y = 0; y < qh; ++y)
       for (int x = 0; x < qw; ++x) {
-        mins[c] = std::min(mins[c], static_cast<double>(quarter.at<cv::Vec4f>(y, x)[c]));
-        maxs[c] = std::max(maxs[c], static_cast<double>(quarter.at<cv::Vec4f>(y, x)[c]));
+        q.mins[c] = std::min(q.mins[c], static_cast<double>(q.vectors.at<cv::Vec4f>(y, x)[c]));
+        q.maxs[c] = std::max(q.maxs[c], static_cast<double>(q.vectors.at<cv::Vec4f>(y, x)[c]));
       }
   }
-  cv::Mat codes(qh, qw, CV_8UC4);
-  ImageRGB rgb(qw, qh);
-  std::vector<ExrPlane> planes = {{"backward.u", std::vector<float>(static_cast<size_t>(qw) * qh)},
-                                  {"backward.v", std::vector<float>(static_cast<size_t>(qw) * qh)}};
+  return q;
+}
+
+// The three encodings of one QuantizedFlow: 8-bit codes over each component's range, the
+// float forward vectors as RGB and the backward ones as extra EXR planes.
+struct EncodedFlow {
+  cv::Mat codes;  // CV_8UC4, BGRA as OpenCV writes it
+  ImageRGB rgb;
+  std::vector<ExrPlane> planes;
+};
+
+EncodedFlow EncodeFlow(const QuantizedFlow& q) {
+  const int qw = q.vectors.cols, qh = q.vectors.rows;
+  EncodedFlow e{cv::Mat(qh, qw, CV_8UC4), ImageRGB(qw, qh),
+                {{"backward.u", std::vector<float>(static_cast<size_t>(qw) * qh)},
+                 {"backward.v", std::vector<float>(static_cast<size_t>(qw) * qh)}}};
   for (int y = 0; y < qh; ++y)
     for (int x = 0; x < qw; ++x) {
-      const cv::Vec4f v = quarter.at<cv::Vec4f>(y, x);
-      cv::Vec4b q;
+      const cv::Vec4f v = q.vectors.at<cv::Vec4f>(y, x);
+      cv::Vec4b c8;
       for (int c = 0; c < 4; ++c) {
-        const double span = maxs[c] - mins[c];
-        q[c] = static_cast<uint8_t>(span > 0.0 ? std::lround(255.0 * (v[c] - mins[c]) / span) : 0);
+        const double span = q.maxs[c] - q.mins[c];
+        c8[c] = static_cast<uint8_t>(span > 0.0 ? std::lround(255.0 * (v[c] - q.mins[c]) / span) : 0);
       }
       // OpenCV writes BGRA: R forward u, G forward v, B backward u, A backward v in the file.
-      codes.at<cv::Vec4b>(y, x) = {q[2], q[1], q[0], q[3]};
-      rgb.at(x, y, 0) = v[0];
-      rgb.at(x, y, 1) = v[1];
+      e.codes.at<cv::Vec4b>(y, x) = {c8[2], c8[1], c8[0], c8[3]};
+      e.rgb.at(x, y, 0) = v[0];
+      e.rgb.at(x, y, 1) = v[1];
       const size_t i = static_cast<size_t>(y) * qw + x;
-      planes[0].values[i] = v[2];
-      planes[1].values[i] = v[3];
+      e.planes[0].values[i] = v[2];
+      e.planes[1].values[i] = v[3];
     }
+  return e;
+}
+
+nlohmann::json FlowSidecar(const FlowOptions& o, const QuantizedFlow& q, int w, int h) {
+  const char* names[4] = {"forward_u", "forward_v", "backward_u", "backward_v"};
   nlohmann::json components = nlohmann::json::array();
-  for (int c = 0; c < 4; ++c) components.push_back({{"name", names[c]}, {"min", mins[c]}, {"max", maxs[c]}});
-  const nlohmann::json meta = {
-      {"format", "skycal-flow"},
-      {"version", 1},
-      {"a", o.a},
-      {"b", o.b},
-      {"frame_width", w},
-      {"frame_height", h},
-      {"width", qw},
-      {"height", qh},
-      {"units", "texture space: u as a fraction of the image width (a full turn of longitude), v of its height"},
-      {"meaning", "forward: a(p) ~ b(p + forward(p)); backward: b(p) ~ a(p + backward(p))"},
-      {"png_channels", {"R forward_u", "G forward_v", "B backward_u", "A backward_v"}},
-      {"decode", "value = min + (max - min) * code / 255"},
-      {"components", components}};
+  for (int c = 0; c < 4; ++c) components.push_back({{"name", names[c]}, {"min", q.mins[c]}, {"max", q.maxs[c]}});
+  return {{"format", "skycal-flow"},
+          {"version", 1},
+          {"a", o.a},
+          {"b", o.b},
+          {"frame_width", w},
+          {"frame_height", h},
+          {"width", q.vectors.cols},
+          {"height", q.vectors.rows},
+          {"units", "texture space: u as a fraction of the image width (a full turn of longitude), v of its height"},
+          {"meaning", "forward: a(p) ~ b(p + forward(p)); backward: b(p) ~ a(p + backward(p))"},
+          {"png_channels", {"R forward_u", "G forward_v", "B backward_u", "A backward_v"}},
+          {"decode", "value = min + (max - min) * code / 255"},
+          {"components", components}};
+}
+
+// Three files, each atomic; a failure on a later one removes the earlier ones (all or none).
+void WriteFlowFiles(const std::string& exr, const std::string& png, const std::string& sidecar, const EncodedFlow& e,
+                    const nlohmann::json& meta) {
   std::vector<uint8_t> png_bytes;
-  if (!cv::imencode(".png", codes, png_bytes)) throw Error(png + ": PNG encoding failed");
+  if (!cv::imencode(".png", e.codes, png_bytes)) throw Error(png + ": PNG encoding failed");
   ExrAttributes attrs;
   attrs.strings["skycalFlow"] = meta.dump();
-  // Three files, each atomic; a failure on a later one removes the earlier ones (all or none).
   std::vector<std::string> written;
   try {
-    WriteExrRGBWithPlanes(o.out, rgb, planes, attrs);
-    written.push_back(o.out);
+    WriteExrRGBWithPlanes(exr, e.rgb, e.planes, attrs);
+    written.push_back(exr);
     WriteFileAtomically(png, std::string(png_bytes.begin(), png_bytes.end()));
     written.push_back(png);
     WriteFileAtomically(sidecar, meta.dump(2) + "\n");
@@ -250,8 +258,34 @@ nlohmann::json RunFlowImpl(const FlowOptions& o) {
     for (const std::string& f : written) std::filesystem::remove(f, ec);
     throw;
   }
-  Log("flow", "wrote " + o.out + ", " + png + ", " + sidecar + " (forward u " + std::to_string(mins[0] * (w - 1)) +
-                  ".." + std::to_string(maxs[0] * (w - 1)) + " px)");
+}
+
+}  // namespace
+
+nlohmann::json WriteFlowVectors(const FlowOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  const std::filesystem::path exr(o.out);
+  const std::string png = std::filesystem::path(exr).replace_extension(".png").string();
+  const std::string sidecar = std::filesystem::path(exr).replace_extension(".json").string();
+  RefuseOutputsOverInputs({{"--out", o.out}, {"--out's 8-bit image", png}, {"--out's sidecar", sidecar}},
+                          {{"frame A", o.a}, {"frame B", o.b}});
+  const LatLongFrame fa = ReadLatLongFrame(o.a), fb = ReadLatLongFrame(o.b);
+  const int w = fa.radiance.width, h = fa.radiance.height;
+  if (fb.radiance.width != w || fb.radiance.height != h) {
+    throw Error(o.b + ": frame is " + std::to_string(fb.radiance.width) + "x" + std::to_string(fb.radiance.height) +
+                ", but " + o.a + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                ": consecutive frames of a time-lapse must share one size");
+  }
+  const int qw = std::max(2, w / o.scale), qh = std::max(2, h / o.scale);
+  Log(o.a + " -> " + o.b + ": " + std::to_string(w) + "x" + std::to_string(h) + ", vectors at " + std::to_string(qw) +
+      "x" + std::to_string(qh));
+  const std::vector<float> fwd = DenseFlow(fa.radiance, fb.radiance), bwd = DenseFlow(fb.radiance, fa.radiance);
+  const QuantizedFlow q = TextureSpaceFlow(fwd, bwd, w, h, qw, qh);
+  const nlohmann::json meta = FlowSidecar(o, q, w, h);
+  WriteFlowFiles(o.out, png, sidecar, EncodeFlow(q), meta);
+  Log("wrote " + o.out + ", " + png + ", " + sidecar + " (forward u " + std::to_string(q.mins[0] * (w - 1)) + ".." +
+      std::to_string(q.maxs[0] * (w - 1)) + " px)");
   nlohmann::json j = meta;
   j["out"] = o.out;
   j["png"] = png;
@@ -259,34 +293,4 @@ nlohmann::json RunFlowImpl(const FlowOptions& o) {
   return j;
 }
 
-FlowOptions ParseFlowArgs(int argc, char** argv) {
-  VerbCommandLine cl("flow",
-                     "skycal flow: motion vectors between two consecutive time-lapse frames (quarter resolution,\n"
-                     "forward and backward, 8-bit with a per-frame range in a JSON sidecar)",
-                     "  skycal flow A.exr B.exr --out V.exr [--scale 4] [--json]",
-                     "Writes V.exr (float: R,G forward u,v; backward.u, backward.v), V.png (8-bit RGBA) and\n"
-                     "V.json (per-component min/max: value = min + (max - min) * code / 255). Units: texture\n"
-                     "space (u a fraction of the width, v of the height). OpenCV DIS on log luminance.");
-  FlowOptions o;
-  // The two frames lead (`skycal flow A.exr B.exr --out V.exr`); the options follow.
-  std::vector<std::string> frames;
-  std::vector<char*> rest;
-  int i = 0;
-  for (; i < argc && argv[i][0] != '-'; ++i) frames.emplace_back(argv[i]);
-  for (; i < argc; ++i) rest.push_back(argv[i]);
-  cl.Text("--out", &o.out, "V.exr", "the float vectors (V.png and V.json beside it)");
-  cl.Integer("--scale", &o.scale, 1, 16, "expected an integer in [1, 16]", "N", "vectors at 1/N of the frames' size (default 4)");
-  bool json = false;
-  cl.Flag("--json", &json, "print the sidecar as a JSON summary on stdout");
-  cl.Parse(static_cast<int>(rest.size()), rest.data());
-  if (frames.size() != 2) throw Error("expected two frames, A.exr B.exr; found " + std::to_string(frames.size()));
-  o.a = frames[0];
-  o.b = frames[1];
-  return o;
-}
-
-int RunFlow(int argc, char** argv) {
-  return RunVerb("flow", WantsJson(argc, argv), [&]() { return RunFlowImpl(ParseFlowArgs(argc, argv)); });
-}
-
-}  // namespace skycal::cli
+}  // namespace skycal::capture

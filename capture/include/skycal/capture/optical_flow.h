@@ -1,16 +1,17 @@
-// `skycal flow`: dense motion vectors between two consecutive frames of a time-lapse, as
+// Dense motion vectors between two consecutive frames of a time-lapse, as
 // Forza Horizon 3 shipped them (GDC talk "The Ambitious HDR Time-lapse Skies of Forza
 // Horizon 3"): quarter resolution, forward (A to B) and backward (B to A) texture-space
 // motion, 8 bits per component with each frame's per-component range in a JSON sidecar so
 // the game can decode; plus a float EXR for tools.
 #pragma once
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/image.h"
 
-namespace skycal::cli {
+namespace skycal::capture {
 
 struct FlowOptions {
   std::string a, b;  // consecutive frames (uniform 2:1 lat-long EXRs of one size)
@@ -26,8 +27,8 @@ struct FlowOptions {
 // for the tests' control). Exposed for tests.
 std::vector<float> DenseFlow(const ImageRGB& a, const ImageRGB& b, bool zenith_cap = true);
 
-nlohmann::json RunFlowImpl(const FlowOptions& options);
-FlowOptions ParseFlowArgs(int argc, char** argv);
-int RunFlow(int argc, char** argv);
+// The controller: reads frames a and b, writes out (float EXR), its 8-bit PNG and its JSON
+// sidecar (all or none) and returns the sidecar plus the three paths. Progress on stderr.
+nlohmann::json WriteFlowVectors(const FlowOptions& options);
 
-}  // namespace skycal::cli
+}  // namespace skycal::capture
