@@ -46,39 +46,46 @@ std::array<double, 3> CaptureOptions::CameraRotationDeg() const {
   return {0.0, 90.0, 0.0};
 }
 
-bool CaptureOptions::IsValid(std::string* why) const {
-  if (brackets.empty() == rig_path.empty()) {
-    *why = "give either --brackets IMG... (one camera) or --rig RIG.json";
-    return false;
-  }
-  // Lens flags that contradict the input: refused, never silently dropped.
+namespace {
+// The lens flags given must fit the input: refused, never silently dropped.
+bool LensFlagsFitTheInput(const CaptureOptions& o, std::string* why) {
   std::vector<std::string> lens_flags;
-  if (lens_fov_given) lens_flags.push_back("--lens-fov-deg");
-  if (lens_center_given) lens_flags.push_back("--lens-center");
-  if (lens_radius_given) lens_flags.push_back("--lens-radius");
-  if (kb_given) lens_flags.push_back("--kb-k");
-  if (vignetting_given) lens_flags.push_back("--vignetting");
+  if (o.lens_fov_given) lens_flags.push_back("--lens-fov-deg");
+  if (o.lens_center_given) lens_flags.push_back("--lens-center");
+  if (o.lens_radius_given) lens_flags.push_back("--lens-radius");
+  if (o.kb_given) lens_flags.push_back("--kb-k");
+  if (o.vignetting_given) lens_flags.push_back("--vignetting");
   auto joined = [](const std::vector<std::string>& v) {
     std::string s;
     for (const auto& f : v) s += (s.empty() ? "" : ", ") + f;
     return s;
   };
-  if (!rig_path.empty() && (lens_model_given || !lens_flags.empty() || camera_ypr_deg)) {
+  if (!o.rig_path.empty() && (o.lens_model_given || !lens_flags.empty() || o.camera_ypr_deg)) {
     *why = "--rig: the rig file gives each camera's lens and rotation; drop --lens, --camera-rotation and the "
            "other lens flags";
     return false;
   }
-  if (lens.model == LensModel::kLatLong && !lens_flags.empty()) {
+  if (o.lens.model == LensModel::kLatLong && !lens_flags.empty()) {
     *why = "--lens latlong: " + joined(lens_flags) +
            " describe a fisheye's image circle; a lat-long input has none (it spans 360 x 180 degrees, its "
            "centre and radius follow from its size). Drop them, or give the fisheye model with --lens";
     return false;
   }
-  if (kb_given && lens.model != LensModel::kKannalaBrandt) {
+  if (o.kb_given && o.lens.model != LensModel::kKannalaBrandt) {
     *why = std::string("--kb-k: Kannala-Brandt coefficients need --lens kannala-brandt (got --lens ") +
-           LensModelName(lens.model) + ")";
+           LensModelName(o.lens.model) + ")";
     return false;
   }
+  return true;
+}
+}  // namespace
+
+bool CaptureOptions::IsValid(std::string* why) const {
+  if (brackets.empty() == rig_path.empty()) {
+    *why = "give either --brackets IMG... (one camera) or --rig RIG.json";
+    return false;
+  }
+  if (!LensFlagsFitTheInput(*this, why)) return false;
   if (!brackets.empty() && brackets.size() < 2) {
     *why = "--brackets: at least two exposures are needed to merge (got 1)";
     return false;

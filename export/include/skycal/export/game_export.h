@@ -1,4 +1,4 @@
-// `skycal export`: the game's tables from calibrated presets: LUT textures as half-float
+// The game export: the game's tables from calibrated presets: LUT textures as half-float
 // EXRs under one pre-exposure scale (FFXV multiplies exposure into every light source so
 // FP16 never clamps, DESIGN.md 1.1), and a time-of-day keyframe table (CSV + JSON, one row
 // per key, one column per parameter: the shape of FFXV's weather file). Where a preset's
@@ -14,7 +14,7 @@
 
 #include "skycal/render/renderer.h"
 
-namespace skycal::cli {
+namespace skycal::exporter {
 
 struct ExportOptions {
   std::vector<std::string> presets;  // preset JSONs
@@ -27,10 +27,9 @@ struct ExportOptions {
   bool IsValid(std::string* why) const;
 };
 
-nlohmann::json RunExportImpl(const ExportOptions& options);
-// Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for
-// --help, skycal::Error naming the option on a bad command line.
-ExportOptions ParseExportArgs(int argc, char** argv);
-int RunExport(int argc, char** argv);
+// The controller: writes every table of the presets into options.out_dir (staged, replaced
+// atomically; core/staged_directory.h), GAME_DIR/report.html when options.report, and
+// returns the manifest with "out". Throws skycal::Error.
+nlohmann::json ExportGameTables(const ExportOptions& options);
 
-}  // namespace skycal::cli
+}  // namespace skycal::exporter
