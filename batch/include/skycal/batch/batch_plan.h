@@ -18,7 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace skycal::cli {
+namespace skycal::batch {
 
 struct BatchFrame {
   std::string path;  // absolute
@@ -88,4 +88,4 @@ BatchProgress CountBatchProgress(const std::string& out_dir, const BatchPlan& pl
 // Indices of the chunks holding a frame that is not done.
 std::vector<int> PendingChunks(const std::string& out_dir, const BatchPlan& plan);
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch
