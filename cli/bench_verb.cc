@@ -20,7 +20,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/render/renderer.h"
-#include "staged_directory.h"
+#include "skycal/core/staged_directory.h"
 #include "verb_common.h"
 
 namespace skycal::cli {

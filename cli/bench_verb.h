@@ -16,7 +16,7 @@ struct BenchOptions {
   std::string suites;                // "render,fit" (names from the registry)
   bool quick = false;                // CI sizes
   int repeat = 0;                    // timed repeats per case, [1, 1000]; 0: each suite's default
-  std::string out;                   // output directory, staged (cli/staged_directory.h)
+  std::string out;                   // output directory, staged (core/staged_directory.h)
   std::vector<std::string> compare;  // OLD.json NEW.json: compare instead of running
   std::string replot;                // RESULTS.json: redraw its plots (and fronts) into --out, run nothing
   double noise_floor = 0.10;         // --compare: relative noise below which a ratio is not flagged

@@ -37,16 +37,6 @@ std::array<double, 8> ParseChartCorners(const std::string& text, const std::stri
   return c;
 }
 
-nlohmann::json ChartSummary(const capture::ColorCorrection& c) {
-  const nlohmann::json j = capture::ColorCorrectionToJson(c);
-  return {{"label", c.label},
-          {"source", c.source},
-          {"matrix", c.matrix},
-          {"delta_e2000_before", {{"mean", j["delta_e2000"]["before"]["mean"]}, {"max", j["delta_e2000"]["before"]["max"]}}},
-          {"delta_e2000_after", {{"mean", j["delta_e2000"]["after"]["mean"]}, {"max", j["delta_e2000"]["after"]["max"]}}},
-          {"detection", c.detection.is_object() ? c.detection.value("method", std::string()) : std::string("read")}};
-}
-
 nlohmann::json RunChartImpl(const ChartVerbOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "skycal/capture/capture_pipeline.h"
 #include "skycal/capture/color_chart.h"
 #include "skycal/capture/hdr_merge.h"
 
@@ -30,6 +31,6 @@ int RunChart(int argc, char** argv);
 // "X1,Y1,...,X4,Y4" -> corners; throws skycal::Error naming `option`.
 std::array<double, 8> ParseChartCorners(const std::string& text, const std::string& option);
 // The correction's summary for a verb's JSON and log: label, source, matrix, mean/max DeltaE.
-nlohmann::json ChartSummary(const capture::ColorCorrection& c);
+using capture::ChartSummary;  // capture/capture_pipeline.h
 
 }  // namespace skycal::cli

@@ -1,31 +1,13 @@
-// `skycal export`: the game's tables from calibrated presets: LUT textures as half-float
-// EXRs under one pre-exposure scale (FFXV multiplies exposure into every light source so
-// FP16 never clamps: Miyamoto & Driancourt 2016), and a time-of-day keyframe table (CSV + JSON, one row
-// per key, one column per parameter: the shape of FFXV's weather file). Where a preset's
-// provenance names the sun direction it was fitted at (fit writes
-// provenance.final_errors[i].sun_direction), also: the sun's illuminance at the ground per
-// key, the sky's SH-9 (FFXV's diffuse lighting) and a fog colour and blurred
-// fog lat-long (Forza Horizon 3's fog cubemap: Wood, GDC).
+// `skycal export`: the game's tables from calibrated presets (export/game_export.h does the
+// work; this verb parses and prints).
 #pragma once
-#include <string>
-#include <vector>
-
 #include <nlohmann/json.hpp>
 
-#include "skycal/render/renderer.h"
+#include "skycal/export/game_export.h"
 
 namespace skycal::cli {
 
-struct ExportOptions {
-  std::vector<std::string> presets;  // preset JSONs
-  std::string out_dir;               // written atomically
-  double headroom = 0.25;            // largest scaled LUT value <= headroom * 65504 (FP16 max)
-  render::Backend backend = render::Backend::kVulkan;  // renders the sky for SH-9 and fog
-  double fog_sigma_deg = 15.0;       // Gaussian blur of the fog lat-long, degrees, (0, 30]
-  bool report = true;                // write GAME_DIR/report.html (skycal report)
-  bool verbose = true;               // progress lines on stderr ([export] ...); skycal bench turns them off
-  bool IsValid(std::string* why) const;
-};
+using exporter::ExportOptions;
 
 nlohmann::json RunExportImpl(const ExportOptions& options);
 // Parses the arguments after the verb (no I/O). Throws HelpRequested (command_line.h) for

@@ -16,7 +16,7 @@
 #include "fit_cloud_mask.h"
 #include "fit_report.h"
 #include "report_verb.h"
-#include "staged_directory.h"
+#include "skycal/core/staged_directory.h"
 #include "render_verb.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"

@@ -12,8 +12,8 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
 #include "run_binary.h"
-#include "synthetic_brackets.h"
-#include "synthetic_fisheye.h"
+#include "skycal/testing/synthetic_brackets.h"
+#include "skycal/testing/synthetic_fisheye.h"
 #include "test_util.h"
 
 namespace skycal {

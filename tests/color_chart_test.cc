@@ -19,7 +19,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
-#include "synthetic_chart.h"
+#include "skycal/testing/synthetic_chart.h"
 #include "test_util.h"
 
 namespace skycal {

@@ -17,7 +17,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "test_util.h"
-#include "zenith_cap.h"
+#include "skycal/capture/zenith_cap.h"
 
 namespace skycal {
 namespace {
@@ -125,7 +125,7 @@ TEST(Flow, CloudsMovedByAKnownShiftAreRecovered) {
   EXPECT_LE(worst, 0.5 * (hi - lo) / 255.0 + 1e-7);
 
   // Control: a frame against itself has no motion (the vectors ~0), so the same check fails.
-  const std::vector<float> still = cli::DenseFlow(a.radiance, a.radiance);
+  const std::vector<float> still = capture::DenseFlow(a.radiance, a.radiance);
   std::vector<float> su(qw * qh), sv(qw * qh);
   for (int y = 0; y < qh; ++y)
     for (int x = 0; x < qw; ++x) {
@@ -141,7 +141,7 @@ TEST(Flow, CloudsMovedByAKnownShiftAreRecovered) {
 // at the centre; at oversample 1 a lat-long row's step in elevation is one polar pixel
 // radially, at any azimuth; LatLongDirection inverts latlong::PixelPosition.
 TEST(ZenithCap, PolarViewRoundTripsAndKeepsTheRowsAngle) {
-  const cli::ZenithCap cap(256, 128, 60.0);
+  const capture::ZenithCap cap(256, 128, 60.0);
   EXPECT_EQ(cap.size, 2 * static_cast<int>(std::ceil(60.0 / 180.0 * 127)) + 1);
   const std::array<double, 2> z = cap.PolarPosition({0.0, 1.0, 0.0});
   EXPECT_DOUBLE_EQ(z[0], cap.centre);
@@ -154,7 +154,7 @@ TEST(ZenithCap, PolarViewRoundTripsAndKeepsTheRowsAngle) {
       const latlong::Vec3d back = cap.PolarDirection(q[0], q[1]);
       for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(back[c] - d[c]));
       worst_row = std::max(worst_row, std::abs(std::hypot(qe[0] - q[0], qe[1] - q[1]) - 1.0));
-      const latlong::Vec3d ll = cli::LatLongDirection(x + 0.25, y + 0.5, 256, 128);
+      const latlong::Vec3d ll = capture::LatLongDirection(x + 0.25, y + 0.5, 256, 128);
       const std::array<double, 2> p = latlong::PixelPosition(ll, 256, 128);
       EXPECT_NEAR(p[0], x + 0.25, 1e-9);
       EXPECT_NEAR(p[1], y + 0.5, 1e-9);
@@ -162,7 +162,7 @@ TEST(ZenithCap, PolarViewRoundTripsAndKeepsTheRowsAngle) {
   EXPECT_LT(worst, 1e-12);
   EXPECT_LT(worst_row, 1e-9);
   // Control: at oversample 3 the same row step is 3 polar pixels, not 1.
-  const cli::ZenithCap fine(256, 128, 60.0, 3.0);
+  const capture::ZenithCap fine(256, 128, 60.0, 3.0);
   const std::array<double, 2> a = fine.PolarPosition(latlong::PixelDirection(5, 10, 256, 128)),
                               b = fine.PolarPosition(latlong::PixelDirection(5, 11, 256, 128));
   EXPECT_NEAR(std::hypot(b[0] - a[0], b[1] - a[1]), 3.0, 1e-9);

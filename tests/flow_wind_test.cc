@@ -21,7 +21,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/render/preset.h"
 #include "test_util.h"
-#include "zenith_cap.h"
+#include "skycal/capture/zenith_cap.h"
 
 namespace skycal {
 namespace {
@@ -51,7 +51,7 @@ struct TrueMotion {
 // Where the motion is measured: the lat-long's pixels (x wraps), or the zenith cap's polar
 // view (cap set; its pixels span the angle of a lat-long row).
 struct View {
-  const cli::ZenithCap* cap = nullptr;
+  const capture::ZenithCap* cap = nullptr;
   // Image position of a camera-relative point, (x, y) in pixels.
   std::array<double, 2> Project(double x, double y, double z) const {
     const double r = std::sqrt(x * x + y * y + z * z);
@@ -213,7 +213,7 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
     }
   };
   set_gradients(truth);
-  const std::vector<float> flow = cli::DenseFlow(a.radiance, b.radiance);
+  const std::vector<float> flow = capture::DenseFlow(a.radiance, b.radiance);
   const FieldError fe = Compare(flow, truth, where, 1.0);
   double largest = 0.0;
   for (const TrueMotion& t : truth)
@@ -235,7 +235,7 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
 
   // Controls: the first frame against itself (no motion found), and a truth with the wind
   // reversed (every true motion negated), must both fail the bounds above.
-  const FieldError still = Compare(cli::DenseFlow(a.radiance, a.radiance), truth, where, 1.0);
+  const FieldError still = Compare(capture::DenseFlow(a.radiance, a.radiance), truth, where, 1.0);
   const FieldError wrong = Compare(flow, truth, where, -1.0);  // the wind reversed: each motion negated (to first order)
   std::printf("[flow-wind] controls: frame against itself median %.3f px; wind reversed median %.3f px\n", still.median,
               wrong.median);
@@ -246,7 +246,7 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
   // motion measured in the cap's polar view (zenith_cap.h; one polar pixel = the angle of
   // one lat-long row), on a grid every 2 polar pixels, each sample at its nearest lat-long
   // pixel. Same translation criteria as above, but in the polar view.
-  const cli::ZenithCap cap(kW, kH, 45.0);
+  const capture::ZenithCap cap(kW, kH, 45.0);
   const View polar{&cap};
   const int side = (cap.size + 1) / 2;
   std::vector<int> pixel(static_cast<size_t>(side) * side, -1);
@@ -281,7 +281,7 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
         continue;
       const int x = pixel[k] % kW, y = pixel[k] / kW;
       const std::array<double, 2> from = cap.PolarPosition(latlong::PixelDirection(x, y, kW, kH));
-      const std::array<double, 2> to = cap.PolarPosition(cli::LatLongDirection(x + f[2 * pixel[k]], y + f[2 * pixel[k] + 1], kW, kH));
+      const std::array<double, 2> to = cap.PolarPosition(capture::LatLongDirection(x + f[2 * pixel[k]], y + f[2 * pixel[k] + 1], kW, kH));
       e.push_back(std::hypot(to[0] - from[0] - t.dx, to[1] - from[1] - t.dy));
       if (motion) motion->push_back(std::hypot(t.dx, t.dy));
     }
@@ -289,7 +289,7 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
   };
   std::vector<double> cap_motion;
   const std::vector<double> cap_e = cap_errors(flow, &cap_motion);
-  const std::vector<double> latlong_only = cap_errors(cli::DenseFlow(a.radiance, b.radiance, /*zenith_cap=*/false), nullptr);
+  const std::vector<double> latlong_only = cap_errors(capture::DenseFlow(a.radiance, b.radiance, /*zenith_cap=*/false), nullptr);
   std::printf("[flow-wind] zenith cap (>= 45 deg), polar pixels: %zu cloud samples, true motion median %.2f px; "
               "end-point error median %.3f px, p90 %.3f px (lat-long flow alone: median %.3f px, p90 %.3f px)\n",
               cap_e.size(), Quantile(cap_motion, 0.5), Quantile(cap_e, 0.5), Quantile(cap_e, 0.9), Quantile(latlong_only, 0.5),

@@ -12,7 +12,7 @@
 #include "skycal/capture/exif_exposure.h"
 #include "skycal/capture/hdr_merge.h"
 #include "skycal/core/error.h"
-#include "synthetic_brackets.h"
+#include "skycal/testing/synthetic_brackets.h"
 #include "test_util.h"
 
 namespace skycal {

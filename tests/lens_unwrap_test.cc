@@ -19,7 +19,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
-#include "synthetic_fisheye.h"
+#include "skycal/testing/synthetic_fisheye.h"
 #include "test_util.h"
 
 namespace skycal::capture {

@@ -23,8 +23,8 @@
 #include "skycal/core/latlong.h"
 #include "skycal/render/irradiance.h"
 #include "skycal/render/renderer.h"
-#include "synthetic_probe.h"
-#include "synthetic_sky.h"
+#include "skycal/testing/synthetic_probe.h"
+#include "skycal/testing/synthetic_sky.h"
 #include "run_binary.h"
 #include "test_util.h"
 

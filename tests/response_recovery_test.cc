@@ -10,7 +10,7 @@
 #include <cstdio>
 
 #include "camera_response.h"
-#include "response_shapes.h"
+#include "skycal/testing/response_shapes.h"
 #include "skycal/capture/hdr_merge.h"
 
 namespace skycal {

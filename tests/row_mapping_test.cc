@@ -17,7 +17,7 @@
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/render/renderer.h"
-#include "synthetic_sky.h"
+#include "skycal/testing/synthetic_sky.h"
 #include "test_util.h"
 
 namespace skycal {

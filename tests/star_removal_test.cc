@@ -14,7 +14,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
 #include "skycal/render/renderer.h"
-#include "synthetic_stars.h"
+#include "skycal/testing/synthetic_stars.h"
 #include "test_util.h"
 
 namespace skycal {

@@ -23,8 +23,8 @@
 #include <optional>
 #include <random>
 
-#include "../../tests/synthetic_chart.h"  // the chart and stars the capture tests use too
-#include "../../tests/synthetic_stars.h"
+#include "skycal/testing/synthetic_chart.h"  // the chart and stars the capture tests use too
+#include "skycal/testing/synthetic_stars.h"
 #include "skycal/bench/study_suite_grids.h"
 #include "skycal/capture/color_chart.h"
 #include "skycal/capture/star_removal.h"

@@ -13,7 +13,7 @@
 #include <map>
 #include <memory>
 
-#include "../../tests/response_shapes.h"
+#include "skycal/testing/response_shapes.h"
 #include "skycal/capture/hdr_merge.h"
 #include "suite_util.h"
 #include "suites_internal.h"

@@ -1,8 +1,8 @@
-// Suite `capture`: `skycal capture` (RunCaptureImpl) on 7 noisy 8-bit PNG brackets with an
+// Suite `capture`: `skycal capture` (RunCapturePipeline) on 7 noisy 8-bit PNG brackets with an
 // sRGB camera curve, seen by an up-looking equisolid 180 deg fisheye (4000x4000; 1000x1000
 // with --quick) from a known lat-long scene (the real sunset when fetched, else the bundled
-// preset; tests/synthetic_brackets.h). Grid: response model x output size. Time: the whole
-// RunCaptureImpl (decode, merge, colour, unwrap, sun, masks, EXR write); error: rel RMSE of
+// preset; testing/synthetic_brackets.h). Grid: response model x output size. Time: the whole
+// RunCapturePipeline (decode, merge, colour, unwrap, sun, masks, EXR write); error: rel RMSE of
 // the frame against the scene (its area mean at the frame's nodes when the frame is coarser)
 // above 10 deg elevation (the fisheye's rim excluded), after the
 // best single exposure scale (a capture's absolute scale is the camera's, not the scene's).
@@ -33,12 +33,12 @@ Suite CaptureSuite() {
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     std::vector<CaseResult> out = RunGrid("capture", grid, o, [&](CaseResult& c) {
       const std::string& size = Get(c.settings, "size");
-      cli::CaptureOptions co = FisheyeCaptureOptions(b.paths, b.exposure_times_s, Get(c.settings, "response"),
+      capture::CaptureOptions co = FisheyeCaptureOptions(b.paths, b.exposure_times_s, Get(c.settings, "response"),
                                                            std::stoi(size.substr(0, size.find('x'))),
                                                            (o.scratch / "capture_frame.exr").string());
       co.verbose = o.verb_logs;
       nlohmann::json summary;
-      c.time = Measure([&] { summary = cli::RunCaptureImpl(co); }, o.quick ? 0 : o.warmup, repeats);
+      c.time = Measure([&] { summary = capture::RunCapturePipeline(co); }, o.quick ? 0 : o.warmup, repeats);
       const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;
       // An output coarser than the scene is compared with the scene's area mean at its own
       // nodes: the unwrap filters (capture/rig.h), so a point-sampled finer truth would

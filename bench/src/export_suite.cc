@@ -1,4 +1,4 @@
-// Suite `export`: `skycal export` (RunExportImpl) of the bundled preset, grid over the
+// Suite `export`: `skycal export` (exporter::ExportGameTables) of the bundled preset, grid over the
 // pre-exposure headroom (the largest LUT texel is at most H x 65504). Time: the whole
 // export (it hardly depends on H); error: RMS over the positive texels of the relative
 // error of a LUT texel read back from the half-float EXR (divided by the pre-exposure)
@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "export_verb.h"
+#include "skycal/export/game_export.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/render/preset.h"
 #include "suite_util.h"
@@ -29,7 +29,7 @@ Suite ExportSuite() {
     const int repeats = o.Repeats(o.quick ? 3 : 7);
     int k = 0;
     return RunGrid("export", grid, o, [&](CaseResult& c) {
-      cli::ExportOptions eo;
+      exporter::ExportOptions eo;
       eo.presets = {DefaultPresetPath()};
       eo.headroom = std::stod(Get(c.settings, "headroom"));
       eo.backend = render::Backend::kCpu;
@@ -37,7 +37,7 @@ Suite ExportSuite() {
       eo.report = false;  // the export's own work is timed, not the HTML report
       eo.out_dir = (o.scratch / ("export_" + std::to_string(k++))).string();
       nlohmann::json summary;
-      c.time = Measure([&] { summary = cli::RunExportImpl(eo); }, o.warmup, repeats);
+      c.time = Measure([&] { summary = exporter::ExportGameTables(eo); }, o.warmup, repeats);
       const double scale = summary.at("pre_exposure").get<double>();
       double sum = 0.0;
       long long n = 0;

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <thread>
 
-#include "../../tests/synthetic_brackets.h"
-#include "../../tests/synthetic_fisheye.h"
+#include "skycal/testing/synthetic_brackets.h"
+#include "skycal/testing/synthetic_fisheye.h"
 
 namespace skycal::bench {
 
@@ -24,9 +24,9 @@ FisheyeBrackets WriteFisheyeBrackets(int scene_width, int fisheye, const std::st
   return b;
 }
 
-cli::CaptureOptions FisheyeCaptureOptions(const std::vector<std::string>& brackets, const std::vector<double>& times_s,
+capture::CaptureOptions FisheyeCaptureOptions(const std::vector<std::string>& brackets, const std::vector<double>& times_s,
                                           const std::string& response, int width, const std::string& out) {
-  cli::CaptureOptions co;
+  capture::CaptureOptions co;
   co.brackets = brackets;
   co.exposure_times_s = times_s;
   co.merge.response = capture::ParseResponseModel(response, "response");

@@ -1,12 +1,12 @@
 // The capture and stress suites' input: a known lat-long scene seen by an up-looking
 // equisolid 180 deg fisheye, as 7 noisy 8-bit PNG brackets with an sRGB camera curve
-// (tests/synthetic_brackets.h), and the capture options that read them back (private to
+// (testing/synthetic_brackets.h), and the capture options that read them back (private to
 // skycal_bench).
 #pragma once
 #include <string>
 #include <vector>
 
-#include "capture_verb.h"
+#include "skycal/capture/capture_pipeline.h"
 #include "skycal/core/image.h"
 
 namespace skycal::bench {
@@ -21,9 +21,9 @@ struct FisheyeBrackets {
 
 FisheyeBrackets WriteFisheyeBrackets(int scene_width, int fisheye, const std::string& dir);
 
-// RunCaptureImpl's options for `brackets` (equisolid 180 deg, looking up), output
+// RunCapturePipeline's options for `brackets` (equisolid 180 deg, looking up), output
 // width x width / 2 at `out`, response "debevec" or "srgb".
-cli::CaptureOptions FisheyeCaptureOptions(const std::vector<std::string>& brackets, const std::vector<double>& times_s,
+capture::CaptureOptions FisheyeCaptureOptions(const std::vector<std::string>& brackets, const std::vector<double>& times_s,
                                           const std::string& response, int width, const std::string& out);
 
 }  // namespace skycal::bench

@@ -23,8 +23,8 @@
 #include "skycal/render/irradiance.h"
 #include "suite_util.h"
 #include "suites_internal.h"
-#include "../../tests/synthetic_probe.h"
-#include "../../tests/synthetic_sky.h"
+#include "skycal/testing/synthetic_probe.h"
+#include "skycal/testing/synthetic_sky.h"
 
 namespace skycal::bench {
 namespace {

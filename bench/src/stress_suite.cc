@@ -23,7 +23,7 @@
 #include <random>
 
 #include "cloud_scene.h"
-#include "export_verb.h"
+#include "skycal/export/game_export.h"
 #include "fisheye_brackets.h"
 #include "image_compare.h"
 #include "probe_extract_verb.h"
@@ -324,10 +324,10 @@ void CaptureArea(Runner& run, const SuiteOptions& o) {
   for (const Input& in : inputs)
     for (const char* response : {"debevec", "srgb"}) {
       run("capture", in.name + " " + response, [&](CaseResult& c) {
-        cli::CaptureOptions co =
+        capture::CaptureOptions co =
             FisheyeCaptureOptions(in.brackets, in.times, response, 128, dir + "/frame_" + std::to_string(n++) + ".exr");
         co.verbose = o.verb_logs;
-        const nlohmann::json summary = cli::RunCaptureImpl(co);
+        const nlohmann::json summary = capture::RunCapturePipeline(co);
         const ImageRGB frame = capture::ReadLatLongFrame(co.out).radiance;
         if (!AllFinite(frame)) NonFinite(c, "non-finite radiance in the frame");
         else if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the summary");
@@ -407,14 +407,14 @@ void ExportArea(Runner& run, const SuiteOptions& o) {
     // maximum (the pre-exposure's rounding must not carry it past, to infinity).
     for (double headroom : {1e-6, 0.25, 1.0 - 1.0 / 4096.0, 1.0}) {
       run("export", in.name + " headroom " + Num(headroom), [&](CaseResult& c) {
-        cli::ExportOptions eo;
+        exporter::ExportOptions eo;
         eo.presets = in.presets;
         eo.headroom = headroom;
         eo.backend = render::Backend::kCpu;
         eo.report = false;  // the export's numbers are stressed, not the HTML report
         eo.verbose = o.verb_logs;
         eo.out_dir = (o.scratch / ("stress_export_" + std::to_string(n++))).string();
-        const nlohmann::json summary = cli::RunExportImpl(eo);
+        const nlohmann::json summary = exporter::ExportGameTables(eo);
         if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the manifest");
         long long nonfinite = 0;
         double largest = 0.0;

@@ -1,4 +1,4 @@
-#include "batch_plan.h"
+#include "skycal/batch/batch_plan.h"
 
 #include <fcntl.h>
 #include <glob.h>
@@ -16,7 +16,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 namespace fs = std::filesystem;
 namespace {
 
@@ -322,4 +322,4 @@ std::vector<int> PendingChunks(const std::string& out_dir, const BatchPlan& plan
   return pending;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

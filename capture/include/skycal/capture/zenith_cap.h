@@ -9,7 +9,7 @@
 
 #include "skycal/core/latlong.h"
 
-namespace skycal::cli {
+namespace skycal::capture {
 
 struct ZenithCap {
   // `frame_width` x `frame_height`: the lat-long frames; `radius_deg`: zenith angle of the
@@ -33,4 +33,4 @@ struct ZenithCap {
 // latlong::PixelPosition; x need not lie in [0, W-1]: longitude is periodic).
 latlong::Vec3d LatLongDirection(double x, double y, int width, int height);
 
-}  // namespace skycal::cli
+}  // namespace skycal::capture

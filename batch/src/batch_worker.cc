@@ -6,15 +6,14 @@
 #include <cmath>
 #include <filesystem>
 
-#include "export_verb.h"
-#include "fit_verb.h"
-#include "report_verb.h"
+#include "batch_process.h"
+#include "skycal/export/game_export.h"
+#include "skycal/report/report.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
-#include "verb_common.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 namespace fs = std::filesystem;
 namespace {
 
@@ -42,17 +41,31 @@ std::vector<int> DaySubsample(int n, int m) {
   return idx;
 }
 
+// OUT/report.html (skycal_report) over the frames' fits (two levels: frames/<name>/).
+void WriteBatchReport(const std::string& out_dir) {
+  report::ReportOptions ro;
+  ro.max_depth = 2;
+  report::ReportSummary s;
+  try {
+    s = report::WriteReport(out_dir, ro);
+  } catch (const Error& e) {
+    throw Error(std::string("report.html: ") + e.what() + " (--no-report leaves the report out)");
+  }
+  BatchLog("report.html: " + std::to_string(s.images) + " images, " + std::to_string(s.plots) + " plots, " +
+           std::to_string(s.bytes / 1024) + " KiB");
+}
+
 }  // namespace
 
-nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
+nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchHooks& hooks) {
   const BatchPlan plan = LoadBatchPlan(out_dir);
   if (chunk < 0 || chunk >= static_cast<int>(plan.chunks.size())) {
     throw Error("--worker-chunk " + std::to_string(chunk) + ": the plan in " + out_dir + " has " +
                 std::to_string(plan.chunks.size()) + " chunks");
   }
-  const BatchOptions o = ParseBatchArgs(plan.argv);
+  const BatchOptions o = hooks.parse_options(plan.argv);
   const auto& members = plan.chunks[chunk];
-  Log("batch", "chunk " + std::to_string(chunk) + ": " + std::to_string(members.size()) + " frames on " + Hostname() +
+  BatchLog("chunk " + std::to_string(chunk) + ": " + std::to_string(members.size()) + " frames on " + Hostname() +
                    " (pid " + std::to_string(::getpid()) + ")");
   std::string warm;  // the previous fitted frame's preset
   nlohmann::json failed = nlohmann::json::array();
@@ -62,12 +75,12 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
     const std::string fit_dir = FrameFitDir(out_dir, f.name);
     if (FrameDone(out_dir, f.name)) {
       warm = (fs::path(fit_dir) / "preset.json").string();
-      Log("batch", f.name + ": done earlier, kept");
+      BatchLog(f.name + ": done earlier, kept");
       continue;
     }
     std::error_code ec;
     fs::remove(FrameStatePath(out_dir, f.name), ec);  // a failed attempt's state: this one replaces it
-    FitVerbOptions fo;
+    FitRequest fo;
     fo.report = false;  // the batch's report covers every frame (a page per frame would cost ~0.1 s each)
     fo.references = {f.path};
     const bool use_warm = !o.cold_start && !warm.empty();
@@ -82,13 +95,13 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
                             {"warm_start_from", use_warm ? nlohmann::json(fs::path(warm).parent_path().filename().string())
                                                          : nlohmann::json()},
                             {"host", Hostname()}};
-    Log("batch", "frame " + std::to_string(k + 1) + "/" + std::to_string(members.size()) + " of chunk " +
+    BatchLog("frame " + std::to_string(k + 1) + "/" + std::to_string(members.size()) + " of chunk " +
                      std::to_string(chunk) + ": " + f.name + " (" + std::to_string(f.time_of_day_h) + " h, " +
                      (use_warm ? "warm start from " + state["warm_start_from"].get<std::string>() : std::string("cold start")) +
                      ")");
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      const nlohmann::json s = RunFitImpl(fo);
+      const nlohmann::json s = hooks.fit(fo);
       const nlohmann::json& r = s.at("references").at(0);
       state["status"] = "ok";
       state["rel_rmse"] = r.at("rel_rmse");
@@ -103,7 +116,7 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk) {
       state["status"] = "failed";
       state["message"] = e.what();
       failed.push_back({{"frame", f.name}, {"message", e.what()}});
-      Log("batch", f.name + ": failed: " + e.what());
+      BatchLog(f.name + ": failed: " + e.what());
     }
     state["wall_s"] = Seconds(t0, std::chrono::steady_clock::now());
     WriteJsonFileAtomically(FrameStatePath(out_dir, f.name), state);
@@ -126,10 +139,10 @@ std::string DescribeUnfinishedFrames(const std::string& out_dir, const BatchPlan
   return s;
 }
 
-nlohmann::json RunBatchReduce(const std::string& out_dir) {
+nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hooks) {
   const auto t0 = std::chrono::steady_clock::now();
   const BatchPlan plan = LoadBatchPlan(out_dir);
-  const BatchOptions o = ParseBatchArgs(plan.argv);
+  const BatchOptions o = hooks.parse_options(plan.argv);
   const BatchProgress p = CountBatchProgress(out_dir, plan);
   if (p.done != p.total) {
     throw Error("reduce: " + std::to_string(p.total - p.done) + " of " + std::to_string(p.total) +
@@ -150,23 +163,23 @@ nlohmann::json RunBatchReduce(const std::string& out_dir) {
   // The day: one multi-reference fit over evenly spaced frames (every LUT row between the
   // lowest and highest sun, with the smoothness prior along sun zenith).
   const std::vector<int> day_idx = DaySubsample(static_cast<int>(plan.frames.size()), o.day_frames);
-  FitVerbOptions day;
+  FitRequest day;
   for (int i : day_idx) day.references.push_back(plan.frames[i].path);
   day.init_preset = o.init_preset;
   day.out_dir = (fs::path(out_dir) / "day").string();
   day.fit = o.fit;
   day.report = false;  // part of the batch's report
-  Log("batch", "reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
+  BatchLog("reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
                    " frames -> " + day.out_dir);
-  const nlohmann::json day_summary = RunFitImpl(day);
+  const nlohmann::json day_summary = hooks.fit(day);
   // The keyframe tables: one key per frame, from each frame's own preset.
-  ExportOptions ex;
+  exporter::ExportOptions ex;
   for (const BatchFrame& f : plan.frames) ex.presets.push_back((fs::path(FrameFitDir(out_dir, f.name)) / "preset.json").string());
   ex.out_dir = (fs::path(out_dir) / "tables").string();
   ex.backend = o.fit.backend;
   ex.report = false;  // part of the batch's report
-  Log("batch", "reduce: keyframe tables of " + std::to_string(ex.presets.size()) + " frames -> " + ex.out_dir);
-  const nlohmann::json tables = RunExportImpl(ex);
+  BatchLog("reduce: keyframe tables of " + std::to_string(ex.presets.size()) + " frames -> " + ex.out_dir);
+  const nlohmann::json tables = exporter::ExportGameTables(ex);
 
 
   nlohmann::json day_refs = nlohmann::json::array();
@@ -189,12 +202,12 @@ nlohmann::json RunBatchReduce(const std::string& out_dir) {
       {"tables", {{"dir", "tables"}, {"summary", tables}}},
       {"reduce_s", Seconds(t0, std::chrono::steady_clock::now())}};
   WriteJsonFileAtomically((fs::path(out_dir) / "batch.json").string(), batch);
-  Log("batch", "reduce: wrote " + (fs::path(out_dir) / "batch.json").string());
+  BatchLog("reduce: wrote " + (fs::path(out_dir) / "batch.json").string());
   // The day's HTML report (skycal report): every frame's fit (frames/<name>/, the day's
   // time-of-day plots), the day fit (day/) and the keyframe tables (tables/); written
   // through a temporary file like every report.
-  WriteVerbReport("batch", out_dir, 2);
+  WriteBatchReport(out_dir);
   return batch;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "batch_plan.h"
+#include "skycal/batch/batch_plan.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 
 // "exit code N" / "killed by signal S" for a waitpid status.
 std::string DescribeWaitStatus(int status);
@@ -26,6 +26,9 @@ Captured RunCapture(const std::vector<std::string>& args);
 
 // `name` on $PATH, else empty.
 std::string FindOnPath(const std::string& name);
+
+// "[batch] message" on stderr (the log line every verb's log has).
+void BatchLog(const std::string& message);
 
 // <out_dir>/logs/<name>
 std::string LogPath(const std::string& out_dir, const std::string& name);
@@ -44,4 +47,4 @@ class ProgressPrinter {
   std::string last_what_;
 };
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

@@ -1,4 +1,4 @@
-#include "staged_directory.h"
+#include "skycal/core/staged_directory.h"
 
 #include <unistd.h>
 
@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace skycal::cli {
+namespace skycal {
 namespace fs = std::filesystem;
 namespace {
 
@@ -114,4 +114,4 @@ void StagedDirectory::Commit() {
   }
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal

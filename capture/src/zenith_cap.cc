@@ -1,9 +1,9 @@
-#include "zenith_cap.h"
+#include "skycal/capture/zenith_cap.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace skycal::cli {
+namespace skycal::capture {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 }  // namespace
@@ -35,4 +35,4 @@ latlong::Vec3d LatLongDirection(double x, double y, int width, int height) {
   return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::capture

@@ -13,7 +13,7 @@
 
 #include "skycal/render/preset.h"
 
-namespace skycal::cli {
+namespace skycal::exporter {
 
 // A number for the keyframe CSVs: 9 significant digits (every float survives the round trip).
 std::string CsvNumber(double v);
@@ -32,4 +32,4 @@ void ExportPresetClouds(const render::Preset& preset, const std::string& preset_
 void ExportCloudKeyframes(const std::vector<render::Preset>& presets, const std::vector<std::string>& paths,
                           const std::filesystem::path& out_root, nlohmann::json* skipped);
 
-}  // namespace skycal::cli
+}  // namespace skycal::exporter

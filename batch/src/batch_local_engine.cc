@@ -14,9 +14,8 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
-#include "verb_common.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -49,7 +48,7 @@ nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan,
       if (r == it->first) {
         exits.push_back({{"chunk", it->second}, {"status", DescribeWaitStatus(status)}});
         if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
-          Log("batch", "chunk " + std::to_string(it->second) + ": " + DescribeWaitStatus(status) + " (log: " +
+          BatchLog("chunk " + std::to_string(it->second) + ": " + DescribeWaitStatus(status) + " (log: " +
                            LogPath(out_dir, "chunk-" + std::to_string(it->second) + ".log") + ")");
         }
         it = running.erase(it);
@@ -68,4 +67,4 @@ nlohmann::json RunLocalEngine(const std::string& out_dir, const BatchPlan& plan,
   return {{"engine", "local"}, {"jobs", jobs}, {"chunks", pending.size()}, {"exits", exits}};
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

@@ -1,4 +1,4 @@
-#include "export_clouds.h"
+#include "skycal/export/export_clouds.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 
-namespace skycal::cli {
+namespace skycal::exporter {
 namespace fs = std::filesystem;
 
 std::string CsvNumber(double v) {
@@ -150,4 +150,4 @@ void ExportCloudKeyframes(const std::vector<render::Preset>& presets, const std:
   WriteJsonFileAtomically(out_root / "cloud_keyframes.json", {{"columns", header}, {"units", units}, {"keys", rows}});
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::exporter

@@ -17,7 +17,7 @@
 #include "skycal/core/file_safety.h"
 #include "skycal/core/interrupt_cleanup.h"
 
-namespace skycal::cli {
+namespace skycal {
 
 inline constexpr const char* kOutputMarker = ".skycal-output.json";
 
@@ -42,4 +42,4 @@ class StagedDirectory {
   std::unique_ptr<TemporaryGuard> guard_;
 };
 
-}  // namespace skycal::cli
+}  // namespace skycal

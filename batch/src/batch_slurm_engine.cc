@@ -15,9 +15,8 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
-#include "verb_common.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -130,7 +129,7 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
       throw Error("--engine slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) + "; its message is above)");
     }
     watch.push_back(array_id);
-    Log("batch", "submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
+    BatchLog("submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
   }
   std::vector<std::string> rargs = {sbatch, "--parsable", "--job-name=skycal-reduce", "--chdir=" + out_abs,
                                     "--output=" + LogPath(out_abs, "reduce.log")};
@@ -148,7 +147,7 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
                 "; its message is above); the chunk array " + array_id + " was cancelled");
   }
   watch.push_back(reduce_id);
-  Log("batch", "submitted the reduce: job " + reduce_id + (array_id.empty() ? "" : " (afterok:" + array_id + ")"));
+  BatchLog("submitted the reduce: job " + reduce_id + (array_id.empty() ? "" : " (afterok:" + array_id + ")"));
   WriteJsonFileAtomically((sdir / "jobs.json").string(), {{"array_job", array_id}, {"reduce_job", reduce_id}, {"chunks", pending}});
   result["array_job"] = array_id;
   result["reduce_job"] = reduce_id;
@@ -183,7 +182,7 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
     result["tasks"] = ParseScontrol(s.out);
     for (const auto& t : result["tasks"]) {
       if (t.value("JobState", "") != "COMPLETED") {
-        Log("batch", "chunk " + t.value("ArrayTaskId", "?") + " (job " + t.value("JobId", "?") + "): " +
+        BatchLog("chunk " + t.value("ArrayTaskId", "?") + " (job " + t.value("JobId", "?") + "): " +
                          t.value("JobState", "?") + ", exit " + t.value("ExitCode", "?") + " (log: " +
                          LogPath(out_abs, "chunk-" + t.value("ArrayTaskId", "?") + ".log") + ")");
       }
@@ -197,4 +196,4 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
 }
 
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

@@ -5,7 +5,7 @@
 //                       with another identity is refused, the same one resumes.
 //   state/<frame>.json  one per fitted frame, written atomically after its fit directory:
 //                       {"status": "ok"|"failed", "message", errors, times, warm start}.
-//   frames/<frame>/     the frame's `skycal fit` output (atomic, cli/staged_directory.h).
+//   frames/<frame>/     the frame's `skycal fit` output (atomic, core/staged_directory.h).
 //   logs/               each chunk's (and the Slurm reduce's) log.
 //   day/, tables/, batch.json   the reduce step's outputs.
 // A frame is done when its state says ok and its fit directory holds preset.json; --resume
@@ -18,7 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
-namespace skycal::cli {
+namespace skycal::batch {
 
 struct BatchFrame {
   std::string path;  // absolute
@@ -88,4 +88,4 @@ BatchProgress CountBatchProgress(const std::string& out_dir, const BatchPlan& pl
 // Indices of the chunks holding a frame that is not done.
 std::vector<int> PendingChunks(const std::string& out_dir, const BatchPlan& plan);
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

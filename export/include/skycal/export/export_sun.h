@@ -1,12 +1,12 @@
 // The sun direction a preset was fitted at, read back from the provenance `skycal fit`
-// writes into the preset JSON (fit_verb.cc). Its own file so the export verb and the
+// writes into the preset JSON (cli/fit_verb.cc). Its own file so the export verb and the
 // fuzz harness (fuzz/json_file_fuzzer.cc) share the one reader.
 #pragma once
 #include <string>
 
 #include "skycal/render/irradiance.h"  // Dir3
 
-namespace skycal::cli {
+namespace skycal::exporter {
 
 struct SunSource {
   bool known = false;
@@ -19,4 +19,4 @@ struct SunSource {
 // invalid JSON throws skycal::Error naming the file.
 SunSource SunFromProvenance(const std::string& path);
 
-}  // namespace skycal::cli
+}  // namespace skycal::exporter

@@ -7,10 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "batch_plan.h"
-#include "batch_verb.h"
+#include "skycal/batch/batch_plan.h"
+#include "skycal/batch/batch.h"
 
-namespace skycal::cli {
+namespace skycal::batch {
 
 // local: a pool of at most `jobs` child processes, one chunk each, over the plan's pending
 // chunks; each child's log goes to logs/chunk-K.log. Prints progress while it waits.
@@ -30,4 +30,4 @@ void RequireSlurmClient();
 // The running binary's absolute path (/proc/self/exe).
 std::string SelfExecutable();
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "synthetic_brackets.h"
+#include "skycal/testing/synthetic_brackets.h"
 
 namespace skycal::synthetic {
 

@@ -11,11 +11,13 @@
 #include <sstream>
 
 #include "skycal/core/error.h"
-#include "verb_common.h"
+#include <iostream>
 
 extern char** environ;
 
-namespace skycal::cli {
+namespace skycal::batch {
+
+void BatchLog(const std::string& message) { std::cerr << "[batch] " << message << std::endl; }
 namespace fs = std::filesystem;
 
 std::string DescribeWaitStatus(int status) {
@@ -95,10 +97,10 @@ void ProgressPrinter::Update(const BatchProgress& p, const std::string& what) {
   line << p.done << "/" << p.total << " frames done, " << p.failed << " failed; " << what << "; " << static_cast<int>(s)
        << " s";
   if (fitted > 0 && s > 0) line << ", " << fitted / s << " frames/s";
-  Log("batch", line.str());
+  BatchLog(line.str());
   last_ = p;
   last_what_ = what;
   last_print_ = now;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::batch

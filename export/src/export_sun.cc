@@ -1,4 +1,4 @@
-#include "export_sun.h"
+#include "skycal/export/export_sun.h"
 
 #include <nlohmann/json.hpp>
 
@@ -6,7 +6,7 @@
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
 
-namespace skycal::cli {
+namespace skycal::exporter {
 
 SunSource SunFromProvenance(const std::string& path) {
   SunSource s;
@@ -37,4 +37,4 @@ SunSource SunFromProvenance(const std::string& path) {
   return s;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::exporter
