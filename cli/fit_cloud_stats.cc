@@ -6,18 +6,18 @@
 #include <memory>
 
 #include "fit_report.h"
-#include "lighting_basis_renderer.h"
-#include "cloud_sun_scale.h"
-#include "photo_sun.h"
 #include "render_clouds.h"
 #include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/sky_segmentation.h"
+#include "skycal/cloudfit/cloud_stats.h"
+#include "skycal/cloudfit/cloud_sun_scale.h"
+#include "skycal/cloudfit/lighting_basis_renderer.h"
+#include "skycal/cloudfit/photo_sun.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
-#include "skycal/fit/cloud_stats.h"
 #include "skycal/render/irradiance.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
@@ -115,7 +115,7 @@ nlohmann::json ErrorsJson(const fit::ImageErrors& e) {
 }
 
 struct PhotoData {
-  fit::CloudStatsReference stats_ref;
+  cloudfit::CloudStatsReference stats_ref;
   fit::Reference whole;  // the reference with every sky pixel (clear and cloud) of the segmentation as kSky
   fit::Reference clear, cloud;  // the same restricted to probability < 0.5 / >= 0.5
   long long non_sky_segmented = 0;
@@ -162,7 +162,7 @@ std::vector<float> AlsoAgainst(const fit::Reference& ref, const ImageRGB& render
 // without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
 // sun-to-sky ratio).
 nlohmann::json SunCheck(const fit::Reference& ref, const render::Preset& preset, double exposure) {
-  const PhotoSun ps = MeasurePhotoSun(ref.radiance, ref.sun_dir);
+  const cloudfit::PhotoSun ps = cloudfit::MeasurePhotoSun(ref.radiance, ref.sun_dir);
   const render::Rgb model = render::SunIlluminanceAtGround(preset, ref.sun_dir);
   nlohmann::json photo = nlohmann::json::array(), ratio = nlohmann::json::array();
   for (int c = 0; c < 3; ++c) {
@@ -255,7 +255,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
                                      const fit::FitResult& sky, const fs::path& fit_dir, CloudStatsPresetUpdate* update) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
-  fit::CloudStatsOptions so;
+  cloudfit::CloudStatsOptions so;
   so.render_width = o.width;
   so.render_height = o.width / 2;
   so.model_renders = o.renders;
@@ -318,7 +318,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     Log("fit", "clouds stats: " + ref.name + ": the photo's sun / the model's (green) " +
                    FormatNumber(d.sun_check["photo_over_model"][1].get<double>()) +
                    (d.sun_check["clipped"].get<bool>() ? " (clipped: a lower bound)" : ""));
-    fit::CloudStatsReference& sr = d.stats_ref;
+    cloudfit::CloudStatsReference& sr = d.stats_ref;
     sr.name = ref.name;
     sr.radiance = BoxDown(ref.radiance, f);
     for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
@@ -329,7 +329,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     // Before any march: a photo with no cloud the statistics can use (after the refinement
     // too) is refused here, naming the file.
     {
-      const fit::CloudStatistics st = fit::ComputeCloudStatistics(sr.radiance, sr.opacity, sr.sky, sr.sun_dir, so);
+      const cloudfit::CloudStatistics st = cloudfit::ComputeCloudStatistics(sr.radiance, sr.opacity, sr.sky, sr.sun_dir, so);
       if (std::none_of(st.weight.begin(), st.weight.end(), [&](double w) { return w >= so.min_bin_sr; }))
         throw Error(ref.path + ": --clouds stats: no cloud pixels to fit (no bin of angle from the sun x elevation x " +
                     "opacity holds " + FormatNumber(so.min_bin_sr) + " sr of cloud" +
@@ -376,7 +376,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   // Opacity only: the transmittance depends on the extinction and the shapes, never on the
   // light samples (cloud_march.glsl.h: the light march feeds the source term alone), so the
   // match marches without them.
-  fit::CloudStatsOptions opacity_only = so;
+  cloudfit::CloudStatsOptions opacity_only = so;
   opacity_only.march.light_samples = 0;
   double target = 0.0;
   for (const PhotoData& d : data)
@@ -384,11 +384,11 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   auto model_opacity = [&](double coverage, std::vector<clouds::WeatherMap>* maps) {
     maps->clear();
     for (int m = 0; m < o.maps; ++m) maps->push_back(StatsWeather(o.weather_seed + m, initial.weather_extent_m, coverage));
-    fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &(*maps)[0]};
+    cloudfit::CloudStatsScene scene{&cloud_preset, initial, &noise, &(*maps)[0]};
     double mean = 0.0;
     for (const PhotoData& d : data)
       for (int m = 0; m < o.maps; ++m)
-        mean += MeanOpacity(fit::RenderForCloudStats(d.stats_ref, scene, initial, *renderer, opacity_only, 0.0, &(*maps)[m]).opacity,
+        mean += MeanOpacity(cloudfit::RenderForCloudStats(d.stats_ref, scene, initial, *renderer, opacity_only, 0.0, &(*maps)[m]).opacity,
                             d.stats_ref.sky, o.width, o.width / 2, min_el) /
                 (data.size() * o.maps);
     return mean;
@@ -424,9 +424,9 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   }
   const double coverage_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - coverage_t0).count();
 
-  std::vector<fit::CloudStatsReference> refs;
+  std::vector<cloudfit::CloudStatsReference> refs;
   for (const PhotoData& d : data) refs.push_back(d.stats_ref);
-  fit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
+  cloudfit::CloudStatsScene scene{&cloud_preset, initial, &noise, &maps[0]};
   for (const auto& m : maps) scene.weather_ensemble.push_back(&m);
   const bool fit_sun = o.sun_scale == "fit";
   if (fit_sun) {  // the albedo held physical; the sun's scale takes its place (below)
@@ -444,30 +444,30 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
     return n == "scattering_albedo" || n == "ambient_strength";
   });
   if (fit_sun && !linear) throw Error("--cloud-stats-sun-scale fit needs the linear lighting alone (albedo, ambient)");
-  LightingBasisCloudRenderer basis(*renderer, static_cast<int>(refs.size()) * o.renders + 1);
+  cloudfit::LightingBasisCloudRenderer basis(*renderer, static_cast<int>(refs.size()) * o.renders + 1);
   clouds::CloudRenderer& fit_renderer = linear ? static_cast<clouds::CloudRenderer&>(basis) : *renderer;
-  fit::CloudStatsResult res;
+  cloudfit::CloudStatsResult res;
   nlohmann::json sun_scale_json;
   if (!fit_sun) {
-    res = fit::FitCloudStats(refs, scene, fit_renderer, so);
+    res = cloudfit::FitCloudStats(refs, scene, fit_renderer, so);
   } else {
     // The profile over s: at each s the ambient fitted from the best ambient so far. The disc
     // bounds s from below where every photo's disc is a lower bound (saturated).
     const bool saturated =
         o.sun == "photo" && std::all_of(data.begin(), data.end(), [](const PhotoData& d) { return d.sun_check["saturated"].get<bool>(); });
-    SunScaleSearchOptions ss;
+    cloudfit::SunScaleSearchOptions ss;
     ss.lower = saturated ? 1.0 : 0.1;
     ss.upper = std::min(sky.preset.sun_illuminance_lux, 2.0e5) / cloud_preset.sun_illuminance_lux;
     if (!(ss.upper > ss.lower)) ss.upper = ss.lower * 1.5;
     std::vector<double> iterations;
     const auto t0 = std::chrono::steady_clock::now();
     double best_cost = INFINITY;
-    const SunScaleSearch found = MinimizeOverSunScale(
+    const cloudfit::SunScaleSearch found = cloudfit::MinimizeOverSunScale(
         [&](double sc) {
           basis.set_sun_scale(sc);
-          fit::CloudStatsScene at = scene;
+          cloudfit::CloudStatsScene at = scene;
           if (best_cost < INFINITY) at.initial.ambient_strength = res.params.ambient_strength;
-          fit::CloudStatsResult r = fit::FitCloudStats(refs, at, fit_renderer, so);
+          cloudfit::CloudStatsResult r = cloudfit::FitCloudStats(refs, at, fit_renderer, so);
           iterations.push_back(r.iterations);
           Log("fit", "clouds stats: sun scale " + FormatNumber(sc) + ": ambient " + FormatNumber(r.params.ambient_strength) +
                          ", cost " + FormatNumber(r.final_cost) + " (" + std::to_string(r.iterations) + " iterations)");
@@ -534,8 +534,8 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   panels.references.clear();
   for (size_t r = 0; r < data.size(); ++r) {
     const PhotoData& d = data[r];
-    const fit::CloudStatistics& photo = res.reference_stats[r];
-    const fit::CloudStatistics& model = res.final_stats.empty() ? photo : res.final_stats[r];
+    const cloudfit::CloudStatistics& photo = res.reference_stats[r];
+    const cloudfit::CloudStatistics& model = res.final_stats.empty() ? photo : res.final_stats[r];
     // The statistical fit image: each sky pixel is the atmosphere's fit where clear and, by
     // its cloud membership, the model's median radiance of its (sun angle, elevation,
     // opacity) bin where cloud. The photo's own cloud map places the clouds; the lighting is
@@ -551,9 +551,9 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         const auto v = latlong::PixelDirection(x, y, w, h);
         const double c = std::clamp(v[0] * ref.sun_dir[0] + v[1] * ref.sun_dir[1] + v[2] * ref.sun_dir[2], -1.0, 1.0);
         int sb = 0, eb = 0;
-        if (!fit::FindCloudBin(so, std::acos(c) * 180.0 / M_PI, latlong::Latitude(y, h) * 180.0 / M_PI, &sb, &eb)) continue;
+        if (!cloudfit::FindCloudBin(so, std::acos(c) * 180.0 / M_PI, latlong::Latitude(y, h) * 180.0 / M_PI, &sb, &eb)) continue;
         double thin = 0.0, thick = 0.0;
-        fit::OpacityClassWeights(so, d.probability[i], &thin, &thick);
+        cloudfit::OpacityClassWeights(so, d.probability[i], &thin, &thick);
         const double weights[2] = {thin, thick};
         double clear_share = 1.0;
         double acc[3] = {0.0, 0.0, 0.0};
@@ -580,7 +580,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
         for (int k = 0; k < 2; ++k) {
           const int bin = photo.Bin(sb, eb, k);
           if (photo.weight[bin] < so.min_bin_sr) continue;
-          auto medians = [&](const fit::CloudStatistics& s) {
+          auto medians = [&](const cloudfit::CloudStatistics& s) {
             nlohmann::json m = nlohmann::json::array();
             for (int ch = 0; ch < 3; ++ch) m.push_back(s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + mid]);
             return m;

@@ -1,7 +1,7 @@
 // `skycal fit --clouds stats`: the cloud lighting of photographs, whose cloud shapes no noise
 // reproduces (issue 11, regime 3). The clear pixels fit the atmosphere (--cloud-mask is
 // implied: cloud probability >= 0.5 leaves the sky fit); then the cloud pixels fit the
-// lighting by statistics (fit/include/skycal/fit/cloud_stats.h) against renders lit by the
+// lighting by statistics (skycal/cloudfit/cloud_stats.h) against renders lit by the
 // fitted atmosphere's own sun and ambient (shared: the cloud render takes both from the
 // fitted preset). Before the lighting, the weather map's mean coverage is matched so the
 // model's mean cloud opacity equals the photo's mean cloud probability over the sky.
@@ -32,7 +32,7 @@ struct FitCloudStatsOptions {
   int max_iterations = 12;   // --cloud-stats-iterations
   uint64_t weather_seed = 1; // seeds of the model's weather maps: seed, seed + 1, ...
   // --cloud-stats-sun: the sun that lights the model's clouds. "photo": the photo's own disc
-  // (cli/photo_sun.h, in model units: divided by the sky fit's exposure) replaces the
+  // (skycal/cloudfit/photo_sun.h, in model units: divided by the sky fit's exposure) replaces the
   // fitted preset's sun illuminance and tint for the cloud renders; "model": the preset's.
   // Why: a sky fit without the disc does not pin the sun apart from the exposure (the gauge
   // keeps the initial preset's sun-to-sky ratio): on `sky` the photo's sun is 0.036 of the

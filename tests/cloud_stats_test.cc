@@ -1,4 +1,4 @@
-// The unknown-shapes cloud lighting objective (fit/include/skycal/fit/cloud_stats.h): the
+// The unknown-shapes cloud lighting objective (cloudfit/include/skycal/cloudfit/cloud_stats.h): the
 // statistics' identities, bad input, and the honest recovery test: a reference rendered
 // with one noise seed and weather map, the fit rendering with different seeds, from a
 // perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md and (regime 2)
@@ -13,16 +13,16 @@
 #include <Eigen/Dense>
 
 #include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/cloudfit/cloud_stats.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
-#include "skycal/fit/cloud_stats.h"
 
 #include <ceres/problem.h>
 
-#include "cloud_stats_objective.h"
 #include "cloud_stats_term.h"
+#include "skycal/cloudfit/cloud_stats_objective.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 namespace {
 
 const std::string kRoot = SKYCAL_SOURCE_DIR;
@@ -497,4 +497,4 @@ TEST(CloudStats, EmptyModelBinsAddTheirResidualWhenAsked) {
 }
 
 }  // namespace
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit
