@@ -132,7 +132,7 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   // The "sky fit's render" here is the photo itself: against it nothing would be cloud. Told
   // that fit missed its clear pixels by 60%, the default `fitted` expectation is not used.
   p.sky.references[0].errors.rel_rmse = 0.6;
-  CloudStatsPresetUpdate update;
+  cloudfit::CloudStatsPresetUpdate update;
   const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir, &update);
   EXPECT_EQ(j["references"][0]["cloud_probability"]["refined"], false);
   // The fitted preset takes the fit: its clouds section carries the lighting fit.json reports
@@ -164,7 +164,7 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   // ambient: bounds [0.1 (the synthetic disc is no lower bound), the sky fit's sun / the
   // measured one].
   EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], true);
-  EXPECT_DOUBLE_EQ(j["parameters"]["scattering_albedo"]["value"].get<double>(), kPhysicalCloudAlbedo);
+  EXPECT_DOUBLE_EQ(j["parameters"]["scattering_albedo"]["value"].get<double>(), cloudfit::kPhysicalCloudAlbedo);
   EXPECT_EQ(j["parameters"]["ambient_strength"]["held"], false);
   const auto& ss = j["sun_scale"];
   EXPECT_GE(ss["scale"].get<double>(), ss["lower_bound"].get<double>());
