@@ -176,8 +176,8 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   const std::vector<CloudStatsReference> refs = {scene.reference};
   const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
   auto term = MakeCloudStatsTerm(refs, model, *f.renderer, o);
-  std::vector<SkipNote> skipped;
-  std::vector<FitDecision> decisions;
+  std::vector<fit::SkipNote> skipped;
+  std::vector<fit::FitDecision> decisions;
   term->ReportSkips(&skipped, &decisions);
   bool g2 = false, g1 = false;
   for (const auto& n : skipped) {
@@ -192,8 +192,8 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   EXPECT_TRUE(g1);
   EXPECT_TRUE(extinction);  // held by default since the regime-2 seed pairs (cloud_stats.h)
   EXPECT_EQ(skipped.size(), 15u);  // 16 lighting fields, 1 fitted (ambient_strength)
-  FitState state;
-  LevelContext level;
+  fit::FitState state;
+  fit::LevelContext level;
   ceres::Problem problem;
   EXPECT_EQ(term->AddTo(problem, state, level), 0);
   level.finest = true;
