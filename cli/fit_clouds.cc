@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "render_clouds.h"
 #include "skycal/clouds/cloud_noise.h"
@@ -35,7 +36,13 @@ bool FitCloudOptions::IsValid(std::string* why) const {
   co.day_smoothness = day_smoothness;
   co.hold = hold;
   if (!co.IsValid(why)) {
-    if (why->starts_with("cloud samples")) *why = "--cloud-samples: " + *why;
+    // The library names its fields; the user set them with these flags.
+    static const std::pair<const char*, const char*> kFlags[] = {
+        {"CloudLightingOptions::samples = ", "--cloud-samples "},
+        {"CloudLightingOptions::day_smoothness = ", "--cloud-day-smoothness "},
+        {"CloudLightingOptions::hold = ", "--cloud-hold "}};
+    for (const auto& [field, flag] : kFlags)
+      if (why->starts_with(field)) *why = flag + why->substr(std::string(field).size());
     return false;
   }
   return true;

@@ -253,7 +253,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   summary["options"] = resolved;
   summary["clouds"] = CloudReportJson(co, joint);
   if (cs.enabled) {
-    std::vector<CloudStatsPhoto> photos;
+    std::vector<cloudfit::CloudStatsPhoto> photos;
     for (size_t r = 0; r < refs.size(); ++r) {
       const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
       photos.push_back({&refs[r], cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
@@ -261,7 +261,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     summary["clouds"]["mode"] = "stats";
     summary["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by statistics "
                                     "of the cloud pixels (fit.json's cloud_stats)";
-    CloudStatsPresetUpdate update;
+    cloudfit::CloudStatsPresetUpdate update;
     summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit", &update);
     summary["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result.preset);
     summary["cloud_stats"]["sky_refit"] = sky_refit;

@@ -1,4 +1,4 @@
-// The unknown-shapes cloud lighting objective (fit/include/skycal/fit/cloud_stats.h): the
+// The unknown-shapes cloud lighting objective (cloudfit/include/skycal/cloudfit/cloud_stats.h): the
 // statistics' identities, bad input, and the honest recovery test: a reference rendered
 // with one noise seed and weather map, the fit rendering with different seeds, from a
 // perturbed start. Tolerances from bench/results/cloud_stats_seed_pairs.md and (regime 2)
@@ -13,16 +13,16 @@
 #include <Eigen/Dense>
 
 #include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/cloudfit/cloud_stats.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
-#include "skycal/fit/cloud_stats.h"
 
 #include <ceres/problem.h>
 
-#include "cloud_stats_objective.h"
 #include "cloud_stats_term.h"
+#include "skycal/cloudfit/cloud_stats_objective.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 namespace {
 
 const std::string kRoot = SKYCAL_SOURCE_DIR;
@@ -176,8 +176,8 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   const std::vector<CloudStatsReference> refs = {scene.reference};
   const CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
   auto term = MakeCloudStatsTerm(refs, model, *f.renderer, o);
-  std::vector<SkipNote> skipped;
-  std::vector<FitDecision> decisions;
+  std::vector<fit::SkipNote> skipped;
+  std::vector<fit::FitDecision> decisions;
   term->ReportSkips(&skipped, &decisions);
   bool g2 = false, g1 = false;
   for (const auto& n : skipped) {
@@ -192,8 +192,8 @@ TEST(CloudStats, TermAddsItsBlockOnTheFinestLevelAndReportsWhatItHolds) {
   EXPECT_TRUE(g1);
   EXPECT_TRUE(extinction);  // held by default since the regime-2 seed pairs (cloud_stats.h)
   EXPECT_EQ(skipped.size(), 15u);  // 16 lighting fields, 1 fitted (ambient_strength)
-  FitState state;
-  LevelContext level;
+  fit::FitState state;
+  fit::LevelContext level;
   ceres::Problem problem;
   EXPECT_EQ(term->AddTo(problem, state, level), 0);
   level.finest = true;
@@ -497,4 +497,4 @@ TEST(CloudStats, EmptyModelBinsAddTheirResidualWhenAsked) {
 }
 
 }  // namespace
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

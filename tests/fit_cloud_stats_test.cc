@@ -9,12 +9,12 @@
 #include <cmath>
 #include <filesystem>
 
-#include "cloud_sun_scale.h"
 #include "fit_cloud_stats.h"
 #include "fit_verb.h"
-#include "lighting_basis_renderer.h"
-#include "photo_sun.h"
 #include "skycal/bench/cloud_stats_scene.h"
+#include "skycal/cloudfit/cloud_sun_scale.h"
+#include "skycal/cloudfit/lighting_basis_renderer.h"
+#include "skycal/cloudfit/photo_sun.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/render/preset.h"
@@ -94,7 +94,7 @@ struct SyntheticPhoto {
     } catch (const Error&) {
       renderer = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat, 2);
     }
-    fit::CloudStatsOptions so;
+    cloudfit::CloudStatsOptions so;
     so.render_width = 64;
     so.render_height = 32;
     const std::string cache = (fs::temp_directory_path() / "skycal-cloud-stats-cache").string();
@@ -132,7 +132,7 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   // The "sky fit's render" here is the photo itself: against it nothing would be cloud. Told
   // that fit missed its clear pixels by 60%, the default `fitted` expectation is not used.
   p.sky.references[0].errors.rel_rmse = 0.6;
-  CloudStatsPresetUpdate update;
+  cloudfit::CloudStatsPresetUpdate update;
   const nlohmann::json j = RunCloudStatsOnPhotos(o, {{&p.ref, p.probability}}, p.sky, dir, &update);
   EXPECT_EQ(j["references"][0]["cloud_probability"]["refined"], false);
   // The fitted preset takes the fit: its clouds section carries the lighting fit.json reports
@@ -164,7 +164,7 @@ TEST(FitCloudStats, WiringAtASmallSize) {
   // ambient: bounds [0.1 (the synthetic disc is no lower bound), the sky fit's sun / the
   // measured one].
   EXPECT_EQ(j["parameters"]["scattering_albedo"]["held"], true);
-  EXPECT_DOUBLE_EQ(j["parameters"]["scattering_albedo"]["value"].get<double>(), kPhysicalCloudAlbedo);
+  EXPECT_DOUBLE_EQ(j["parameters"]["scattering_albedo"]["value"].get<double>(), cloudfit::kPhysicalCloudAlbedo);
   EXPECT_EQ(j["parameters"]["ambient_strength"]["held"], false);
   const auto& ss = j["sun_scale"];
   EXPECT_GE(ss["scale"].get<double>(), ss["lower_bound"].get<double>());
@@ -276,7 +276,7 @@ TEST(FitCloudStats, RefinedMaskReleasesPixelsAndRefitsTheSky) {
   EXPECT_EQ(j["refitted"], false);
 }
 
-// The photo's sun (cli/photo_sun.h): a disc of known illuminance spread over a few pixels
+// The photo's sun (skycal/cloudfit/photo_sun.h): a disc of known illuminance spread over a few pixels
 // of a 512x256 lat-long on a sky gradient is recovered; its ring's median is subtracted.
 TEST(FitCloudStats, PhotoSunRecoversADiscOnASky) {
   const int w = 512, h = 256;
@@ -295,19 +295,19 @@ TEST(FitCloudStats, PhotoSunRecoversADiscOnASky) {
       for (int c = 0; c < 3; ++c)
         img.at(x0 + i, y0 + j, c) +=
             static_cast<float>(share[j][i] * e_true[c] / latlong::PixelSolidAngle(x0 + i, y0 + j, w, h));
-  const PhotoSun s = MeasurePhotoSun(img, sun);
+  const cloudfit::PhotoSun s = cloudfit::MeasurePhotoSun(img, sun);
   // The ring's median is the sky at the ring's mean row; the gradient across the 3-deg disc
   // is symmetric to first order: 1% covers what is left.
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.illuminance[c], e_true[c], 0.01 * e_true[c]) << c;
   EXPECT_FALSE(s.clipped());
   // Control: the same disc measured 10 deg away finds no sun.
   const std::array<double, 3> off = {0.0, std::sin(50.0 * M_PI / 180.0), std::cos(50.0 * M_PI / 180.0)};
-  EXPECT_LT(std::abs(MeasurePhotoSun(img, off).illuminance[1]), 0.01 * e_true[1]);
+  EXPECT_LT(std::abs(cloudfit::MeasurePhotoSun(img, off).illuminance[1]), 0.01 * e_true[1]);
   // A clipped disc: a plateau of equal values.
   for (int j = -2; j <= 2; ++j)
     for (int i = -2; i <= 2; ++i)
       for (int c = 0; c < 3; ++c) img.at(x0 + i, y0 + j, c) = 65504.0f;
-  EXPECT_TRUE(MeasurePhotoSun(img, sun).clipped());
+  EXPECT_TRUE(cloudfit::MeasurePhotoSun(img, sun).clipped());
 }
 
 // Saturation by energy (PhotoSun::saturated): on a uniform sky of radiance L the diffuse
@@ -321,60 +321,60 @@ TEST(FitCloudStats, PhotoSunSaturatedWhenTooWeakForItsSky) {
     ImageRGB img(w, h);
     for (float& v : img.pixels) v = static_cast<float>(sky);
     for (int c = 0; c < 3; ++c) img.at(x0, y0, c) += static_cast<float>(e / latlong::PixelSolidAngle(x0, y0, w, h));
-    return MeasurePhotoSun(img, sun);
+    return cloudfit::MeasurePhotoSun(img, sun);
   };
   const double direct = 4000.0 * std::sin(40.0 * M_PI / 180.0);
-  const PhotoSun bright = sky_with_disc(1000.0, 4000.0);
+  const cloudfit::PhotoSun bright = sky_with_disc(1000.0, 4000.0);
   EXPECT_NEAR(bright.direct_to_diffuse(), direct / (M_PI * 1000.0), 0.01 * direct / (M_PI * 1000.0));
   EXPECT_TRUE(bright.clean_disc());
   EXPECT_FALSE(bright.saturated());  // 0.82 >= 0.5
   EXPECT_FALSE(bright.clipped());    // one pixel: no plateau
-  const PhotoSun weak = sky_with_disc(3000.0, 4000.0);  // 0.27 < 0.5: the disc cannot be the sun
+  const cloudfit::PhotoSun weak = sky_with_disc(3000.0, 4000.0);  // 0.27 < 0.5: the disc cannot be the sun
   EXPECT_NEAR(weak.direct_to_diffuse(), direct / (M_PI * 3000.0), 0.01 * direct / (M_PI * 3000.0));
   EXPECT_TRUE(weak.clean_disc());
   EXPECT_TRUE(weak.saturated());
   // Control: a veiled sun (the disc under 100x its sky, seen through cloud) is weak for its
   // sky by nature: not called saturated.
-  const PhotoSun veiled = sky_with_disc(3000.0, 10.0);
+  const cloudfit::PhotoSun veiled = sky_with_disc(3000.0, 10.0);
   EXPECT_FALSE(veiled.clean_disc());
   EXPECT_FALSE(veiled.saturated());
 }
 
-// The sun scale's search (cli/cloud_sun_scale.h): a smooth profile's minimum, one with a kink
+// The sun scale's search (skycal/cloudfit/cloud_sun_scale.h): a smooth profile's minimum, one with a kink
 // (as where the ambient reaches its bound), and a minimum at a bound.
 TEST(FitCloudStats, SunScaleSearchFindsTheProfileMinimum) {
-  SunScaleSearchOptions o;
+  cloudfit::SunScaleSearchOptions o;
   o.lower = 0.1;
   o.upper = 100.0;
   const double truth = std::log(3.7);
   auto smooth = [&](double s) { const double d = std::log(s) - truth; return 1.0 + d * d + 0.3 * d * d * d * d; };
-  SunScaleSearch r = MinimizeOverSunScale(smooth, o);
+  cloudfit::SunScaleSearch r = cloudfit::MinimizeOverSunScale(smooth, o);
   EXPECT_NEAR(std::log(r.scale), truth, 0.03);
   EXPECT_LE(r.scales.size(), 12u);
   EXPECT_FALSE(r.at_lower || r.at_upper);
   EXPECT_EQ(r.scales.size(), r.costs.size());
   // A kink: steeper on one side (ambient at its bound beyond the minimum).
   auto kink = [&](double s) { const double d = std::log(s) - truth; return d < 0.0 ? -0.5 * d : 3.0 * d; };
-  r = MinimizeOverSunScale(kink, o);
+  r = cloudfit::MinimizeOverSunScale(kink, o);
   EXPECT_NEAR(std::log(r.scale), truth, 0.1);
   // Falling over the whole range: the lower bound is the answer, and said so.
-  r = MinimizeOverSunScale([](double s) { return s; }, o);
+  r = cloudfit::MinimizeOverSunScale([](double s) { return s; }, o);
   EXPECT_DOUBLE_EQ(r.scale, 0.1);
   EXPECT_TRUE(r.at_lower);
   // Control: the answer follows the cost's minimum when it moves (0.5 instead of 3.7).
   auto moved = [&](double s) { const double d = std::log(s) - std::log(0.5); return d * d; };
-  EXPECT_NEAR(std::log(MinimizeOverSunScale(moved, o).scale), std::log(0.5), 0.03);
+  EXPECT_NEAR(std::log(cloudfit::MinimizeOverSunScale(moved, o).scale), std::log(0.5), 0.03);
   o.lower = 2.0;
   o.upper = 1.0;
-  EXPECT_THROW(MinimizeOverSunScale(smooth, o), Error);
+  EXPECT_THROW(cloudfit::MinimizeOverSunScale(smooth, o), Error);
 }
 
-// The lighting basis (cli/lighting_basis_renderer.h): albedo and ambient from three cached
+// The lighting basis (skycal/cloudfit/lighting_basis_renderer.h): albedo and ambient from three cached
 // marches equal a march at those values; anything else marches anew.
 TEST(FitCloudStats, LightingBasisEqualsAMarch) {
   SyntheticPhoto p;
   clouds::CloudRenderer& raw = *p.renderer;
-  LightingBasisCloudRenderer basis(raw, 4);
+  cloudfit::LightingBasisCloudRenderer basis(raw, 4);
   clouds::CloudParams c = p.scene.truth;
   clouds::CloudScene scene{&p.scene.preset, &c, &p.scene.noise, &p.scene.weather};
   clouds::CloudRenderRequest req;

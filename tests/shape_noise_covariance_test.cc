@@ -1,4 +1,4 @@
-// The full generalised least-squares whitening of the cloud statistics (fit/src/
+// The full generalised least-squares whitening of the cloud statistics (cloudfit/src/
 // shape_noise_covariance.h): the whitened residual's squared norm is rᵀ Σ^-1 r, the shrinkage
 // toward the diagonal, and controls that show each check can fail.
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include "shape_noise_covariance.h"
 #include "skycal/core/error.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 namespace {
 
 // A correlated 5x5 covariance: A Aᵀ + diag (positive definite), correlations up to ~0.9.
@@ -114,4 +114,4 @@ TEST(ShapeNoiseCovariance, EstimatedShrinkageFollowsTheCorrelations) {
 }
 
 }  // namespace
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

@@ -23,9 +23,9 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
-#include "cloud_stats_objective.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"
+#include "skycal/cloudfit/cloud_stats_objective.h"
 #include "skycal/core/error.h"
 #include "suite_util.h"
 #include "suites_internal.h"
@@ -69,7 +69,7 @@ struct NoiseAnalysis {
 
 NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRenderer& renderer, const SuiteOptions& o) {
   const int draws = plan.draws, maps = plan.model_maps;
-  fit::CloudStatsOptions options;
+  cloudfit::CloudStatsOptions options;
   options.render_width = plan.width;
   options.render_height = plan.width / 2;
   const std::string cache = CloudStatsCacheDir();
@@ -81,11 +81,11 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
   model_maps.push_back(scene.weather);
   for (int e = 1; e < maps; ++e) model_maps.push_back(CloudStatsWeather(211 + 1000 * e, scene.truth.weather_extent_m));
   for (int d = 0; d < draws; ++d) draw_maps.push_back(CloudStatsWeather(5000 + d, scene.truth.weather_extent_m));
-  fit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
+  cloudfit::CloudStatsScene model{&scene.preset, scene.truth, &scene.noise, &scene.weather};
   for (const auto& w : model_maps) model.weather_ensemble.push_back(&w);
   for (const auto& w : draw_maps) model.shape_draw_maps.push_back(&w);
-  const std::vector<fit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
-  const fit::CloudStatsObjective obj(refs, model, renderer, options);
+  const std::vector<cloudfit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
+  const cloudfit::CloudStatsObjective obj(refs, model, renderer, options);
   const int n = obj.num_residuals(), p = obj.num_parameters();
   const std::vector<double> x = obj.InitialX();
   // Σ over the draws.
@@ -97,9 +97,9 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
   // The same draws with another noise seed (the seed pairs' references use seeds 1-6, the
   // model 101-106): a difference of the means is a bias no number of draws averages away.
   const clouds::CloudNoise other_noise = clouds::LoadOrGenerateCloudNoise(1, cache);
-  fit::CloudStatsScene model_other = model;
+  cloudfit::CloudStatsScene model_other = model;
   model_other.noise = &other_noise;
-  const fit::CloudStatsObjective obj_other(refs, model_other, renderer, options);
+  const cloudfit::CloudStatsObjective obj_other(refs, model_other, renderer, options);
   std::vector<std::vector<double>> v_other(draws, std::vector<double>(n));
   for (int d = 0; d < draws; ++d)
     if (!obj_other.DrawStatistics(x.data(), d, v_other[d].data())) throw Error("shape draw failed");
@@ -192,9 +192,9 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
     std::vector<std::vector<double>> vs;
     for (uint64_t seed : {1, 2, 3, 4, 5, 6, 101, 102, 103, 104, 105, 106}) {
       const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
-      fit::CloudStatsScene ms = model;
+      cloudfit::CloudStatsScene ms = model;
       ms.noise = &nz;
-      const fit::CloudStatsObjective o2(refs, ms, renderer, options);
+      const cloudfit::CloudStatsObjective o2(refs, ms, renderer, options);
       vs.emplace_back(n);
       if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
     }

@@ -1,4 +1,4 @@
-// Suite `fit-cloud-stats`: the unknown-shapes cloud lighting fit (fit/include/skycal/fit/
+// Suite `fit-cloud-stats`: the unknown-shapes cloud lighting fit (cloudfit/include/skycal/cloudfit/
 // cloud_stats.h) over seed pairs — what the bench_cloud_stats program measured
 // (bench/results/cloud_stats_seed_pairs*.md), now a suite of `skycal bench`.
 //
@@ -61,8 +61,8 @@ std::string SignedPct(double v) {
   return b;
 }
 
-fit::CloudStatsOptions OptionsFor(const CloudStatsPlan& plan, const CloudStatsConfig& cfg) {
-  fit::CloudStatsOptions o;
+cloudfit::CloudStatsOptions OptionsFor(const CloudStatsPlan& plan, const CloudStatsConfig& cfg) {
+  cloudfit::CloudStatsOptions o;
   const int width = plan.width_override > 0 ? plan.width_override : cfg.width;
   if (width > 0) o.render_width = width, o.render_height = width / 2;
   if (cfg.model_renders > 0) o.model_renders = cfg.model_renders;
@@ -86,7 +86,7 @@ std::string Whitening(const nlohmann::json& x) {
 }
 
 // One seed pair's fit (k = 0: the control) -> its row.
-nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStatsOptions& options,
+nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const cloudfit::CloudStatsOptions& options,
                        clouds::CloudRenderer& renderer, const std::string& cache, const SuiteOptions& o) {
   const bool control = k == 0;
   const auto uk = static_cast<uint64_t>(k);
@@ -100,7 +100,7 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
     const auto& s = Spec(name);
     *s.field(start) = std::clamp(*s.field(scene.truth) * (name == "extinction" ? cfg.extinction_start : f), s.min, s.max);
   }
-  fit::CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
+  cloudfit::CloudStatsScene model{&scene.preset, start, &scene.noise, &scene.weather};
   std::vector<clouds::WeatherMap> ensemble, noise_maps;
   if (!control && cfg.model_maps > 1) {
     ensemble.push_back(scene.weather);
@@ -121,16 +121,16 @@ nlohmann::json RunPair(int k, const CloudStatsConfig& cfg, const fit::CloudStats
     model.noise_textures.push_back(&scene.noise);
     for (const auto& t : textures) model.noise_textures.push_back(&t);
   }
-  fit::CloudStatsOptions run_options = options;
+  cloudfit::CloudStatsOptions run_options = options;
   if (control) run_options.model_renders = 1;  // the reference's own shapes, at its own wind time
-  std::vector<fit::CloudStatsReference> refs = {scene.reference};
+  std::vector<cloudfit::CloudStatsReference> refs = {scene.reference};
   for (int j = 1; j < cfg.references; ++j) {
     const CloudStatsSeeds more{1 + uk + 10 * j, 11 + uk + 10 * j};
     refs.push_back(MakeCloudStatsScene(SKYCAL_SOURCE_DIR, more, model_seeds, kSunElevationDeg, kSunAzimuthDeg, options,
                                        renderer, cache)
                        .reference);
   }
-  const fit::CloudStatsResult res = fit::FitCloudStats(refs, model, renderer, run_options);
+  const cloudfit::CloudStatsResult res = cloudfit::FitCloudStats(refs, model, renderer, run_options);
   nlohmann::json row = {{"control_known_shapes", control},
                         {"reference_seeds", {ref_seeds.noise, ref_seeds.weather}},
                         {"model_seeds", {model_seeds.noise, model_seeds.weather}},
@@ -301,7 +301,7 @@ Suite SeedPairSuite(const std::string& suite_name, const std::string& summary, C
     const std::unique_ptr<clouds::CloudRenderer> renderer = CreateCloudStatsRenderer();
     return RunGrid(suite_name, plan.grid, o, [&](CaseResult& c) {
       const CloudStatsConfig& cfg = FindCloudStatsConfig(plan, Get(c.settings, "config"));
-      const fit::CloudStatsOptions options = OptionsFor(plan, cfg);
+      const cloudfit::CloudStatsOptions options = OptionsFor(plan, cfg);
       nlohmann::json runs = nlohmann::json::array();
       c.time = Measure(
           [&] {

@@ -184,30 +184,32 @@ CloudMode ParseCloudMode(const std::string& text, const std::string& option) {
 
 bool CloudLightingOptions::IsValid(std::string* why) const {
   if (samples < 16 || samples > 1000000) {
-    *why = "cloud samples = " + std::to_string(samples) + " (expected an integer in [16, 1000000])";
+    *why = "CloudLightingOptions::samples = " + std::to_string(samples) + " (expected an integer in [16, 1000000])";
     return false;
   }
   if (!(cloud_transmittance > 0.0 && cloud_transmittance <= 1.0)) {
-    *why = "cloud transmittance threshold = " + FormatNumber(cloud_transmittance) + " (expected in (0, 1])";
+    *why = "CloudLightingOptions::cloud_transmittance = " + FormatNumber(cloud_transmittance) + " (expected in (0, 1])";
     return false;
   }
   if (!(noise_level > 0.0 && noise_level < 1.0) || !(max_predicted_error > 0.0 && max_predicted_error < 10.0)) {
-    *why = "cloud noise level and max predicted error must be in (0, 1) and (0, 10)";
+    *why = "CloudLightingOptions::noise_level = " + FormatNumber(noise_level) + ", max_predicted_error = " +
+           FormatNumber(max_predicted_error) + " (expected in (0, 1) and (0, 10))";
     return false;
   }
   if (!(day_smoothness >= 0.0 && day_smoothness <= 1e6)) {
-    *why = "--cloud-day-smoothness " + FormatNumber(day_smoothness) + " (expected a weight in [0, 1e6])";
+    *why = "CloudLightingOptions::day_smoothness = " + FormatNumber(day_smoothness) + " (expected a weight in [0, 1e6])";
     return false;
   }
   if (max_iterations < 1 || max_iterations > 10000 || threads < 1 || threads > 256) {
-    *why = "cloud max iterations must be in [1, 10000] and threads in [1, 256]";
+    *why = "CloudLightingOptions::max_iterations = " + std::to_string(max_iterations) + ", threads = " +
+           std::to_string(threads) + " (expected [1, 10000] and [1, 256])";
     return false;
   }
   for (const std::string& h : hold) {
     if (CloudLightingIndex(h) < 0) {
       std::string names;
       for (const char* n : CloudLightingNames()) names += (names.empty() ? "" : ", ") + std::string(n);
-      *why = "--cloud-hold " + h + ": not a cloud lighting parameter (expected one of " + names + ")";
+      *why = "CloudLightingOptions::hold = " + h + ": not a cloud lighting parameter (expected one of " + names + ")";
       return false;
     }
   }

@@ -13,12 +13,12 @@
 #include <memory>
 #include <string>
 
+#include "skycal/cloudfit/cloud_stats.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/core/latlong.h"
-#include "skycal/fit/cloud_stats.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 
@@ -33,7 +33,7 @@ struct CloudStatsSyntheticScene {
   clouds::CloudParams truth;
   clouds::CloudNoise noise;        // the model's shapes
   clouds::WeatherMap weather;
-  fit::CloudStatsReference reference;
+  cloudfit::CloudStatsReference reference;
 };
 
 // The renderer of the benchmark's fits: Vulkan, else (no device) the float CPU path, said on stderr.
@@ -63,7 +63,7 @@ inline clouds::WeatherMap CloudStatsWeather(uint64_t seed, double extent_m) {
 // the model scene carries `model_seeds`. Noise is cached in `cache_dir`.
 inline CloudStatsSyntheticScene MakeCloudStatsScene(const std::string& source_dir, CloudStatsSeeds ref_seeds,
                                                     CloudStatsSeeds model_seeds, double sun_elevation_deg,
-                                                    double sun_azimuth_deg, const fit::CloudStatsOptions& options,
+                                                    double sun_azimuth_deg, const cloudfit::CloudStatsOptions& options,
                                                     clouds::CloudRenderer& renderer, const std::string& cache_dir) {
   CloudStatsSyntheticScene s;
   s.preset = render::LoadPreset(source_dir + "/datasets/presets/default_cloudy.json");
@@ -82,8 +82,8 @@ inline CloudStatsSyntheticScene MakeCloudStatsScene(const std::string& source_di
   ref.clear_sky = render::CreateRenderer(render::Backend::kCpu)->Render(s.preset, sky_req);
   const clouds::CloudNoise ref_noise = clouds::LoadOrGenerateCloudNoise(ref_seeds.noise, cache_dir);
   const clouds::WeatherMap ref_weather = CloudStatsWeather(ref_seeds.weather, s.truth.weather_extent_m);
-  fit::CloudStatsScene ref_scene{&s.preset, s.truth, &ref_noise, &ref_weather};
-  const fit::CloudStatsRender r = fit::RenderForCloudStats(ref, ref_scene, s.truth, renderer, options);
+  cloudfit::CloudStatsScene ref_scene{&s.preset, s.truth, &ref_noise, &ref_weather};
+  const cloudfit::CloudStatsRender r = cloudfit::RenderForCloudStats(ref, ref_scene, s.truth, renderer, options);
   ref.radiance = r.composite;
   ref.opacity = r.opacity;
   return s;

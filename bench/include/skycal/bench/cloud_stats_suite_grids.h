@@ -9,7 +9,7 @@
 
 namespace skycal::bench {
 
-// One configuration of the unknown-shapes cloud lighting fit (fit/include/skycal/fit/cloud_stats.h),
+// One configuration of the unknown-shapes cloud lighting fit (cloudfit/include/skycal/cloudfit/cloud_stats.h),
 // as one of the program's results files reported it. 0 in width/renders/iterations: the
 // CloudStatsOptions default.
 struct CloudStatsConfig {

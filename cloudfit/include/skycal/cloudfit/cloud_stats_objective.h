@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "skycal/fit/cloud_stats.h"
+#include "skycal/cloudfit/cloud_stats.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 
 class CovarianceWhitener;  // shape_noise_covariance.h
 
@@ -95,4 +95,4 @@ class CloudStatsObjective {
   void Flatten(int r, const CloudStatistics& s, int images, double* values) const;
 };
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

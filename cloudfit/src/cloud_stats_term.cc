@@ -10,7 +10,7 @@
 
 #include "skycal/core/error.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 namespace {
 
 // Why each lighting field outside the fitted set is held (what the statistics cannot
@@ -185,7 +185,7 @@ CloudStatsTerm::CloudStatsTerm(const std::vector<CloudStatsReference>& refs, con
                                clouds::CloudRenderer& renderer, const CloudStatsOptions& options)
     : objective_(refs, scene, renderer, options), x_(objective_.InitialX()), options_(options), initial_(scene.initial) {}
 
-long long CloudStatsTerm::AddTo(ceres::Problem& problem, FitState& /*state*/, const LevelContext& level) {
+long long CloudStatsTerm::AddTo(ceres::Problem& problem, fit::FitState& /*state*/, const fit::LevelContext& level) {
   // The statistics need the whole render: only the finest level carries them (the coarse
   // levels shape the sky; the clouds' residuals would cost a render per evaluation there too).
   if (!level.finest) return 0;
@@ -197,7 +197,7 @@ long long CloudStatsTerm::AddTo(ceres::Problem& problem, FitState& /*state*/, co
   return objective_.num_residuals();
 }
 
-void CloudStatsTerm::ReportSkips(std::vector<SkipNote>* skipped, std::vector<FitDecision>* /*decisions*/) const {
+void CloudStatsTerm::ReportSkips(std::vector<fit::SkipNote>* skipped, std::vector<fit::FitDecision>* /*decisions*/) const {
   for (const auto& p : DescribeCloudStatsParameters(initial_, initial_, options_.fitted))
     if (p.held) skipped->push_back({"clouds." + p.name, "held: " + p.why_held});
 }
@@ -218,4 +218,4 @@ std::unique_ptr<CloudStatsTerm> MakeCloudStatsTerm(const std::vector<CloudStatsR
   return std::make_unique<CloudStatsTerm>(refs, scene, renderer, options);
 }
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

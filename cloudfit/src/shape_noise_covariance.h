@@ -11,13 +11,13 @@
 // clamped to [0, 1]. The whitening is the fixed linear map r' = L^-1 r with Σ = L Lᵀ, so
 // |r'|² = rᵀ Σ^-1 r (the GLS cost) and a least-squares solver needs nothing else.
 //
-// Private to skycal_fit (Eigen stays out of the public headers); the unit tests include it.
+// Private to skycal_cloudfit (Eigen stays out of the public headers); the unit tests include it.
 #pragma once
 #include <vector>
 
 #include <Eigen/Core>
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 
 // Schäfer–Strimmer λ* toward the diagonal for the draws X (rows: draws, columns: variables;
 // at least 2 draws). A variable with zero variance takes no part (its correlations are 0).
@@ -45,4 +45,4 @@ class CovarianceWhitener {
   Eigen::MatrixXd lower_;  // L, lower triangular
 };
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

@@ -7,7 +7,7 @@
 
 #include "skycal/core/image.h"
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 
 struct PhotoSunOptions {
   double disc_deg = 3.0;       // deg: radius integrated around the sun direction (disc + blur)
@@ -48,4 +48,4 @@ struct PhotoSun {
 // skycal::Error when the disc or the ring holds no pixel (too small an image).
 PhotoSun MeasurePhotoSun(const ImageRGB& latlong, const std::array<double, 3>& sun_dir, const PhotoSunOptions& o = {});
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit

@@ -1,5 +1,5 @@
 // The sun that lights a photograph's clouds, fitted (fit --clouds stats): a scale s on the
-// photo's measured sun (cli/photo_sun.h). The albedo is held at its physical value, so the
+// photo's measured sun (photo_sun.h). The albedo is held at its physical value, so the
 // statistics' direct light is s x the disc and the ambient k is fitted at each s: the cost's
 // profile over s is minimised here (a grid over ln s, then successive parabolas around the
 // best grid point). One dimension, a handful of evaluations, each a statistics fit on cached renders.
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 
 struct SunScaleSearchOptions {
   double lower = 0.1, upper = 30.0;  // bounds of s (lower 1 where the disc is a lower bound)
@@ -28,4 +28,4 @@ struct SunScaleSearch {
 // on invalid options.
 SunScaleSearch MinimizeOverSunScale(const std::function<double(double)>& cost, const SunScaleSearchOptions& o);
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit

@@ -17,10 +17,10 @@
 
 #include <ceres/cost_function.h>
 
-#include "cloud_stats_objective.h"
 #include "fit_term.h"
+#include "skycal/cloudfit/cloud_stats_objective.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 
 class CloudStatsCost final : public ceres::CostFunction {
  public:
@@ -35,13 +35,13 @@ class CloudStatsCost final : public ceres::CostFunction {
 // The term for FitSkyWithTerms: on the finest level it adds one parameter block (the free
 // lighting fields, scaled) and the statistics' residuals; the caller reads the fitted
 // parameters from result() after the fit. The references and the scene must outlive it.
-class CloudStatsTerm final : public FitTerm {
+class CloudStatsTerm final : public fit::FitTerm {
  public:
   CloudStatsTerm(const std::vector<CloudStatsReference>& refs, const CloudStatsScene& scene,
                  clouds::CloudRenderer& renderer, const CloudStatsOptions& options);
   std::string name() const override { return "cloud_stats"; }
-  long long AddTo(ceres::Problem& problem, FitState& state, const LevelContext& level) override;
-  void ReportSkips(std::vector<SkipNote>* skipped, std::vector<FitDecision>* decisions) const override;
+  long long AddTo(ceres::Problem& problem, fit::FitState& state, const fit::LevelContext& level) override;
+  void ReportSkips(std::vector<fit::SkipNote>* skipped, std::vector<fit::FitDecision>* decisions) const override;
   // The fitted parameters and statistics at the block's current value.
   CloudStatsResult result() const;
 
@@ -63,4 +63,4 @@ std::vector<CloudStatsParameter> DescribeCloudStatsParameters(const clouds::Clou
                                                               const clouds::CloudParams& fitted,
                                                               const std::vector<std::string>& fitted_names);
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

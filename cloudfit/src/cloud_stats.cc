@@ -7,13 +7,13 @@
 
 #include <Eigen/Core>
 
-#include "cloud_stats_objective.h"
+#include "skycal/cloudfit/cloud_stats_objective.h"
 #include "shape_noise_covariance.h"
 #include "skycal/clouds/composite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 namespace {
 
 double Smoothstep(double lo, double hi, double v) {
@@ -516,4 +516,4 @@ bool CloudStatsObjective::Evaluate(const double* x, double* residuals, std::vect
   return true;
 }
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

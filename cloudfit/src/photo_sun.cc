@@ -1,4 +1,4 @@
-#include "photo_sun.h"
+#include "skycal/cloudfit/photo_sun.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 
 bool PhotoSunOptions::IsValid(std::string* why) const {
   if (!(disc_deg > 0.0 && disc_deg < ring_inner_deg && ring_inner_deg < ring_outer_deg && ring_outer_deg <= 45.0)) {
@@ -77,4 +77,4 @@ PhotoSun MeasurePhotoSun(const ImageRGB& img, const std::array<double, 3>& sun, 
   return s;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit

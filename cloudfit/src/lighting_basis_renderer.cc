@@ -1,4 +1,4 @@
-#include "lighting_basis_renderer.h"
+#include "skycal/cloudfit/lighting_basis_renderer.h"
 
 #include <cmath>
 #include <cstring>
@@ -7,7 +7,7 @@
 #include "skycal/core/error.h"
 #include "skycal/render/preset.h"
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 namespace {
 
 bool IsLinearField(const char* name) {
@@ -134,4 +134,4 @@ clouds::CloudImage LightingBasisCloudRenderer::Render(const clouds::CloudScene& 
   return out;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit

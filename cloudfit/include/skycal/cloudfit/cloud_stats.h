@@ -14,7 +14,7 @@
 // interpolation never jumps); derivatives are central differences through the renderer
 // (cloud_stats_term.h says why not Jets).
 //
-// This header keeps Ceres and Vulkan out: the cost and the FitTerm are in fit/src.
+// This header keeps Ceres and Vulkan out: the cost and the FitTerm are in cloudfit/src.
 #pragma once
 #include <array>
 #include <string>
@@ -25,7 +25,7 @@
 #include "skycal/core/image.h"
 #include "skycal/render/preset.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 
 struct CloudStatsOptions {
   // Bin edges (deg). Angle from the sun: the silver lining lives in the first bins.
@@ -89,7 +89,7 @@ struct CloudStatsOptions {
   // cannot estimate a full covariance of ~100 statistics), each variance floored as above:
   // Ceres sees the fixed linear map r' = L^-1 r, Σ (1 + 1/M) = L Lᵀ, so the cost is
   // rᵀ Σ^-1 r and statistics that move together with the shapes (a bin's quantiles and
-  // channels, neighbouring bins) count once (fit/src/shape_noise_covariance.h).
+  // channels, neighbouring bins) count once (cloudfit/src/shape_noise_covariance.h).
   std::string noise_covariance = "diagonal";
   // λ of the "full" covariance: in [0, 1] fixed, or -1: estimated from the draws (Schäfer &
   // Strimmer 2005, the Ledoit-Wolf optimum for a diagonal target; at least 1e-3 when the
@@ -218,4 +218,4 @@ CloudStatsRender RenderForCloudStats(const CloudStatsReference& ref, const Cloud
                                      const CloudStatsOptions& options, double time_offset_s = 0.0,
                                      const clouds::WeatherMap* weather = nullptr);
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

@@ -8,7 +8,7 @@
 
 #include "skycal/core/error.h"
 
-namespace skycal::fit {
+namespace skycal::cloudfit {
 
 Eigen::MatrixXd SampleCovariance(const Eigen::MatrixXd& X) {
   if (X.rows() < 2) throw Error("shape noise: a covariance needs at least 2 draws, got " + std::to_string(X.rows()));
@@ -69,4 +69,4 @@ void CovarianceWhitener::Apply(const double* r, double* out) const {
   Eigen::Map<Eigen::VectorXd>(out, lower_.rows()) = v;
 }
 
-}  // namespace skycal::fit
+}  // namespace skycal::cloudfit

@@ -26,7 +26,7 @@ namespace skycal::render {
 struct Preset;
 }
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 
 class LightingBasisCloudRenderer final : public clouds::CloudRenderer {
  public:
@@ -63,4 +63,4 @@ class LightingBasisCloudRenderer final : public clouds::CloudRenderer {
   double sun_scale_ = 1.0;
 };
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit

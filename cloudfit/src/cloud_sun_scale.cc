@@ -1,11 +1,11 @@
-#include "cloud_sun_scale.h"
+#include "skycal/cloudfit/cloud_sun_scale.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "skycal/core/error.h"
 
-namespace skycal::cli {
+namespace skycal::cloudfit {
 
 bool SunScaleSearchOptions::IsValid(std::string* why) const {
   if (!(lower > 0.0 && upper > lower && std::isfinite(upper))) {
@@ -85,4 +85,4 @@ SunScaleSearch MinimizeOverSunScale(const std::function<double(double)>& cost, c
   return r;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::cloudfit
