@@ -15,6 +15,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/luminance.h"
 #include "verb_common.h"
 #include "zenith_cap.h"
 
@@ -22,7 +23,7 @@ namespace skycal::cli {
 namespace {
 
 double LogLuminance(const ImageRGB& img, size_t i) {
-  const double l = 0.2126 * img.pixels[3 * i] + 0.7152 * img.pixels[3 * i + 1] + 0.0722 * img.pixels[3 * i + 2];
+  const double l = skycal::Rec709Luminance<double>(img.pixels[3 * i], img.pixels[3 * i + 1], img.pixels[3 * i + 2]);
   return std::log(std::max(std::isfinite(l) ? l : 0.0, 1e-30));
 }
 

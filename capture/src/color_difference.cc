@@ -3,11 +3,13 @@
 #include <cmath>
 #include <numbers>
 
+#include "skycal/core/luminance.h"
+
 namespace skycal::capture {
 
 Rgb LinearRec709ToXyz(const Rgb& c) {
   return {0.4124 * c[0] + 0.3576 * c[1] + 0.1805 * c[2],  //
-          0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2],  //
+          Rec709Luminance(c),  // the Y row: the Rec.709 luminance weights
           0.0193 * c[0] + 0.1192 * c[1] + 0.9505 * c[2]};
 }
 
