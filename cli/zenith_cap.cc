@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "skycal/core/math_constants.h"
+
 namespace skycal::cli {
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}  // namespace
 
 ZenithCap::ZenithCap(int w, int h, double radius_deg, double oversample)
     : frame_width(w), frame_height(h), px_per_rad(oversample * (h - 1) / kPi) {

@@ -7,6 +7,8 @@
 #include <ceres/jet.h>
 
 #include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
+#include "skycal/render/sky_model.h"
 
 namespace skycal {
 namespace {
@@ -36,6 +38,24 @@ TEST(Luminance, JetDerivativesAreTheWeights) {
   const J y = Rec709Luminance(J(0.5, 0), J(2.0, 1), J(4.0, 2));
   EXPECT_DOUBLE_EQ(y.a, Rec709Luminance(0.5, 2.0, 4.0));
   for (int c = 0; c < 3; ++c) EXPECT_EQ(y.v[c], kRec709LuminanceWeights[c]);
+}
+
+// LUT hook the shared model source needs; the tests below call no LUT code.
+struct NoLut {
+  template <typename S>
+  glsl::Vec3<S> texel(int, int, int) const { return glsl::Vec3<S>(S(0.0)); }
+};
+using ModelD = model::SkyModel<double, NoLut>;
+
+TEST(Constants, PiIsTheModelsPiAndDegreesConvert) {
+  EXPECT_EQ(kPi, ModelD::SC_PI);  // the GLSL model's literal
+  EXPECT_EQ(kPi, 3.14159265358979323846);
+  EXPECT_EQ(DegToRad(180.0), kPi);
+  EXPECT_EQ(RadToDeg(kPi), 180.0);
+  EXPECT_EQ(DegToRad(90.0), kPi / 2);
+  EXPECT_EQ(kRadiansPerDegree, kPi / 180.0);
+  EXPECT_NEAR(kRadiansPerDegree * kDegreesPerRadian, 1.0, 1e-16);
+  EXPECT_EQ(DegToRad(37.5), 37.5 * kPi / 180.0);  // the inline form the project writes
 }
 
 }  // namespace

@@ -1,9 +1,9 @@
 #include "skycal/capture/color_difference.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 
@@ -29,7 +29,6 @@ double DeltaE76(const Rgb& a, const Rgb& b) {
 }
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 double Deg(double rad) { return rad * 180.0 / kPi; }
 double Rad(double deg) { return deg * kPi / 180.0; }
 // Hue angle in degrees [0, 360); 0 for a neutral (a' = b = 0), as the formula specifies.

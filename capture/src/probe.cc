@@ -12,11 +12,10 @@
 #include "skycal/capture/sun_detect.h"
 #include "skycal/core/error.h"
 #include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string CircleText(const BallCircle& c) {
   std::ostringstream s;

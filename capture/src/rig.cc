@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <set>
 #include <thread>
 
@@ -14,11 +13,11 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/json_schema.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr const char* kFormat = "skycal-rig";
 constexpr int kFormatVersion = 1;
 

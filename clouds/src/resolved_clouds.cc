@@ -1,16 +1,15 @@
 #include "resolved_clouds.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/render/irradiance.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::clouds {
 namespace {
-constexpr double kPi = std::numbers::pi;
 // The clear sky is rendered this small for its SH-9 (order 2 resolves nothing finer than
 // ~60 deg; 128 x 64 pixels put the quadrature error far below that).
 constexpr int kShWidth = 128, kShHeight = 64;

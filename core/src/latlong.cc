@@ -2,15 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 
 #include "skycal/core/error.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::latlong {
-namespace {
-constexpr double kPi = std::numbers::pi;
-}
 
 double Latitude(int y, int height) {
   if (height <= 1) return 0.0;

@@ -2,18 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kHalfPi = kPi / 2;
 constexpr double kMaxShape = 30.0;  // sinh(30) ~ 5e12: density ratio horizon : pole up to ~5e12
 

@@ -6,12 +6,11 @@
 
 #include "robust_residual.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "model_structure.h"
 
 namespace skycal::fit {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 template <typename S>
 using Model = StructureModel<S>;

@@ -24,17 +24,15 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <thread>
 #include <vector>
 
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::render {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // Numbers in messages: %g (core/format_number.h).
 std::string Num(double v) { return FormatNumber(v); }

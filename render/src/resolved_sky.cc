@@ -1,15 +1,12 @@
 #include "resolved_sky.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::render {
-namespace {
-constexpr double kPi = std::numbers::pi;
-}
 
 const char* ToString(Backend b) { return b == Backend::kVulkan ? "vulkan" : "cpu"; }
 
