@@ -30,8 +30,7 @@ latlong::Vec3d ZenithCap::PolarDirection(double x, double y) const {
 }
 
 latlong::Vec3d LatLongDirection(double x, double y, int width, int height) {
-  const double lat = -kPi * (y / (height - 1) - 0.5), lon = -2.0 * kPi * (x / (width - 1) - 0.5);
-  return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
+  return latlong::Direction(latlong::Latitude(y, height), latlong::Longitude(x, width));
 }
 
 }  // namespace skycal::cli

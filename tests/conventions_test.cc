@@ -2,10 +2,14 @@
 // them against that source and assert the identities the conventions promise.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <utility>
 
 #include <ceres/jet.h>
 
+#include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
 #include "skycal/core/math_constants.h"
 #include "skycal/render/sky_model.h"
@@ -56,6 +60,41 @@ TEST(Constants, PiIsTheModelsPiAndDegreesConvert) {
   EXPECT_EQ(kRadiansPerDegree, kPi / 180.0);
   EXPECT_NEAR(kRadiansPerDegree * kDegreesPerRadian, 1.0, 1e-16);
   EXPECT_EQ(DegToRad(37.5), 37.5 * kPi / 180.0);  // the inline form the project writes
+}
+
+TEST(LatLong, CoreIsTheModelsMapping) {
+  const NoLut lut;
+  ModelD m(lut);
+  for (int h : {2, 3, 26, 64, 129, 297, 1024}) {
+    for (int y = 0; y < h; ++y) EXPECT_EQ(latlong::Latitude(y, h), m.latlong_latitude(y, h)) << y << " of " << h;
+    const int w = 2 * h - 1;
+    for (int x = 0; x < w; ++x) EXPECT_EQ(latlong::Longitude(x, w), m.latlong_longitude(x, w)) << x << " of " << w;
+  }
+  const auto d = latlong::Direction(0.3, -2.1);
+  const auto v = m.latlong_direction_from_trig(std::sin(0.3), std::cos(0.3), std::sin(-2.1), std::cos(-2.1));
+  EXPECT_EQ(d[0], v.x);
+  EXPECT_EQ(d[1], v.y);
+  EXPECT_EQ(d[2], v.z);
+  // The convention's fixed points: top row +pi/2, middle row and column 0, column 0 +pi.
+  EXPECT_NEAR(latlong::Latitude(0, 129), kPi / 2, 1e-15);
+  EXPECT_EQ(latlong::Latitude(64, 129), 0.0);
+  EXPECT_EQ(latlong::Longitude(128, 257), 0.0);
+  EXPECT_NEAR(latlong::Longitude(0, 257), kPi, 1e-15);
+}
+
+TEST(LatLong, PixelDirectionPixelRoundTrip) {
+  for (const auto& [w, h] : {std::pair{257, 129}, std::pair{512, 256}, std::pair{1001, 297}}) {
+    double worst = 0.0;
+    for (int y = 1; y < h - 1; ++y) {  // the poles have no longitude
+      for (int x = 1; x < w - 1; ++x) {  // the seam columns share one direction
+        const auto p = latlong::PixelPosition(latlong::PixelDirection(x, y, w, h), w, h);
+        worst = std::max({worst, std::abs(p[0] - x), std::abs(p[1] - y)});
+      }
+    }
+    EXPECT_LT(worst, 1e-12) << w << "x" << h;
+    for (int y = 0; y < h; ++y) EXPECT_NEAR(latlong::RowOfLatitude(latlong::Latitude(y, h), h), y, 1e-12);
+    for (int x = 0; x < w; ++x) EXPECT_NEAR(latlong::ColumnOfLongitude(latlong::Longitude(x, w), w), x, 1e-12);
+  }
 }
 
 }  // namespace
