@@ -12,6 +12,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
 #include "skycal/core/math_constants.h"
+#include "skycal/render/preset.h"
 #include "skycal/render/sky_model.h"
 
 namespace skycal {
@@ -94,6 +95,36 @@ TEST(LatLong, PixelDirectionPixelRoundTrip) {
     EXPECT_LT(worst, 1e-12) << w << "x" << h;
     for (int y = 0; y < h; ++y) EXPECT_NEAR(latlong::RowOfLatitude(latlong::Latitude(y, h), h), y, 1e-12);
     for (int x = 0; x < w; ++x) EXPECT_NEAR(latlong::ColumnOfLongitude(latlong::Longitude(x, w), w), x, 1e-12);
+  }
+}
+
+TEST(LutGrid, HostMappingIsTheModelsAndInvertsAtTheNodes) {
+  render::LutGrid g;
+  g.n_theta = 37;
+  g.n_gamma = 64;
+  g.theta_max_deg = 108.0;
+  const NoLut lut;
+  ModelD m(lut);
+  ModelD::SkyParams p{};
+  p.lut_one_minus_cos_theta_max = render::LutOneMinusCosThetaMax(g);
+  p.lut_n_theta = g.n_theta;
+  p.lut_n_gamma = g.n_gamma;
+  EXPECT_EQ(render::LutOneMinusCosThetaMax(g), 1.0 - std::cos(108.0 * kPi / 180.0));
+  for (int i = 0; i <= 400; ++i) {
+    const double sun_height = 1.0 - i / 200.0;  // 1 .. -1, past theta_max: clamped
+    const auto lr = m.lut_row(sun_height, p);
+    EXPECT_EQ(render::LutRowPosition(g, sun_height), lr.row0 + lr.frow) << sun_height;
+  }
+  for (int row = 0; row < g.n_theta; ++row) {
+    EXPECT_NEAR(render::LutRowPosition(g, render::LutRowSunHeight(g, row)), row, 1e-12);
+    EXPECT_NEAR(std::cos(render::LutRowSunZenithRad(g, row)), render::LutRowSunHeight(g, row), 1e-15);
+  }
+  EXPECT_EQ(render::LutRowSunHeight(g, 0), 1.0);
+  EXPECT_NEAR(render::LutRowSunZenithRad(g, g.n_theta - 1), 108.0 * kPi / 180.0, 1e-12);
+  for (int col = 0; col < g.n_gamma; ++col) {
+    const auto lc = m.lut_col(render::LutColumnViewHeight(g, col), p);
+    EXPECT_NEAR(lc.col0 + lc.fcol, col, 1e-12);
+    EXPECT_NEAR(std::sin(render::LutColumnElevationRad(g, col)), render::LutColumnViewHeight(g, col), 1e-15);
   }
 }
 
