@@ -14,6 +14,7 @@
 #include "skycal/core/math_constants.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/sky_model.h"
+#include "skycal/render/sky_params.h"
 
 namespace skycal {
 namespace {
@@ -126,6 +127,40 @@ TEST(LutGrid, HostMappingIsTheModelsAndInvertsAtTheNodes) {
     EXPECT_NEAR(lc.col0 + lc.fcol, col, 1e-12);
     EXPECT_NEAR(std::sin(render::LutColumnElevationRad(g, col)), render::LutColumnViewHeight(g, col), 1e-15);
   }
+}
+
+TEST(SkyParams, FromPresetCarriesEveryPresetField) {
+  render::Preset preset;
+  preset.variant = render::ModelVariant::kFfxvIso;
+  preset.haziness_g = 0.83;
+  preset.overcast_weight = 0.25;
+  preset.overcast_zenith_cd_m2 = 3100.0;
+  preset.sun_angular_radius_deg = 0.2666;
+  preset.sun_limb_darkening = 0.6;
+  preset.luts.grid.n_theta = 41;
+  preset.luts.grid.n_gamma = 33;
+  preset.luts.grid.theta_max_deg = 100.0;
+  const auto p = render::SkyParamsFromPreset<ModelD::SkyParams>(preset);
+  EXPECT_EQ(p.haziness_g, 0.83);
+  EXPECT_EQ(p.isotropic_weight, 1.0);
+  EXPECT_EQ(p.overcast_weight, 0.25);
+  EXPECT_EQ(p.overcast_zenith, 3100.0);
+  EXPECT_EQ(p.sun_radius, 0.2666 * kPi / 180.0);
+  EXPECT_NEAR(p.sun_one_minus_cos_radius, 1.0 - std::cos(p.sun_radius), 1e-12 * p.sun_one_minus_cos_radius);
+  EXPECT_EQ(p.sun_limb_u, 0.6);
+  EXPECT_EQ(p.lut_one_minus_cos_theta_max, render::LutOneMinusCosThetaMax(preset.luts.grid));
+  EXPECT_EQ(p.lut_n_theta, 41);
+  EXPECT_EQ(p.lut_n_gamma, 33);
+  EXPECT_EQ(p.sun_dir.y, 0.0);  // the request's, left zero
+  EXPECT_EQ(p.sun_centre_radiance.x, 0.0);
+  EXPECT_EQ(p.ground_radiance.z, 0.0);
+  preset.variant = render::ModelVariant::kFfxv;
+  // Any scalar of the model: Jets carry the same values.
+  using J = ceres::Jet<double, 2>;
+  const auto pj = render::SkyParamsFromPreset<model::SkyModel<J, NoLut>::SkyParams>(preset);
+  EXPECT_EQ(pj.isotropic_weight.a, 0.0);
+  EXPECT_EQ(pj.haziness_g.a, 0.83);
+  EXPECT_EQ(pj.lut_one_minus_cos_theta_max.a, p.lut_one_minus_cos_theta_max);
 }
 
 }  // namespace
