@@ -16,6 +16,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
 #include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 #include "verb_common.h"
 #include "zenith_cap.h"
 
@@ -95,7 +96,7 @@ void ZenithCapFlow(const ImageRGB& a, const ImageRGB& b, double lo, double hi, s
   dis->calc(pa, pb, polar);
   const double period = w - 1;
   for (int y = 0; y < h; ++y) {
-    const double elevation = latlong::Latitude(y, h) * 180.0 / 3.14159265358979323846;
+    const double elevation = latlong::Latitude(y, h) * 180.0 / kPi;
     if (elevation <= kCapBlendFromDeg) break;  // rows run from the zenith down
     const double t = std::min(1.0, (elevation - kCapBlendFromDeg) / (kCapBlendToDeg - kCapBlendFromDeg));
     const double s = t * t * (3.0 - 2.0 * t);  // smoothstep: no seam in the vectors
