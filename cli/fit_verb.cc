@@ -22,6 +22,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
 #include "skycal/fit/fit_json.h"
@@ -284,7 +285,7 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                    {"fit", "fit/" + refs[r].name + ".fit.png"},
                    {"error", "fit/" + refs[r].name + ".error.png"}};
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
-    j["sun_illuminance_at_ground_lux"] = 0.2126 * sun[0] + 0.7152 * sun[1] + 0.0722 * sun[2];
+    j["sun_illuminance_at_ground_lux"] = skycal::Rec709Luminance(sun);
     if (o.cloud_mask) j["cloud_mask"] = cloud_json[r];
   }
   if (fo.time_of_day_h) summary["time_of_day_h"] = *fo.time_of_day_h;

@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
-#include <numbers>
 #include <vector>
 
 #include "command_line.h"
@@ -17,6 +16,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/core/sha256.h"
 #include "verb_common.h"
 
@@ -41,8 +41,6 @@
 
 namespace skycal::cli {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;

@@ -31,6 +31,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/render/preset.h"
 #include "suite_util.h"
 #include "suites_internal.h"
@@ -48,7 +49,7 @@ std::string RealSky(const std::string& name) {
 double MedianLuminance(const ImageRGB& img) {
   std::vector<float> y;
   for (size_t i = 0; i < img.pixels.size(); i += 3)
-    y.push_back(0.2126f * img.pixels[i] + 0.7152f * img.pixels[i + 1] + 0.0722f * img.pixels[i + 2]);
+    y.push_back(Rec709Luminance(img.pixels[i], img.pixels[i + 1], img.pixels[i + 2]));
   std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
   return y[y.size() / 2];
 }

@@ -18,6 +18,7 @@
 
 #include "skycal/bench/study_suite_grids.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
@@ -28,7 +29,7 @@ namespace skycal::bench {
 
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDeg = kRadiansPerDegree;
 constexpr double kZenithLuminance = 5000.0;  // Lz, cd/m^2 (absolute level of every reference)
 constexpr double kCircumsolarDeg = 15.0;     // region boundaries of the error breakdown, degrees
 constexpr double kHorizonBandDeg = 10.0;

@@ -10,6 +10,7 @@
 #include "skycal/capture/hdr_merge.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
+#include "skycal/core/luminance.h"
 
 namespace skycal::capture {
 namespace {
@@ -144,7 +145,7 @@ Sampled SamplePatches(const ChartImage& img, const std::array<double, 8>& corner
         s.clipped[p] += img.clipped[i];
         for (int c = 0; c < 3; ++c) sum[c] += img.linear.pixels[3 * i + c];
         const float* rgb = &img.linear.pixels[3 * i];
-        const double l = std::log(std::max(1e-12, 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]));
+        const double l = std::log(std::max(1e-12, Rec709Luminance<double>(rgb[0], rgb[1], rgb[2])));
         sum_l += l, sum_l2 += l * l;
       }
     }
@@ -154,7 +155,7 @@ Sampled SamplePatches(const ChartImage& img, const std::array<double, 8>& corner
   return s;
 }
 
-double CameraY(const Rgb& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+double CameraY(const Rgb& c) { return Rec709Luminance(c); }
 
 // White to black: each neutral patch darker than the one before (a cast scales them alike).
 bool NeutralsOrdered(const ChartColors& m) {

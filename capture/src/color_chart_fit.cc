@@ -7,6 +7,7 @@
 
 #include "skycal/capture/color_chart.h"
 #include "skycal/core/error.h"
+#include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 
 namespace skycal::capture {
@@ -28,7 +29,7 @@ constexpr const char* kNames[kChartPatches] = {
     "blue",      "green",      "red",       "yellow",       "magenta",     "cyan",
     "white 9.5", "neutral 8",  "neutral 6.5", "neutral 5",  "neutral 3.5", "black 2"};
 
-double Rec709Y(const Rgb& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+double Rec709Y(const Rgb& c) { return Rec709Luminance(c); }
 
 }  // namespace
 

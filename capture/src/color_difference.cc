@@ -1,13 +1,15 @@
 #include "skycal/capture/color_difference.h"
 
 #include <cmath>
-#include <numbers>
+
+#include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 
 Rgb LinearRec709ToXyz(const Rgb& c) {
   return {0.4124 * c[0] + 0.3576 * c[1] + 0.1805 * c[2],  //
-          0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2],  //
+          Rec709Luminance(c),  // the Y row: the Rec.709 luminance weights
           0.0193 * c[0] + 0.1192 * c[1] + 0.9505 * c[2]};
 }
 
@@ -27,7 +29,6 @@ double DeltaE76(const Rgb& a, const Rgb& b) {
 }
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 double Deg(double rad) { return rad * 180.0 / kPi; }
 double Rad(double deg) { return deg * kPi / 180.0; }
 // Hue angle in degrees [0, 360); 0 for a neutral (a' = b = 0), as the formula specifies.

@@ -2,17 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <sstream>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "skycal/core/math_constants.h"
+
 namespace skycal::capture {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 // Kannala-Brandt rays within this of 90 degrees (and beyond) skip OpenCV: its pinhole
 // normalisation x = X / Z degenerates there.
 constexpr double kOpenCvThetaLimit = kPi / 2 - 1e-6;

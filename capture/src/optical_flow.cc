@@ -16,6 +16,8 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
@@ -23,7 +25,7 @@ namespace {
 void Log(const std::string& message) { std::cerr << "[flow] " << message << std::endl; }
 
 double LogLuminance(const ImageRGB& img, size_t i) {
-  const double l = 0.2126 * img.pixels[3 * i] + 0.7152 * img.pixels[3 * i + 1] + 0.0722 * img.pixels[3 * i + 2];
+  const double l = skycal::Rec709Luminance<double>(img.pixels[3 * i], img.pixels[3 * i + 1], img.pixels[3 * i + 2]);
   return std::log(std::max(std::isfinite(l) ? l : 0.0, 1e-30));
 }
 
@@ -95,7 +97,7 @@ void ZenithCapFlow(const ImageRGB& a, const ImageRGB& b, double lo, double hi, s
   dis->calc(pa, pb, polar);
   const double period = w - 1;
   for (int y = 0; y < h; ++y) {
-    const double elevation = latlong::Latitude(y, h) * 180.0 / 3.14159265358979323846;
+    const double elevation = latlong::Latitude(y, h) * 180.0 / kPi;
     if (elevation <= kCapBlendFromDeg) break;  // rows run from the zenith down
     const double t = std::min(1.0, (elevation - kCapBlendFromDeg) / (kCapBlendToDeg - kCapBlendFromDeg));
     const double s = t * t * (3.0 - 2.0 * t);  // smoothstep: no seam in the vectors

@@ -11,11 +11,11 @@
 #include "skycal/capture/rig.h"
 #include "skycal/capture/sun_detect.h"
 #include "skycal/core/error.h"
+#include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string CircleText(const BallCircle& c) {
   std::ostringstream s;
@@ -245,7 +245,7 @@ double SunShareOfBrightest(const std::vector<ProbeSample>& samples, const std::v
   if (sun_radiance.size() != samples.size() || sun_cos.size() != samples.size()) {
     throw Error("sun share: need one sun radiance and cosine per probe sample");
   }
-  auto lum = [](const std::array<double, 3>& v) { return 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]; };
+  auto lum = [](const std::array<double, 3>& v) { return Rec709Luminance(v); };
   std::vector<std::pair<double, size_t>> bright;  // (measured luminance, index) of sun-facing samples
   for (size_t i = 0; i < samples.size(); ++i) {
     if (sun_cos[i] > 0.05) bright.emplace_back(lum(samples[i].radiance), i);

@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <set>
 #include <thread>
 
@@ -14,11 +13,12 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/json_schema.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr const char* kFormat = "skycal-rig";
 constexpr int kFormatVersion = 1;
 
@@ -421,14 +421,14 @@ ImageRGB UnwrapToLatLong(const std::vector<std::pair<RigCamera, const ImageRGB*>
   if (coverage) coverage->assign(static_cast<size_t>(width) * height, 0.0f);
   std::vector<double> sin_lon(width), cos_lon(width);
   for (int x = 0; x < width; ++x) {
-    const double lon = -2.0 * kPi * (static_cast<double>(x) / (width - 1) - 0.5);  // latlong::Longitude
+    const double lon = latlong::Longitude(x, width);
     sin_lon[x] = std::sin(lon);
     cos_lon[x] = std::cos(lon);
   }
   const double dlon_dx = -2.0 * kPi / (width - 1), dlat_dy = -kPi / (height - 1);
 
   ParallelFor(height, threads, [&](int y) {
-    const double lat = -kPi * (static_cast<double>(y) / (height - 1) - 0.5);  // latlong::Latitude
+    const double lat = latlong::Latitude(y, height);
     const double sl = std::sin(lat), cl = std::cos(lat);
     // Width of the node's footprint across longitude: the mean cos(latitude) over its band of
     // +-half a row (core/latlong.h PixelSolidAngle), not zero at the poles.

@@ -7,6 +7,7 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 
 namespace skycal::capture {
 namespace {
@@ -37,7 +38,7 @@ cv::Mat LogLuminance(const ImageRGB& f, int rows, cv::Mat* valid_out) {
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < f.width; ++x) {
       const float r = f.at(x, y, 0), g = f.at(x, y, 1), b = f.at(x, y, 2);
-      const float Y = 0.2126f * r + 0.7152f * g + 0.0722f * b;
+      const float Y = Rec709Luminance(r, g, b);
       const bool ok = std::isfinite(r) && std::isfinite(g) && std::isfinite(b) && r > 0.0f && g > 0.0f && b > 0.0f;
       L.at<float>(y, x) = ok ? std::log(Y) : 0.0f;
       valid.at<float>(y, x) = ok ? 1.0f : 0.0f;

@@ -11,11 +11,11 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::capture {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSunRadiusDeg = 0.26667;  // apparent solar radius (refraction cut-off, as in the reference code)
 
 double Rad(double deg) { return deg * (kPi / 180.0); }

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "skycal/core/error.h"
+#include "skycal/core/luminance.h"
 
 namespace skycal::capture {
 
@@ -55,7 +56,7 @@ struct Grid {
 };
 
 double Luminance(const float* p) {
-  const double y = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+  const double y = Rec709Luminance<double>(p[0], p[1], p[2]);
   return std::isfinite(y) && y > 0.0 ? y : 0.0;
 }
 

@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "skycal/core/math_constants.h"
+
 namespace skycal::capture {
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}  // namespace
 
 ZenithCap::ZenithCap(int w, int h, double radius_deg, double oversample)
     : frame_width(w), frame_height(h), px_per_rad(oversample * (h - 1) / kPi) {
@@ -31,8 +30,7 @@ latlong::Vec3d ZenithCap::PolarDirection(double x, double y) const {
 }
 
 latlong::Vec3d LatLongDirection(double x, double y, int width, int height) {
-  const double lat = -kPi * (y / (height - 1) - 0.5), lon = -2.0 * kPi * (x / (width - 1) - 0.5);
-  return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
+  return latlong::Direction(latlong::Latitude(y, height), latlong::Longitude(x, width));
 }
 
 }  // namespace skycal::capture

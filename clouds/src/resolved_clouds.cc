@@ -1,16 +1,15 @@
 #include "resolved_clouds.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/render/irradiance.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::clouds {
 namespace {
-constexpr double kPi = std::numbers::pi;
 // The clear sky is rendered this small for its SH-9 (order 2 resolves nothing finer than
 // ~60 deg; 128 x 64 pixels put the quadrature error far below that).
 constexpr int kShWidth = 128, kShHeight = 64;
@@ -208,12 +207,12 @@ std::vector<float> PackCloudShade(const CloudShadeD& d) {
 LatLongTrig MakeLatLongTrig(int width, int height) {
   LatLongTrig t;
   for (int y = 0; y < height; ++y) {
-    const double lat = (height - 1 - 2 * y) * (0.5 * kPi / (height - 1));  // sky_model.glsl.h's latlong_latitude
+    const double lat = latlong::Latitude(y, height);
     t.sin_lat.push_back(std::sin(lat));
     t.cos_lat.push_back(std::cos(lat));
   }
   for (int x = 0; x < width; ++x) {
-    const double lon = (width - 1 - 2 * x) * (kPi / (width - 1));
+    const double lon = latlong::Longitude(x, width);
     t.sin_lon.push_back(std::sin(lon));
     t.cos_lon.push_back(std::cos(lon));
   }

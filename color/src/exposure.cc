@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "skycal/core/luminance.h"
+
 namespace skycal::color::detail {
 
 AutoExposure ComputeAutoExposure(const ImageRGB& linear) {
@@ -13,7 +15,7 @@ AutoExposure ComputeAutoExposure(const ImageRGB& linear) {
     const float* p = &linear.pixels[i * 3];
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
     // Rec.709 / sRGB luminance weights (relative luminance of linear Rec.709 RGB).
-    const double y = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    const double y = Rec709Luminance<double>(p[0], p[1], p[2]);
     if (!(y > 0.0)) continue;
     sum_log2 += std::log2(y);
     ++out.pixels_used;

@@ -2,34 +2,49 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 
 #include "skycal/core/error.h"
+#include "skycal/core/math_constants.h"
+#include "../../render/model/glsl_compat.h"
 
 namespace skycal::latlong {
 namespace {
-constexpr double kPi = std::numbers::pi;
-}
 
-double Latitude(int y, int height) {
+// The shared model source's lat-long functions compiled in double: one formula for the
+// shaders' model, the renderers and everything that reads a lat-long frame.
+struct SharedLatLong {
+  using Scalar = double;
+  using vec3 = glsl::Vec3<double>;
+  SC_CONST(SC_PI, kPi)
+#include "../../render/model/latlong.glsl.h"
+};
+
+}  // namespace
+
+double Latitude(double y, int height) {
   if (height <= 1) return 0.0;
-  return -kPi * (static_cast<double>(y) / (height - 1) - 0.5);
+  return SharedLatLong().latlong_latitude(y, height);
 }
 
-double Longitude(int x, int width) {
+double Longitude(double x, int width) {
   if (width <= 1) return 0.0;
-  return -2.0 * kPi * (static_cast<double>(x) / (width - 1) - 0.5);
+  return SharedLatLong().latlong_longitude(x, width);
 }
 
-Vec3d PixelDirection(int x, int y, int width, int height) {
-  const double lat = Latitude(y, height), lon = Longitude(x, width);
-  return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
+double RowOfLatitude(double latitude, int height) { return (0.5 - latitude / kPi) * (height - 1); }
+
+double ColumnOfLongitude(double longitude, int width) { return (0.5 - longitude / (2.0 * kPi)) * (width - 1); }
+
+Vec3d Direction(double lat, double lon) {
+  const auto d = SharedLatLong().latlong_direction_from_trig(std::sin(lat), std::cos(lat), std::sin(lon), std::cos(lon));
+  return {d.x, d.y, d.z};
 }
+
+Vec3d PixelDirection(int x, int y, int width, int height) { return Direction(Latitude(y, height), Longitude(x, width)); }
 
 Vec3d DirectionFromElevationAzimuthDeg(double elevation_deg, double azimuth_deg) {
-  const double lat = elevation_deg * kPi / 180.0, lon = azimuth_deg * kPi / 180.0;
-  return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
+  return Direction(elevation_deg * kPi / 180.0, azimuth_deg * kPi / 180.0);
 }
 
 double ElevationDeg(const Vec3d& d) {
@@ -41,7 +56,7 @@ double AzimuthDeg(const Vec3d& d) { return std::atan2(d[0], d[2]) * 180.0 / kPi;
 std::array<double, 2> PixelPosition(const Vec3d& d, int width, int height) {
   const double lat = std::atan2(d[1], std::hypot(d[0], d[2]));
   const double lon = std::atan2(d[0], d[2]);
-  return {(0.5 - lon / (2.0 * kPi)) * (width - 1), (0.5 - lat / kPi) * (height - 1)};
+  return {ColumnOfLongitude(lon, width), RowOfLatitude(lat, height)};
 }
 
 double PixelSolidAngle(int x, int y, int width, int height) {

@@ -2,18 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kHalfPi = kPi / 2;
 constexpr double kMaxShape = 30.0;  // sinh(30) ~ 5e12: density ratio horizon : pole up to ~5e12
 
@@ -75,9 +75,7 @@ double RowMapping::PixelSolidAngle(int x, int y, int width) const {
 }
 
 std::array<double, 3> RowMapping::PixelDirection(int x, int y, int width) const {
-  const double lat = Elevation(y);
-  const double lon = -2.0 * kPi * (static_cast<double>(x) / (width - 1) - 0.5);
-  return {std::sin(lon) * std::cos(lat), std::sin(lat), std::cos(lon) * std::cos(lat)};
+  return latlong::Direction(Elevation(y), latlong::Longitude(x, width));
 }
 
 std::string RowMapping::ToAttribute() const {
@@ -172,7 +170,7 @@ ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& m) {
     const bool sky = centre > 0.0 && last_sky >= 1, ground = centre < 0.0 && first_ground <= H - 2;
     const double lo = ground ? horizon : 0.0, hi = sky ? horizon : H - 1.0;
     const int k_lo = ground ? first_ground : 0, k_hi = sky ? last_sky - 1 : H - 2;
-    auto source_row = [&](double e) { return std::clamp((0.5 - e / kPi) * (H - 1), lo, hi); };
+    auto source_row = [&](double e) { return std::clamp(latlong::RowOfLatitude(e, H), lo, hi); };
     const double a = source_row(m.Elevation(y - 0.5)), b = source_row(m.Elevation(y + 0.5));
     const double mid = source_row(centre);
     for (size_t i = 0; i < stride; ++i) {

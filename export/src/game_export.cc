@@ -16,6 +16,7 @@
 #include "skycal/core/file_safety.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/staged_directory.h"
 #include "skycal/core/version.h"
@@ -34,7 +35,7 @@ void Log(const std::string& message) { std::cerr << "[export] " << message << st
 constexpr int kShWidth = 256, kShHeight = 128;
 constexpr int kFogWidth = 64, kFogHeight = 32;
 
-double Rec709Luminance(const render::Rgb& c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+double Rec709Luminance(const render::Rgb& c) { return skycal::Rec709Luminance(c); }
 
 // Solid-angle-weighted mean radiance of the upper hemisphere (pixel direction y > 0).
 render::Rgb UpperHemisphereMean(const ImageRGB& sky) {

@@ -13,6 +13,7 @@
 #include "robust_residual.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/render/sky_params.h"
 #include "model_structure.h"
 
 namespace skycal::fit {
@@ -21,11 +22,8 @@ namespace {
 using ModelD = StructureModel<double>;
 
 ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
-  ModelD::SkyParams p{};
+  auto p = render::SkyParamsFromPreset<ModelD::SkyParams>(st.preset);
   p.sun_dir = glsl::Vec3<double>(0.0, sun_height, 0.0);
-  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(st.preset.luts.grid.theta_max_deg * M_PI / 180.0);
-  p.lut_n_theta = st.preset.luts.grid.n_theta;
-  p.lut_n_gamma = st.preset.luts.grid.n_gamma;
   return p;
 }
 

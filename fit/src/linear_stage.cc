@@ -74,8 +74,7 @@ void DecidePolish(const FitOptions& o, bool probed, const std::string& converged
 
 // LUT row coordinate of a sun direction (fractional), as lut_row of the shared source.
 double SunRowPosition(const render::LutGrid& grid, const std::array<double, 3>& sun) {
-  const double one_minus_cos_max = 1.0 - std::cos(grid.theta_max_deg * M_PI / 180.0);
-  return std::clamp((1.0 - sun[1]) / one_minus_cos_max, 0.0, 1.0) * (grid.n_theta - 1);
+  return render::LutRowPosition(grid, sun[1]);
 }
 
 // The render check: the backend draws the state at the level size of each reference and

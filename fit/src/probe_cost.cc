@@ -6,23 +6,19 @@
 
 #include "robust_residual.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
+#include "skycal/render/sky_params.h"
 #include "model_structure.h"
 
 namespace skycal::fit {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 template <typename S>
 using Model = StructureModel<S>;
 
 template <typename S>
 typename Model<S>::SkyParams GridParams(const FitState& st) {
-  typename Model<S>::SkyParams p{};
-  p.lut_one_minus_cos_theta_max = S(1.0 - std::cos(st.preset.luts.grid.theta_max_deg * kPi / 180.0));
-  p.lut_n_theta = st.preset.luts.grid.n_theta;
-  p.lut_n_gamma = st.preset.luts.grid.n_gamma;
-  return p;
+  return render::SkyParamsFromPreset<typename Model<S>::SkyParams>(st.preset);
 }
 
 }  // namespace

@@ -4,13 +4,12 @@
 #include <cmath>
 
 #include "skycal/core/error.h"
+#include "skycal/core/math_constants.h"
 #include "fit_decisions.h"
 #include "sun_from_probe.h"
 
 namespace skycal::fit {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-
 double Dot(const std::array<double, 3>& a, const std::array<double, 3>& b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }

@@ -64,8 +64,7 @@ std::vector<bool> PlanRows(const std::vector<Reference>& refs, FitState* state, 
   const render::LutGrid& grid = state->preset.luts.grid;
   std::set<int> observed;
   for (const Reference& ref : refs) {
-    const double one_minus_cos_max = 1.0 - std::cos(grid.theta_max_deg * M_PI / 180.0);
-    const double pos = std::clamp((1.0 - ref.sun_dir[1]) / one_minus_cos_max, 0.0, 1.0) * (grid.n_theta - 1);
+    const double pos = render::LutRowPosition(grid, ref.sun_dir[1]);
     const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
     ReferenceFit rf;
     rf.observed_rows.push_back(r0);

@@ -5,6 +5,7 @@
 #include "model_structure.h"
 #include "robust_residual.h"
 #include "skycal/render/sky_model.h"
+#include "skycal/render/sky_params.h"
 
 namespace skycal::fit {
 namespace {
@@ -26,20 +27,14 @@ template <typename S>
 using Model = model::SkyModel<S, BlockLut>;
 
 Model<double>::SkyParams MakeParams(const FitState& st, const std::array<double, 3>& sun, double g, double lz) {
-  Model<double>::SkyParams p;
+  auto p = render::SkyParamsFromPreset<Model<double>::SkyParams>(st.preset);  // disc and ground radiance 0
   p.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
   p.haziness_g = g;
   p.isotropic_weight = st.tables == 3 ? 1.0 : 0.0;
-  p.overcast_weight = st.preset.overcast_weight;
   p.overcast_zenith = lz;
   p.sun_one_minus_cos_radius = 0.0;
   p.sun_radius = 1.0;
   p.sun_limb_u = 0.0;
-  p.sun_centre_radiance = glsl::Vec3<double>(0.0);
-  p.ground_radiance = glsl::Vec3<double>(0.0);
-  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(st.preset.luts.grid.theta_max_deg * M_PI / 180.0);
-  p.lut_n_theta = st.preset.luts.grid.n_theta;
-  p.lut_n_gamma = st.preset.luts.grid.n_gamma;
   return p;
 }
 

@@ -5,12 +5,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "skycal/core/luminance.h"
 #include "skycal/fit/sky_fit.h"
 
 namespace skycal::fit {
 
 inline double Rec709Luminance(const std::array<double, 3>& rgb) {
-  return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+  return skycal::Rec709Luminance(rgb);
 }
 
 // Parses a "skycal-probe-samples" document; `origin` names it in errors.

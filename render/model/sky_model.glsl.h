@@ -151,20 +151,4 @@ vec3 radiance(vec3 view, SkyParams p) {
   return view.y < Scalar(0.0) ? p.ground_radiance : sky;
 }
 
-// Lat-long pixel centres follow OpenEXR's envmap LatLong convention (core/latlong.h):
-// latitude +pi/2 at row 0, longitude +pi at column 0 and -pi at column width - 1. The
-// angles come from exact integer numerators, lat = pi (h - 1 - 2y) / (2 (h - 1)); the
-// textbook pi (0.5 - y / (h - 1)) loses ~3e-5 relative precision near the horizon in float.
-Scalar latlong_latitude(int y, int height) {
-  return Scalar(height - 1 - 2 * y) * (Scalar(0.5 * SC_PI) / Scalar(height - 1));
-}
-Scalar latlong_longitude(int x, int width) {
-  return Scalar(width - 1 - 2 * x) * (Scalar(SC_PI) / Scalar(width - 1));
-}
-// Direction from the sines and cosines of latitude and longitude. The GPU takes them from
-// per-row and per-column tables the host fills in double precision: shader sin/cos carry
-// ~1e-6 absolute error (lavapipe; 2^-11 is all Vulkan guarantees), which a peaked Mie
-// phase (g = 0.99) would turn into ~1e-3 relative radiance error near the sun.
-vec3 latlong_direction_from_trig(Scalar sin_lat, Scalar cos_lat, Scalar sin_lon, Scalar cos_lon) {
-  return vec3(sin_lon * cos_lat, sin_lat, cos_lon * cos_lat);
-}
+#include "latlong.glsl.h"

@@ -24,17 +24,15 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <thread>
 #include <vector>
 
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::render {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // Numbers in messages: %g (core/format_number.h).
 std::string Num(double v) { return FormatNumber(v); }
@@ -420,7 +418,6 @@ void BakeSingleScattering(const AtmosphereOptions& opts, SkyLuts& luts) {
 
   const Atmosphere atm(opts);
   const double r0 = opts.planet_radius_m + opts.observer_altitude_m;
-  const double one_minus_cos_max = 1.0 - std::cos(g.theta_max_deg * kPi / 180.0);
   const double e_sun = opts.sun_illuminance_lux;
   // Enough steps for the observer's own sun ray that its quadrature error is negligible
   // next to the LUT's interpolation (only n_theta rays).
@@ -430,7 +427,7 @@ void BakeSingleScattering(const AtmosphereOptions& opts, SkyLuts& luts) {
   // turn and the result does not depend on the number of threads.
   auto bake_row = [&](int row, std::vector<double>& nodes, std::vector<char>& lit) {
     // The model's row coordinate is linear in cos(sun zenith).
-    const double cos_ts = std::clamp(1.0 - static_cast<double>(row) / (g.n_theta - 1) * one_minus_cos_max, -1.0, 1.0);
+    const double cos_ts = LutRowSunHeight(g, row);
     const double sin_ts = std::sqrt((1.0 - cos_ts) * (1.0 + cos_ts));
 
     // Direct sun: blocked when the ray from the observer meets the planet.
@@ -443,8 +440,7 @@ void BakeSingleScattering(const AtmosphereOptions& opts, SkyLuts& luts) {
 
     for (int col = 0; col < g.n_gamma; ++col) {
       // The model's column coordinate is sqrt(sin(elevation)).
-      const double u = static_cast<double>(col) / (g.n_gamma - 1);
-      const double sin_e = std::min(u * u, 1.0);
+      const double sin_e = LutColumnViewHeight(g, col);
       const double cos_e = std::sqrt((1.0 - sin_e) * (1.0 + sin_e));
       // With the sun or the view at the zenith the relative azimuth does not matter.
       const int n_az = (sin_ts < 1e-12 || cos_e < 1e-12) ? 1 : opts.azimuth_samples;

@@ -7,11 +7,10 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::render {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The image as a list of weighted samples (structure of arrays so the inner loop over
 // pixels vectorises): direction and L(w) dw per channel. Zero pixels are dropped.

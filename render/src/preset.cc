@@ -328,20 +328,28 @@ void SavePreset(const Preset& preset, const std::string& json_path, const json* 
   for (auto& out : outs) out->Commit();
 }
 
-double LutRowSunZenithRad(const LutGrid& g, int row) {
-  const double one_minus_cos_max = 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0);
-  return std::acos(std::clamp(1.0 - static_cast<double>(row) / (g.n_theta - 1) * one_minus_cos_max, -1.0, 1.0));
+double LutOneMinusCosThetaMax(const LutGrid& g) { return 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0); }
+
+double LutRowPosition(const LutGrid& g, double sun_height) {
+  return std::clamp((1.0 - sun_height) / LutOneMinusCosThetaMax(g), 0.0, 1.0) * (g.n_theta - 1);
 }
 
-double LutColumnElevationRad(const LutGrid& g, int col) {
-  const double u = static_cast<double>(col) / (g.n_gamma - 1);
-  return std::asin(std::clamp(u * u, 0.0, 1.0));
+double LutRowSunHeight(const LutGrid& g, int row) {
+  return std::clamp(1.0 - static_cast<double>(row) / (g.n_theta - 1) * LutOneMinusCosThetaMax(g), -1.0, 1.0);
 }
+
+double LutColumnViewHeight(const LutGrid& g, int col) {
+  const double u = static_cast<double>(col) / (g.n_gamma - 1);
+  return std::clamp(u * u, 0.0, 1.0);
+}
+
+double LutRowSunZenithRad(const LutGrid& g, int row) { return std::acos(LutRowSunHeight(g, row)); }
+
+double LutColumnElevationRad(const LutGrid& g, int col) { return std::asin(LutColumnViewHeight(g, col)); }
 
 std::array<double, 3> SunTransmittance(const SkyLuts& luts, double sun_zenith_rad) {
   const LutGrid& g = luts.grid;
-  const double one_minus_cos_max = 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0);
-  const double r = std::clamp((1.0 - std::cos(sun_zenith_rad)) / one_minus_cos_max, 0.0, 1.0) * (g.n_theta - 1);
+  const double r = LutRowPosition(g, std::cos(sun_zenith_rad));
   const int r0 = std::clamp(static_cast<int>(std::floor(r)), 0, g.n_theta - 2);
   const double f = r - r0;
   std::array<double, 3> t{};

@@ -1,15 +1,13 @@
 #include "resolved_sky.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
+#include "skycal/render/sky_params.h"
 
 namespace skycal::render {
-namespace {
-constexpr double kPi = std::numbers::pi;
-}
 
 const char* ToString(Backend b) { return b == Backend::kVulkan ? "vulkan" : "cpu"; }
 
@@ -61,19 +59,8 @@ SkyParamsD ResolveSkyParams(const Preset& preset, const RenderRequest& request) 
   ValidatePreset(preset, "preset '" + preset.name + "'");
   const auto sun = latlong::Normalized(request.sun_dir, "sun direction");
 
-  SkyParamsD p;
+  SkyParamsD p = SkyParamsFromPreset<SkyParamsD>(preset);
   p.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
-  p.haziness_g = preset.haziness_g;
-  p.isotropic_weight = preset.variant == ModelVariant::kFfxvIso ? 1.0 : 0.0;
-  p.overcast_weight = preset.overcast_weight;
-  p.overcast_zenith = preset.overcast_zenith_cd_m2;
-  const double radius = preset.sun_angular_radius_deg * kPi / 180.0;
-  p.sun_radius = radius;
-  p.sun_one_minus_cos_radius = 2.0 * std::sin(0.5 * radius) * std::sin(0.5 * radius);
-  p.sun_limb_u = preset.sun_limb_darkening;
-  p.lut_one_minus_cos_theta_max = 1.0 - std::cos(preset.luts.grid.theta_max_deg * kPi / 180.0);
-  p.lut_n_theta = preset.luts.grid.n_theta;
-  p.lut_n_gamma = preset.luts.grid.n_gamma;
 
   // Direct sun illuminance at normal incidence (lux per channel) and disc radiance.
   // Linear limb darkening on a small disc: E = L0 * Omega * (1 - u/3), Omega = 2 pi (1 - cos R).

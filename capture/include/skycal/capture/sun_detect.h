@@ -6,6 +6,7 @@
 #include <string>
 
 #include "skycal/core/image.h"
+#include "skycal/core/luminance.h"
 
 namespace skycal::capture {
 
@@ -22,6 +23,6 @@ struct SunDetection {
 std::optional<SunDetection> DetectSun(const ImageRGB& latlong, std::string* why, double min_contrast = 20.0);
 
 // Rec.709 / sRGB luminance weights (ITU-R BT.709).
-inline double Luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+inline double Luminance(const float* rgb) { return Rec709Luminance<double>(rgb[0], rgb[1], rgb[2]); }
 
 }  // namespace skycal::capture

@@ -14,8 +14,15 @@ namespace skycal::latlong {
 
 using Vec3d = std::array<double, 3>;
 
-double Latitude(int y, int height);    // radians
-double Longitude(int x, int width);    // radians
+// Radians at pixel coordinates (centres at integers; continuous positions in between). The
+// formulas are the shared model source's (render/model/latlong.glsl.h), the shaders' too.
+double Latitude(double y, int height);
+double Longitude(double x, int width);
+// Their inverses: the continuous row of a latitude and the column of a longitude (radians).
+double RowOfLatitude(double latitude, int height);
+double ColumnOfLongitude(double longitude, int width);
+// Unit vector of latitude and longitude (radians), the convention above.
+Vec3d Direction(double latitude, double longitude);
 Vec3d PixelDirection(int x, int y, int width, int height);
 // Unit vector from elevation and azimuth (longitude), both in degrees.
 Vec3d DirectionFromElevationAzimuthDeg(double elevation_deg, double azimuth_deg);

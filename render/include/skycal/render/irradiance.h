@@ -14,6 +14,7 @@
 // 1 - cos(0.27 deg) ~ 1e-5 of its cosine factor).
 #pragma once
 #include <array>
+#include <numbers>
 #include <vector>
 
 #include "skycal/core/image.h"
@@ -64,8 +65,8 @@ std::array<double, 9> ShBasis(const Dir3& unit_dir);
 ShCoefficients ProjectSh9(const ImageRGB& latlong);
 // E(n) = sum_lm A_l L_lm Y_lm(n).
 Rgb ShIrradiance(const ShCoefficients& radiance_sh, const Dir3& normal);
-inline constexpr std::array<double, 3> kShClampedCosineBand = {3.14159265358979323846, 2.0 * 3.14159265358979323846 / 3.0,
-                                                               3.14159265358979323846 / 4.0};
+inline constexpr std::array<double, 3> kShClampedCosineBand = {std::numbers::pi, 2.0 * std::numbers::pi / 3.0,
+                                                               std::numbers::pi / 4.0};
 
 // n points spread over the unit sphere (Fibonacci / golden-angle spiral), y from
 // 1 - 1/n down to -1 + 1/n. n >= 1.

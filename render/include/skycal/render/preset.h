@@ -90,8 +90,18 @@ std::vector<std::string> PresetOutputFiles(const std::string& json_path, ModelVa
 // (optional) adds top-level keys to the JSON, e.g. the fit's provenance.
 void SavePreset(const Preset& preset, const std::string& json_path, const nlohmann::json* extra = nullptr);
 
-// Where the LUT nodes sit (see render/model/sky_model.glsl.h): the sun zenith angle of a
-// row and the view elevation of a column, radians.
+// The LUT grid's mapping on the host (the shaders' is lut_row / lut_col of
+// render/model/sky_model.glsl.h, which a test holds these to):
+//   row = (1 - cos ts) / (1 - cos ts_max) (n_theta - 1), col = sqrt(sin e) (n_gamma - 1).
+// 1 - cos(ts_max), ts_max = grid.theta_max_deg.
+double LutOneMinusCosThetaMax(const LutGrid& grid);
+// The fractional row of a sun height cos(ts) = sun.y, clamped to [0, n_theta - 1].
+double LutRowPosition(const LutGrid& grid, double sun_height);
+// The inverses at the nodes: cos(sun zenith) of a row, sin(view elevation) of a column.
+double LutRowSunHeight(const LutGrid& grid, int row);
+double LutColumnViewHeight(const LutGrid& grid, int col);
+// Where the LUT nodes sit: the sun zenith angle of a row and the view elevation of a
+// column, radians.
 double LutRowSunZenithRad(const LutGrid& grid, int row);
 double LutColumnElevationRad(const LutGrid& grid, int col);
 

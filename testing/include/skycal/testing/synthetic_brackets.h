@@ -20,6 +20,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::synthetic {
@@ -134,7 +135,7 @@ inline SyntheticBrackets MakeSyntheticBrackets(const ImageRGB& scene, const Brac
   if (!(out.gain > 0.0)) {
     std::vector<float> lum(pixels);
     for (size_t p = 0; p < pixels; ++p)
-      lum[p] = 0.2126f * scene.pixels[3 * p] + 0.7152f * scene.pixels[3 * p + 1] + 0.0722f * scene.pixels[3 * p + 2];
+      lum[p] = Rec709Luminance(scene.pixels[3 * p], scene.pixels[3 * p + 1], scene.pixels[3 * p + 2]);
     std::nth_element(lum.begin(), lum.begin() + pixels / 2, lum.end());
     std::vector<double> sorted_k = k;
     std::sort(sorted_k.begin(), sorted_k.end());

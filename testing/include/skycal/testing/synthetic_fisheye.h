@@ -14,6 +14,8 @@
 #include "skycal/capture/rig.h"
 #include "skycal/core/image.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::synthetic {
 
@@ -124,7 +126,7 @@ inline RoundTripError CompareLatLong(const ImageRGB& truth, const ImageRGB& got,
                                      double min_elevation_deg, std::optional<std::array<double, 3>> sun,
                                      double sun_exclusion_deg, const std::vector<float>& mask = {}) {
   std::vector<double> lum, worst;
-  const double cos_sun = std::cos(sun_exclusion_deg * 3.14159265358979323846 / 180.0);
+  const double cos_sun = std::cos(sun_exclusion_deg * kPi / 180.0);
   for (int y = 0; y < truth.height; ++y) {
     for (int x = 0; x < truth.width; ++x) {
       const size_t i = static_cast<size_t>(y) * truth.width + x;
@@ -143,8 +145,8 @@ inline RoundTripError CompareLatLong(const ImageRGB& truth, const ImageRGB& got,
         if (ok) w = std::max(w, e <= 1e30 ? e : 1e30);  // a non-finite result counts as a huge error
       }
       if (!ok) continue;
-      const double lt = 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2];
-      const double lg = 0.2126 * g[0] + 0.7152 * g[1] + 0.0722 * g[2];
+      const double lt = Rec709Luminance(t[0], t[1], t[2]);
+      const double lg = Rec709Luminance(g[0], g[1], g[2]);
       const double e = std::abs(lg - lt) / lt;
       lum.push_back(e <= 1e30 ? e : 1e30);
       worst.push_back(w);
