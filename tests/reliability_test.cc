@@ -83,5 +83,45 @@ TEST(Reliability, PlotsWithoutPlplotDriversAreSkippedAndTheFitKept) {
   }
 }
 
+// Runs the command; expects exit 1, `needle` in stderr, and `victim` byte-identical.
+void ExpectKept(const std::string& args, const std::string& needle, const std::string& victim) {
+  const std::string before = Sha256OfFile(victim);
+  const ProcessResult r = Skycal(args);
+  EXPECT_EQ(r.rc, 1) << args << "\n" << r.err;
+  EXPECT_TRUE(Has(r.err, needle)) << "expected '" << needle << "' in: " << r.err;
+  EXPECT_EQ(Sha256OfFile(victim), before) << victim << " was replaced by: " << args;
+}
+
+TEST(Reliability, ASingleFileOutputNeverReplacesAFileItDidNotMake) {
+  ScratchDir dir("rel-kinds");
+  const std::string sky = Render(dir, "sky.exr");
+  ASSERT_EQ(Skycal("bake --out " + (dir / "p.json")).rc, 0);
+  ASSERT_EQ(Skycal("export --preset " + (dir / "p.json") + " --out " + (dir / "game") + " --no-report").rc, 0);
+  testing::WriteText(dir / "notes.csv", "a,b\n1,2\n");
+  testing::WriteText(dir / "mine.html", "<html><body>my own page</body></html>\n");
+  const std::string report = "report " + (dir / "game") + " --out ";
+  ExpectKept(report + (dir / "notes.csv"), "ending in .html", dir / "notes.csv");
+  ExpectKept(report + (dir / "p.mie.exr"), "ending in .html", dir / "p.mie.exr");
+  ExpectKept(report + (dir / "mine.html"), "did not write", dir / "mine.html");
+  // Its own page: replaced.
+  ASSERT_EQ(Skycal(report + (dir / "r.html")).rc, 0);
+  const ProcessResult again = Skycal(report + (dir / "r.html"));
+  EXPECT_EQ(again.rc, 0) << again.err;
+  // The same rule in every writer: a CSV renamed .exr, a text renamed .json, a FIFO.
+  fs::copy(dir / "notes.csv", dir / "data.exr");
+  ExpectKept("render" + kSun + "--size 64x32 --backend cpu --out " + (dir / "data.exr"), "not an OpenEXR file",
+             dir / "data.exr");
+  // An EXR over a preset's LUT (not this verb's input): the preset would no longer load.
+  ExpectKept("render" + kSun + "--size 64x32 --backend cpu --out " + (dir / "p.mie.exr"), "LUT table", dir / "p.mie.exr");
+  ExpectKept("weather --size 16 --out " + (dir / "notes.csv"), "ending in .exr", dir / "notes.csv");
+  testing::WriteText(dir / "notes.json", "not json\n");
+  ExpectKept("bake --out " + (dir / "notes.json"), "not a JSON file", dir / "notes.json");
+  ExpectKept("probe-extract --image " + sky + " --out " + (dir / "notes.json"), "not a JSON file", dir / "notes.json");
+  fs::copy(dir / "notes.csv", dir / "photo.png");
+  ExpectKept("render" + kSun + "--size 64x32 --backend cpu --out " + (dir / "x.exr") + " --png " + (dir / "photo.png"),
+             "not a PNG file", dir / "photo.png");
+  EXPECT_FALSE(fs::exists(dir / "x.exr")) << "refused before the work";
+}
+
 }  // namespace
 }  // namespace skycal

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal {
 namespace fs = std::filesystem;
@@ -31,6 +32,7 @@ AtomicOutput::AtomicOutput(std::string final_path) : final_path_(std::move(final
     throw Error(final_path_ + ": cannot write, directory '" + dir.string() +
                 "' is not writable (" + std::strerror(errno) + ")");
   }
+  RefuseReplacingAnotherKind(final_path_);
   static std::atomic<int> counter{0};
   temp_path_ = (dir / ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) +
                        "-" + std::to_string(counter++)))

@@ -24,6 +24,7 @@
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal {
 namespace {
@@ -54,6 +55,24 @@ std::pair<int, int> CheckReadableLayout(const std::string& path) {
   if (w <= 0 || hh <= 0) throw Error(path + ": empty data window");
   CheckImageSize(w, hh, path);
   return {static_cast<int>(w), static_cast<int>(hh)};
+}
+
+// A preset's LUT table (attribute skycalLut, written by render's SavePreset) is replaced
+// only by another LUT: an image written over it would leave a preset that no longer loads.
+void RefuseReplacingAPresetLut(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return;
+  std::string lut;
+  try {
+    const Imf::InputFile file(path.c_str());
+    if (const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>("skycalLut")) lut = a->value();
+  } catch (const std::exception&) {
+    return;  // not a readable EXR: AtomicOutput's kind check speaks for it
+  }
+  if (!lut.empty()) {
+    throw Error(path + ": refusing to replace it, it is a preset's LUT table ('" + lut +
+                "'); the preset would no longer load (choose another output path)");
+  }
 }
 
 void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
@@ -215,6 +234,8 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
     }
   }
   if (image.empty()) throw Error(path + ": refusing to write an empty image");
+  RefuseMismatchedExtension(path, ".exr", "an OpenEXR image");
+  if (!attributes.strings.count("skycalLut")) RefuseReplacingAPresetLut(path);
   AtomicOutput out(path);
   ExrWriteReport report;
   const size_t n = static_cast<size_t>(image.width) * image.height;
