@@ -123,5 +123,29 @@ TEST(Reliability, ASingleFileOutputNeverReplacesAFileItDidNotMake) {
   EXPECT_FALSE(fs::exists(dir / "x.exr")) << "refused before the work";
 }
 
+TEST(Reliability, APresetInterruptedBetweenItsFilesIsOneWholePreset) {
+  ScratchDir dir("rel-bake");
+  ASSERT_EQ(Skycal("bake --n-gamma 32 --out " + (dir / "p.json")).rc, 0);
+  fs::create_directory(dir.path() / "new");
+  ASSERT_EQ(Skycal("bake --n-gamma 48 --out " + (dir / "new/p.json")).rc, 0);
+  const std::vector<std::string> luts = {"p.rayleigh.exr", "p.mie.exr", "p.sun_transmittance.exr"};
+  for (int stop_after : {1, 2, 3}) {
+    const ProcessResult r = Skycal("bake --n-gamma 48 --out " + (dir / "p.json"),
+                                   "SKYCAL_TEST_STOP_BETWEEN_FILES=" + std::to_string(stop_after));
+    EXPECT_EQ(r.rc, 128 + 15) << "SIGTERM after file " << stop_after << ": " << r.err;
+    // Every LUT is the new bake's: the renames finished as one unit before the exit.
+    for (const std::string& l : luts) {
+      EXPECT_EQ(Sha256OfFile(dir / l), Sha256OfFile(dir / ("new/" + l))) << l << " after stop " << stop_after;
+    }
+    const ProcessResult use = Skycal("render" + kSun + "--size 32x16 --backend cpu --preset " + (dir / "p.json") +
+                                     " --out " + (dir / "check.exr"));
+    EXPECT_EQ(use.rc, 0) << "the preset loads after stop " << stop_after << ": " << use.err;
+    for (const auto& e : fs::directory_iterator(dir.path())) {
+      EXPECT_NE(e.path().filename().string().rfind(".", 0), 0u) << "left behind: " << e.path();
+    }
+    ASSERT_EQ(Skycal("bake --n-gamma 32 --out " + (dir / "p.json")).rc, 0);  // back to the old one
+  }
+}
+
 }  // namespace
 }  // namespace skycal
