@@ -147,5 +147,79 @@ TEST(Reliability, APresetInterruptedBetweenItsFilesIsOneWholePreset) {
   }
 }
 
+// A 64 x 32 lat-long of the binary's render with NaN and +inf written into two columns.
+std::string DirtyFrame(const ScratchDir& dir, const std::string& clean) {
+  capture::LatLongFrame f = capture::ReadLatLongFrame(clean);
+  f.radiance.at(10, 5, 1) = std::numeric_limits<float>::quiet_NaN();
+  f.radiance.at(20, 8, 0) = std::numeric_limits<float>::infinity();
+  capture::WriteLatLongFrame(dir / "dirty.exr", f);
+  return dir / "dirty.exr";
+}
+
+TEST(Reliability, ResampleMasksInvalidPixelsInsteadOfSpreadingThem) {
+  ScratchDir dir("rel-resample");
+  const std::string clean = Render(dir, "clean.exr");
+  const std::string dirty = DirtyFrame(dir, clean);
+  ASSERT_EQ(Skycal("resample --in " + clean + " --out " + (dir / "a.exr")).rc, 0);
+  const ProcessResult r = Skycal("resample --in " + dirty + " --out " + (dir / "b.exr"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const ImageRGB a = ReadExrRGB(dir / "a.exr").image, b = ReadExrRGB(dir / "b.exr").image;
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  EXPECT_EQ(NonFinite(b), 0);
+  int far_rows = 0;
+  for (int y = 0; y < b.height; ++y) {
+    for (int x = 0; x < b.width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        const bool touched = (x == 10 && c == 1) || (x == 20 && c == 0);
+        if (!touched) {
+          EXPECT_EQ(a.at(x, y, c), b.at(x, y, c)) << x << "," << y << "," << c;
+        }
+      }
+    }
+    // Rows well below the invalid pixels (rows 5 and 8 of 32, upper sky): their own values.
+    if (y > b.height / 2) {
+      EXPECT_NEAR(b.at(10, y, 1), a.at(10, y, 1), 1e-5 * std::abs(a.at(10, y, 1)) + 1e-9);
+      EXPECT_NEAR(b.at(20, y, 0), a.at(20, y, 0), 1e-5 * std::abs(a.at(20, y, 0)) + 1e-9);
+      ++far_rows;
+    }
+  }
+  EXPECT_GT(far_rows, 5);
+}
+
+TEST(Reliability, NoVerbWritesNanOrInf) {
+  ScratchDir dir("rel-finite");
+  const std::string clean = Render(dir, "clean.exr");
+  const std::string dirty = DirtyFrame(dir, clean);
+  // import: invalid pixels written as 0 (masked by the fit like values <= 0), counted.
+  const ProcessResult imp = Skycal("import --in " + dirty + " --out " + (dir / "imp.exr") + " --json");
+  ASSERT_EQ(imp.rc, 0) << imp.err;
+  EXPECT_EQ(NonFinite(ReadExrRGB(dir / "imp.exr").image), 0);
+  EXPECT_TRUE(Has(imp.err, "written as 0")) << imp.err;
+  // stars: a star beside a NaN and an inf; the replacement stays finite.
+  ImageRGB night(128, 64);
+  for (float& v : night.pixels) v = 1.0f;
+  for (int c = 0; c < 3; ++c) night.at(40, 20, c) = 60.0f;  // the star
+  night.at(44, 20, 1) = std::numeric_limits<float>::quiet_NaN();  // in the replacement's pairs
+  night.at(40, 24, 0) = std::numeric_limits<float>::infinity();    // likewise; itself a "star"
+  WriteExrRGB(dir / "night.exr", night, {});
+  const ProcessResult st = Skycal("stars --reference " + (dir / "night.exr") + " --out " + (dir / "clean-night.exr"));
+  ASSERT_EQ(st.rc, 0) << st.err;
+  const ImageRGB out = ReadExrRGB(dir / "clean-night.exr").image;
+  EXPECT_EQ(NonFinite(out), 0);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(out.at(40, 20, c), 1.0f, 1e-6) << "the star replaced by its sky";
+  EXPECT_EQ(out.at(44, 20, 1), 0.0f);  // an invalid pixel left alone: written as 0
+  // --half at the sun: clamped to 65504, counted, never +inf.
+  const ProcessResult half =
+      Skycal("render" + kSun + "--size 2048x1024 --backend cpu --half --out " + (dir / "half.exr"));
+  ASSERT_EQ(half.rc, 0) << half.err;
+  EXPECT_TRUE(Has(half.err, "clamped to 65504")) << half.err;
+  const ImageRGB h = ReadExrRGB(dir / "half.exr").image;
+  EXPECT_EQ(NonFinite(h), 0);
+  float peak = 0.0f;
+  for (float v : h.pixels) peak = std::max(peak, v);
+  EXPECT_EQ(peak, 65504.0f);
+}
+
 }  // namespace
 }  // namespace skycal

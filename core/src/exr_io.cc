@@ -243,8 +243,11 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
   if (type == ExrPixelType::kHalf) {
     halves.resize(n * 3);
     for (size_t i = 0; i < n * 3; ++i) {
-      halves[i] = half(image.pixels[i]);
-      if (std::isfinite(image.pixels[i]) && halves[i].isInfinity()) ++report.half_overflow_count;
+      // Finite values beyond FP16's range are clamped to +-65504 (HALF_MAX), never +-inf.
+      const float v = image.pixels[i];
+      const bool over = std::isfinite(v) && std::abs(v) > HALF_MAX;
+      halves[i] = half(over ? std::copysign(HALF_MAX, v) : v);
+      report.half_overflow_count += over ? 1 : 0;
     }
   }
   try {
