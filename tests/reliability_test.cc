@@ -221,5 +221,44 @@ TEST(Reliability, NoVerbWritesNanOrInf) {
   EXPECT_EQ(peak, 65504.0f);
 }
 
+// An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).
+void WriteWindowed(const std::string& path, const Imath::Box2i& display, const Imath::Box2i& data) {
+  Imf::Header header(display, data);
+  for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+  const int w = data.max.x - data.min.x + 1, h = data.max.y - data.min.y + 1;
+  std::vector<float> px(static_cast<size_t>(w) * h * 3, 1.0f);
+  Imf::OutputFile file(path.c_str(), header);
+  Imf::FrameBuffer fb;
+  for (int c = 0; c < 3; ++c) {
+    char* base = reinterpret_cast<char*>(px.data() + c) -
+                 (static_cast<ptrdiff_t>(data.min.x) + static_cast<ptrdiff_t>(data.min.y) * w) * 3 * sizeof(float);
+    fb.insert(std::string(1, "RGB"[c]), Imf::Slice(Imf::FLOAT, base, 3 * sizeof(float), 3 * sizeof(float) * w));
+  }
+  file.setFrameBuffer(fb);
+  file.writePixels(h);
+}
+
+TEST(Reliability, ExrWindowsAndOutputExtensionsAreChecked) {
+  ScratchDir dir("rel-headers");
+  const Imath::Box2i display(Imath::V2i(0, 0), Imath::V2i(63, 31));
+  WriteWindowed(dir / "crop.exr", display, Imath::Box2i(Imath::V2i(0, 0), Imath::V2i(31, 31)));
+  WriteWindowed(dir / "offset.exr", display, Imath::Box2i(Imath::V2i(8, 0), Imath::V2i(71, 31)));
+  for (const auto& [file, box] : {std::pair{std::string("crop.exr"), std::string("(0, 0) - (31, 31)")},
+                                  std::pair{std::string("offset.exr"), std::string("(8, 0) - (71, 31)")}}) {
+    for (const auto& [verb, out] : {std::pair{std::string("probe-extract --image "), std::string("o.json")},
+                                    std::pair{std::string("resample --in "), std::string("o.exr")},
+                                    std::pair{std::string("import --in "), std::string("o.exr")}}) {
+      const ProcessResult r = Skycal(verb + (dir / file) + " --out " + (dir / out));
+      EXPECT_EQ(r.rc, 1) << verb << file;
+      EXPECT_TRUE(Has(r.err, file) && Has(r.err, box) && Has(r.err, "(0, 0) - (63, 31)")) << r.err;
+    }
+  }
+  const ProcessResult w = Skycal("weather --size 16 --out " + (dir / "w.png"));
+  EXPECT_EQ(w.rc, 1);
+  EXPECT_TRUE(Has(w.err, "ending in .exr")) << w.err;
+  EXPECT_FALSE(fs::exists(dir / "w.png"));
+  EXPECT_EQ(Skycal("weather --size 16 --out " + (dir / "w.exr")).rc, 0);
+}
+
 }  // namespace
 }  // namespace skycal

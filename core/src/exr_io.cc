@@ -54,6 +54,18 @@ std::pair<int, int> CheckReadableLayout(const std::string& path) {
   const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1, hh = static_cast<long long>(dw.max.y) - dw.min.y + 1;
   if (w <= 0 || hh <= 0) throw Error(path + ": empty data window");
   CheckImageSize(w, hh, path);
+  // A data window that is not the display window is a crop or a render region: read as a
+  // whole panorama it would put every pixel at the wrong direction. Refused, not guessed.
+  const Imath::Box2i disp = h.displayWindow();
+  if (dw != disp) {
+    auto box = [](const Imath::Box2i& b) {
+      return "(" + std::to_string(b.min.x) + ", " + std::to_string(b.min.y) + ") - (" + std::to_string(b.max.x) + ", " +
+             std::to_string(b.max.y) + ")";
+    };
+    throw Error(path + ": the data window " + box(dw) + " differs from the display window " + box(disp) +
+                ": a cropped or offset image (a render region) is not a whole frame; write the full display window "
+                "(e.g. oiiotool IN --fullpixels -o OUT)");
+  }
   return {static_cast<int>(w), static_cast<int>(hh)};
 }
 
