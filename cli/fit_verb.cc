@@ -379,6 +379,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;
+  if (c.clouds.mode != "auto" && c.clouds.mode != "on" && c.clouds.mode != "off" && c.clouds.mode != "stats") {
+    throw Error("--clouds: unknown mode '" + c.clouds.mode + "' (expected auto, on, off or stats)");
+  }
   if (c.clouds.mode == "stats") {
     if (!c.clouds.preset.empty()) throw Error("--clouds stats: the shapes are unknown: --cloud-preset does not apply");
     c.cloud_stats.enabled = true;
