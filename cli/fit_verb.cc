@@ -274,15 +274,25 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                                        {"options", resolved},
                                        {"final_errors", per_ref}}}};
   render::SavePreset(result.preset, out / "preset.json", &provenance);
-  WriteFitReport(out / "report.png", refs, result);
-  WriteFitPanels(out / "fit", refs, result);
+  // The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
+  // file) leaves them out, never the fit.
+  bool previews = true;
+  try {
+    WriteFitReport(out / "report.png", refs, result);
+    WriteFitPanels(out / "fit", refs, result);
+  } catch (const Error& e) {
+    previews = false;
+    Log("fit", std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
+  }
   // What the report reads beside the errors: the images, the fitted sun at the ground
   // (model units: lux with --absolute) and the cloud mask.
   for (size_t r = 0; r < refs.size(); ++r) {
     nlohmann::json& j = summary["references"][r];
-    j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
-                   {"fit", "fit/" + refs[r].name + ".fit.png"},
-                   {"error", "fit/" + refs[r].name + ".error.png"}};
+    if (previews) {
+      j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
+                     {"fit", "fit/" + refs[r].name + ".fit.png"},
+                     {"error", "fit/" + refs[r].name + ".error.png"}};
+    }
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
     j["sun_illuminance_at_ground_lux"] = 0.2126 * sun[0] + 0.7152 * sun[1] + 0.0722 * sun[2];
     if (o.cloud_mask) j["cloud_mask"] = cloud_json[r];

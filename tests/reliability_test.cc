@@ -83,6 +83,19 @@ TEST(Reliability, PlotsWithoutPlplotDriversAreSkippedAndTheFitKept) {
   }
 }
 
+TEST(Reliability, AMissingOcioConfigLeavesThePreviewsOutNotTheFit) {
+  ScratchDir dir("rel-ocio");
+  const std::string sky = Render(dir, "sky.exr");
+  const ProcessResult r = Skycal("fit --quiet --backend cpu --reference " + sky + " --out " + (dir / "out"),
+                                 "OCIO=" + (dir / "missing.ocio"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_TRUE(Has(r.err, "previews skipped") && Has(r.err, "missing.ocio")) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "out/preset.json"));
+  EXPECT_TRUE(fs::exists(dir / "out/fit.json"));
+  EXPECT_TRUE(fs::exists(dir / "out/report.html"));
+  EXPECT_FALSE(fs::exists(dir / "out/report.png"));
+}
+
 // Runs the command; expects exit 1, `needle` in stderr, and `victim` byte-identical.
 void ExpectKept(const std::string& args, const std::string& needle, const std::string& victim) {
   const std::string before = Sha256OfFile(victim);
