@@ -16,4 +16,15 @@ struct FiniteOutputCounts {
 
 FiniteOutputCounts PrepareImageForWrite(const std::string& verb, const std::string& path, ImageRGB* image, bool half);
 
+// The floor under which an input frame is degenerate and refused: at least 1% of its
+// pixels valid (`valid` of `total`). A sky frame offers its whole upper hemisphere (half a
+// lat-long), and lossy-compression ringing, clipping or a partial capture leave far more
+// than 1% valid; below it the result rests on a handful of pixels (a fit "succeeded" on 4
+// of 16,384) or on none (a mask of an all-NaN frame reported "0% not sky"). Throws
+// skycal::Error naming the file, the counts and `what` a valid pixel is.
+inline constexpr double kMinValidShare = 0.01;
+void RequireValidShare(const std::string& path, long long valid, long long total, const std::string& what);
+// The same over an image's pixels: valid = every channel finite and the luminance > 0.
+void RequireValidShare(const std::string& path, const ImageRGB& image);
+
 }  // namespace skycal::cli

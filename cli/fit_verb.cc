@@ -14,6 +14,7 @@
 #include "fit_option_args.h"
 #include "option_values.h"
 #include "fit_cloud_mask.h"
+#include "finite_output.h"
 #include "fit_report.h"
 #include "report_verb.h"
 #include "staged_directory.h"
@@ -122,6 +123,9 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   std::set<std::string> names;
   for (const std::string& path : o.references) {
     refs.push_back(fit::LoadReference(path, o.fit));
+    const fit::MaskCounts& n = refs.back().counts;  // the user's mask and the sun cone are choices, not damage
+    RequireValidShare(path, n.sky, n.sky + n.invalid + n.clipped, "fittable sky pixels of those above the horizon "
+                      "outside --mask and the sun cone");
     if (!names.insert(refs.back().name).second) {
       throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
     }

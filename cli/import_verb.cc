@@ -198,6 +198,7 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
   { AtomicOutput probe(o.out_path); }  // fail on an unwritable output before reading
 
   ExrRGB src = ReadExrRGB(o.in_path);
+  RequireValidShare(o.in_path, src.image);
   const std::string sha = Sha256OfFile(o.in_path);
   const int w = src.image.width, h = src.image.height;
   if (w != 2 * h || h < 2) {

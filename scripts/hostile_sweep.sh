@@ -138,7 +138,7 @@ DEGENERATE="frame_nan.exr frame_inf.exr frame_-inf.exr frame_0.exr frame_-1.exr"
 # --- 1. hostile inputs, every verb that reads an image --------------------------------
 for in in $BAD_INPUTS; do
   run "fit --reference $in" refuse "" fit --quiet --backend cpu --reference "$F/$in" --out "$O/fit"
-  run "ceiling --reference $in" refuse "" ceiling --backend cpu --reference "$F/$in"
+  run "ceiling --reference $in" refuse "" ceiling --reference "$F/$in"
   run "mask --reference $in" refuse "" mask --reference "$F/$in" --out "$O/m.exr"
   run "stars --reference $in" refuse "" stars --reference "$F/$in" --out "$O/s.exr"
   run "probe-extract --image $in" refuse "" probe-extract --image "$F/$in" --out "$O/s.json"
@@ -159,7 +159,7 @@ done
 # --- 2. degenerate frames (finite output or a refusal; never NaN written) -------------
 for in in $DEGENERATE; do
   run "fit --reference $in" any "" fit --quiet --backend cpu --reference "$F/$in" --out "$O/fit"
-  run "ceiling --reference $in" any "" ceiling --backend cpu --reference "$F/$in"
+  run "ceiling --reference $in" any "" ceiling --reference "$F/$in"
   run "mask --reference $in" any "" mask --reference "$F/$in" --out "$O/m.exr"
   run "stars --reference $in" any "" stars --reference "$F/$in" --out "$O/s.exr" --mask-out "$O/sm.exr"
   run "probe-extract --image $in" any "" probe-extract --image "$F/$in" --out "$O/s.json"

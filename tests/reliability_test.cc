@@ -234,6 +234,38 @@ TEST(Reliability, NoVerbWritesNanOrInf) {
   EXPECT_EQ(peak, 65504.0f);
 }
 
+TEST(Reliability, DegenerateFramesAreRefusedWithTheirCounts) {
+  ScratchDir dir("rel-degenerate");
+  const std::string sky = Render(dir, "sky.exr");
+  for (const float v : {std::numeric_limits<float>::quiet_NaN(), 0.0f, -1.0f}) {
+    capture::LatLongFrame f = capture::ReadLatLongFrame(sky);  // its sun attribute kept
+    for (float& p : f.radiance.pixels) p = v;
+    if (std::isnan(v)) f.radiance.at(3, 3, 0) = f.radiance.at(3, 3, 1) = f.radiance.at(3, 3, 2) = 1.0f;  // 1 of 2048
+    capture::WriteLatLongFrame(dir / "bad.exr", f);
+    const std::string bad = dir / "bad.exr";
+    for (const std::string& cmd : {"mask --reference " + bad + " --out " + (dir / "m.exr"),
+                                   "import --in " + bad + " --out " + (dir / "i.exr"),
+                                   "probe-extract --image " + bad + " --out " + (dir / "s.json"),
+                                   "fit --quiet --backend cpu --reference " + bad + " --out " + (dir / "fit"),
+                                   "ceiling --reference " + bad}) {
+      const ProcessResult r = Skycal(cmd);
+      EXPECT_EQ(r.rc, 1) << v << ": " << cmd << "\n" << r.err;
+      EXPECT_TRUE(Has(r.err, "bad.exr") && (Has(r.err, "pixels are valid") || Has(r.err, "no valid sky pixel")))
+          << v << ": " << cmd << "\n" << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "m.exr") || fs::exists(dir / "i.exr") || fs::exists(dir / "s.json") ||
+                 fs::exists(dir / "fit"));
+  }
+  // A frame with 10% of its pixels valid passes the floor (the mask runs).
+  capture::LatLongFrame f = capture::ReadLatLongFrame(sky);
+  for (size_t i = 0; i < f.radiance.pixels.size(); ++i) {
+    if ((i / 3) % 10 != 0) f.radiance.pixels[i] = std::numeric_limits<float>::quiet_NaN();
+  }
+  capture::WriteLatLongFrame(dir / "sparse.exr", f);
+  const ProcessResult ok = Skycal("import --in " + (dir / "sparse.exr") + " --out " + (dir / "i.exr"));
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+}
+
 // An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).
 void WriteWindowed(const std::string& path, const Imath::Box2i& display, const Imath::Box2i& data) {
   Imf::Header header(display, data);
