@@ -145,7 +145,8 @@ TEST(Reliability, APresetInterruptedBetweenItsFilesIsOneWholePreset) {
   for (int stop_after : {1, 2, 3}) {
     const ProcessResult r = Skycal("bake --n-gamma 48 --out " + (dir / "p.json"),
                                    "SKYCAL_TEST_STOP_BETWEEN_FILES=" + std::to_string(stop_after));
-    EXPECT_EQ(r.rc, 128 + 15) << "SIGTERM after file " << stop_after << ": " << r.err;
+    // 143: the watcher exited once the renames were done; 0: the verb returned first.
+    EXPECT_TRUE(r.rc == 128 + 15 || r.rc == 0) << "SIGTERM after file " << stop_after << ": " << r.rc << " " << r.err;
     // Every LUT is the new bake's: the renames finished as one unit before the exit.
     for (const std::string& l : luts) {
       EXPECT_EQ(Sha256OfFile(dir / l), Sha256OfFile(dir / ("new/" + l))) << l << " after stop " << stop_after;
