@@ -39,9 +39,8 @@ inline constexpr int kMaxExrTileSide = 8192;
 
 // Writes R, G, B channels atomically (temp file + rename). Throws skycal::Error naming the
 // file on failure; no partial file is left. Half output clamps finite values beyond 65504
-// (FP16's largest) to +-65504, never +-inf; callers that write half choose a pre-exposure
-// first, and the report counts the values clamped. A name ending in another format's
-// extension (.png, .json, ...) is refused.
+// (FP16's largest) to +-65504, never +-inf, and counts them; a name ending in another
+// format's extension (.png, .json, ...) is refused.
 struct ExrWriteReport {
   long long half_overflow_count = 0;  // finite floats clamped to +-65504 in half
 };
