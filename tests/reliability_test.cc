@@ -7,6 +7,7 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <filesystem>
@@ -265,6 +266,28 @@ TEST(Reliability, DegenerateFramesAreRefusedWithTheirCounts) {
   capture::WriteLatLongFrame(dir / "sparse.exr", f);
   const ProcessResult ok = Skycal("import --in " + (dir / "sparse.exr") + " --out " + (dir / "i.exr"));
   EXPECT_EQ(ok.rc, 0) << ok.err;
+}
+
+TEST(Reliability, PathMessagesSayWhatIsThere) {
+  ScratchDir dir("rel-messages");
+  fs::create_directory(dir.path() / "adir");
+  ASSERT_EQ(::mkfifo((dir / "fifo.exr").c_str(), 0600), 0);
+  fs::create_symlink("loop_b.exr", dir.path() / "loop_a.exr");
+  fs::create_symlink("loop_a.exr", dir.path() / "loop_b.exr");
+  fs::create_symlink("nowhere.exr", dir.path() / "dangling.exr");
+  testing::WriteText(dir / "file.txt", "x");
+  for (const auto& [in, says] : {std::pair{std::string("adir"), std::string("is a directory")},
+                                 std::pair{std::string("fifo.exr"), std::string("not a regular file")},
+                                 std::pair{std::string("loop_a.exr"), std::string("symlink loop")},
+                                 std::pair{std::string("dangling.exr"), std::string("dangling symlink")},
+                                 std::pair{std::string("missing.exr"), std::string("no such file")}}) {
+    const ProcessResult r = Skycal("probe-extract --image " + (dir / in) + " --out " + (dir / "s.json"));
+    EXPECT_EQ(r.rc, 1);
+    EXPECT_TRUE(Has(r.err, says)) << in << ": " << r.err;
+  }
+  const ProcessResult r = Skycal("render" + kSun + "--size 32x16 --backend cpu --out " + (dir / "file.txt/o.exr"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_TRUE(Has(r.err, "is not a directory")) << r.err;
 }
 
 // An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).

@@ -23,6 +23,7 @@ AtomicOutput::AtomicOutput(std::string final_path) : final_path_(std::move(final
   if (dir.empty()) dir = ".";
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
+    if (fs::exists(dir, ec)) throw Error(final_path_ + ": cannot write, '" + dir.string() + "' is not a directory");
     throw Error(final_path_ + ": cannot write, directory '" + dir.string() + "' does not exist");
   }
   if (fs::is_directory(p, ec)) {

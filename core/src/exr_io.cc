@@ -15,7 +15,10 @@
 #include <ImfVecAttribute.h>
 #include <half.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -67,6 +70,20 @@ std::pair<int, int> CheckReadableLayout(const std::string& path) {
                 "(e.g. oiiotool IN --fullpixels -o OUT)");
   }
   return {static_cast<int>(w), static_cast<int>(hh)};
+}
+
+// Why `path` is not a readable regular file, in the user's terms: "no such file" only when
+// nothing is there.
+std::string NotAFileWhy(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ELOOP) return "a symlink loop";
+    if (errno == EACCES) return "permission denied";
+    struct stat lst {};
+    return ::lstat(path.c_str(), &lst) == 0 ? "a dangling symlink (its target does not exist)" : "no such file";
+  }
+  if (S_ISDIR(st.st_mode)) return "is a directory";
+  return "is not a regular file (a FIFO, socket or device)";
 }
 
 // A preset's LUT table (attribute skycalLut, written by render's SavePreset) is replaced
@@ -293,7 +310,7 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
 
 std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   LimitOpenExrAllocations();
   CheckAttributeSizes(path);
   try {
@@ -323,7 +340,7 @@ ExrRGB ReadExrRGB(const std::string& path) { return ReadExrRGB(path, nullptr); }
 ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
-    throw Error(path + ": no such file (expected an OpenEXR image)");
+    throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   }
   ExrRGB result;
   LimitOpenExrAllocations();
@@ -368,7 +385,7 @@ ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, i
 
 ExrHeaderInfo ReadExrHeader(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   LimitOpenExrAllocations();
   CheckAttributeSizes(path);
   ExrHeaderInfo info;
