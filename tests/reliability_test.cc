@@ -290,6 +290,16 @@ TEST(Reliability, PathMessagesSayWhatIsThere) {
   EXPECT_TRUE(Has(r.err, "is not a directory")) << r.err;
 }
 
+TEST(Reliability, BakeRefusesALutWidthBeforeTheCompute) {
+  ScratchDir dir("rel-bake-width");
+  const ProcessResult r = Skycal("bake --n-gamma 300 --out " + (dir / "p.json"));
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_TRUE(Has(r.err, "--n-gamma") && Has(r.err, "[2, 256]")) << r.err;
+  EXPECT_FALSE(Has(r.err, "luts.")) << "names the option, not a JSON field: " << r.err;
+  EXPECT_FALSE(fs::exists(dir / "p.json"));
+  EXPECT_EQ(Skycal("bake --n-gamma 256 --n-theta 8 --out " + (dir / "p.json")).rc, 0);
+}
+
 // An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).
 void WriteWindowed(const std::string& path, const Imath::Box2i& display, const Imath::Box2i& data) {
   Imf::Header header(display, data);
