@@ -300,6 +300,25 @@ TEST(Reliability, BakeRefusesALutWidthBeforeTheCompute) {
   EXPECT_EQ(Skycal("bake --n-gamma 256 --n-theta 8 --out " + (dir / "p.json")).rc, 0);
 }
 
+TEST(Reliability, AReportEmbedsOnlyTheRunsOwnFiles) {
+  ScratchDir dir("rel-report-embed");
+  const std::string sky = Render(dir, "sky.exr");
+  ASSERT_EQ(Skycal("fit --quiet --backend cpu --reference " + sky + " --out " + (dir / "out")).rc, 0);
+  fs::copy(dir / "out/fit/sky.reference.png", dir / "outside.png");
+  const nlohmann::json original = nlohmann::json::parse(testing::Slurp(dir / "out/fit.json"));
+  for (const std::string& elsewhere : {dir / "outside.png", std::string("../outside.png")}) {
+    nlohmann::json j = original;
+    j["references"][0]["images"]["reference"] = elsewhere;
+    testing::WriteText(dir / "out/fit.json", j.dump());
+    const ProcessResult r = Skycal("report " + (dir / "out") + " --out " + (dir / "r.html"));
+    EXPECT_EQ(r.rc, 1) << elsewhere;
+    EXPECT_TRUE(Has(r.err, "outside the fit's directory")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "r.html"));
+  }
+  testing::WriteText(dir / "out/fit.json", original.dump());
+  EXPECT_EQ(Skycal("report " + (dir / "out") + " --out " + (dir / "r.html")).rc, 0);
+}
+
 // An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).
 void WriteWindowed(const std::string& path, const Imath::Box2i& display, const Imath::Box2i& data) {
   Imf::Header header(display, data);
