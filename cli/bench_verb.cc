@@ -2,9 +2,11 @@
 
 #include "report_verb.h"
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -262,7 +264,12 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   if (!o.IsValid(&why)) throw Error(why);
   if (!o.compare.empty()) return Compare(o);
   if (!o.replot.empty()) return Replot(o, registry);
-  if (!o.worker_journal.empty()) return RunWorker(o, registry);
+  if (!o.worker_journal.empty()) {
+    // A worker ends with its parent: a SIGKILLed bench must not leave workers running.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() == 1) throw Error("bench worker: the parent bench has already exited");
+    return RunWorker(o, registry);
+  }
   const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
   StagedDirectory out(o.out, "--out", "bench", {});
   // Scratch for the suites' inputs (references, brackets): beside the staging directory,
