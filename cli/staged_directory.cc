@@ -52,6 +52,19 @@ void RequireReplaceable(const fs::path& dir, const std::string& shown, const std
                   "` run did not write: refusing to replace the directory and lose it" + how);
     }
   }
+  // Folders (empty ones too) and symbolic links to folders are not files: a folder holding
+  // none of the listed files, and any link, are the user's.
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    const std::string rel = fs::relative(it->path(), dir).generic_string();
+    const bool link = it->is_symlink(), folder = !link && it->is_directory();
+    if (!link && !folder) continue;
+    bool ours = false;
+    for (const std::string& f : listed) ours = ours || (folder && f.rfind(rel + "/", 0) == 0);
+    if (!ours) {
+      throw Error(shown + ": holds the " + (link ? "symbolic link '" : "folder '") + rel + "', which the earlier `skycal " +
+                  verb + "` run did not make: refusing to replace the directory and lose it" + how);
+    }
+  }
 }
 
 }  // namespace

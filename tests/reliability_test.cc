@@ -319,6 +319,27 @@ TEST(Reliability, AReportEmbedsOnlyTheRunsOwnFiles) {
   EXPECT_EQ(Skycal("report " + (dir / "out") + " --out " + (dir / "r.html")).rc, 0);
 }
 
+TEST(Reliability, AFitRerunKeepsTheFoldersAndLinksTheUserAdded) {
+  ScratchDir dir("rel-rerun");
+  const std::string sky = Render(dir, "sky.exr");
+  const std::string fit = "fit --quiet --backend cpu --reference " + sky + " --out " + (dir / "out");
+  ASSERT_EQ(Skycal(fit).rc, 0);
+  ASSERT_EQ(Skycal(fit).rc, 0);  // its own output, untouched: replaced
+  fs::create_directory(dir.path() / "out/notes");
+  ProcessResult r = Skycal(fit);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_TRUE(Has(r.err, "folder 'notes'")) << r.err;
+  EXPECT_TRUE(fs::is_directory(dir.path() / "out/notes"));
+  fs::remove(dir.path() / "out/notes");
+  fs::create_directory_symlink(dir.path(), dir.path() / "out/link");
+  r = Skycal(fit);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_TRUE(Has(r.err, "symbolic link 'link'")) << r.err;
+  EXPECT_TRUE(fs::is_symlink(dir.path() / "out/link"));
+  fs::remove(dir.path() / "out/link");
+  EXPECT_EQ(Skycal(fit).rc, 0);
+}
+
 // An EXR whose data window is `data` inside the display window `display` (x0, y0, x1, y1).
 void WriteWindowed(const std::string& path, const Imath::Box2i& display, const Imath::Box2i& data) {
   Imf::Header header(display, data);
