@@ -14,11 +14,14 @@ namespace skycal::cli {
 namespace fs = std::filesystem;
 namespace {
 
-// Files (not directories) below `dir`, as generic relative paths, sorted.
-std::vector<std::string> FilesBelow(const fs::path& dir) {
+// Files (not directories) below `dir`, as generic relative paths, sorted; with `folders`,
+// the directories too, each with a trailing '/'.
+std::vector<std::string> FilesBelow(const fs::path& dir, bool folders = false) {
   std::vector<std::string> files;
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
-    if (!it->is_directory()) files.push_back(fs::relative(it->path(), dir).generic_string());
+    const std::string rel = fs::relative(it->path(), dir).generic_string();
+    if (!it->is_directory()) files.push_back(rel);
+    else if (folders && !it->is_symlink()) files.push_back(rel + "/");
   }
   std::sort(files.begin(), files.end());
   return files;
@@ -59,6 +62,8 @@ void RequireReplaceable(const fs::path& dir, const std::string& shown, const std
     const bool link = it->is_symlink(), folder = !link && it->is_directory();
     if (!link && !folder) continue;
     bool ours = false;
+    // A folder the marker lists (rel + "/"), or, in a marker from before folders were
+    // listed, one holding a listed file.
     for (const std::string& f : listed) ours = ours || (folder && f.rfind(rel + "/", 0) == 0);
     if (!ours) {
       throw Error(shown + ": holds the " + (link ? "symbolic link '" : "folder '") + rel + "', which the earlier `skycal " +
@@ -102,7 +107,7 @@ StagedDirectory::~StagedDirectory() {
 
 void StagedDirectory::Commit() {
   WriteJsonFileAtomically((staging_ / kOutputMarker).string(),
-                          {{"verb", verb_}, {"files", FilesBelow(staging_)},
+                          {{"verb", verb_}, {"files", FilesBelow(staging_, true)},
                            {"note", "written by skycal: a later `skycal " + verb_ +
                                         " --out` may replace this directory only while it holds just these files"}});
   const fs::path old = final_.parent_path() / ("." + final_.filename().string() + ".old-" + std::to_string(::getpid()));
