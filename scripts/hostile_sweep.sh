@@ -33,9 +33,9 @@ while [ $# -gt 0 ]; do
   esac
   shift
 done
-BIN=$(realpath "${BIN_ARG:-$BUILD/cli/skycal}")
+BIN=$(realpath "${BIN_ARG:-$BUILD/skycal}")
 TOOL=$(realpath "${TOOL_ARG:-$BUILD/tests/skycal_exr_tool}")
-[ -x "$BIN" ] && [ -x "$TOOL" ] || { echo "need $BUILD/cli/skycal and $BUILD/tests/skycal_exr_tool" >&2; exit 2; }
+[ -x "$BIN" ] && [ -x "$TOOL" ] || { echo "need $BUILD/skycal and $BUILD/tests/skycal_exr_tool" >&2; exit 2; }
 LIMIT=${SWEEP_CASE_TIMEOUT:-120}
 
 W=$(mktemp -d "${TMPDIR:-/tmp}/skycal-sweep.XXXXXX")
