@@ -77,8 +77,10 @@ BakeOptions ParseBakeArgs(int argc, char** argv) {
   cl.Text("--model", &model, "NAME", "model variant written into the preset: ffxv (default) or ffxv-iso");
   cl.Integer("--n-theta", &o.grid.n_theta, 2, 1024, "expected an integer in [2, 1024]", "N",
              "LUT rows (sun zenith), integer in [2, 1024] (default 37)");
-  cl.Integer("--n-gamma", &o.grid.n_gamma, 2, 1024, "expected an integer in [2, 1024]", "N",
-             "LUT columns (view elevation), integer in [2, 1024] (default 32)");
+  // The renderers' limit (render/model/limits.glsl.h), checked here rather than after the bake.
+  const std::string columns = "[2, " + std::to_string(render::kMaxLutColumns) + "]";
+  cl.Integer("--n-gamma", &o.grid.n_gamma, 2, render::kMaxLutColumns, "expected an integer in " + columns, "N",
+             "LUT columns (view elevation), integer in " + columns + " (default 32)");
   cl.Number("--mie-scattering", &mie_scattering, "PER_M",
             "Mie scattering coefficient at sea level, 1/m (default 3.996e-6); the extinction\n"
             "follows at 4.440/3.996 of it (Hillaire's single-scattering albedo 0.9)");

@@ -2,9 +2,11 @@
 
 #include "report_verb.h"
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -19,6 +21,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
+#include "skycal/report/plot_devices.h"
 #include "skycal/render/renderer.h"
 #include "skycal/core/staged_directory.h"
 #include "verb_common.h"
@@ -109,8 +112,13 @@ void AnalyseSuite(const std::string& error_label, const std::vector<bench::CaseR
   rep->plots.clear();
   if (!plot.cases.empty()) {
     const std::string stem = rep->name + "_pareto";
-    bench::WriteParetoPlot(plot, dir / (stem + ".png"), dir / (stem + ".svg"));
-    rep->plots = {stem + ".png", stem + ".svg"};
+    std::string why;
+    if (report::PlotDeviceAvailable("pngcairo", &why) && report::PlotDeviceAvailable("svgcairo", &why)) {
+      bench::WriteParetoPlot(plot, dir / (stem + ".png"), dir / (stem + ".svg"));
+      rep->plots = {stem + ".png", stem + ".svg"};
+    } else {
+      Log("bench", rep->name + ": plots skipped, the Pareto plot is left out: " + why + "; the results are complete");
+    }
   }
   Log("bench", rep->name + ": " + std::to_string(rep->front.size()) + " of " + std::to_string(cases.size()) +
                    " cases on the Pareto front; default " +
@@ -256,7 +264,12 @@ nlohmann::json RunBenchImpl(const BenchOptions& o, const bench::SuiteRegistry& r
   if (!o.IsValid(&why)) throw Error(why);
   if (!o.compare.empty()) return Compare(o);
   if (!o.replot.empty()) return Replot(o, registry);
-  if (!o.worker_journal.empty()) return RunWorker(o, registry);
+  if (!o.worker_journal.empty()) {
+    // A worker ends with its parent: a SIGKILLed bench must not leave workers running.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() == 1) throw Error("bench worker: the parent bench has already exited");
+    return RunWorker(o, registry);
+  }
   const std::vector<const bench::Suite*> suites = registry.Resolve(o.suites);
   StagedDirectory out(o.out, "--out", "bench", {});
   // Scratch for the suites' inputs (references, brackets): beside the staging directory,

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "skycal/core/error.h"
 #include "skycal/fit/ceiling.h"
 #include "skycal/fit/reference.h"
@@ -20,6 +21,8 @@ nlohmann::json RunCeilingImpl(const CeilingVerbOptions& o) {
   const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
   const render::Preset init = render::LoadPreset(init_path);
   const fit::Reference ref = fit::LoadReference(o.reference, o.fit);
+  RequireValidShare(o.reference, ref.counts.sky, ref.counts.sky + ref.counts.invalid + ref.counts.clipped,
+                    "fittable sky pixels of those above the horizon outside the sun cone");
   const fit::CeilingResult c = fit::ModelCeiling(ref, init, o.fit);
   Log("ceiling", ref.name + ": LUT ceiling rel RMSE " + std::to_string(100.0 * c.lut_rel_rmse) + "% at g " +
                      std::to_string(c.lut_g) + "; per-row ceiling " + std::to_string(100.0 * c.per_row_rel_rmse) +

@@ -4,6 +4,7 @@
 #include "option_values.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/json_file.h"
 #include "skycal/core/format_number.h"
 #include "verb_common.h"
 
@@ -49,7 +50,7 @@ nlohmann::json RunChartImpl(const ChartVerbOptions& o) {
       for (int c = 0; c < 3; ++c) response[3 * k + c] = static_cast<float>(capture::SrgbDecode(k / 255.0));
   }
   const capture::ColorCorrection c = capture::CorrectionFromChartImage(o.image, response, o.chart, o.label);
-  WriteFileAtomically(o.out, capture::ColorCorrectionToJson(c).dump(2) + "\n");
+  WriteJsonFileAtomically(o.out, capture::ColorCorrectionToJson(c));  // refuses CORRECTION.csv and the like
   const nlohmann::json summary = ChartSummary(c);
   Log("chart", "wrote " + o.out + ": mean CIEDE2000 " + FormatNumber(summary["delta_e2000_before"]["mean"].get<double>()) +
                    " -> " + FormatNumber(summary["delta_e2000_after"]["mean"].get<double>()) + " (" +

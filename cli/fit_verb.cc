@@ -14,6 +14,7 @@
 #include "fit_option_args.h"
 #include "option_values.h"
 #include "fit_cloud_mask.h"
+#include "finite_output.h"
 #include "fit_report.h"
 #include "report_verb.h"
 #include "skycal/core/staged_directory.h"
@@ -123,6 +124,9 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   std::set<std::string> names;
   for (const std::string& path : o.references) {
     refs.push_back(fit::LoadReference(path, o.fit));
+    const fit::MaskCounts& n = refs.back().counts;  // the user's mask and the sun cone are choices, not damage
+    RequireValidShare(path, n.sky, n.sky + n.invalid + n.clipped, "fittable sky pixels of those above the horizon "
+                      "outside --mask and the sun cone");
     if (!names.insert(refs.back().name).second) {
       throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
     }
@@ -275,15 +279,25 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                                        {"options", resolved},
                                        {"final_errors", per_ref}}}};
   render::SavePreset(result.preset, out / "preset.json", &provenance);
-  WriteFitReport(out / "report.png", refs, result);
-  WriteFitPanels(out / "fit", refs, result);
+  // The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
+  // file) leaves them out, never the fit.
+  bool previews = true;
+  try {
+    WriteFitReport(out / "report.png", refs, result);
+    WriteFitPanels(out / "fit", refs, result);
+  } catch (const Error& e) {
+    previews = false;
+    Log("fit", std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
+  }
   // What the report reads beside the errors: the images, the fitted sun at the ground
   // (model units: lux with --absolute) and the cloud mask.
   for (size_t r = 0; r < refs.size(); ++r) {
     nlohmann::json& j = summary["references"][r];
-    j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
-                   {"fit", "fit/" + refs[r].name + ".fit.png"},
-                   {"error", "fit/" + refs[r].name + ".error.png"}};
+    if (previews) {
+      j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
+                     {"fit", "fit/" + refs[r].name + ".fit.png"},
+                     {"error", "fit/" + refs[r].name + ".error.png"}};
+    }
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
     j["sun_illuminance_at_ground_lux"] = skycal::Rec709Luminance(sun);
     if (o.cloud_mask) j["cloud_mask"] = cloud_json[r];
@@ -380,6 +394,9 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
   c.cloud_stats.renders = 2 * c.cloud_stats.maps;
+  if (c.clouds.mode != "auto" && c.clouds.mode != "on" && c.clouds.mode != "off" && c.clouds.mode != "stats") {
+    throw Error("--clouds: unknown mode '" + c.clouds.mode + "' (expected auto, on, off or stats)");
+  }
   if (c.clouds.mode == "stats") {
     if (!c.clouds.preset.empty()) throw Error("--clouds stats: the shapes are unknown: --cloud-preset does not apply");
     c.cloud_stats.enabled = true;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "option_values.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sun_detect.h"
@@ -195,6 +196,7 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
   { AtomicOutput probe(o.out_path); }  // fail on an unwritable output before reading
 
   ExrRGB src = ReadExrRGB(o.in_path);
+  RequireValidShare(o.in_path, src.image);
   const std::string sha = Sha256OfFile(o.in_path);
   const int w = src.image.width, h = src.image.height;
   if (w != 2 * h || h < 2) {
@@ -214,7 +216,7 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
   if (src_census.negative + src_census.nan + src_census.inf > 0) {
     warnings.push_back(o.in_path + ": " + std::to_string(src_census.negative) + " negative, " +
                        std::to_string(src_census.nan) + " NaN, " + std::to_string(src_census.inf) +
-                       " Inf pixels (lossy-compression ringing?) kept as they are; the fit masks them");
+                       " Inf pixels (lossy-compression ringing?): non-finite ones written as 0, which the fit masks like negative ones");
   }
 
   nlohmann::json sun = nullptr;
@@ -256,6 +258,7 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
   frame.extra.strings["skycalSourceConvention"] = ToString(o.convention);
   frame.extra.strings["skycalSunSource"] = sun_source;
   frame.extra.strings["skycalUnits"] = "relative scene-linear Rec.709 (source not calibrated: exposure unknown)";
+  const FiniteOutputCounts written = PrepareImageForWrite("import", o.out_path, &frame.radiance, o.half);
   capture::WriteLatLongFrame(o.out_path, frame, o.half);
 
   for (const auto& wmsg : warnings) Log("import", "warning: " + wmsg.get<std::string>());
@@ -280,6 +283,8 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
           {"pixels", {{"source", ToJson(src_census)}, {"output", ToJson(out_census)}}},
           {"sun", sun},
           {"half", o.half},
+          {"written_as_zero", written.non_finite},
+          {"half_clamped", written.half_clamped},
           {"time_ms", ms},
           {"warnings", warnings}};
 }
@@ -289,7 +294,8 @@ ImportOptions ParseImportArgs(int argc, char** argv) {
                      "  skycal import --in SRC.exr --out FRAME.exr [--sun-dir X,Y,Z | --detect-sun]\n"
                      "                [--source-convention blender|exr] [--half] [--json]",
                      "Pixels are resampled bilinearly (wrapping in longitude). Negative, NaN and Inf source pixels\n"
-                     "(e.g. DWAB ringing) are kept as they are (the fit masks them) and counted in the summary.");
+                     "(e.g. DWAB ringing) are counted in the summary and masked: the fit leaves values <= 0 out;\n"
+                     "NaN and Inf are written as 0 (no non-finite value is written).");
   ImportOptions o;
   std::optional<std::string> sun_dir, convention;
   bool json = false;

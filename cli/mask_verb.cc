@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "option_values.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/atomic_file.h"
@@ -38,6 +39,7 @@ nlohmann::json RunMaskImpl(const MaskOptions& o) {
   RefuseOutputsOverInputs({{"--out", o.out_path}}, {{"--reference", o.reference_path}});
   { AtomicOutput probe(o.out_path); }  // fail on an unwritable output before the work
   const capture::LatLongFrame frame = capture::ReadLatLongFrame(o.reference_path);
+  RequireValidShare(o.reference_path, frame.radiance);
   Log("mask", "segmenting " + o.reference_path + " (" + std::to_string(frame.radiance.width) + "x" +
                   std::to_string(frame.radiance.height) + (frame.sun_direction ? ", sun known" : ", no sun direction") + ")");
   const capture::SkyMask m = capture::EstimateSkyMask(frame.radiance, frame.sun_direction, o.segmentation);

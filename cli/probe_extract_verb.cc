@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "option_values.h"
 #include "skycal/capture/rig.h"
 #include "skycal/core/atomic_file.h"
@@ -55,6 +56,7 @@ nlohmann::json RunProbeExtractImpl(const ProbeExtractOptions& o) {
   RefuseOutputsOverInputs({{"--out", o.out}}, {{"--image", o.image}});
   { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
   const ExrRGB exr = ReadExrRGB(o.image);
+  RequireValidShare(o.image, exr.image);
   const auto rotation = capture::RotationFromYawPitchRollDeg(o.camera_ypr_deg[0], o.camera_ypr_deg[1], o.camera_ypr_deg[2]);
   capture::ProbeOptions po;
   po.clip_level = o.clip_level;

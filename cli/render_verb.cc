@@ -8,6 +8,7 @@
 #include "skycal/core/atomic_file.h"
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "option_values.h"
 #include "sun_choice.h"
 #include "skycal/capture/latlong_frame.h"
@@ -162,6 +163,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   frame.extra.strings["skycalBackend"] = render::ToString(o.backend);
   frame.extra.strings["skycalUnits"] = "cd/m^2 per channel, scene-linear Rec.709";
 
+  PrepareImageForWrite("render", o.out_exr, &frame.radiance, o.half);
   capture::WriteLatLongFrame(o.out_exr, frame, o.half);
   nlohmann::json preview = nullptr;
   if (!o.out_png.empty()) {

@@ -8,6 +8,17 @@
 
 namespace skycal::cli {
 
+namespace {
+
+// Plots are optional: a machine where PLplot cannot draw gets the page without them.
+void LogSkippedPlots(const std::string& verb, const report::ReportSummary& s) {
+  if (s.plots_skipped == 0) return;
+  Log(verb, "plots skipped: " + std::to_string(s.plots_skipped) + " chart(s) left out of the report, " +
+                s.plots_skipped_why + "; the results are complete");
+}
+
+}  // namespace
+
 bool ReportVerbOptions::IsValid(std::string* why) const {
   if (dir.empty()) {
     *why = "expected the directory to report on: skycal report DIR [--out report.html]";
@@ -25,9 +36,10 @@ nlohmann::json RunReportImpl(const ReportVerbOptions& o) {
                     std::to_string(s.frames) + " frame(s), " + std::to_string(s.exports) + " export(s), " +
                     std::to_string(s.benches) + " bench run(s), " + std::to_string(s.images) + " images, " +
                     std::to_string(s.plots) + " plots)");
+  LogSkippedPlots("report", s);
   return {{"out", s.path},      {"bytes", s.bytes},     {"fits", s.fits},     {"frames", s.frames},
           {"fit_sections", s.fit_sections}, {"exports", s.exports}, {"benches", s.benches}, {"images", s.images}, {"plots", s.plots},
-          {"day", s.day}};
+          {"day", s.day}, {"plots_skipped", s.plots_skipped}};
 }
 
 ReportVerbOptions ParseReportArgs(int argc, char** argv) {
@@ -70,6 +82,7 @@ void WriteVerbReport(const std::string& verb, const std::string& staging_dir, in
   }
   Log(verb, "report.html: " + std::to_string(s.images) + " images, " + std::to_string(s.plots) + " plots, " +
                 std::to_string(s.bytes / 1024) + " KiB");
+  LogSkippedPlots(verb, s);
 }
 
 }  // namespace skycal::cli

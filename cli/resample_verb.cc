@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -48,8 +49,14 @@ nlohmann::json RunResampleImpl(const ResampleOptions& o) {
   Log("resample", o.in + ": " + std::to_string(w) + "x" + std::to_string(h) + " -> " + std::to_string(w) + "x" +
                       std::to_string(m.rows) + " (horizon row " + FormatNumber(m.HorizonRow()) + ", b_up " +
                       FormatNumber(m.b_up) + ", b_down " + FormatNumber(m.b_down) + ")");
-  frame.radiance = ResampleToRows(frame.radiance, m);
+  long long unsourced = 0;
+  frame.radiance = ResampleToRows(frame.radiance, m, &unsourced);
+  if (unsourced > 0) {
+    Log("resample", o.out + ": " + std::to_string(unsourced) +
+                        " values cover only invalid (non-finite) source pixels: written as 0, which the fit masks");
+  }
   frame.row_mapping = m;
+  PrepareImageForWrite("resample", o.out, &frame.radiance, o.half);
   capture::WriteLatLongFrame(o.out, frame, o.half);
   // Rows per degree as the file has them (the rounding of rows moves them slightly).
   const double uniform = (nominal - 1) / 180.0;

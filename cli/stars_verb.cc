@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "command_line.h"
+#include "finite_output.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -55,7 +56,8 @@ nlohmann::json RunStarsImpl(const StarsOptions& o) {
   }
   Log("stars", "finding stars in " + o.reference + " (" + std::to_string(in.image.width) + "x" +
                    std::to_string(in.image.height) + ")");
-  const capture::StarRemovalResult r = capture::RemoveStars(in.image, o.removal);
+  capture::StarRemovalResult r = capture::RemoveStars(in.image, o.removal);
+  PrepareImageForWrite("stars", o.out, &r.image, false);
   ExrAttributes attrs = in.attributes;
   attrs.floats["skycalStarsRemoved"] = static_cast<float>(r.stars);
   if (!o.mask_out.empty()) {

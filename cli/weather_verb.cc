@@ -5,6 +5,7 @@
 
 #include "command_line.h"
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -36,6 +37,7 @@ bool WeatherOptions::IsValid(std::string* why) const {
 nlohmann::json RunWeatherImpl(const WeatherOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  RequireExtension("--out", o.out, {".exr"}, "the weather map (OpenEXR)");
   Log("weather", "procedural map, seed " + std::to_string(o.seed) + ", " + std::to_string(o.size) + "x" +
                      std::to_string(o.size) + " over " + std::to_string(static_cast<int>(o.extent_m)) + " m");
   const clouds::WeatherMap map = clouds::NoiseWeatherMap(static_cast<uint64_t>(o.seed), o.size, o.extent_m, o.noise);

@@ -616,6 +616,21 @@ TEST(BenchCompare, FlagsAPlanted2xRegressionAndNotA5PercentWobble) {
   EXPECT_EQ(u.outcome_worse, 1);
 }
 
+TEST(BenchCompare, AnOldMedianOfZeroIsNotSame) {
+  // A case too fast to time in the old run (median 0 ms) and measurable now: a regression
+  // of unbounded ratio, not "same" (the ratio used to be NaN, which no test flags).
+  Results old_run, new_run;
+  old_run.cases = {MakeCase("x", {{"a", "1"}}, T(0, 0, 0, 1), 0.0), MakeCase("x", {{"a", "2"}}, T(0, 0, 0, 1), 0.0)};
+  new_run.cases = {MakeCase("x", {{"a", "1"}}, T(5, 5, 5, 1), 0.0), MakeCase("x", {{"a", "2"}}, T(0, 0, 0, 1), 0.0)};
+  const Comparison c = Compare(old_run, new_run, CompareOptions{});
+  ASSERT_EQ(c.cases.size(), 2u);
+  EXPECT_EQ(c.cases[0].verdict, Verdict::kSlower);
+  EXPECT_TRUE(std::isinf(c.cases[0].ratio));
+  EXPECT_EQ(c.cases[1].verdict, Verdict::kSame);  // 0 then 0: the same
+  EXPECT_EQ(c.cases[1].ratio, 1.0);
+  EXPECT_TRUE(c.Regressed());
+}
+
 TEST(BenchStressTable, CountsOutcomesPerArea) {
   std::vector<CaseResult> cases;
   auto add = [&](const std::string& area, Outcome o, std::optional<bool> conv) {

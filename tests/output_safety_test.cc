@@ -217,6 +217,8 @@ TEST(OutputSafety, TemporaryNamesAreRecognisedExactly) {
   EXPECT_EQ(TemporaryOwnerPid(".sky.tmp-12-"), -1);
   EXPECT_EQ(TemporaryOwnerPid(".sky.tmp-"), -1);
   EXPECT_EQ(TemporaryOwnerPid(".tmp-12"), -1);
+  EXPECT_EQ(TemporaryOwnerPid("..out.tmp-4321-scratch"), 4321);  // bench's scratch
+  EXPECT_EQ(TemporaryOwnerPid("..out.tmp-4321-scratchy"), -1);
 }
 
 TEST(OutputSafety, AJsonSummaryThatCannotBeWrittenIsAnError) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -71,10 +72,15 @@ Comparison Compare(const Results& old_run, const Results& new_run, const Compare
     cc.old_error = p.error;
     cc.old_outcome = ToString(p.outcome);
     cc.noise = std::max({Spread(p.time), Spread(n.time), o.noise_floor});
-    cc.ratio = p.time.median_ms > 0.0 ? n.time.median_ms / p.time.median_ms : std::nan("");
+    // An old median of 0 (a case too fast to time then) against a measurable new one is
+    // an unbounded slowdown, not "same": ratio +inf. Both 0: the same.
+    cc.ratio = p.time.median_ms > 0.0   ? n.time.median_ms / p.time.median_ms
+               : n.time.median_ms > 0.0 ? std::numeric_limits<double>::infinity()
+               : n.time.median_ms == 0.0 && p.time.median_ms == 0.0 ? 1.0
+                                                                      : std::nan("");
     // Untimed cases (stress: one run each, the input's outcome is what matters) get no time verdict.
     const bool timed = p.timed && n.timed;
-    if (timed && std::isfinite(cc.ratio) && cc.ratio > 1.0 + cc.noise) cc.verdict = Verdict::kSlower;
+    if (timed && cc.ratio > 1.0 + cc.noise) cc.verdict = Verdict::kSlower;  // NaN compares false
     else if (timed && std::isfinite(cc.ratio) && cc.ratio < 1.0 / (1.0 + cc.noise)) cc.verdict = Verdict::kFaster;
     // Error: worse beyond the relative tolerance (plus a tiny absolute floor for ~0 errors),
     // or a number that became non-finite.

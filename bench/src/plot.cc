@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "skycal/core/error.h"
+#include "skycal/report/plot_devices.h"
 
 namespace skycal::bench {
 namespace {
@@ -212,6 +213,8 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
 
 void WriteParetoPlot(const ParetoPlot& p, const std::string& png_path, const std::string& svg_path) {
   for (const auto& [device, path] : {std::pair{std::string("pngcairo"), png_path}, std::pair{std::string("svgcairo"), svg_path}}) {
+    std::string why;
+    if (!report::PlotDeviceAvailable(device, &why)) throw Error(path + ": " + why);  // PLplot would exit()
     Draw(p, device, path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec) || std::filesystem::file_size(path, ec) == 0)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "skycal/core/error.h"
@@ -60,6 +61,8 @@ double Luminance(const float* p) {
   return std::isfinite(y) && y > 0.0 ? y : 0.0;
 }
 
+// Non-finite values (invalid pixels) are left out of the window; a window with none finite
+// gives NaN, which no comparison passes, so no candidate is found there.
 std::vector<float> LocalMedian(const std::vector<float>& lum, const Grid& g, int r) {
   std::vector<float> med(lum.size()), buf;
   buf.reserve((2 * r + 1) * (2 * r + 1));
@@ -67,7 +70,14 @@ std::vector<float> LocalMedian(const std::vector<float>& lum, const Grid& g, int
     for (int x = 0; x < g.w; ++x) {
       buf.clear();
       for (int dy = -r; dy <= r; ++dy)
-        for (int dx = -r; dx <= r; ++dx) buf.push_back(lum[g.I(x + dx, y + dy)]);
+        for (int dx = -r; dx <= r; ++dx) {
+          const float v = lum[g.I(x + dx, y + dy)];
+          if (std::isfinite(v)) buf.push_back(v);
+        }
+      if (buf.empty()) {
+        med[static_cast<size_t>(y) * g.w + x] = std::numeric_limits<float>::quiet_NaN();
+        continue;
+      }
       std::nth_element(buf.begin(), buf.begin() + buf.size() / 2, buf.end());
       med[static_cast<size_t>(y) * g.w + x] = buf[buf.size() / 2];
     }
@@ -77,7 +87,10 @@ std::vector<float> LocalMedian(const std::vector<float>& lum, const Grid& g, int
 
 double NoiseSigma(const std::vector<float>& lum, const std::vector<float>& med) {
   std::vector<float> dev;
-  for (size_t i = 0; i < lum.size(); i += 3) dev.push_back(std::abs(lum[i] - med[i]));
+  for (size_t i = 0; i < lum.size(); i += 3) {
+    const float d = std::abs(lum[i] - med[i]);
+    if (std::isfinite(d)) dev.push_back(d);
+  }
   if (dev.empty()) return 0.0;
   std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
   return 1.4826 * dev[dev.size() / 2];
@@ -219,7 +232,11 @@ StarRemovalResult RemoveStars(const ImageRGB& image, const StarRemovalOptions& o
     for (const auto& [x, y] : region) {
       for (int c = 0; c < 3; ++c) {
         buf.clear();
-        auto usable = [&](int px, int py) { return py >= 0 && py < g.h && res.mask[g.I(px, py)] < 2 && !cand[g.I(px, py)]; };
+        // A non-finite neighbour (an invalid pixel) never enters a replacement value.
+        auto usable = [&](int px, int py) {
+          return py >= 0 && py < g.h && res.mask[g.I(px, py)] < 2 && !cand[g.I(px, py)] &&
+                 std::isfinite(image.pixels[3 * g.I(px, py) + c]);
+        };
         for (int d = 1; d <= span; ++d) {
           if (usable(x - d, y) && usable(x + d, y))
             buf.push_back(PairMean(image.pixels[3 * g.I(x - d, y) + c], image.pixels[3 * g.I(x + d, y) + c]));

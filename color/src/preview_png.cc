@@ -8,6 +8,7 @@
 #include "skycal/color/preview.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal::color {
 namespace {
@@ -38,6 +39,7 @@ std::vector<uint8_t> EncodePng(const std::vector<uint8_t>& rgb, int width, int h
 
 PreviewReport WritePreviewPng(const ImageRGB& linear, const std::string& png_path, const PreviewOptions& options) {
   // Check the destination first (cheap, and AtomicOutput's errors name the path).
+  RefuseMismatchedExtension(png_path, ".png", "a PNG preview");
   AtomicOutput out(png_path);
   PreviewReport report;
   std::vector<uint8_t> png;

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal {
 namespace fs = std::filesystem;
@@ -22,6 +23,7 @@ AtomicOutput::AtomicOutput(std::string final_path) : final_path_(std::move(final
   if (dir.empty()) dir = ".";
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
+    if (fs::exists(dir, ec)) throw Error(final_path_ + ": cannot write, '" + dir.string() + "' is not a directory");
     throw Error(final_path_ + ": cannot write, directory '" + dir.string() + "' does not exist");
   }
   if (fs::is_directory(p, ec)) {
@@ -31,6 +33,7 @@ AtomicOutput::AtomicOutput(std::string final_path) : final_path_(std::move(final
     throw Error(final_path_ + ": cannot write, directory '" + dir.string() +
                 "' is not writable (" + std::strerror(errno) + ")");
   }
+  RefuseReplacingAnotherKind(final_path_);
   static std::atomic<int> counter{0};
   temp_path_ = (dir / ("." + p.filename().string() + ".tmp-" + std::to_string(::getpid()) +
                        "-" + std::to_string(counter++)))

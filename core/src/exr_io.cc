@@ -15,7 +15,10 @@
 #include <ImfVecAttribute.h>
 #include <half.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -24,6 +27,7 @@
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal {
 namespace {
@@ -53,7 +57,51 @@ std::pair<int, int> CheckReadableLayout(const std::string& path) {
   const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1, hh = static_cast<long long>(dw.max.y) - dw.min.y + 1;
   if (w <= 0 || hh <= 0) throw Error(path + ": empty data window");
   CheckImageSize(w, hh, path);
+  // A data window that is not the display window is a crop or a render region: read as a
+  // whole panorama it would put every pixel at the wrong direction. Refused, not guessed.
+  const Imath::Box2i disp = h.displayWindow();
+  if (dw != disp) {
+    auto box = [](const Imath::Box2i& b) {
+      return "(" + std::to_string(b.min.x) + ", " + std::to_string(b.min.y) + ") - (" + std::to_string(b.max.x) + ", " +
+             std::to_string(b.max.y) + ")";
+    };
+    throw Error(path + ": the data window " + box(dw) + " differs from the display window " + box(disp) +
+                ": a cropped or offset image (a render region) is not a whole frame; write the full display window "
+                "(e.g. oiiotool IN --fullpixels -o OUT)");
+  }
   return {static_cast<int>(w), static_cast<int>(hh)};
+}
+
+// Why `path` is not a readable regular file, in the user's terms: "no such file" only when
+// nothing is there.
+std::string NotAFileWhy(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ELOOP) return "a symlink loop";
+    if (errno == EACCES) return "permission denied";
+    struct stat lst {};
+    return ::lstat(path.c_str(), &lst) == 0 ? "a dangling symlink (its target does not exist)" : "no such file";
+  }
+  if (S_ISDIR(st.st_mode)) return "is a directory";
+  return "is not a regular file (a FIFO, socket or device)";
+}
+
+// A preset's LUT table (attribute skycalLut, written by render's SavePreset) is replaced
+// only by another LUT: an image written over it would leave a preset that no longer loads.
+void RefuseReplacingAPresetLut(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return;
+  std::string lut;
+  try {
+    const Imf::InputFile file(path.c_str());
+    if (const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>("skycalLut")) lut = a->value();
+  } catch (const std::exception&) {
+    return;  // not a readable EXR: AtomicOutput's kind check speaks for it
+  }
+  if (!lut.empty()) {
+    throw Error(path + ": refusing to replace it, it is a preset's LUT table ('" + lut +
+                "'); the preset would no longer load (choose another output path)");
+  }
 }
 
 void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
@@ -215,6 +263,8 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
     }
   }
   if (image.empty()) throw Error(path + ": refusing to write an empty image");
+  RefuseMismatchedExtension(path, ".exr", "an OpenEXR image");
+  if (!attributes.strings.count("skycalLut")) RefuseReplacingAPresetLut(path);
   AtomicOutput out(path);
   ExrWriteReport report;
   const size_t n = static_cast<size_t>(image.width) * image.height;
@@ -222,8 +272,11 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
   if (type == ExrPixelType::kHalf) {
     halves.resize(n * 3);
     for (size_t i = 0; i < n * 3; ++i) {
-      halves[i] = half(image.pixels[i]);
-      if (std::isfinite(image.pixels[i]) && halves[i].isInfinity()) ++report.half_overflow_count;
+      // Finite values beyond FP16's range are clamped to +-65504 (HALF_MAX), never +-inf.
+      const float v = image.pixels[i];
+      const bool over = std::isfinite(v) && std::abs(v) > HALF_MAX;
+      halves[i] = half(over ? std::copysign(HALF_MAX, v) : v);
+      report.half_overflow_count += over ? 1 : 0;
     }
   }
   try {
@@ -257,7 +310,7 @@ ExrWriteReport WriteExrRGBWithPlanes(const std::string& path, const ImageRGB& im
 
 std::vector<float> ReadExrChannel(const std::string& path, const std::string& channel, int* width, int* height) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   LimitOpenExrAllocations();
   CheckAttributeSizes(path);
   try {
@@ -287,7 +340,7 @@ ExrRGB ReadExrRGB(const std::string& path) { return ReadExrRGB(path, nullptr); }
 ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
-    throw Error(path + ": no such file (expected an OpenEXR image)");
+    throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   }
   ExrRGB result;
   LimitOpenExrAllocations();
@@ -332,7 +385,7 @@ ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, i
 
 ExrHeaderInfo ReadExrHeader(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such file (expected an OpenEXR image)");
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": " + NotAFileWhy(path) + " (expected an OpenEXR image)");
   LimitOpenExrAllocations();
   CheckAttributeSizes(path);
   ExrHeaderInfo info;

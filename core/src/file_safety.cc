@@ -1,13 +1,91 @@
 #include "skycal/core/file_safety.h"
+#include "skycal/core/output_kind.h"
 
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <fstream>
 
 #include "skycal/core/error.h"
 
 namespace skycal {
 namespace fs = std::filesystem;
+
+namespace {
+
+std::string LowerExtension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// The first `n` bytes of a regular file (fewer when it is shorter).
+std::string Head(const std::string& path, size_t n) {
+  std::ifstream f(path, std::ios::binary);
+  std::string s(n, '\0');
+  f.read(s.data(), static_cast<std::streamsize>(n));
+  s.resize(static_cast<size_t>(std::max<std::streamsize>(f.gcount(), 0)));
+  return s;
+}
+
+// Empty when the existing regular file at `path` is of the kind its extension names.
+std::string KindMismatch(const std::string& path, const std::string& ext) {
+  if (ext == ".exr") return Head(path, 4) == std::string("\x76\x2f\x31\x01", 4) ? "" : "not an OpenEXR file";
+  if (ext == ".png") return Head(path, 8) == "\x89PNG\r\n\x1a\n" ? "" : "not a PNG file";
+  if (ext == ".json") {
+    const std::string h = Head(path, 4096);
+    const size_t at = h.find_first_not_of(" \t\r\n");
+    return at != std::string::npos && (h[at] == '{' || h[at] == '[') ? "" : "not a JSON file";
+  }
+  if (ext == ".html" || ext == ".htm") {
+    // The report's first lines hold the marker; 64 KiB covers the style sheet before it.
+    return Head(path, 65536).find("Written by skycal") != std::string::npos ? "" : "an HTML page skycal did not write";
+  }
+  return "";
+}
+
+}  // namespace
+
+void RefuseReplacingAnotherKind(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;  // nothing there (or a dangling link): nothing lost
+  if (S_ISDIR(st.st_mode)) return;             // the writers' own checks name directories
+  if (!S_ISREG(st.st_mode)) {
+    throw Error(path + ": refusing to replace it, it exists and is not a regular file (a FIFO, socket or device); "
+                       "choose another output path");
+  }
+  const std::string ext = LowerExtension(path);
+  const std::string mismatch = KindMismatch(path, ext);
+  if (!mismatch.empty()) {
+    throw Error(path + ": refusing to replace it, the existing file is " + mismatch + " (its name says " + ext +
+                "); remove it or choose another output path");
+  }
+}
+
+void RefuseMismatchedExtension(const std::string& path, const std::string& extension, const std::string& what) {
+  const std::string ext = LowerExtension(path);
+  if (ext == extension || (extension == ".html" && ext == ".htm")) return;
+  for (const char* known : {".exr", ".png", ".jpg", ".jpeg", ".tif", ".tiff", ".hdr", ".bmp", ".webp", ".svg", ".json",
+                            ".html", ".htm", ".csv", ".txt", ".md", ".cube", ".ocio", ".yaml"}) {
+    if (ext == known) {
+      throw Error(path + ": " + what + " is written here, but the name ends in " + ext + " (expected a name ending in " +
+                  extension + ")");
+    }
+  }
+}
+
+void RequireExtension(const std::string& role, const std::string& path, const std::vector<std::string>& extensions,
+                      const std::string& what) {
+  const std::string ext = LowerExtension(path);
+  for (const std::string& e : extensions) {
+    if (ext == e) return;
+  }
+  std::string list;
+  for (const std::string& e : extensions) list += (list.empty() ? "" : " or ") + e;
+  throw Error(role + " " + path + ": " + what + " is written there, expected a name ending in " + list);
+}
 
 bool SameFile(const std::string& a, const std::string& b) {
   struct stat sa {}, sb {};

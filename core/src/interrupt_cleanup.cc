@@ -98,6 +98,8 @@ long TemporaryOwnerPid(const std::string& name) {
     size_t digits = 0;
     while (i < name.size() && name[i] >= '0' && name[i] <= '9' && digits < 10) pid = pid * 10 + (name[i++] - '0'), ++digits;
     if (digits == 0) continue;
+    // bench's scratch beside its staging directory: "..NAME.tmp-PID-scratch".
+    if (name.compare(i, std::string::npos, "-scratch") == 0) return pid > 0 ? pid : -1;
     if (i < name.size()) {  // an optional "-N" counter, then the end
       if (name[i] != '-' || i + 1 == name.size()) continue;
       size_t j = i + 1;

@@ -4,6 +4,7 @@
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/output_kind.h"
 
 namespace skycal {
 
@@ -17,6 +18,7 @@ nlohmann::json ReadJsonFile(const std::string& path) {
 }
 
 void WriteJsonFileAtomically(const std::string& path, const nlohmann::json& value) {
+  RefuseMismatchedExtension(path, ".json", "JSON");
   // Strings that are not UTF-8 (a file name in another encoding) are written with U+FFFD
   // in place of the bad bytes rather than failing after the work is done.
   WriteFileAtomically(path, value.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -141,9 +143,12 @@ RowMapping RowMapping::ForDensities(int source_height, double horizon_density, d
   return m;
 }
 
-ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& m) {
+namespace {
+
+// ResampleToRows for finite values: a non-finite value would poison the running integral
+// of its whole column below it.
+ImageRGB ResampleFiniteToRows(const ImageRGB& uniform, const RowMapping& m) {
   const int w = uniform.width, H = uniform.height;
-  if (H < 2 || w < 1) throw Error("ResampleToRows: the source needs at least 2 rows");
   // cum[k]: integral of the linear interpolant from row 0 to row k, per column and channel.
   const size_t stride = static_cast<size_t>(w) * 3;
   std::vector<double> cum(static_cast<size_t>(H) * stride, 0.0);
@@ -182,6 +187,36 @@ ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& m) {
         v = value(k, i) + (mid - k) * (value(k + 1, i) - value(k, i));
       }
       out.pixels[static_cast<size_t>(y) * stride + i] = static_cast<float>(v);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& m, long long* unsourced) {
+  const int w = uniform.width, H = uniform.height;
+  if (H < 2 || w < 1) throw Error("ResampleToRows: the source needs at least 2 rows");
+  if (unsourced) *unsourced = 0;
+  const size_t stride = static_cast<size_t>(w) * 3;
+  std::vector<uint8_t> bad_column(stride, 0);  // per column and channel: holds a non-finite value
+  ImageRGB zeroed = uniform, valid(w, H);
+  bool any_bad = false;
+  for (size_t p = 0; p < uniform.pixels.size(); ++p) {
+    const bool ok = std::isfinite(uniform.pixels[p]);
+    valid.pixels[p] = ok ? 1.0f : 0.0f;
+    if (!ok) zeroed.pixels[p] = 0.0f, bad_column[p % stride] = 1, any_bad = true;
+  }
+  ImageRGB out = ResampleFiniteToRows(zeroed, m);
+  if (!any_bad) return out;  // bit-identical to the unmasked integral
+  const ImageRGB weight = ResampleFiniteToRows(valid, m);
+  for (size_t p = 0; p < out.pixels.size(); ++p) {
+    if (!bad_column[p % stride]) continue;
+    if (weight.pixels[p] >= 0.5f) {
+      out.pixels[p] /= weight.pixels[p];
+    } else {
+      out.pixels[p] = 0.0f;
+      if (unsourced) ++*unsourced;
     }
   }
   return out;

@@ -14,11 +14,14 @@ namespace skycal {
 namespace fs = std::filesystem;
 namespace {
 
-// Files (not directories) below `dir`, as generic relative paths, sorted.
-std::vector<std::string> FilesBelow(const fs::path& dir) {
+// Files (not directories) below `dir`, as generic relative paths, sorted; with `folders`,
+// the directories too, each with a trailing '/'.
+std::vector<std::string> FilesBelow(const fs::path& dir, bool folders = false) {
   std::vector<std::string> files;
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
-    if (!it->is_directory()) files.push_back(fs::relative(it->path(), dir).generic_string());
+    const std::string rel = fs::relative(it->path(), dir).generic_string();
+    if (!it->is_directory()) files.push_back(rel);
+    else if (folders && !it->is_symlink()) files.push_back(rel + "/");
   }
   std::sort(files.begin(), files.end());
   return files;
@@ -50,6 +53,21 @@ void RequireReplaceable(const fs::path& dir, const std::string& shown, const std
     if (!listed.count(f)) {
       throw Error(shown + ": holds '" + f + "', which the earlier `skycal " + verb +
                   "` run did not write: refusing to replace the directory and lose it" + how);
+    }
+  }
+  // Folders (empty ones too) and symbolic links to folders are not files: a folder holding
+  // none of the listed files, and any link, are the user's.
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
+    const std::string rel = fs::relative(it->path(), dir).generic_string();
+    const bool link = it->is_symlink(), folder = !link && it->is_directory();
+    if (!link && !folder) continue;
+    bool ours = false;
+    // A folder the marker lists (rel + "/"), or, in a marker from before folders were
+    // listed, one holding a listed file.
+    for (const std::string& f : listed) ours = ours || (folder && f.rfind(rel + "/", 0) == 0);
+    if (!ours) {
+      throw Error(shown + ": holds the " + (link ? "symbolic link '" : "folder '") + rel + "', which the earlier `skycal " +
+                  verb + "` run did not make: refusing to replace the directory and lose it" + how);
     }
   }
 }
@@ -89,7 +107,7 @@ StagedDirectory::~StagedDirectory() {
 
 void StagedDirectory::Commit() {
   WriteJsonFileAtomically((staging_ / kOutputMarker).string(),
-                          {{"verb", verb_}, {"files", FilesBelow(staging_)},
+                          {{"verb", verb_}, {"files", FilesBelow(staging_, true)},
                            {"note", "written by skycal: a later `skycal " + verb_ +
                                         " --out` may replace this directory only while it holds just these files"}});
   const fs::path old = final_.parent_path() / ("." + final_.filename().string() + ".old-" + std::to_string(::getpid()));

@@ -1,16 +1,23 @@
 #include "skycal/render/preset.h"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <sstream>
+#include <thread>
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/json_schema.h"
 #include "skycal/core/version.h"
@@ -306,6 +313,20 @@ std::vector<std::string> PresetFiles(const std::string& json_path) {
   return files;
 }
 
+namespace {
+
+// Test hook: SKYCAL_TEST_STOP_BETWEEN_FILES=N sends SIGTERM to this process after the N-th
+// file of a preset is in place, and waits long enough for the interrupt watcher to act
+// (interrupt_cleanup.h); tests prove that the preset on disk is still one whole preset.
+void StopBetweenFilesForTests(size_t committed) {
+  const char* env = std::getenv("SKYCAL_TEST_STOP_BETWEEN_FILES");
+  if (env == nullptr || std::strtoul(env, nullptr, 10) != committed) return;
+  ::kill(::getpid(), SIGTERM);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+}
+
+}  // namespace
+
 void SavePreset(const Preset& preset, const std::string& json_path, const json* extra) {
   ValidatePreset(preset, json_path);
   const std::vector<std::string> files = PresetOutputFiles(json_path, preset.variant);
@@ -325,7 +346,13 @@ void SavePreset(const Preset& preset, const std::string& json_path, const json* 
     for (auto it = extra->begin(); it != extra->end(); ++it) j[it.key()] = it.value();
   }
   WriteJsonFileAtomically(outs.back()->temp_path(), j);
-  for (auto& out : outs) out->Commit();
+  // The renames are one unit: an interruption waits until the last (the JSON) is done, so a
+  // signal never leaves new LUTs beside the old JSON (which then no longer loads).
+  InterruptCleanupCriticalSection whole;
+  for (size_t k = 0; k < outs.size(); ++k) {
+    outs[k]->Commit();
+    if (k + 1 < outs.size()) StopBetweenFilesForTests(k + 1);
+  }
 }
 
 double LutOneMinusCosThetaMax(const LutGrid& g) { return 1.0 - std::cos(g.theta_max_deg * M_PI / 180.0); }

@@ -10,6 +10,7 @@
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/report/plot_devices.h"
 
 namespace skycal::report {
 namespace {
@@ -134,6 +135,8 @@ void Draw(const Chart& chart, const std::string& path) {
 }  // namespace
 
 std::string ChartSvg(const Chart& chart) {
+  std::string why;
+  if (!PlotDeviceAvailable("svgcairo", &why)) throw Error("chart '" + chart.title + "': " + why);  // PLplot would exit()
   const std::string path = ScratchPath();
   TemporaryGuard guard(path);
   struct Remove {

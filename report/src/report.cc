@@ -9,6 +9,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/output_kind.h"
 #include "skycal/core/version.h"
 #include "skycal/report/html.h"
 #include "sources.h"
@@ -85,6 +86,14 @@ bool ReportOptions::IsValid(std::string* why) const {
     *why = "--out " + out_path + ": is a directory (expected the HTML file to write)";
     return false;
   }
+  if (!out_path.empty()) {
+    try {
+      RequireExtension("--out", out_path, {".html", ".htm"}, "the HTML report");
+    } catch (const Error& e) {
+      *why = e.what();
+      return false;
+    }
+  }
   return true;
 }
 
@@ -133,7 +142,9 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
   }
   const std::string name = DisplayName(root);
   const std::string title = o.title.empty() ? "skycal report: " + name : o.title;
-  std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + EscapeHtml(title) +
+  // The comment marks the page as skycal's: a later --out may replace it, nothing else
+  // (output_kind.h, RefuseReplacingAnotherKind).
+  std::string html = "<!DOCTYPE html>\n<!-- Written by skycal report -->\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + EscapeHtml(title) +
                      "</title>\n<style>" + kStyle + "</style>\n</head>\n<body>\n<h1>" + EscapeHtml(title) + "</h1>\n";
   html += "<p class=\"note\">Written by skycal " + std::string(kSkycalVersion) + " at " + UtcNow() + " from " +
           EscapeHtml(name) + ": " + std::to_string(s.fits.size()) + " fit(s), " + std::to_string(s.exports.size()) +
@@ -148,6 +159,8 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
   sum.benches = static_cast<int>(s.benches.size());
   sum.images = counts.images;
   sum.plots = counts.plots;
+  sum.plots_skipped = counts.plots_skipped;
+  sum.plots_skipped_why = counts.plots_skipped_why;
   sum.bytes = static_cast<long long>(html.size());
   return sum;
 }

@@ -10,6 +10,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/report/html.h"
+#include "skycal/report/plot_devices.h"
 
 namespace skycal::report {
 namespace {
@@ -26,6 +27,12 @@ std::string PlotImg(const Chart& chart, PageCounts* counts) {
     }
   }
   if (!any) return "<p class=\"note\">" + E(chart.title) + ": no value to plot in these files.</p>\n";
+  std::string why;
+  if (!PlotDeviceAvailable("svgcairo", &why)) {
+    ++counts->plots_skipped;
+    counts->plots_skipped_why = why;
+    return "<p class=\"note\">" + E(chart.title) + ": plot left out, " + E(why) + ".</p>\n";
+  }
   ++counts->plots;
   return "<img class=\"plot\" alt=\"" + E(chart.title) + "\" src=\"" + DataUri("image/svg+xml", ChartSvg(chart)) + "\">\n";
 }

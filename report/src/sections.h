@@ -11,6 +11,8 @@ namespace skycal::report {
 // Counts what went into the page (for ReportSummary and the log).
 struct PageCounts {
   int images = 0, plots = 0;
+  int plots_skipped = 0;          // PLplot cannot draw here (plot_devices.h)
+  std::string plots_skipped_why;  // the cause, once
 };
 
 // Every frame of the fits (one per reference) over time of day, or over frame order when a

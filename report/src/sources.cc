@@ -41,6 +41,17 @@ fs::path MatchReplacedName(const fs::path& p) {
   return p;
 }
 
+// Only the run's own files are embedded: a fit.json naming an absolute path or "../.."
+// would carry files from outside its directory into a page that is mailed alone.
+void RequireInside(const fs::path& dir, const fs::path& p, const std::string& where) {
+  std::error_code ec;
+  const fs::path d = fs::weakly_canonical(dir, ec), f = fs::weakly_canonical(p, ec);
+  if (std::mismatch(d.begin(), d.end(), f.begin(), f.end()).first != d.end()) {
+    throw Error(where + ": the image '" + p.string() + "' lies outside the fit's directory '" + d.string() +
+                "': a report embeds only the run's own files");
+  }
+}
+
 std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, const std::string& kind,
                       const std::string& name) {
   if (images) {
@@ -48,6 +59,7 @@ std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, 
     fs::path p = dir / f.String();
     if (!fs::is_regular_file(p)) p = MatchReplacedName(p);
     if (!fs::is_regular_file(p)) throw Error(f.Where() + ": the image '" + p.string() + "' does not exist");
+    RequireInside(dir, p, f.Where());
     return p.string();
   }
   const fs::path p = dir / "fit" / (name + "." + kind + ".png");

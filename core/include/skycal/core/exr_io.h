@@ -38,11 +38,11 @@ inline constexpr long long kMaxExrPixels = SKYCAL_EXR_MAX_PIXELS;
 inline constexpr int kMaxExrTileSide = 8192;
 
 // Writes R, G, B channels atomically (temp file + rename). Throws skycal::Error naming the
-// file on failure; no partial file is left. Half output turns finite values above 65504
-// into +inf, so callers that write half choose a pre-exposure first; the report counts
-// the values that overflowed.
+// file on failure; no partial file is left. Half output clamps finite values beyond 65504
+// (FP16's largest) to +-65504, never +-inf, and counts them; a name ending in another
+// format's extension (.png, .json, ...) is refused.
 struct ExrWriteReport {
-  long long half_overflow_count = 0;  // finite floats that became +-inf in half
+  long long half_overflow_count = 0;  // finite floats clamped to +-65504 in half
 };
 ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
                            const ExrAttributes& attributes,

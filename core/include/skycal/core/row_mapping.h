@@ -62,8 +62,12 @@ struct RowMapping {
 // the mapping is coarser than the source this averages the rows it covers (no aliasing);
 // where finer it interpolates. The horizon is an edge: a row above it reads the source's
 // rows above it only (the last two extended linearly to the horizon), likewise below.
-// Non-finite source values propagate to the rows they touch.
-ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& mapping);
+// Non-finite source values (invalid pixels) are masked: an output value averages the finite
+// source values it covers (the same integral of a 0/1 validity divides the integral of the
+// values with the invalid ones zeroed), so one NaN or inf never reaches another row's or
+// column's value. An output value that covers no finite source (validity integral below
+// one half) is written as 0 and counted in `*unsourced` (when given).
+ImageRGB ResampleToRows(const ImageRGB& uniform, const RowMapping& mapping, long long* unsourced = nullptr);
 
 // The height of a uniform lat-long at least as dense as `mapping` everywhere (its
 // densest rows are at the horizon), for rendering a model before ResampleToRows.

@@ -26,6 +26,10 @@ struct ReportSummary {
   int fit_sections = 0;      // fits shown in full (<= max_fit_sections)
   int exports = 0, benches = 0;
   int images = 0, plots = 0;  // embedded PNGs, PLplot charts
+  // Charts left out because PLplot cannot draw on this machine (plot_devices.h), and why;
+  // the page says so where each would be.
+  int plots_skipped = 0;
+  std::string plots_skipped_why;
   bool day = false;           // the time-of-day section was written (2 or more frames)
   long long bytes = 0;
 };
