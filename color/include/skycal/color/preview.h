@@ -57,8 +57,8 @@ std::vector<uint8_t> ToDisplay8(const ImageRGB& linear, const PreviewOptions& op
 void ConvertColorspace(ImageRGB& image, const std::string& from, const std::string& to,
                        const std::string& config_path = "");
 
-// $OCIO when set and non-empty, else the repo's config/skycal.ocio (path fixed at build
-// time).
+// $OCIO when set and non-empty, else the bundled config/skycal.ocio in the data directory
+// (skycal::DataPath, core/data_dir.h: the checkout, or share/skycal of an install).
 std::string DefaultConfigPath();
 
 }  // namespace skycal::color
