@@ -1,5 +1,5 @@
 // Display previews of linear HDR images through OpenColorIO, and plain colour-space
-// conversions. The default OCIO config is the repo's config/skycal.ocio (scene-linear
+// conversions. The default OCIO config is the bundled config/skycal.ocio (scene-linear
 // Rec.709 reference, sRGB display with an ACES filmic view and an un-tone-mapped view);
 // $OCIO overrides it with a studio config.
 #pragma once
