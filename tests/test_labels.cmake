@@ -13,7 +13,7 @@
 # quiet.
 
 # Measured (ms, under load): cloud_noise, fit_cloud_stats, hdr_merge, render_parity,
-# response_recovery, lens_unwrap, clouds_parity.
+# response_recovery, lens_unwrap, clouds_parity; cli_test.
 set(SKYCAL_SLOW_TESTS_MEASURED
   CloudNoiseCache.AFlippedByteAnywhereIsRegeneratedWithAWarning                 # 13752
   CloudNoiseCache.AConsistentCacheWithAValueOutOfRangeIsRegeneratedWithAWarning # 6090
@@ -29,6 +29,13 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   Unwrap.FisheyeRigRoundTripRecoversTheLatLong                                  # > 80000 (stopped)
   Unwrap.RotatedLatLongCameraRoundTrip                                          # not reached (after the above)
   CloudsParity.FloatCpuVsVulkanPerPixelAndDoubleVsVulkanStatistics              # > 150000 (stopped)
+  # cli_test through CTest at load average 16 (a bare `skycal --version` took ~2 s there,
+  # so only the tests at 20 s or more, dozens of binary runs each, are moved):
+  Cli.HelpListsEveryRegisteredOption                                            # 89019
+  Cli.OptionSyntaxAndStrictness                                                 # 51576
+  Cli.BadInputIsRefusedClearlyAndLeavesNothing                                  # 40789
+  Cli.FitBadInputLeavesNothing                                                  # 38695
+  Cli.FitWritesItsOutputsAndExportMakesGameTables                               # 20394
 )
 
 # Not timed: sorted by what they do (see above).
@@ -70,7 +77,6 @@ set(SKYCAL_SLOW_TESTS_BY_CONTENT
   ColorChart.CastInARealSkyFrameIsRecoveredByDetection
   ColorChart.ChartVerbAndCaptureThroughTheBinary
   Capture.BracketsOfAFisheyeBecomeTheLatLong
-  Cli.FitWritesItsOutputsAndExportMakesGameTables
 )
 
 set_tests_properties(${SKYCAL_SLOW_TESTS_MEASURED} ${SKYCAL_SLOW_TESTS_BY_CONTENT} PROPERTIES LABELS slow)
