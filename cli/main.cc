@@ -25,6 +25,7 @@
 #include "resample_verb.h"
 #include "weather_verb.h"
 #include "skycal/core/interrupt_cleanup.h"
+#include "skycal/core/data_dir.h"
 #include "skycal/core/version.h"
 
 namespace {
@@ -64,7 +65,8 @@ void PrintUsage() {
   std::cout << "skycal " << skycal::kSkycalVersion << ": calibration and fitting workbench for real-time game skies\n\n"
             << "usage: skycal VERB [options]   (skycal VERB --help for a verb's options)\n\nverbs:\n";
   for (const Verb& v : Verbs()) std::cout << "  " << v.name << std::string(std::strlen(v.name) < 12 ? 12 - std::strlen(v.name) : 1, ' ') << v.summary << "\n";
-  std::cout << "\n  --version   print the version\n";
+  std::cout << "\n  --version   print the version\n"
+            << "  --data-dir  print the directory of the bundled data (presets, OCIO config, tables) and its origin\n";
 }
 
 }  // namespace
@@ -79,6 +81,10 @@ int main(int argc, char** argv) {
   }
   if (!std::strcmp(argv[1], "--version")) {
     std::cout << "skycal " << skycal::kSkycalVersion << "\n";
+    return 0;
+  }
+  if (!std::strcmp(argv[1], "--data-dir")) {  // "<dir>\t<origin>": SKYCAL_DATA_DIR, install or source
+    std::cout << skycal::DataDir() << "\t" << skycal::DataDirOrigin() << "\n";
     return 0;
   }
   for (const Verb& v : Verbs()) {

@@ -5,13 +5,14 @@
 #include "option_values.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
+#include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
 namespace fs = std::filesystem;
 
-std::string DefaultCloudyPresetPath() { return std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json"; }
+std::string DefaultCloudyPresetPath() { return DataPath("datasets/presets/default_cloudy.json"); }
 
 clouds::MarchOptions CloudMarchOptions(const CloudOptions& o) {
   clouds::MarchOptions m = o.naive ? clouds::MarchOptions::Naive() : clouds::MarchOptions{};

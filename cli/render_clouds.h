@@ -27,7 +27,7 @@ struct CloudOptions {
   std::optional<std::string> cheap_light_opacity;
 };
 
-std::string DefaultCloudyPresetPath();  // datasets/presets/default_cloudy.json of this checkout
+std::string DefaultCloudyPresetPath();  // datasets/presets/default_cloudy.json in the data directory (core/data_dir.h)
 inline constexpr uint64_t kCloudNoiseSeed = 1;  // the noise every render uses (cached)
 
 // The march options the command line asks for; throws skycal::Error naming the option

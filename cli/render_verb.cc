@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "skycal/core/atomic_file.h"
+#include "skycal/core/data_dir.h"
 
 #include "command_line.h"
 #include "finite_output.h"
@@ -28,7 +29,7 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 
 }  // namespace
 
-std::string DefaultPresetPath() { return std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json"; }
+std::string DefaultPresetPath() { return DataPath("datasets/presets/default_clear.json"); }
 
 bool RenderOptions::IsValid(std::string* why) const {
   if (!ValidSunChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir, why)) return false;

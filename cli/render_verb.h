@@ -45,6 +45,6 @@ int RunRender(int argc, char** argv);
 // "lit" or "zero" (--ground of render and probe-predict); throws naming `option`.
 render::GroundMode ParseGroundMode(const std::string& text, const std::string& option);
 
-std::string DefaultPresetPath();  // datasets/presets/default_clear.json of this checkout
+std::string DefaultPresetPath();  // datasets/presets/default_clear.json in the data directory (core/data_dir.h)
 
 }  // namespace skycal::cli

@@ -464,30 +464,5 @@ TEST(HdrMergeExif, JpegRoundTripThroughLoader) {
   EXPECT_NE(ErrorOf([&] { capture::ReadExifExposure(dir / "none.jpg"); }).find("none.jpg: no such file"), std::string::npos);
 }
 
-// --- timings --------------------------------------------------------------------------------------
-
-// Not a benchmark (the machine is shared): prints the stages of one load + merge of
-// 7 x 1024x512 8-bit PNG brackets, and the merge on 1 vs 2 threads.
-TEST(HdrMergeTiming, SevenBrackets1024x512) {
-  const SyntheticBrackets s = Make(CameraCurve::kFilmic);
-  testing::ScratchDir dir("hdr_timing");
-  const std::vector<std::string> paths = synthetic::WriteBracketsPng(s, dir.path().string());
-  std::vector<Bracket> br;
-  for (int threads : {1, 2}) {
-    nlohmann::json load;
-    br = capture::LoadBrackets(paths, BracketSpec().exposure_times_s, threads, &load);
-    std::printf("[timing] load (PNG decode, EXIF) threads %d: %s\n", threads, load["timings_ms"].dump().c_str());
-  }
-  for (ResponseModel m : {ResponseModel::kDebevec, ResponseModel::kRobertson, ResponseModel::kSrgb}) {
-    for (int threads : {1, 2}) {
-      MergeOptions o;
-      o.response = m;
-      o.threads = threads;
-      const MergeResult r = MergeBrackets(br, o);
-      std::printf("[timing] merge %-9s threads %d: %s\n", capture::ResponseModelName(m), threads,
-                  r.report["timings_ms"].dump().c_str());
-    }
-  }
-}
 }  // namespace
 }  // namespace skycal

@@ -25,6 +25,7 @@
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/composite.h"
 #include "skycal/clouds/weather_map.h"
+#include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/render/preset.h"
@@ -165,7 +166,7 @@ void TimeCloudRender(clouds::CloudRenderer& renderer, const CloudBenchScene& sce
 }
 
 CloudBenchScene LoadDefaultCloudyScene() {
-  const std::string path = std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_cloudy.json";
+  const std::string path = DataPath("datasets/presets/default_cloudy.json");
   CloudBenchScene s;
   s.preset = render::LoadPreset(path);
   s.params = clouds::ParseCloudSectionText(s.preset.clouds_json, path);

@@ -1,9 +1,10 @@
 #include "skycal/bench/suite.h"
+#include "skycal/core/data_dir.h"
 #include "suites_internal.h"
 
 namespace skycal::bench {
 
-std::string DefaultPresetPath() { return std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json"; }
+std::string DefaultPresetPath() { return DataPath("datasets/presets/default_clear.json"); }
 
 SuiteRegistry BuiltinSuites() {
   SuiteRegistry r;

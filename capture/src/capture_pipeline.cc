@@ -10,6 +10,7 @@
 #include "skycal/capture/sun_detect.h"
 #include "skycal/color/preview.h"
 #include "skycal/core/atomic_file.h"
+#include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
@@ -393,7 +394,7 @@ MaskResult MaskStage(const CaptureOptions& o, const UnwrapResult& u, SunResult* 
   req.height = o.height;
   req.sun_disc = false;
   const std::string preset =
-      o.clear_sky_preset.empty() ? std::string(SKYCAL_SOURCE_DIR) + "/datasets/presets/default_clear.json" : o.clear_sky_preset;
+      o.clear_sky_preset.empty() ? DataPath("datasets/presets/default_clear.json") : o.clear_sky_preset;
   const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(preset), req);
   const CloudMask cm = EstimateCloudProbability(u.frame, clear, sun->direction, {});
   r.planes.push_back({"mask.cloud", cm.probability});

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "skycal/color/preview.h"
+#include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 
 namespace skycal::color {
@@ -14,7 +15,7 @@ namespace skycal::color {
 std::string DefaultConfigPath() {
   const char* env = std::getenv("OCIO");
   if (env != nullptr && env[0] != '\0') return env;
-  return SKYCAL_DEFAULT_OCIO_CONFIG;  // compile definition: <repo>/config/skycal.ocio
+  return DataPath("config/skycal.ocio");  // the bundled config (core/data_dir.h)
 }
 
 namespace detail {

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 
 namespace skycal::refsky {
@@ -59,13 +60,13 @@ double ParseNumber(const std::string& text, const std::string& where, const char
 
 }  // namespace
 
-std::string DefaultCieCsvPath() { return std::string(SKYCAL_SHARED_DIR) + "/data/cie_general_sky.csv"; }
+std::string DefaultCieCsvPath() { return DataPath("datasets/tables/cie_general_sky.csv"); }
 
 std::vector<CieSkyType> LoadCieSkyTypes(const std::string& path) {
   std::ifstream in(path);
   if (!in) {
-    throw Error(path + ": cannot open the CIE standard general sky table (expected the shared data directory, "
-                "SKYCAL_SHARED_DIR = " SKYCAL_SHARED_DIR ")");
+    throw Error(path + ": cannot open the CIE standard general sky table (the data directory is " + DataDir() +
+                ", from " + DataDirOrigin() + ")");
   }
   const char* kHeader[] = {"sky_type", "gradation_group", "indicatrix_group", "a", "b", "c", "d", "e", "description"};
   std::string line;

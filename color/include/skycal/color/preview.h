@@ -1,5 +1,5 @@
 // Display previews of linear HDR images through OpenColorIO, and plain colour-space
-// conversions. The default OCIO config is the repo's config/skycal.ocio (scene-linear
+// conversions. The default OCIO config is the bundled config/skycal.ocio (scene-linear
 // Rec.709 reference, sRGB display with an ACES filmic view and an un-tone-mapped view);
 // $OCIO overrides it with a studio config.
 #pragma once
@@ -57,8 +57,8 @@ std::vector<uint8_t> ToDisplay8(const ImageRGB& linear, const PreviewOptions& op
 void ConvertColorspace(ImageRGB& image, const std::string& from, const std::string& to,
                        const std::string& config_path = "");
 
-// $OCIO when set and non-empty, else the repo's config/skycal.ocio (path fixed at build
-// time).
+// $OCIO when set and non-empty, else the bundled config/skycal.ocio in the data directory
+// (skycal::DataPath, core/data_dir.h: the checkout, or share/skycal of an install).
 std::string DefaultConfigPath();
 
 }  // namespace skycal::color

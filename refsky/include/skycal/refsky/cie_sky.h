@@ -12,7 +12,7 @@
 // At the horizon (Z = pi/2) cos Z = 0 and, since every standard type has b < 0,
 // b / cos Z -> -inf and phi(pi/2) = 1 exactly (the limit; evaluated explicitly, not as
 // exp(b / 0)).
-// Parameters a-e per type: /work/shared/data/cie_general_sky.csv (from the standard's
+// Parameters a-e per type: datasets/tables/cie_general_sky.csv (from the standard's
 // table 1 / table 2 grouping), read at run time.
 #pragma once
 #include <array>
@@ -29,7 +29,7 @@ struct CieSkyType {
   std::string description;
 };
 
-// Path of the bundled table: SKYCAL_SHARED_DIR "/data/cie_general_sky.csv".
+// Path of the bundled table: DataPath("datasets/tables/cie_general_sky.csv") (core/data_dir.h).
 std::string DefaultCieCsvPath();
 
 // Reads the table (header sky_type,gradation_group,indicatrix_group,a,b,c,d,e,description;
