@@ -342,6 +342,139 @@ CloudDecision DecideClouds(CloudMode mode, const std::vector<fit::Reference>& re
   return d;
 }
 
+namespace {
+
+void CheckSkyAndCloudsInputs(const std::vector<fit::Reference>& refs, CloudTermKind kind,
+                             const KnownCloudShapes* shapes, const CloudLightingOptions& o,
+                             const clouds::CloudRenderer* cloud_renderer) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  if (kind != CloudTermKind::kKnownShapes) throw Error("cloud lighting fit: unknown cloud term kind");
+  if (!shapes) throw Error("cloud lighting fit: the known-shapes term needs the shapes (--cloud-preset)");
+  if (!cloud_renderer) throw Error("cloud lighting fit: no cloud renderer");
+  if (!shapes->time_s_per_reference.empty() && shapes->time_s_per_reference.size() != refs.size()) {
+    throw Error("cloud lighting fit: one wind time per reference");
+  }
+  CheckShapes(*shapes);
+}
+
+// The cloud pixels of every reference (the known shapes at the start's light), which
+// leave the sky terms (kUserMasked) for the cloud blocks: fills each member's pixels and
+// request, and returns the references with those pixels masked.
+std::vector<fit::Reference> MaskCloudPixels(const std::vector<fit::Reference>& refs, const render::Preset& init,
+                                            const KnownCloudShapes& shapes, const CloudLightingOptions& o,
+                                            clouds::CloudRenderer* cloud_renderer, std::vector<Member>* members) {
+  std::vector<Member>& m = *members;
+  std::vector<fit::Reference> masked = refs;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const fit::Reference& ref = refs[r];
+    Member& x = m[r];
+    x.name = ref.name;
+    x.time_h = ref.time_of_day_h;
+    x.reference = &ref.radiance;
+    KnownCloudShapes own = shapes;
+    own.time_s = shapes.TimeOf(r);
+    x.request = RequestFor(ref.sun_dir, ref.radiance.width, ref.radiance.height, own);
+    const clouds::CloudImage start_image =
+        cloud_renderer->Render({&init, &shapes.params, shapes.noise, shapes.weather}, x.request);
+    std::vector<char> usable(ref.pixel_class.size());
+    for (size_t i = 0; i < usable.size(); ++i) usable[i] = ref.pixel_class[i] == fit::PixelClass::kSky ? 1 : 0;
+    x.pixels = CloudPixelsOf(usable, start_image, o.cloud_transmittance);
+    if (x.pixels.empty()) {
+      throw Error(ref.path + ": --clouds: the known cloud shapes (--cloud-preset, --cloud-time) cover none of the "
+                  "reference's fitted sky pixels (transmittance < " + FormatNumber(o.cloud_transmittance) + ")");
+    }
+    for (size_t i : x.pixels) masked[r].pixel_class[i] = fit::PixelClass::kUserMasked;
+    masked[r].counts.sky -= static_cast<long long>(x.pixels.size());
+    masked[r].counts.user_masked += static_cast<long long>(x.pixels.size());
+  }
+  return masked;
+}
+
+// The cloud blocks on the fitted sky (after its gauge move), values through the renderer.
+void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitResult& sky_fit,
+                      const KnownCloudShapes& shapes, const CloudLightingOptions& o,
+                      clouds::CloudRenderer* cloud_renderer, std::vector<Member>* members) {
+  std::vector<Member>& m = *members;
+  const std::unique_ptr<render::SkyRenderer> cpu_sky = render::CreateRenderer(render::Backend::kCpu);
+  for (size_t r = 0; r < refs.size(); ++r) {
+    Member& x = m[r];
+    render::RenderRequest req;
+    req.sun_dir = refs[r].sun_dir;
+    req.width = refs[r].radiance.width;
+    req.height = refs[r].radiance.height;
+    req.sun_disc = false;  // the sun cone is masked; the clouds' sun light is the direct term
+    const ImageRGB sky = cpu_sky->Render(sky_fit.preset, req);
+    x.sky_preset = sky_fit.preset;
+    x.exposure = sky_fit.references[r].exposure;
+    // The report's composites over the rendered sky (the backend's, disc included).
+    x.sky_exposed = sky_fit.references[r].rendered;
+    x.model = std::make_unique<CloudSampleModel>(
+        CloudSampleScene{sky_fit.preset, shapes.params, shapes.noise, shapes.weather, x.request},
+        ChooseSamples(x.pixels, refs[r].radiance, o.samples), CloudValueSource::kRenderer, cloud_renderer, o.threads);
+    x.model->SetSky(sky_fit.preset, sky, x.exposure);
+  }
+}
+
+// The outputs: each reference's composite with its fitted clouds over the fitted sky, and
+// the sky stages' times and renders (from the fit's report, out->clouds) in each cloud
+// report.
+void ComposeOutputs(const std::vector<fit::Reference>& refs, const std::vector<Member>& m,
+                    const KnownCloudShapes& shapes, const CloudDecision& decision,
+                    clouds::CloudRenderer* cloud_renderer, SkyCloudFit* out) {
+  const double cloud_pixels_s = out->clouds.cloud_pixels_time_s, sky_fit_s = out->clouds.sky_fit_time_s;
+  const int sky_renders = out->clouds.sky_renders;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    CloudLightingReport& cr = out->references[r];
+    fit::ReferenceFit& rf = out->sky.references[r];
+    const clouds::CloudImage* fitted = m[r].model->RenderedAt(GetCloudLighting(cr.fitted_params).data());
+    const clouds::CloudImage image =
+        fitted ? *fitted
+               : cloud_renderer->Render({&out->sky.preset, &cr.fitted_params, shapes.noise, shapes.weather}, m[r].request);
+    rf.rendered = Composite(m[r].sky_exposed, image, rf.exposure);
+    cr.clear.pixels = rf.errors.pixels;
+    cr.clear.rel_rmse = rf.errors.rel_rmse;
+    cr.clear.log_rmse = rf.errors.log_rmse;
+    rf.errors = fit::CompareToReference(refs[r], rf.rendered);  // the whole sky, cloud pixels included
+    cr.cloud_fraction = decision.cloud_fraction;
+    cr.cloud_pixels_time_s = cloud_pixels_s;
+    cr.sky_fit_time_s = sky_fit_s;
+    cr.sky_renders = sky_renders;
+  }
+}
+
+// The fit's report: the earliest reference's (a day: its values head the day's keys),
+// with the whole solve's counts and the time of every stage.
+void SummariseClouds(const std::vector<Member>& m, const CloudLightingOptions& o, Clock::time_point t0,
+                     SkyCloudFit* out) {
+  CloudLightingReport& rep = out->clouds;
+  size_t first = 0;
+  for (size_t r = 1; r < m.size(); ++r) {
+    if (m[r].time_h && m[first].time_h && *m[r].time_h < *m[first].time_h) first = r;
+  }
+  rep = out->references[first];
+  rep.renders = rep.jacobians = 0;
+  rep.render_time_s = rep.jacobian_time_s = 0.0;
+  long long pixels = 0;
+  for (const CloudLightingReport& cr : out->references) {
+    rep.renders += cr.renders;
+    rep.jacobians += cr.jacobians;
+    rep.render_time_s += cr.render_time_s;
+    rep.jacobian_time_s += cr.jacobian_time_s;
+    pixels += cr.cloud_pixels;
+  }
+  rep.time_s = Seconds(t0);
+  out->sky.time_s = rep.time_s;  // fit.json time_s: the whole fit, sky and clouds
+  out->sky.decisions.push_back(
+      {"sky terms without the cloud pixels",
+       std::to_string(pixels) + " pixels whose known-shape transmittance is below " + FormatNumber(o.cloud_transmittance) +
+           " are fitted by the cloud blocks (sky x T + clouds), not the sky rows; the sky is fitted first on its clear "
+           "pixels (its linear stage, as a clear sky), then the cloud blocks on it",
+       0.0, "measured: the sky fit's part of the whole fit is clouds.solve.sky_fit_time_s", std::nullopt, ""});
+}
+
+}  // namespace
+
 SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const render::Preset& init,
                             const fit::FitOptions& fo, render::SkyRenderer& renderer,
                             const std::vector<const fit::ProbeSamples*>& probes, const CloudDecision& decision,
@@ -361,41 +494,9 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
     return out;
   }
   const auto t0 = Clock::now();
-  std::string why;
-  if (!o.IsValid(&why)) throw Error(why);
-  if (kind != CloudTermKind::kKnownShapes) throw Error("cloud lighting fit: unknown cloud term kind");
-  if (!shapes) throw Error("cloud lighting fit: the known-shapes term needs the shapes (--cloud-preset)");
-  if (!cloud_renderer) throw Error("cloud lighting fit: no cloud renderer");
-  if (!shapes->time_s_per_reference.empty() && shapes->time_s_per_reference.size() != refs.size()) {
-    throw Error("cloud lighting fit: one wind time per reference");
-  }
-  CheckShapes(*shapes);
-  // The cloud pixels of every reference (the known shapes at the start's light), which
-  // leave the sky terms (kUserMasked) for the cloud blocks.
+  CheckSkyAndCloudsInputs(refs, kind, shapes, o, cloud_renderer);
   std::vector<Member> m(refs.size());
-  std::vector<fit::Reference> masked = refs;
-  for (size_t r = 0; r < refs.size(); ++r) {
-    const fit::Reference& ref = refs[r];
-    Member& x = m[r];
-    x.name = ref.name;
-    x.time_h = ref.time_of_day_h;
-    x.reference = &ref.radiance;
-    KnownCloudShapes own = *shapes;
-    own.time_s = shapes->TimeOf(r);
-    x.request = RequestFor(ref.sun_dir, ref.radiance.width, ref.radiance.height, own);
-    const clouds::CloudImage start_image =
-        cloud_renderer->Render({&init, &shapes->params, shapes->noise, shapes->weather}, x.request);
-    std::vector<char> usable(ref.pixel_class.size());
-    for (size_t i = 0; i < usable.size(); ++i) usable[i] = ref.pixel_class[i] == fit::PixelClass::kSky ? 1 : 0;
-    x.pixels = CloudPixelsOf(usable, start_image, o.cloud_transmittance);
-    if (x.pixels.empty()) {
-      throw Error(ref.path + ": --clouds: the known cloud shapes (--cloud-preset, --cloud-time) cover none of the "
-                  "reference's fitted sky pixels (transmittance < " + FormatNumber(o.cloud_transmittance) + ")");
-    }
-    for (size_t i : x.pixels) masked[r].pixel_class[i] = fit::PixelClass::kUserMasked;
-    masked[r].counts.sky -= static_cast<long long>(x.pixels.size());
-    masked[r].counts.user_masked += static_cast<long long>(x.pixels.size());
-  }
+  const std::vector<fit::Reference> masked = MaskCloudPixels(refs, init, *shapes, o, cloud_renderer, &m);
   CheckDayTimes(m);
   rep.cloud_pixels_time_s = Seconds(t0);
 
@@ -406,72 +507,10 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
   rep.sky_fit_time_s = Seconds(ts);
   for (const fit::LevelReport& l : out.sky.levels) rep.sky_renders += l.renders;
 
-  // The cloud blocks on the fitted sky (after its gauge move), values through the renderer.
-  const std::unique_ptr<render::SkyRenderer> cpu_sky = render::CreateRenderer(render::Backend::kCpu);
-  for (size_t r = 0; r < refs.size(); ++r) {
-    Member& x = m[r];
-    render::RenderRequest req;
-    req.sun_dir = refs[r].sun_dir;
-    req.width = refs[r].radiance.width;
-    req.height = refs[r].radiance.height;
-    req.sun_disc = false;  // the sun cone is masked; the clouds' sun light is the direct term
-    const ImageRGB sky = cpu_sky->Render(out.sky.preset, req);
-    x.sky_preset = out.sky.preset;
-    x.exposure = out.sky.references[r].exposure;
-    // The report's composites over the rendered sky (the backend's, disc included).
-    x.sky_exposed = out.sky.references[r].rendered;
-    x.model = std::make_unique<CloudSampleModel>(
-        CloudSampleScene{out.sky.preset, shapes->params, shapes->noise, shapes->weather, x.request},
-        ChooseSamples(x.pixels, refs[r].radiance, o.samples), CloudValueSource::kRenderer, cloud_renderer, o.threads);
-    x.model->SetSky(out.sky.preset, sky, x.exposure);
-  }
-  const double cloud_pixels_s = rep.cloud_pixels_time_s, sky_fit_s = rep.sky_fit_time_s;
-  const int sky_renders = rep.sky_renders;
+  BuildCloudModels(refs, out.sky, *shapes, o, cloud_renderer, &m);
   out.references = SolveMembers(m, start, *shapes, o, cloud_renderer, decision.why);
-
-  // The outputs: each reference's composite with its fitted clouds over the fitted sky.
-  for (size_t r = 0; r < refs.size(); ++r) {
-    CloudLightingReport& cr = out.references[r];
-    fit::ReferenceFit& rf = out.sky.references[r];
-    const clouds::CloudImage* fitted = m[r].model->RenderedAt(GetCloudLighting(cr.fitted_params).data());
-    const clouds::CloudImage image =
-        fitted ? *fitted
-               : cloud_renderer->Render({&out.sky.preset, &cr.fitted_params, shapes->noise, shapes->weather}, m[r].request);
-    rf.rendered = Composite(m[r].sky_exposed, image, rf.exposure);
-    cr.clear.pixels = rf.errors.pixels;
-    cr.clear.rel_rmse = rf.errors.rel_rmse;
-    cr.clear.log_rmse = rf.errors.log_rmse;
-    rf.errors = fit::CompareToReference(refs[r], rf.rendered);  // the whole sky, cloud pixels included
-    cr.cloud_fraction = decision.cloud_fraction;
-    cr.cloud_pixels_time_s = cloud_pixels_s;
-    cr.sky_fit_time_s = sky_fit_s;
-    cr.sky_renders = sky_renders;
-  }
-  // The fit's report: the earliest reference's (a day: its values head the day's keys),
-  // with the whole solve's counts and the time of every stage.
-  size_t first = 0;
-  for (size_t r = 1; r < refs.size(); ++r) {
-    if (m[r].time_h && m[first].time_h && *m[r].time_h < *m[first].time_h) first = r;
-  }
-  rep = out.references[first];
-  rep.renders = rep.jacobians = 0;
-  rep.render_time_s = rep.jacobian_time_s = 0.0;
-  long long pixels = 0;
-  for (const CloudLightingReport& cr : out.references) {
-    rep.renders += cr.renders;
-    rep.jacobians += cr.jacobians;
-    rep.render_time_s += cr.render_time_s;
-    rep.jacobian_time_s += cr.jacobian_time_s;
-    pixels += cr.cloud_pixels;
-  }
-  rep.time_s = Seconds(t0);
-  out.sky.time_s = rep.time_s;  // fit.json time_s: the whole fit, sky and clouds
-  out.sky.decisions.push_back(
-      {"sky terms without the cloud pixels",
-       std::to_string(pixels) + " pixels whose known-shape transmittance is below " + FormatNumber(o.cloud_transmittance) +
-           " are fitted by the cloud blocks (sky x T + clouds), not the sky rows; the sky is fitted first on its clear "
-           "pixels (its linear stage, as a clear sky), then the cloud blocks on it",
-       0.0, "measured: the sky fit's part of the whole fit is clouds.solve.sky_fit_time_s", std::nullopt, ""});
+  ComposeOutputs(refs, m, *shapes, decision, cloud_renderer, &out);
+  SummariseClouds(m, o, t0, &out);
   return out;
 }
 

@@ -33,6 +33,19 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
 constexpr double kFloorFraction = 1e-6;
 constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
 constexpr int kActiveSetRounds = 20;
+// Unknowns one row's normal matrix spans: at most 3 tables x 2 x 2 nodes, and L_z.
+constexpr int kMaxRowUnknowns = 13;
+
+// Sum of the solid-angle weights of the pixels the solve uses (every stride-th pixel of
+// every stride-th row) over all levels.
+double TotalWeight(const std::vector<const FitLevel*>& levels, int w, int h, int stride) {
+  double total_weight = 0.0;
+  for (const FitLevel* lv : levels)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (x % stride == 0 && y % stride == 0) total_weight += lv->weight[static_cast<size_t>(y) * w + x];
+  return total_weight;
+}
 
 }  // namespace
 
@@ -46,8 +59,6 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   if (o_.unknowns == LinearUnknowns::kFreeRows && static_cast<int>(o_.row_fitted.size()) != grid.n_theta) {
     throw Error("LinearSky: free rows need row_fitted for every LUT row");
   }
-  NoLut none;
-  ModelD m(none);
   // Unknown layout.
   const int per_table = o_.unknowns == LinearUnknowns::kTiedRows   ? grid.n_gamma
                         : o_.unknowns == LinearUnknowns::kFreeRows ? grid.n_theta * grid.n_gamma
@@ -56,101 +67,122 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   if (o_.fit_overcast) lz_index_ = num_unknowns_++;
   initial_.assign(num_unknowns_, 1.0);
   if (lz_index_ >= 0) initial_[lz_index_] = std::exp(state.log_overcast_zenith);
-  const size_t table_size = state.preset.luts.table_size();
-  auto initial_lut = [&](int t, int row, int col, int ch) {
-    return std::exp(state.initial_log_lut[t * table_size + ((static_cast<size_t>(row) * grid.n_gamma + col) * 3 + ch)]);
-  };
 
   const int stride = std::max(1, o_.stride);
-  auto used = [&](int x, int y) { return x % stride == 0 && y % stride == 0; };
-  double total_weight = 0.0;
-  for (const FitLevel* lv : levels)
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x)
-        if (used(x, y)) total_weight += lv->weight[static_cast<size_t>(y) * w + x];
+  const double total_weight = TotalWeight(levels, w, h, stride);
   size_t sample = 0;
   for (size_t r = 0; r < refs.size(); ++r) {
     const FitLevel& lv = *levels[r];
     if (lv.width != w || lv.height != h) throw Error("LinearSky: level sizes differ");
-    const auto p = GridParams(state, refs[r].sun_dir[1]);
-    const auto lr = m.lut_row(p.sun_dir.y, p);
-    const double wr[2] = {1.0 - lr.frow, lr.frow};
-    for (int y = 0; y < h; ++y) {
-      if (y % stride != 0) continue;
-      Row row;
-      row.ref = r;
-      row.y = y;
-      row.first_sample = sample;
-      const auto v0 = latlong::PixelDirection(0, y, w, h);
-      row.overcast_shape = OvercastShape(v0[1]);
-      for (int x = 0; x < w; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x;
-        if (lv.weight[i] <= 0.0 || !used(x, y)) continue;
-        const auto v = latlong::PixelDirection(x, y, w, h);
-        Pixel px;
-        px.x = x;
-        px.sqrt_weight = std::sqrt(lv.weight[i] / total_weight);
-        px.one_minus_mu = OneMinusMu(v, refs[r].sun_dir);
-        px.mu = 1.0 - px.one_minus_mu;
-        px.phase_r = m.phase_rayleigh(px.mu);
-        for (int c = 0; c < 3; ++c) px.ref[c] = lv.radiance[3 * i + c];
-        row.pixels.push_back(px);
-        // Angle from |v - s|^2 = 2 (1 - cos), without acos' loss near 0.
-        const double angle_deg = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(2.0 * px.one_minus_mu))) * 180.0 / M_PI;
-        for (int c = 0; c < 3; ++c) {
-          error_weight_.push_back(lv.weight[i] / total_weight);
-          sun_angle_deg_.push_back(angle_deg);
-        }
-        sample += 3;
-      }
-      if (row.pixels.empty()) continue;
-      const auto lc = m.lut_col(v0[1], p);
-      const double wc[2] = {1.0 - lc.fcol, lc.fcol};
-      for (int t = 0; t < state.tables; ++t) {
-        if (o_.unknowns == LinearUnknowns::kPerImageRow) {
-          const int u = ((t * h) + y) * 3;
-          row.nodes.push_back({t, -1, u, 1.0});
-          for (int c = 0; c < 3; ++c) {
-            double v = 0.0;
-            for (int dc = 0; dc < 2; ++dc)
-              for (int dr = 0; dr < 2; ++dr) v += wc[dc] * wr[dr] * initial_lut(t, lr.row0 + dr, lc.col0 + dc, c);
-            initial_[u + c] = v;
-          }
-          continue;
-        }
-        for (int dc = 0; dc < 2; ++dc) {
-          if (wc[dc] <= 0.0) continue;
-          const int col = lc.col0 + dc;
-          if (o_.unknowns == LinearUnknowns::kTiedRows) {
-            const int u = (t * grid.n_gamma + col) * 3;
-            row.nodes.push_back({t, col, u, wc[dc]});
-            for (int c = 0; c < 3; ++c) {
-              initial_[u + c] = wr[0] * initial_lut(t, lr.row0, col, c) + wr[1] * initial_lut(t, lr.row0 + 1, col, c);
-            }
-            continue;
-          }
-          for (int dr = 0; dr < 2; ++dr) {
-            if (wr[dr] <= 0.0) continue;
-            const int lut_row = lr.row0 + dr;
-            if (!o_.row_fitted[lut_row]) throw Error("LinearSky: a reference reads LUT row " + std::to_string(lut_row) + ", which is not fitted");
-            const int u = ((t * grid.n_theta + lut_row) * grid.n_gamma + col) * 3;
-            row.nodes.push_back({t, col, u, wc[dc] * wr[dr]});
-          }
-        }
-      }
-      rows_.push_back(std::move(row));
-    }
+    AddReferenceRows(r, lv, refs[r], total_weight, &sample);
   }
   held_overcast_zenith_ = std::exp(state.log_overcast_zenith);
   if (o_.unknowns == LinearUnknowns::kFreeRows) {
     for (int t = 0; t < state.tables; ++t)
       for (int row = 0; row < grid.n_theta; ++row)
         for (int col = 0; col < grid.n_gamma; ++col)
-          for (int c = 0; c < 3; ++c) initial_[((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c] = initial_lut(t, row, col, c);
+          for (int c = 0; c < 3; ++c) initial_[((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c] = InitialLut(t, row, col, c);
   }
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
   start_scale_ = StartScale(exposures, *MiePhases(state.g));
+}
+
+double LinearSky::InitialLut(int t, int row, int col, int ch) const {
+  const auto& grid = state_.preset.luts.grid;
+  const size_t table_size = state_.preset.luts.table_size();
+  return std::exp(state_.initial_log_lut[t * table_size + ((static_cast<size_t>(row) * grid.n_gamma + col) * 3 + ch)]);
+}
+
+void LinearSky::AddReferenceRows(size_t r, const FitLevel& lv, const Reference& ref, double total_weight,
+                                 size_t* sample) {
+  NoLut none;
+  ModelD m(none);
+  const int w = lv.width, h = lv.height;
+  const int stride = std::max(1, o_.stride);
+  const auto p = GridParams(state_, ref.sun_dir[1]);
+  const auto lr = m.lut_row(p.sun_dir.y, p);
+  const double wr[2] = {1.0 - lr.frow, lr.frow};
+  for (int y = 0; y < h; ++y) {
+    if (y % stride != 0) continue;
+    Row row;
+    row.ref = r;
+    row.y = y;
+    row.first_sample = *sample;
+    const auto v0 = latlong::PixelDirection(0, y, w, h);
+    row.overcast_shape = OvercastShape(v0[1]);
+    AddRowPixels(&row, lv, ref, total_weight, sample);
+    if (row.pixels.empty()) continue;
+    const auto lc = m.lut_col(v0[1], p);
+    const double wc[2] = {1.0 - lc.fcol, lc.fcol};
+    AddRowNodes(&row, h, lr.row0, wr, lc.col0, wc);
+    rows_.push_back(std::move(row));
+  }
+}
+
+void LinearSky::AddRowPixels(Row* row, const FitLevel& lv, const Reference& ref, double total_weight,
+                             size_t* sample) {
+  NoLut none;
+  ModelD m(none);
+  const int w = lv.width, h = lv.height, y = row->y;
+  const int stride = std::max(1, o_.stride);
+  for (int x = 0; x < w; ++x) {
+    const size_t i = static_cast<size_t>(y) * w + x;
+    if (lv.weight[i] <= 0.0 || x % stride != 0 || y % stride != 0) continue;
+    const auto v = latlong::PixelDirection(x, y, w, h);
+    Pixel px;
+    px.x = x;
+    px.sqrt_weight = std::sqrt(lv.weight[i] / total_weight);
+    px.one_minus_mu = OneMinusMu(v, ref.sun_dir);
+    px.mu = 1.0 - px.one_minus_mu;
+    px.phase_r = m.phase_rayleigh(px.mu);
+    for (int c = 0; c < 3; ++c) px.ref[c] = lv.radiance[3 * i + c];
+    row->pixels.push_back(px);
+    // Angle from |v - s|^2 = 2 (1 - cos), without acos' loss near 0.
+    const double angle_deg = 2.0 * std::asin(std::min(1.0, 0.5 * std::sqrt(2.0 * px.one_minus_mu))) * 180.0 / M_PI;
+    for (int c = 0; c < 3; ++c) {
+      error_weight_.push_back(lv.weight[i] / total_weight);
+      sun_angle_deg_.push_back(angle_deg);
+    }
+    *sample += 3;
+  }
+}
+
+void LinearSky::AddRowNodes(Row* row, int h, int row0, const double wr[2], int col0, const double wc[2]) {
+  const auto& grid = state_.preset.luts.grid;
+  const int y = row->y;
+  for (int t = 0; t < state_.tables; ++t) {
+    if (o_.unknowns == LinearUnknowns::kPerImageRow) {
+      const int u = ((t * h) + y) * 3;
+      row->nodes.push_back({t, -1, u, 1.0});
+      for (int c = 0; c < 3; ++c) {
+        double v = 0.0;
+        for (int dc = 0; dc < 2; ++dc)
+          for (int dr = 0; dr < 2; ++dr) v += wc[dc] * wr[dr] * InitialLut(t, row0 + dr, col0 + dc, c);
+        initial_[u + c] = v;
+      }
+      continue;
+    }
+    for (int dc = 0; dc < 2; ++dc) {
+      if (wc[dc] <= 0.0) continue;
+      const int col = col0 + dc;
+      if (o_.unknowns == LinearUnknowns::kTiedRows) {
+        const int u = (t * grid.n_gamma + col) * 3;
+        row->nodes.push_back({t, col, u, wc[dc]});
+        for (int c = 0; c < 3; ++c) {
+          initial_[u + c] = wr[0] * InitialLut(t, row0, col, c) + wr[1] * InitialLut(t, row0 + 1, col, c);
+        }
+        continue;
+      }
+      for (int dr = 0; dr < 2; ++dr) {
+        if (wr[dr] <= 0.0) continue;
+        const int lut_row = row0 + dr;
+        if (!o_.row_fitted[lut_row]) throw Error("LinearSky: a reference reads LUT row " + std::to_string(lut_row) + ", which is not fitted");
+        const int u = ((t * grid.n_theta + lut_row) * grid.n_gamma + col) * 3;
+        row->nodes.push_back({t, col, u, wc[dc] * wr[dr]});
+      }
+    }
+  }
 }
 
 double LinearSky::StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const {
@@ -207,109 +239,35 @@ double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m,
   return (1.0 - w_o) * lut + w_o * v.lz * row.overcast_shape;
 }
 
+// The normal equations N x = b of one solve: N as triplets (summed on assembly into
+// `normal`) and b.
+struct LinearSky::NormalSystem {
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::VectorXd rhs;
+  Eigen::SparseMatrix<double> normal;
+};
+
+// What a solve's data pass reads (Solve's arguments and the Mie phases at its g).
+struct LinearSky::SolveInputs {
+  const std::vector<double>& phase_m;
+  const std::vector<double>& exposures;
+  const std::vector<double>& robust_weights;
+  const LinearSkySolution* linearize_at;
+};
+
+// Second moments of a row's pixel features (Rayleigh, Mie, isotropic phase, overcast
+// shape) for one channel, upper triangle, and their products with the target.
+struct LinearSky::FeatureMoments {
+  double mom[4][4] = {};
+  double mb[4] = {};
+};
+
 LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposures,
                                    const std::vector<double>& robust_weights,
                                    const LinearSkySolution* linearize_at, bool with_cost) const {
-  const double w_o = state_.preset.overcast_weight;
   const std::shared_ptr<const std::vector<double>> phases = MiePhases(g);
-  const std::vector<double>& phase_m = *phases;
-  // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
-  // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once. Rows
-  // are split between threads, each with its own triplets and right-hand side.
-  constexpr int kMax = 13;
-  struct Part {
-    std::vector<Eigen::Triplet<double>> triplets;
-    Eigen::VectorXd rhs;
-  };
-  auto accumulate = [&](size_t row_begin, size_t row_end, Part* part) {
-    part->rhs = Eigen::VectorXd::Zero(num_unknowns_);
-    // Reserved: growing ~10^6 triplets (a day) re-allocated and page-faulted ~10% of the
-    // day's linear stage (perf).
-    size_t count = 0;
-    for (size_t ri = row_begin; ri < row_end; ++ri) {
-      const size_t kk = rows_[ri].nodes.size() + (lz_index_ >= 0 ? 1 : 0);
-      count += 3 * kk * kk;
-    }
-    part->triplets.reserve(count);
-    for (size_t ri = row_begin; ri < row_end; ++ri) {
-      const Row& row = rows_[ri];
-      const size_t pixel_index = row.first_sample / 3;
-      const int k = static_cast<int>(row.nodes.size());
-      const int kk = k + (lz_index_ >= 0 ? 1 : 0);
-      const double exposure = exposures[row.ref];
-      const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * held_overcast_zenith_ * row.overcast_shape;
-      // Every coefficient of a row is (bilinear weight) x (a pixel feature): the phase of
-      // its table, or the overcast shape for L_z. So the row's normal matrix is the
-      // weights' outer product times the features' second moments over its pixels (4 x 4
-      // at most), accumulated per pixel instead of the nodes' 13 x 13.
-      const RowValues v0 = linearize_at ? Blend(row, *linearize_at) : RowValues{};
-      double coef[kMax];
-      int feature[kMax];
-      for (int j = 0; j < k; ++j) {
-        coef[j] = (1.0 - w_o) * row.nodes[j].weight;
-        feature[j] = row.nodes[j].table;
-      }
-      if (lz_index_ >= 0) {
-        coef[k] = w_o * row.overcast_shape;
-        feature[k] = 3;
-      }
-      for (int c = 0; c < 3; ++c) {
-        double mom[4][4] = {};
-        double mb[4] = {};
-        for (size_t p = 0; p < row.pixels.size(); ++p) {
-          const Pixel& px = row.pixels[p];
-          const size_t smp = row.first_sample + 3 * p + c;
-          const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
-          const double s = px.sqrt_weight * std::sqrt(rw);
-          const double pm = phase_m[pixel_index + p];
-          // Relative error: a . x / R - 1. Log error linearised at M0:
-          // a . x / M0 - (1 - ln(k M0 / R)).
-          double norm = px.ref[c], target = s;
-          if (linearize_at) {
-            const double m0 = exposure * Model(row, px, c, pm, v0);
-            if (m0 > 0.0) {
-              norm = m0;
-              target = s * (1.0 - std::log(m0 / px.ref[c]));
-            }
-          }
-          const double scale = s * exposure / norm;
-          target -= scale * fixed_lz;
-          const double f[4] = {scale * px.phase_r, scale * pm, scale * kIsotropicPhase, scale};
-          for (int a = 0; a < 4; ++a) {
-            mb[a] += target * f[a];
-            for (int b = a; b < 4; ++b) mom[a][b] += f[a] * f[b];
-          }
-        }
-        double n[kMax][kMax], b[kMax];
-        for (int i = 0; i < kk; ++i) {
-          b[i] = coef[i] * mb[feature[i]];
-          for (int j = i; j < kk; ++j) {
-            const int fa = std::min(feature[i], feature[j]), fb = std::max(feature[i], feature[j]);
-            n[i][j] = coef[i] * coef[j] * mom[fa][fb];
-          }
-        }
-        auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
-        for (int i = 0; i < kk; ++i) {
-          part->rhs[global(i)] += b[i];
-          for (int j = 0; j < kk; ++j) part->triplets.emplace_back(global(i), global(j), i <= j ? n[i][j] : n[j][i]);
-        }
-      }
-    }
-  };
-  Part parts[2];
-  if (o_.threads > 1) {
-    const size_t half = rows_.size() / 2;
-    std::thread worker(accumulate, half, rows_.size(), &parts[1]);
-    accumulate(0, half, &parts[0]);
-    worker.join();
-  } else {
-    accumulate(0, rows_.size(), &parts[0]);
-    parts[1].rhs = Eigen::VectorXd::Zero(num_unknowns_);
-  }
-  std::vector<Eigen::Triplet<double>> triplets = std::move(parts[0].triplets);
-  triplets.reserve(triplets.size() + parts[1].triplets.size() + 10 * static_cast<size_t>(num_unknowns_));
-  triplets.insert(triplets.end(), parts[1].triplets.begin(), parts[1].triplets.end());
-  Eigen::VectorXd rhs = parts[0].rhs + parts[1].rhs;
+  const SolveInputs in{*phases, exposures, robust_weights, linearize_at};
+  NormalSystem sys = AccumulateData(in);
   // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
   // (x / (k x0) - 1) toward the start's shape at lambda = 1e-14, k the start's
   // least-squares scale on this data, so only entries no pixel sees feel it; the damping
@@ -318,7 +276,6 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   // (scale-free) links the rows between references, and the pull at prior_weight
   // separates the two rows around each sun, which the data see only blended; no damping
   // (toward zero it would fight the smoothness in exactly those directions).
-  const double k_start = start_scale_;
   const bool free_rows = o_.unknowns == LinearUnknowns::kFreeRows;
   // Free rows linearised at a current solution xc (the day's Gauss-Newton steps): the
   // Ceres problem's log-space priors themselves, u = ln(x / x0) ~ x / xc - 1 + ln(xc / x0),
@@ -326,68 +283,198 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   // ln(1 / floor) each step).
   const bool log_priors = free_rows && linearize_at != nullptr;
   const std::vector<char> was_held = log_priors ? linearize_at->held : std::vector<char>(num_unknowns_, 0);
+  AddPriors(linearize_at, was_held, &sys);
+  if (free_rows && o_.smoothness > 0.0) AddSmoothness(linearize_at, was_held, &sys);
+  sys.normal = Eigen::SparseMatrix<double>(num_unknowns_, num_unknowns_);
+  sys.normal.setFromTriplets(sys.triplets.begin(), sys.triplets.end());
+  DampTowardStart(&sys);
+
+  LinearSkySolution sol;
+  sol.g = g;
+  SolveActiveSet(sys, &sol);
+  sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);
+  if (!with_cost) return sol;
+  AddDataCost(in, &sol);
+  return sol;
+}
+
+LinearSky::NormalSystem LinearSky::AccumulateData(const SolveInputs& in) const {
+  // Rows are split between threads, each with its own triplets and right-hand side.
+  NormalSystem parts[2];
+  if (o_.threads > 1) {
+    const size_t half = rows_.size() / 2;
+    std::thread worker([&] { AccumulateRows(half, rows_.size(), in, &parts[1]); });
+    AccumulateRows(0, half, in, &parts[0]);
+    worker.join();
+  } else {
+    AccumulateRows(0, rows_.size(), in, &parts[0]);
+    parts[1].rhs = Eigen::VectorXd::Zero(num_unknowns_);
+  }
+  NormalSystem sys;
+  sys.triplets = std::move(parts[0].triplets);
+  sys.triplets.reserve(sys.triplets.size() + parts[1].triplets.size() + 10 * static_cast<size_t>(num_unknowns_));
+  sys.triplets.insert(sys.triplets.end(), parts[1].triplets.begin(), parts[1].triplets.end());
+  sys.rhs = parts[0].rhs + parts[1].rhs;
+  return sys;
+}
+
+void LinearSky::AccumulateRows(size_t row_begin, size_t row_end, const SolveInputs& in, NormalSystem* part) const {
+  part->rhs = Eigen::VectorXd::Zero(num_unknowns_);
+  // Reserved: growing ~10^6 triplets (a day) re-allocated and page-faulted ~10% of the
+  // day's linear stage (perf).
+  size_t count = 0;
+  for (size_t ri = row_begin; ri < row_end; ++ri) {
+    const size_t kk = rows_[ri].nodes.size() + (lz_index_ >= 0 ? 1 : 0);
+    count += 3 * kk * kk;
+  }
+  part->triplets.reserve(count);
+  for (size_t ri = row_begin; ri < row_end; ++ri) AccumulateRow(rows_[ri], in, part);
+}
+
+void LinearSky::AccumulateRow(const Row& row, const SolveInputs& in, NormalSystem* part) const {
+  // Per row and channel: a dense normal matrix over the row's nodes (+ L_z), accumulated
+  // in fixed arrays (a row reads at most 3 tables x 2 x 2 nodes) and scattered once.
+  const double w_o = state_.preset.overcast_weight;
+  const int k = static_cast<int>(row.nodes.size());
+  const int kk = k + (lz_index_ >= 0 ? 1 : 0);
+  // Every coefficient of a row is (bilinear weight) x (a pixel feature): the phase of
+  // its table, or the overcast shape for L_z. So the row's normal matrix is the
+  // weights' outer product times the features' second moments over its pixels (4 x 4
+  // at most), accumulated per pixel instead of the nodes' 13 x 13.
+  const RowValues v0 = in.linearize_at ? Blend(row, *in.linearize_at) : RowValues{};
+  double coef[kMaxRowUnknowns];
+  int feature[kMaxRowUnknowns];
+  for (int j = 0; j < k; ++j) {
+    coef[j] = (1.0 - w_o) * row.nodes[j].weight;
+    feature[j] = row.nodes[j].table;
+  }
+  if (lz_index_ >= 0) {
+    coef[k] = w_o * row.overcast_shape;
+    feature[k] = 3;
+  }
+  for (int c = 0; c < 3; ++c) {
+    const FeatureMoments fm = ChannelMoments(row, c, in, v0);
+    double n[kMaxRowUnknowns][kMaxRowUnknowns], b[kMaxRowUnknowns];
+    for (int i = 0; i < kk; ++i) {
+      b[i] = coef[i] * fm.mb[feature[i]];
+      for (int j = i; j < kk; ++j) {
+        const int fa = std::min(feature[i], feature[j]), fb = std::max(feature[i], feature[j]);
+        n[i][j] = coef[i] * coef[j] * fm.mom[fa][fb];
+      }
+    }
+    auto global = [&](int j) { return j < k ? row.nodes[j].unknown_ch0 + c : lz_index_; };
+    for (int i = 0; i < kk; ++i) {
+      part->rhs[global(i)] += b[i];
+      for (int j = 0; j < kk; ++j) part->triplets.emplace_back(global(i), global(j), i <= j ? n[i][j] : n[j][i]);
+    }
+  }
+}
+
+LinearSky::FeatureMoments LinearSky::ChannelMoments(const Row& row, int c, const SolveInputs& in,
+                                                    const RowValues& v0) const {
+  const double w_o = state_.preset.overcast_weight;
+  const size_t pixel_index = row.first_sample / 3;
+  const double exposure = in.exposures[row.ref];
+  const double fixed_lz = lz_index_ >= 0 ? 0.0 : w_o * held_overcast_zenith_ * row.overcast_shape;
+  FeatureMoments fm;
+  for (size_t p = 0; p < row.pixels.size(); ++p) {
+    const Pixel& px = row.pixels[p];
+    const size_t smp = row.first_sample + 3 * p + c;
+    const double rw = in.robust_weights.empty() ? 1.0 : in.robust_weights[smp];
+    const double s = px.sqrt_weight * std::sqrt(rw);
+    const double pm = in.phase_m[pixel_index + p];
+    // Relative error: a . x / R - 1. Log error linearised at M0:
+    // a . x / M0 - (1 - ln(k M0 / R)).
+    double norm = px.ref[c], target = s;
+    if (in.linearize_at) {
+      const double m0 = exposure * Model(row, px, c, pm, v0);
+      if (m0 > 0.0) {
+        norm = m0;
+        target = s * (1.0 - std::log(m0 / px.ref[c]));
+      }
+    }
+    const double scale = s * exposure / norm;
+    target -= scale * fixed_lz;
+    const double f[4] = {scale * px.phase_r, scale * pm, scale * kIsotropicPhase, scale};
+    for (int a = 0; a < 4; ++a) {
+      fm.mb[a] += target * f[a];
+      for (int b = a; b < 4; ++b) fm.mom[a][b] += f[a] * f[b];
+    }
+  }
+  return fm;
+}
+
+void LinearSky::AddPriors(const LinearSkySolution* linearize_at, const std::vector<char>& was_held,
+                          NormalSystem* sys) const {
+  const double k_start = start_scale_;
+  const bool free_rows = o_.unknowns == LinearUnknowns::kFreeRows;
+  const bool log_priors = free_rows && linearize_at != nullptr;
   const double lambda = free_rows ? std::max(o_.prior_weight, 1e-14) : 1e-14;
   for (int j = 0; j < num_unknowns_; ++j) {
     if (j == lz_index_) continue;
     if (log_priors && !was_held[j]) {
       const double xc = linearize_at->values[j], offset = std::log(xc / initial_[j]);
-      triplets.emplace_back(j, j, lambda / (xc * xc));
-      rhs[j] += lambda * (1.0 - offset) / xc;
+      sys->triplets.emplace_back(j, j, lambda / (xc * xc));
+      sys->rhs[j] += lambda * (1.0 - offset) / xc;
       continue;
     }
     const double centre = log_priors ? linearize_at->values[j] : k_start * initial_[j];
     const double weight = log_priors ? 1e-14 : lambda;  // held: only keep the entry defined
-    triplets.emplace_back(j, j, weight / (centre * centre));
-    rhs[j] += weight / centre;
+    sys->triplets.emplace_back(j, j, weight / (centre * centre));
+    sys->rhs[j] += weight / centre;
   }
-  if (free_rows && o_.smoothness > 0.0) {
-    const auto& grid = state_.preset.luts.grid;
-    const double sqrt_s = std::sqrt(o_.smoothness);
-    for (int t = 0; t < state_.tables; ++t)
-      for (int row = 1; row + 1 < grid.n_theta; ++row) {
-        if (!o_.row_fitted[row - 1] || !o_.row_fitted[row] || !o_.row_fitted[row + 1]) continue;
-        for (int col = 0; col < grid.n_gamma; ++col)
-          for (int c = 0; c < 3; ++c) {
-            const int ub = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
-            const int stride = grid.n_gamma * 3;
-            const int idx[3] = {ub - stride, ub, ub + stride};
-            if (was_held[idx[0]] || was_held[idx[1]] || was_held[idx[2]]) continue;
-            const double second[3] = {1.0, -2.0, 1.0};
-            double coef[3], target = 0.0;
-            for (int i = 0; i < 3; ++i) {
-              // Relative form x / x0 (scale-free) for the first solve; the log form,
-              // linearised at xc, in Gauss-Newton steps.
-              const double xc = log_priors ? linearize_at->values[idx[i]] : initial_[idx[i]];
-              coef[i] = sqrt_s * second[i] / xc;
-              if (log_priors) target -= sqrt_s * second[i] * (std::log(xc / initial_[idx[i]]) - 1.0);
-            }
-            for (int i = 0; i < 3; ++i) {
-              rhs[idx[i]] += target * coef[i];
-              for (int j = 0; j < 3; ++j) triplets.emplace_back(idx[i], idx[j], coef[i] * coef[j]);
-            }
+}
+
+void LinearSky::AddSmoothness(const LinearSkySolution* linearize_at, const std::vector<char>& was_held,
+                              NormalSystem* sys) const {
+  const bool log_priors = linearize_at != nullptr;  // free rows only
+  const auto& grid = state_.preset.luts.grid;
+  const double sqrt_s = std::sqrt(o_.smoothness);
+  for (int t = 0; t < state_.tables; ++t)
+    for (int row = 1; row + 1 < grid.n_theta; ++row) {
+      if (!o_.row_fitted[row - 1] || !o_.row_fitted[row] || !o_.row_fitted[row + 1]) continue;
+      for (int col = 0; col < grid.n_gamma; ++col)
+        for (int c = 0; c < 3; ++c) {
+          const int ub = ((t * grid.n_theta + row) * grid.n_gamma + col) * 3 + c;
+          const int stride = grid.n_gamma * 3;
+          const int idx[3] = {ub - stride, ub, ub + stride};
+          if (was_held[idx[0]] || was_held[idx[1]] || was_held[idx[2]]) continue;
+          const double second[3] = {1.0, -2.0, 1.0};
+          double coef[3], target = 0.0;
+          for (int i = 0; i < 3; ++i) {
+            // Relative form x / x0 (scale-free) for the first solve; the log form,
+            // linearised at xc, in Gauss-Newton steps.
+            const double xc = log_priors ? linearize_at->values[idx[i]] : initial_[idx[i]];
+            coef[i] = sqrt_s * second[i] / xc;
+            if (log_priors) target -= sqrt_s * second[i] * (std::log(xc / initial_[idx[i]]) - 1.0);
           }
-      }
-  }
-  std::vector<char> held(num_unknowns_, 0);
-  Eigen::SparseMatrix<double> normal(num_unknowns_, num_unknowns_);
-  normal.setFromTriplets(triplets.begin(), triplets.end());
-  {
-    // Toward the start's shape k x0, not toward zero: a weakly seen entry (a LUT column
-    // only the lowest image row touches, with bilinear weight 0.1) keeps the start's
-    // shape instead of shrinking (measured: such columns at 3-7% of the truth when
-    // damped toward zero).
-    const double mu = o_.unknowns == LinearUnknowns::kFreeRows ? 0.0 : o_.damping;
-    for (int j = 0; j < num_unknowns_; ++j) {
-      if (j == lz_index_) continue;
-      const double added = mu * normal.coeff(j, j);
-      normal.coeffRef(j, j) += added;
-      rhs[j] += added * k_start * initial_[j];
+          for (int i = 0; i < 3; ++i) {
+            sys->rhs[idx[i]] += target * coef[i];
+            for (int j = 0; j < 3; ++j) sys->triplets.emplace_back(idx[i], idx[j], coef[i] * coef[j]);
+          }
+        }
     }
+}
+
+void LinearSky::DampTowardStart(NormalSystem* sys) const {
+  // Toward the start's shape k x0, not toward zero: a weakly seen entry (a LUT column
+  // only the lowest image row touches, with bilinear weight 0.1) keeps the start's
+  // shape instead of shrinking (measured: such columns at 3-7% of the truth when
+  // damped toward zero).
+  const double k_start = start_scale_;
+  const double mu = o_.unknowns == LinearUnknowns::kFreeRows ? 0.0 : o_.damping;
+  for (int j = 0; j < num_unknowns_; ++j) {
+    if (j == lz_index_) continue;
+    const double added = mu * sys->normal.coeff(j, j);
+    sys->normal.coeffRef(j, j) += added;
+    sys->rhs[j] += added * k_start * initial_[j];
   }
+}
 
-
-  LinearSkySolution sol;
-  sol.g = g;
+void LinearSky::SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const {
+  const Eigen::SparseMatrix<double>& normal = eq.normal;
+  const Eigen::VectorXd& rhs = eq.rhs;
+  std::vector<char> held(num_unknowns_, 0);
   Eigen::VectorXd x;
   // The rounds change only the diagonal: the fill-reducing ordering is computed once (the
   // day's first joint step takes 5 rounds).
@@ -432,25 +519,26 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     }
     if (!changed) break;
   }
-  sol.held = held;
-  sol.values.resize(num_unknowns_);
+  sol->held = held;
+  sol->values.resize(num_unknowns_);
   for (int j = 0; j < num_unknowns_; ++j) {
-    sol.values[j] = std::max(x[j], Floor(j));
-    sol.held_non_positive += held[j];
+    sol->values[j] = std::max(x[j], Floor(j));
+    sol->held_non_positive += held[j];
   }
-  sol.overcast_zenith = lz_index_ >= 0 ? sol.values[lz_index_] : std::exp(state_.log_overcast_zenith);
-  if (!with_cost) return sol;
+}
+
+void LinearSky::AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const {
   // Cost and relative error of the data terms.
   double cost = 0.0, sq = 0.0, wsum = 0.0;
   size_t pixel_index = 0;
   for (const Row& row : rows_) {
-    const RowValues v = Blend(row, sol);
+    const RowValues v = Blend(row, *sol);
     for (size_t p = 0; p < row.pixels.size(); ++p) {
       const Pixel& px = row.pixels[p];
       for (int c = 0; c < 3; ++c) {
         const size_t smp = row.first_sample + 3 * p + c;
-        const double e = (exposures[row.ref] * Model(row, px, c, phase_m[pixel_index + p], v) - px.ref[c]) / px.ref[c];
-        const double rw = robust_weights.empty() ? 1.0 : robust_weights[smp];
+        const double e = (in.exposures[row.ref] * Model(row, px, c, in.phase_m[pixel_index + p], v) - px.ref[c]) / px.ref[c];
+        const double rw = in.robust_weights.empty() ? 1.0 : in.robust_weights[smp];
         cost += 0.5 * rw * error_weight_[smp] * e * e;
         sq += error_weight_[smp] * e * e;
         wsum += error_weight_[smp];
@@ -458,9 +546,8 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
     }
     pixel_index += row.pixels.size();
   }
-  sol.cost = cost;
-  sol.rel_rmse = wsum > 0.0 ? std::sqrt(sq / wsum) : 0.0;
-  return sol;
+  sol->cost = cost;
+  sol->rel_rmse = wsum > 0.0 ? std::sqrt(sq / wsum) : 0.0;
 }
 
 LinearSkySolution LinearSky::FromState(const FitState& state) const {

@@ -173,6 +173,31 @@ class LinearSky {
   // exposures: the centre of the prior is this scale times the start (see Solve).
   double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
 
+  // Construction, per reference and level row (the constructor's stages).
+  double InitialLut(int t, int row, int col, int ch) const;  // exp of the start's log LUT
+  void AddReferenceRows(size_t r, const FitLevel& lv, const Reference& ref, double total_weight, size_t* sample);
+  void AddRowPixels(Row* row, const FitLevel& lv, const Reference& ref, double total_weight, size_t* sample);
+  // The row's (table, node) unknowns and bilinear weights (wr around LUT row row0, wc
+  // around column col0), and the start values of the unknowns they blend.
+  void AddRowNodes(Row* row, int h, int row0, const double wr[2], int col0, const double wc[2]);
+
+  // Solve's stages (types in linear_sky.cc, keeping Eigen out of this header): the data's
+  // normal equations, the priors and smoothness, the damping, the active-set solve and
+  // the data cost.
+  struct NormalSystem;
+  struct SolveInputs;
+  struct FeatureMoments;
+  NormalSystem AccumulateData(const SolveInputs& in) const;
+  void AccumulateRows(size_t row_begin, size_t row_end, const SolveInputs& in, NormalSystem* part) const;
+  void AccumulateRow(const Row& row, const SolveInputs& in, NormalSystem* part) const;
+  FeatureMoments ChannelMoments(const Row& row, int c, const SolveInputs& in, const RowValues& v0) const;
+  void AddPriors(const LinearSkySolution* linearize_at, const std::vector<char>& was_held, NormalSystem* sys) const;
+  void AddSmoothness(const LinearSkySolution* linearize_at, const std::vector<char>& was_held,
+                     NormalSystem* sys) const;
+  void DampTowardStart(NormalSystem* sys) const;
+  void SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const;  // values, held
+  void AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const;       // cost, rel_rmse
+
   const FitState& state_;
   LinearSkyOptions o_;
   std::vector<Row> rows_;

@@ -101,16 +101,46 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
                                         int finest_width, int decimate, render::SkyRenderer* renderer,
                                         FitState* state, FitResult* result);
 
-LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const FitOptions& o,
-                                     const std::vector<bool>& row_fitted, bool fit_overcast, bool probed,
-                                     int finest_width, render::SkyRenderer& renderer, FitState* state,
-                                     FitResult* result) {
-  const auto t0 = Clock::now();
-  const auto& grid = state->preset.luts.grid;
+// The day's per-reference starts (tied rows, each reference on its own): their states,
+// outcomes and reports, the references ordered by sun row position, and the day's g.
+struct DayStarts {
+  std::vector<FitState> singles;
+  std::vector<LinearStageOutcome> outcomes;
+  std::vector<FitResult> reports;
+  std::vector<std::pair<double, size_t>> order;  // (sun row position, reference), ascending
+  double day_g = 0.0;
+};
+
+// Reference r's start: a one-reference state from the day's preset at g, tied to the two
+// LUT rows around its sun.
+void RunDayStart(const std::vector<Reference>& refs, size_t r, const FitOptions& options, bool fit_overcast,
+                 int finest_width, double g, const FitState& state, FitState* start, LinearStageOutcome* outcome,
+                 FitResult* report) {
+  const auto& grid = state.preset.luts.grid;
+  FitState& st = *start;
+  st = FitState::FromPreset(state.preset, state.preset.variant, 1);
+  st.initial_log_lut = state.initial_log_lut;
+  st.log_lut = state.initial_log_lut;
+  st.g = g;
+  const double pos = SunRowPosition(grid, refs[r].sun_dir);
+  const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
+  st.tied_rows = {r0, r0 + 1};
+  std::vector<bool> rows(grid.n_theta, false);
+  rows[r0] = rows[r0 + 1] = true;
+  // No render check of its own (the day's joint solution is checked), decimated
+  // (kDayStartStride): this start only seeds the joint steps.
+  *outcome = RunLinearStageSingle({refs[r]}, options, true, rows, fit_overcast, false, finest_width, kDayStartStride,
+                                  nullptr, &st, report);
+}
+
+DayStarts RunDayStarts(const std::vector<Reference>& refs, const FitOptions& o, bool fit_overcast, int finest_width,
+                       const FitState& state) {
+  const auto& grid = state.preset.luts.grid;
   const size_t n = refs.size();
-  std::vector<FitState> singles(n);
-  std::vector<LinearStageOutcome> outcomes(n);
-  std::vector<FitResult> reports(n);
+  DayStarts s;
+  s.singles.resize(n);
+  s.outcomes.resize(n);
+  s.reports.resize(n);
   std::vector<std::string> errors(n);
   FitOptions single_options = o;
   single_options.verbose = false;
@@ -118,36 +148,23 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   single_options.linear_threads = 1;  // the references themselves run two at a time
   // g is shared by the day: searched only by kDayGSearchReferences references spread over
   // the sun angles (the first phase), the others start at their median (held).
-  std::vector<std::pair<double, size_t>> order;
-  for (size_t r = 0; r < n; ++r) order.emplace_back(SunRowPosition(grid, refs[r].sun_dir), r);
-  std::sort(order.begin(), order.end());
+  for (size_t r = 0; r < n; ++r) s.order.emplace_back(SunRowPosition(grid, refs[r].sun_dir), r);
+  std::sort(s.order.begin(), s.order.end());
   std::vector<size_t> searching, holding;
   {
     const size_t k = std::min(n, kDayGSearchReferences);
     std::vector<bool> picked(n, false);
-    for (size_t i = 0; i < k; ++i) picked[order[std::min(n - 1, (2 * i + 1) * n / (2 * k))].second] = true;
+    for (size_t i = 0; i < k; ++i) picked[s.order[std::min(n - 1, (2 * i + 1) * n / (2 * k))].second] = true;
     for (size_t r = 0; r < n; ++r) (picked[r] ? searching : holding).push_back(r);
   }
   FitOptions holding_options = single_options;
   holding_options.fit_haziness = false;
-  double day_g = state->g;
+  s.day_g = state.g;
   auto run = [&](size_t r) {
     try {
       const bool search_g = o.fit_haziness && std::find(searching.begin(), searching.end(), r) != searching.end();
-      FitState& st = singles[r];
-      st = FitState::FromPreset(state->preset, state->preset.variant, 1);
-      st.initial_log_lut = state->initial_log_lut;
-      st.log_lut = state->initial_log_lut;
-      st.g = day_g;
-      const double pos = SunRowPosition(grid, refs[r].sun_dir);
-      const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
-      st.tied_rows = {r0, r0 + 1};
-      std::vector<bool> rows(grid.n_theta, false);
-      rows[r0] = rows[r0 + 1] = true;
-      // No render check of its own (the day's joint solution is checked), decimated
-      // (kDayStartStride): this start only seeds the joint steps.
-      outcomes[r] = RunLinearStageSingle({refs[r]}, search_g ? single_options : holding_options, true, rows,
-                                         fit_overcast, false, finest_width, kDayStartStride, nullptr, &st, &reports[r]);
+      RunDayStart(refs, r, search_g ? single_options : holding_options, fit_overcast, finest_width, s.day_g, state,
+                  &s.singles[r], &s.outcomes[r], &s.reports[r]);
     } catch (const std::exception& e) {
       errors[r] = refs[r].name + ": " + e.what();
     }
@@ -168,12 +185,19 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   run_all(searching);
   if (o.fit_haziness) {
     std::vector<double> searched;
-    for (size_t r : searching) searched.push_back(singles[r].g);
+    for (size_t r : searching) searched.push_back(s.singles[r].g);
     std::nth_element(searched.begin(), searched.begin() + searched.size() / 2, searched.end());
-    day_g = searched[searched.size() / 2];
+    s.day_g = searched[searched.size() / 2];
   }
   run_all(holding);
-  // Combine: log change per (table, column, channel) at each reference's row position.
+  return s;
+}
+
+// Combine: log change per (table, column, channel) at each reference's row position.
+void CombineDayStarts(const DayStarts& s, const std::vector<bool>& row_fitted, FitState* state) {
+  const auto& grid = state->preset.luts.grid;
+  const auto& order = s.order;
+  const auto& singles = s.singles;
   for (int t = 0; t < state->tables; ++t)
     for (int col = 0; col < grid.n_gamma; ++col)
       for (int ch = 0; ch < 3; ++ch) {
@@ -196,17 +220,79 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
           state->log_lut[i] = state->initial_log_lut[i] + change;
         }
       }
+}
+
+// The day's joint Gauss-Newton steps: the solution, exposures and robust cost per step.
+struct DayJoint {
+  LinearSkySolution sol;
+  std::vector<double> exposures;
+  std::vector<double> costs;
+};
+
+// Steps from the state (the combined start) until one no longer lowers the robust cost;
+// writes the result into the state (LUT, L_z, exposures of the n references).
+DayJoint RunDayJoint(const LinearSky& day, const FitOptions& o, const std::vector<RingLossScales>& ring_scales,
+                     size_t n, FitState* state) {
+  DayJoint j;
+  for (double le : state->log_exposure) j.exposures.push_back(std::exp(le));
+  j.sol = day.FromState(*state);
+  std::vector<double> scales(day.num_samples());
+  for (size_t i = 0; i < scales.size(); ++i) {
+    scales[i] = ring_scales[day.SampleReference(i)].At(day.sun_angles_deg()[i]);
+  }
+  std::vector<double> e = day.LogErrors(j.sol, j.exposures);  // of the current solution
+  double cost = day.RobustCostOf(e, o.loss, scales);
+  j.costs.push_back(cost);
+  for (int step = 0; step < kDayGaussNewtonSteps; ++step) {
+    std::vector<double> weights(e.size(), 1.0);
+    for (size_t i = 0; i < e.size() && o.loss != RobustLoss::kNone; ++i) {
+      double rho = 0.0, drho = 1.0;
+      RobustRho(o.loss, (e[i] / scales[i]) * (e[i] / scales[i]), &rho, &drho);
+      weights[i] = drho;
+    }
+    LinearSkySolution next = day.Solve(state->g, j.exposures, weights, &j.sol);
+    std::vector<double> next_exposures = j.exposures;
+    if (!o.absolute) {
+      const std::vector<double> best = day.BestExposures(next, weights);
+      for (size_t r = 1; r < n; ++r) next_exposures[r] *= best[r];
+    }
+    std::vector<double> next_e = day.LogErrors(next, next_exposures);
+    const double next_cost = day.RobustCostOf(next_e, o.loss, scales);
+    j.costs.push_back(next_cost);
+    // A step is kept only when it lowers the robust cost (the exposures' alternation and
+    // the linearised priors can overshoot); the first step that does not ends the loop.
+    if (!(next_cost < cost)) break;
+    const bool settled = cost - next_cost < kDaySettled * cost;
+    j.sol = std::move(next);
+    j.exposures = std::move(next_exposures);
+    e = std::move(next_e);
+    cost = next_cost;
+    if (settled) break;
+  }
+  day.Apply(j.sol, state);
+  for (size_t r = 0; r < n; ++r) state->log_exposure[r] = std::log(j.exposures[r]);
+  return j;
+}
+
+LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const FitOptions& o,
+                                     const std::vector<bool>& row_fitted, bool fit_overcast, bool probed,
+                                     int finest_width, render::SkyRenderer& renderer, FitState* state,
+                                     FitResult* result) {
+  const auto t0 = Clock::now();
+  const size_t n = refs.size();
+  const DayStarts starts = RunDayStarts(refs, o, fit_overcast, finest_width, *state);
+  CombineDayStarts(starts, row_fitted, state);
   LinearStageOutcome out;
   out.ran = true;
   for (size_t r = 0; r < n; ++r) {
-    out.ring_scales_per_reference.push_back(outcomes[r].ring_scales.value_or(RingLossScales{}));
-    out.loss_scale = std::max(out.loss_scale, outcomes[r].loss_scale);
-    for (const auto& tc : outcomes[r].observed_columns) out.observed_columns.insert(tc);
+    out.ring_scales_per_reference.push_back(starts.outcomes[r].ring_scales.value_or(RingLossScales{}));
+    out.loss_scale = std::max(out.loss_scale, starts.outcomes[r].loss_scale);
+    for (const auto& tc : starts.outcomes[r].observed_columns) out.observed_columns.insert(tc);
   }
-  state->g = day_g;
+  state->g = starts.day_g;
   if (fit_overcast) {
     double sum = 0.0;
-    for (const FitState& st : singles) sum += st.log_overcast_zenith;
+    for (const FitState& st : starts.singles) sum += st.log_overcast_zenith;
     state->log_overcast_zenith = sum / static_cast<double>(n);
   }
   const double per_reference_time = Seconds(t0, Clock::now());
@@ -227,48 +313,10 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   lo.smoothness = o.smoothness;
   lo.prior_weight = o.prior_weight;
   const LinearSky day(*state, level_ptrs, refs, lo);
-  std::vector<double> exposures;
-  for (double le : state->log_exposure) exposures.push_back(std::exp(le));
-  LinearSkySolution sol = day.FromState(*state);
-  std::vector<double> scales(day.num_samples());
-  for (size_t i = 0; i < scales.size(); ++i) {
-    scales[i] = out.ring_scales_per_reference[day.SampleReference(i)].At(day.sun_angles_deg()[i]);
-  }
-  std::vector<double> costs;
-  std::vector<double> e = day.LogErrors(sol, exposures);  // of the current solution
-  double cost = day.RobustCostOf(e, o.loss, scales);
-  costs.push_back(cost);
-  for (int step = 0; step < kDayGaussNewtonSteps; ++step) {
-    std::vector<double> weights(e.size(), 1.0);
-    for (size_t i = 0; i < e.size() && o.loss != RobustLoss::kNone; ++i) {
-      double rho = 0.0, drho = 1.0;
-      RobustRho(o.loss, (e[i] / scales[i]) * (e[i] / scales[i]), &rho, &drho);
-      weights[i] = drho;
-    }
-    LinearSkySolution next = day.Solve(state->g, exposures, weights, &sol);
-    std::vector<double> next_exposures = exposures;
-    if (!o.absolute) {
-      const std::vector<double> best = day.BestExposures(next, weights);
-      for (size_t r = 1; r < n; ++r) next_exposures[r] *= best[r];
-    }
-    std::vector<double> next_e = day.LogErrors(next, next_exposures);
-    const double next_cost = day.RobustCostOf(next_e, o.loss, scales);
-    costs.push_back(next_cost);
-    // A step is kept only when it lowers the robust cost (the exposures' alternation and
-    // the linearised priors can overshoot); the first step that does not ends the loop.
-    if (!(next_cost < cost)) break;
-    const bool settled = cost - next_cost < kDaySettled * cost;
-    sol = std::move(next);
-    exposures = std::move(next_exposures);
-    e = std::move(next_e);
-    cost = next_cost;
-    if (settled) break;
-  }
-  day.Apply(sol, state);
-  for (size_t r = 0; r < n; ++r) state->log_exposure[r] = std::log(exposures[r]);
+  const DayJoint joint = RunDayJoint(day, o, out.ring_scales_per_reference, n, state);
   const double joint_time = Seconds(t_joint, Clock::now());
   const auto t_check = Clock::now();
-  out.render_difference = RenderCheck(day, sol, exposures, refs, level_ptrs, *state, renderer);
+  out.render_difference = RenderCheck(day, joint.sol, joint.exposures, refs, level_ptrs, *state, renderer);
   const double check_time = Seconds(t_check, Clock::now());
   out.observed_columns.clear();
   for (const auto& tc : day.ObservedColumns()) out.observed_columns.insert(tc);
@@ -281,11 +329,12 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   report.per_reference_time_s = per_reference_time;
   report.joint_unknowns = day.num_unknowns();
   report.joint_samples = static_cast<long long>(day.num_samples());
-  report.joint_robust_cost_per_step = costs;
+  report.joint_robust_cost_per_step = joint.costs;
   report.joint_time_s = joint_time;
   report.render_check = MakeRenderCheckReport(renderer, out.render_difference, check_time);
   for (size_t r = 0; r < n; ++r) {
-    report.references.emplace_back(refs[r].name, reports[r].linear_start.single.value_or(LinearStartSingleReport{}));
+    report.references.emplace_back(refs[r].name,
+                                   starts.reports[r].linear_start.single.value_or(LinearStartSingleReport{}));
   }
   report.time_s = Seconds(t0, Clock::now());
   result->linear_start.day = std::move(report);
@@ -295,6 +344,70 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
               << Seconds(t0, Clock::now()) << " s" << std::endl;
   }
   return out;
+}
+
+// The linear sky problems of one reference's start: the search level (g and the
+// exposures), the robust level and the final level (which may be the robust one), and
+// the strides the search and robust problems take on the robust level.
+struct SingleSkies {
+  std::vector<std::unique_ptr<LinearSky>> skies;  // front: robust; back: final
+  std::unique_ptr<LinearSky> search;
+  int robust_stride = 1;
+  int search_stride = 1;
+};
+
+SingleSkies BuildSingleSkies(const std::vector<Reference>& refs, const LinearSkyOptions& lo,
+                             const std::vector<std::vector<const FitLevel*>>& level_ptrs, int decimate,
+                             int robust_width, int linear_width, const FitState& state) {
+  // A sparse reference (a mask leaving a few rows) keeps every pixel: the decimation
+  // could drop whole rows, or all of them.
+  size_t valid_samples = 0;  // pixels x channels of the robust level
+  for (const FitLevel* lv : level_ptrs.front())
+    for (double w : lv->weight) valid_samples += w > 0.0 ? 3 : 0;
+  // A decimation by k keeps it only when at least kMinDecimatedSamples remain.
+  auto keeps_enough = [&](int k) { return valid_samples >= static_cast<size_t>(kMinDecimatedSamples) * k * k; };
+  SingleSkies s;
+  LinearSkyOptions robust_options = lo;
+  robust_options.stride = decimate > 1 && keeps_enough(decimate) ? decimate : 1;
+  s.skies.push_back(std::make_unique<LinearSky>(state, level_ptrs.front(), refs, robust_options));
+  if (level_ptrs.size() > 1 || robust_options.stride > 1) {
+    s.skies.push_back(std::make_unique<LinearSky>(state, level_ptrs.back(), refs, lo));
+  }
+  LinearSkyOptions search_options = lo;
+  const int search_stride = decimate > 1 ? 2 * robust_options.stride : std::max(1, robust_width / linear_width);
+  search_options.stride = keeps_enough(search_stride) ? search_stride : robust_options.stride;
+  s.search = std::make_unique<LinearSky>(state, level_ptrs.front(), refs, search_options);
+  s.robust_stride = robust_options.stride;
+  s.search_stride = search_options.stride;
+  return s;
+}
+
+// The start's report (without the render check) from RunLinearStart's.
+LinearStartSingleReport MakeSingleReport(const LinearStartReport& rep, const FitOptions& o, const SingleSkies& skies,
+                                         int robust_width, int final_width, double linear_time) {
+  const LinearSky& sky = *skies.skies.back();
+  LinearStartSingleReport report;
+  report.search_width = robust_width / skies.search_stride;
+  report.robust_width = robust_width / skies.robust_stride;
+  report.width = final_width;
+  report.unknowns = sky.num_unknowns();
+  report.samples = static_cast<long long>(sky.num_samples());
+  report.solves = rep.solves;
+  report.gauss_newton_steps = rep.gauss_newton_steps;
+  report.cost_per_step = rep.cost_per_step;
+  report.search_time_s = rep.search_time_s;
+  report.robust_time_s = rep.robust_time_s;
+  report.final_time_s = rep.final_time_s;
+  report.haziness_g = rep.g;
+  report.rel_rmse_least_squares = rep.rel_rmse_least_squares;
+  report.rel_rmse_robust = rep.rel_rmse_robust;
+  report.residual_sigma_log = rep.residual_sigma;
+  report.loss_scale = rep.loss_scale;
+  report.loss_scale_floor = o.loss_scale;
+  report.loss_scale_by_sun_distance = RingScaleReports(rep.ring_scales);
+  report.held_non_positive = rep.held_non_positive;
+  report.time_s = linear_time;
+  return report;
 }
 
 // One reference; without a renderer no render check and no polish decision (a day's
@@ -331,28 +444,11 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
   lo.smoothness = o.smoothness;
   lo.prior_weight = o.prior_weight;
   lo.threads = o.linear_threads;
-  // A sparse reference (a mask leaving a few rows) keeps every pixel: the decimation
-  // could drop whole rows, or all of them.
-  size_t valid_samples = 0;  // pixels x channels of the robust level
-  for (const FitLevel* lv : level_ptrs.front())
-    for (double w : lv->weight) valid_samples += w > 0.0 ? 3 : 0;
-  // A decimation by k keeps it only when at least kMinDecimatedSamples remain.
-  auto keeps_enough = [&](int k) { return valid_samples >= static_cast<size_t>(kMinDecimatedSamples) * k * k; };
-  LinearSkyOptions robust_options = lo;
-  robust_options.stride = decimate > 1 && keeps_enough(decimate) ? decimate : 1;
-  std::vector<std::unique_ptr<LinearSky>> skies;
-  skies.push_back(std::make_unique<LinearSky>(*state, level_ptrs.front(), refs, robust_options));
-  if (level_ptrs.size() > 1 || robust_options.stride > 1) {
-    skies.push_back(std::make_unique<LinearSky>(*state, level_ptrs.back(), refs, lo));
-  }
-  LinearSkyOptions search_options = lo;
-  const int search_stride = decimate > 1 ? 2 * robust_options.stride : std::max(1, robust_width / linear_width);
-  search_options.stride = keeps_enough(search_stride) ? search_stride : robust_options.stride;
-  const LinearSky search(*state, level_ptrs.front(), refs, search_options);
-  const LinearSky& sky = *skies.back();
-  const LinearSky& robust = *skies.front();
+  const SingleSkies skies = BuildSingleSkies(refs, lo, level_ptrs, decimate, robust_width, linear_width, *state);
+  const LinearSky& sky = *skies.skies.back();
+  const LinearSky& robust = *skies.skies.front();
   const LinearStartReport rep =
-      RunLinearStart(search, robust, sky, state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
+      RunLinearStart(*skies.search, robust, sky, state, o, o.fit_haziness, !o.absolute && refs.size() > 1);
   out.ran = true;
   out.loss_scale = rep.loss_scale;
   out.ring_scales = rep.ring_scales;
@@ -363,27 +459,7 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
                                "need there): held at 1e-6 of their start, not polished in log space"});
   }
   const double linear_time = Seconds(t_linear, Clock::now());
-  LinearStartSingleReport report;
-  report.search_width = robust_width / search_options.stride;
-  report.robust_width = robust_width / robust_options.stride;
-  report.width = final_ptrs[0]->width;
-  report.unknowns = sky.num_unknowns();
-  report.samples = static_cast<long long>(sky.num_samples());
-  report.solves = rep.solves;
-  report.gauss_newton_steps = rep.gauss_newton_steps;
-  report.cost_per_step = rep.cost_per_step;
-  report.search_time_s = rep.search_time_s;
-  report.robust_time_s = rep.robust_time_s;
-  report.final_time_s = rep.final_time_s;
-  report.haziness_g = rep.g;
-  report.rel_rmse_least_squares = rep.rel_rmse_least_squares;
-  report.rel_rmse_robust = rep.rel_rmse_robust;
-  report.residual_sigma_log = rep.residual_sigma;
-  report.loss_scale = rep.loss_scale;
-  report.loss_scale_floor = o.loss_scale;
-  report.loss_scale_by_sun_distance = RingScaleReports(rep.ring_scales);
-  report.held_non_positive = rep.held_non_positive;
-  report.time_s = linear_time;
+  LinearStartSingleReport report = MakeSingleReport(rep, o, skies, robust_width, final_ptrs[0]->width, linear_time);
   if (o.verbose) {
     std::cerr << "[fit] linear start at " << linear_width << " wide: g " << rep.g << ", rel RMSE "
               << rep.rel_rmse_least_squares << " (least squares) -> " << rep.rel_rmse_robust << " (robust, scale "

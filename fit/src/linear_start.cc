@@ -163,163 +163,209 @@ double WeightedMedianAbs(const std::vector<double>& values, const std::vector<do
   return 0.0;
 }
 
-LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robust, const LinearSky& final,
-                                 FitState* state, const FitOptions& o, bool fit_g, bool fit_exposures) {
+namespace {
+
+// The running state of RunLinearStart's steps: the level being solved (`sky`), its
+// solution, that solution's log errors and robust cost, and the exposures, robust
+// weights, loss scales and g the next solve uses.
+struct StartRun {
+  const FitOptions& o;
+  bool fit_exposures = false;
   LinearStartReport rep;
   std::vector<double> exposures;
-  for (double le : state->log_exposure) exposures.push_back(std::exp(le));
   std::vector<double> weights;  // empty: least squares
-  double g = std::clamp(state->g, 0.0, kGMax);
-  auto update_exposures = [&](const LinearSky& level, const LinearSkySolution& s) {
+  double g = 0.0;
+  const LinearSky* sky = nullptr;
+  LinearSkySolution sol;
+  std::vector<double> e;        // the current solution's log errors
+  RingLossScales rings;
+  std::vector<double> scales;   // per sample, from `rings`
+  double cost = 0.0;            // robust cost of `e`
+
+  void UpdateExposures(const LinearSky& level, const LinearSkySolution& s) {
     if (!fit_exposures) return;
     const std::vector<double> best = level.BestExposures(s, weights);
     for (size_t r = 1; r < exposures.size(); ++r) exposures[r] *= best[r];
-  };
-  auto alternate_exposures = [&](const LinearSky& level, int rounds) {
+  }
+  void AlternateExposures(const LinearSky& level, int rounds) {
     for (int k = 0; k < rounds && fit_exposures; ++k) {
-      update_exposures(level, level.Solve(g, exposures, weights, nullptr, false));
+      UpdateExposures(level, level.Solve(g, exposures, weights, nullptr, false));
       ++rep.solves;
     }
-  };
-  // 1. Least squares of the relative error: exposures at the start's g, then g, on the
-  //    search level; then the final level.
-  const auto t0 = std::chrono::steady_clock::now();
-  alternate_exposures(search, 3);
-  std::vector<double> other_minima;
-  if (fit_g) g = SearchHaziness(search, exposures, weights, g, &rep.solves, SearchCost::kLogAfterStep, kGoldenSteps,
-                                &other_minima);
-  alternate_exposures(search, 2);
-  const auto t1 = std::chrono::steady_clock::now();
-  rep.search_time_s = std::chrono::duration<double>(t1 - t0).count();
-  const LinearSky* sky = &robust;
-  LinearSkySolution sol = sky->Solve(g, exposures, weights, nullptr, false);
-  ++rep.solves;
-  update_exposures(*sky, sol);
-  // Least squares of the log error (Gauss-Newton steps, no robust weights): symmetric in
-  // over- and under-estimation, so dark outliers do not dominate the scale estimate.
-  for (int k = 0; k < kLogLeastSquaresSteps; ++k) {
-    sol = sky->Solve(g, exposures, weights, &sol, false);
-    ++rep.solves;
-    update_exposures(*sky, sol);
   }
-  rep.rel_rmse_least_squares = RelativeRmse(*sky, sky->LogErrors(sol, exposures));
-
-  // 2. The loss scales from the least-squares residuals.
-  std::vector<double> e = sky->LogErrors(sol, exposures);
-  RingLossScales rings = EstimateRingScales(*sky, e, o.loss_scale, &rep.residual_sigma);
-  std::vector<double> scales = PerSample(*sky, rings);
-
-  // 3. Gauss-Newton steps of the robust log objective, the scales annealed from 8x down,
-  //    then at 1x until the cost settles.
-  auto gauss_newton_step = [&](double factor) {
+  // One Gauss-Newton step of the robust log objective, the scales times `factor`.
+  void GaussNewtonStep(double factor) {
     weights = RobustWeights(o.loss, scales, factor, e);
     sol = sky->Solve(g, exposures, weights, &sol, false);
     ++rep.solves;
     ++rep.gauss_newton_steps;
-    update_exposures(*sky, sol);
+    UpdateExposures(*sky, sol);
     e = sky->LogErrors(sol, exposures);
     rep.cost_per_step.push_back({sky->width(), sky->RobustCostOf(e, o.loss, scales)});
-  };
-  if (o.loss != RobustLoss::kNone) {
-    for (double factor : {8.0, 4.0, 2.0, 1.0, 1.0}) gauss_newton_step(factor);
-    // The scales again from the robust solution's residuals, until they stop shrinking:
-    // contamination pulls the least-squares fit and inflates its MADs; each robust fit
-    // sheds more of that pull.
-    for (int round = 0; round < kScaleRounds; ++round) {
-      double sigma = 0.0;
-      const RingLossScales again = EstimateRingScales(*sky, e, o.loss_scale, &sigma);
-      bool shrank = again.global < 0.95 * rings.global;
-      for (int k = 0; k < RingLossScales::kRings; ++k) shrank = shrank || again.ring[k] < 0.95 * rings.ring[k];
-      if (!shrank) break;
-      rep.residual_sigma = sigma;
-      // Ring-wise the smaller scale: a scale only ever narrows.
-      rings.global = std::min(rings.global, again.global);
-      for (int k = 0; k < RingLossScales::kRings; ++k) rings.ring[k] = std::min(rings.ring[k], again.ring[k]);
-      scales = PerSample(*sky, rings);
-      gauss_newton_step(1.0);
-      gauss_newton_step(1.0);
-    }
   }
-  rep.loss_scale = rings.global;
-  rep.ring_scales = rings;
-  double cost = sky->RobustCostOf(e, o.loss, scales);  // e: the current solution's log errors
-  auto settle = [&](int max_steps) {
+  // Steps at 1x until the cost changes by at most kSettledCost (relative).
+  void Settle(int max_steps) {
     for (int k = 0; k < max_steps; ++k) {
-      gauss_newton_step(1.0);
+      GaussNewtonStep(1.0);
       const double next = sky->RobustCostOf(e, o.loss, scales);
       const bool settled = std::abs(cost - next) <= kSettledCost * cost;
       cost = next;
       if (settled) break;
     }
+  }
+};
+
+// Step 1's second half on the robust level: a relative least-squares solve, then least
+// squares of the log error (Gauss-Newton steps, no robust weights): symmetric in over-
+// and under-estimation, so dark outliers do not dominate the scale estimate.
+void LeastSquaresOnRobust(const LinearSky& robust, StartRun* run) {
+  run->sky = &robust;
+  const LinearSky* sky = run->sky;
+  run->sol = sky->Solve(run->g, run->exposures, run->weights, nullptr, false);
+  ++run->rep.solves;
+  run->UpdateExposures(*sky, run->sol);
+  for (int k = 0; k < kLogLeastSquaresSteps; ++k) {
+    run->sol = sky->Solve(run->g, run->exposures, run->weights, &run->sol, false);
+    ++run->rep.solves;
+    run->UpdateExposures(*sky, run->sol);
+  }
+  run->rep.rel_rmse_least_squares = RelativeRmse(*sky, sky->LogErrors(run->sol, run->exposures));
+}
+
+// Step 3: Gauss-Newton steps of the robust log objective, the scales annealed from 8x
+// down, then the scales re-estimated while they shrink.
+void RobustSteps(StartRun* run) {
+  const LinearSky* sky = run->sky;
+  RingLossScales& rings = run->rings;
+  for (double factor : {8.0, 4.0, 2.0, 1.0, 1.0}) run->GaussNewtonStep(factor);
+  // The scales again from the robust solution's residuals, until they stop shrinking:
+  // contamination pulls the least-squares fit and inflates its MADs; each robust fit
+  // sheds more of that pull.
+  for (int round = 0; round < kScaleRounds; ++round) {
+    double sigma = 0.0;
+    const RingLossScales again = EstimateRingScales(*sky, run->e, run->o.loss_scale, &sigma);
+    bool shrank = again.global < 0.95 * rings.global;
+    for (int k = 0; k < RingLossScales::kRings; ++k) shrank = shrank || again.ring[k] < 0.95 * rings.ring[k];
+    if (!shrank) break;
+    run->rep.residual_sigma = sigma;
+    // Ring-wise the smaller scale: a scale only ever narrows.
+    rings.global = std::min(rings.global, again.global);
+    for (int k = 0; k < RingLossScales::kRings; ++k) rings.ring[k] = std::min(rings.ring[k], again.ring[k]);
+    run->scales = PerSample(*sky, rings);
+    run->GaussNewtonStep(1.0);
+    run->GaussNewtonStep(1.0);
+  }
+}
+
+// Step 4: g once more under the robust log cost, in a narrow bracket around the search's
+// g, and around the scan's other local minima re-ranked at this level.
+void RefineHaziness(const std::vector<double>& other_minima, StartRun* run) {
+  const LinearSky* sky = run->sky;
+  const LinearSkySolution at = run->sol;
+  auto robust_cost = [&](double gg) {
+    ++run->rep.solves;
+    return sky->RobustLogCost(sky->Solve(gg, run->exposures, run->weights, &at, false), run->exposures, run->o.loss,
+                              run->scales);
   };
-  settle(kMaxGaussNewton);
-  // 4. g once more under the robust log cost, in a narrow bracket around the search's g.
-  if (fit_g) {
-    const LinearSkySolution at = sol;
-    auto robust_cost = [&](double gg) {
-      ++rep.solves;
-      return sky->RobustLogCost(sky->Solve(gg, exposures, weights, &at, false), exposures, o.loss, scales);
-    };
-    // The bracket follows the minimum when it lands on an edge (the search level's
-    // area averaging can bias g where g is weakly determined, e.g. a sun below the horizon).
-    auto refine = [&](double from) {
-      double gg = from;
-      for (int shift = 0; shift < kRefineShifts; ++shift) {
-        const double lo = std::max(0.0, gg - kRefineHalfWidth), hi = std::min(kGMax, gg + kRefineHalfWidth);
-        const double next = GoldenSection(robust_cost, lo, hi, kRefineSteps);
-        const bool at_edge =
-            (next - lo < 0.1 * kRefineHalfWidth && lo > 0.0) || (hi - next < 0.1 * kRefineHalfWidth && hi < kGMax);
-        gg = next;
-        if (!at_edge) break;
-      }
-      return gg;
-    };
-    double g2 = refine(g);
-    double best_cost = robust_cost(g2);
-    // The scan's other local minima, re-ranked at this level.
-    for (double candidate : other_minima) {
-      if (robust_cost(candidate) >= best_cost) continue;
-      const double refined = refine(candidate);
-      const double c = robust_cost(refined);
-      if (c < best_cost) {
-        best_cost = c;
-        g2 = refined;
-      }
+  // The bracket follows the minimum when it lands on an edge (the search level's
+  // area averaging can bias g where g is weakly determined, e.g. a sun below the horizon).
+  auto refine = [&](double from) {
+    double gg = from;
+    for (int shift = 0; shift < kRefineShifts; ++shift) {
+      const double lo = std::max(0.0, gg - kRefineHalfWidth), hi = std::min(kGMax, gg + kRefineHalfWidth);
+      const double next = GoldenSection(robust_cost, lo, hi, kRefineSteps);
+      const bool at_edge =
+          (next - lo < 0.1 * kRefineHalfWidth && lo > 0.0) || (hi - next < 0.1 * kRefineHalfWidth && hi < kGMax);
+      gg = next;
+      if (!at_edge) break;
     }
-    if (std::abs(g2 - g) > 1e-6) {
-      g = g2;
-      settle(kMaxGaussNewton);
+    return gg;
+  };
+  double g2 = refine(run->g);
+  double best_cost = robust_cost(g2);
+  for (double candidate : other_minima) {
+    if (robust_cost(candidate) >= best_cost) continue;
+    const double refined = refine(candidate);
+    const double c = robust_cost(refined);
+    if (c < best_cost) {
+      best_cost = c;
+      g2 = refined;
     }
   }
+  if (std::abs(g2 - run->g) > 1e-6) {
+    run->g = g2;
+    run->Settle(kMaxGaussNewton);
+  }
+}
+
+// Step 5 on a final level finer than the robust one.
+void FinalLevelSteps(const LinearSky& final, StartRun* run) {
+  // The final level sees LUT columns the coarser one did not (nearer the horizon):
+  // a relative least-squares solve places them before the robust log steps.
+  run->sky = &final;
+  const LinearSky* sky = run->sky;
+  run->scales = PerSample(*sky, run->rings);
+  run->weights.clear();
+  run->sol = sky->Solve(run->g, run->exposures, run->weights, nullptr, false);
+  ++run->rep.solves;
+  run->e = sky->LogErrors(run->sol, run->exposures);
+  run->cost = sky->RobustCostOf(run->e, run->o.loss, run->scales);
+  run->Settle(kMaxFinalSteps);
+}
+
+}  // namespace
+
+LinearStartReport RunLinearStart(const LinearSky& search, const LinearSky& robust, const LinearSky& final,
+                                 FitState* state, const FitOptions& o, bool fit_g, bool fit_exposures) {
+  StartRun run{o, fit_exposures};
+  for (double le : state->log_exposure) run.exposures.push_back(std::exp(le));
+  run.g = std::clamp(state->g, 0.0, kGMax);
+  // 1. Least squares of the relative error: exposures at the start's g, then g, on the
+  //    search level; then the final level.
+  const auto t0 = std::chrono::steady_clock::now();
+  run.AlternateExposures(search, 3);
+  std::vector<double> other_minima;
+  if (fit_g) run.g = SearchHaziness(search, run.exposures, run.weights, run.g, &run.rep.solves,
+                                    SearchCost::kLogAfterStep, kGoldenSteps, &other_minima);
+  run.AlternateExposures(search, 2);
+  const auto t1 = std::chrono::steady_clock::now();
+  run.rep.search_time_s = std::chrono::duration<double>(t1 - t0).count();
+  LeastSquaresOnRobust(robust, &run);
+
+  // 2. The loss scales from the least-squares residuals.
+  run.e = run.sky->LogErrors(run.sol, run.exposures);
+  run.rings = EstimateRingScales(*run.sky, run.e, o.loss_scale, &run.rep.residual_sigma);
+  run.scales = PerSample(*run.sky, run.rings);
+
+  // 3. Gauss-Newton steps of the robust log objective, the scales annealed from 8x down,
+  //    then at 1x until the cost settles.
+  if (o.loss != RobustLoss::kNone) RobustSteps(&run);
+  run.rep.loss_scale = run.rings.global;
+  run.rep.ring_scales = run.rings;
+  run.cost = run.sky->RobustCostOf(run.e, o.loss, run.scales);  // e: the current solution's log errors
+  run.Settle(kMaxGaussNewton);
+  // 4. g once more under the robust log cost, in a narrow bracket around the search's g.
+  if (fit_g) RefineHaziness(other_minima, &run);
   const auto t2 = std::chrono::steady_clock::now();
   // 5. The final level: Gauss-Newton steps at the final g (the robust level's solution
   //    is its start: same unknowns, finer pixels).
-  if (&final != &robust) {
-    // The final level sees LUT columns the coarser one did not (nearer the horizon):
-    // a relative least-squares solve places them before the robust log steps.
-    sky = &final;
-    scales = PerSample(*sky, rings);
-    weights.clear();
-    sol = sky->Solve(g, exposures, weights, nullptr, false);
-    ++rep.solves;
-    e = sky->LogErrors(sol, exposures);
-    cost = sky->RobustCostOf(e, o.loss, scales);
-    settle(kMaxFinalSteps);
-  }
+  if (&final != &robust) FinalLevelSteps(final, &run);
   const auto t3 = std::chrono::steady_clock::now();
-  rep.robust_cost = cost;
+  LinearStartReport& rep = run.rep;
+  const LinearSky* sky = run.sky;
+  rep.robust_cost = run.cost;
   rep.robust_time_s = std::chrono::duration<double>(t2 - t1).count();
   rep.final_time_s = std::chrono::duration<double>(t3 - t2).count();
-  rep.rel_rmse_robust = RelativeRmse(*sky, e);
-  sky->Apply(sol, state);
-  state->g = g;
-  for (size_t r = 0; r < exposures.size(); ++r) state->log_exposure[r] = std::log(exposures[r]);
-  rep.g = g;
-  rep.held_non_positive = sol.held_non_positive;
-  rep.exposures = exposures;
-  rep.held = sky->HeldParameters(sol, state);
-  rep.solution = sol;
-  return rep;
+  rep.rel_rmse_robust = RelativeRmse(*sky, run.e);
+  sky->Apply(run.sol, state);
+  state->g = run.g;
+  for (size_t r = 0; r < run.exposures.size(); ++r) state->log_exposure[r] = std::log(run.exposures[r]);
+  rep.g = run.g;
+  rep.held_non_positive = run.sol.held_non_positive;
+  rep.exposures = run.exposures;
+  rep.held = sky->HeldParameters(run.sol, state);
+  rep.solution = run.sol;
+  return std::move(run.rep);
 }
 
 CeilingReport MinimiseOverHaziness(const LinearSky& sky, const std::vector<double>& exposures, double g_hint) {

@@ -47,7 +47,6 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
   frow_ = lr.frow;
 
   // LUT parameters: every (table, column) some pixel row reads, per channel.
-  const int tables = st.tables;
   for (int y = 0; y < rows_; ++y) {
     const auto v = latlong::PixelDirection(0, y, qw_, qh);
     const auto lc = m.lut_col(v[1], p);
@@ -59,6 +58,25 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
     if (row_fcol_[y] < 1.0) columns_read.insert(row_col0_[y]);
     if (row_fcol_[y] > 0.0) columns_read.insert(row_col0_[y] + 1);
   }
+  AddSlots(columns_read, texel_index);
+  BuildQuadrature();
+  BuildConstantTeff();
+  const int n = static_cast<int>(setup_.samples.size());
+  const auto& s = setup_.sun_dir;
+  for (int i = 0; i < n; ++i) {
+    const auto& nn = setup_.samples[i].normal;
+    h_.push_back(0.5 * (1.0 - nn[1]));
+    cos_sun_.push_back(std::max(0.0, nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]));
+  }
+
+  set_num_residuals(3 * n);
+  for (size_t i = 0; i < slots_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
+  for (int size : {1, 1, 1, 3, 1}) mutable_parameter_block_sizes()->push_back(size);  // g, log Lz, log k, sun, rho_g
+}
+
+void ProbeCost::AddSlots(const std::set<int>& columns_read, std::vector<size_t>* texel_index) {
+  const FitState& st = *setup_.state;
+  const int tables = st.tables;
   const double wr[2] = {1.0 - frow_, frow_};
   texel_index->clear();
   for (int t = 0; t < tables; ++t) {
@@ -85,7 +103,12 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
       }
     }
   }
+}
 
+void ProbeCost::BuildQuadrature() {
+  NoLut nolut;
+  Model<double> m(nolut);
+  const int qh = qw_ / 2;
   // Quadrature weights for every sample normal and the up normal (last row).
   const int n = static_cast<int>(setup_.samples.size());
   const int npix = rows_ * qw_;
@@ -123,6 +146,11 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
     g_isotropic_.col(row_col0_[y] + 1) += row_fcol_[y] * ai;
   }
   a_overcast_ = w_ * shape;
+}
+
+void ProbeCost::BuildConstantTeff() {
+  const FitState& st = *setup_.state;
+  const double wr[2] = {1.0 - frow_, frow_};
   // The LUT at the sun's row position, from the state now: the values of the columns that
   // are not parameters (constants of this block).
   overcast_weight_ = st.preset.overcast_weight;
@@ -143,15 +171,6 @@ ProbeCost::ProbeCost(ProbeCostSetup setup, std::vector<size_t>* texel_index) : s
       }
     }
   }
-  for (int i = 0; i < n; ++i) {
-    const auto& nn = setup_.samples[i].normal;
-    h_.push_back(0.5 * (1.0 - nn[1]));
-    cos_sun_.push_back(std::max(0.0, nn[0] * s[0] + nn[1] * s[1] + nn[2] * s[2]));
-  }
-
-  set_num_residuals(3 * n);
-  for (size_t i = 0; i < slots_.size(); ++i) mutable_parameter_block_sizes()->push_back(1);
-  for (int size : {1, 1, 1, 3, 1}) mutable_parameter_block_sizes()->push_back(size);  // g, log Lz, log k, sun, rho_g
 }
 
 bool ProbeCost::Compute(double const* const* parameters, bool with_derivatives, Irradiance* out) const {

@@ -95,6 +95,12 @@ class ProbeCost final : public ceres::CostFunction {
   };
   struct Irradiance;  // per evaluation (probe_cost.cc)
   bool Compute(double const* const* parameters, bool with_derivatives, Irradiance* out) const;
+  // The constructor's stages: the LUT parameters (slots) of the columns the pixel rows
+  // read, the quadrature (w_, the phases, the fixed G matrices, a_overcast_), and the
+  // LUT at the sun's row from the state (constant_teff_).
+  void AddSlots(const std::set<int>& columns_read, std::vector<size_t>* texel_index);
+  void BuildQuadrature();
+  void BuildConstantTeff();
 
   ProbeCostSetup setup_;
   double overcast_weight_ = 0.0;

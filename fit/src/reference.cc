@@ -71,25 +71,12 @@ std::array<double, 3> Reference::PixelDirection(int x, int y) const {
                      : latlong::PixelDirection(x, y, radiance.width, radiance.height);
 }
 
-Reference LoadReference(const std::string& path, const FitOptions& o) {
-  Reference r;
-  r.path = path;
-  r.name = std::filesystem::path(path).stem().string();
-  capture::LatLongFrame frame = capture::ReadLatLongFrame(path, capture::RowMappingPolicy::kAccept);
-  r.sha256 = Sha256OfFile(path);
-  r.radiance = std::move(frame.radiance);
-  r.row_mapping = frame.row_mapping;
-  if (auto it = frame.extra.strings.find("skycalWarning"); it != frame.extra.strings.end()) {
-    r.warnings.push_back(path + ": " + it->second);
-  }
-  if (auto it = frame.extra.floats.find("skycalTimeOfDay"); it != frame.extra.floats.end()) {
-    if (!(it->second >= 0.0f && it->second < 24.0f)) {  // the file's fault, not a --time the user never gave
-      throw Error(path + ": attribute 'skycalTimeOfDay' = " + FormatNumber(it->second) + ": expected hours in [0, 24)");
-    }
-    r.time_of_day_h = it->second;
-  }
-  const int w = r.radiance.width, h = r.radiance.height;
+namespace {
 
+// The sun direction: the option, the frame's attribute, or detected in the image (not
+// with horizon-biased rows).
+void SetSunDirection(const std::string& path, const FitOptions& o, const capture::LatLongFrame& frame, Reference* ref) {
+  Reference& r = *ref;
   if (o.sun_dir) {
     r.sun_dir = latlong::Normalized(*o.sun_dir, "--sun-dir");
     r.sun_source = "option";
@@ -113,7 +100,10 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
                          std::to_string(latlong::AzimuthDeg(r.sun_dir)) + " deg" + (d->clipped ? ", clipped" : "") +
                          "); pass --sun-dir to override");
   }
+}
 
+// The user's mask (FitOptions::mask_path; empty: none), the reference's size.
+std::vector<float> ReadUserMask(const FitOptions& o, int w, int h) {
   std::vector<float> user;
   if (!o.mask_path.empty()) {
     ExrRGB m = ReadExrRGB(o.mask_path);
@@ -123,8 +113,14 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
     }
     user = std::move(m.image.pixels);
   }
+  return user;
+}
 
-  r.clip_level = FindClipLevel(r.radiance);
+// Every pixel's class (the first that applies: below the horizon, invalid, in the sun
+// cone, clipped, user-masked, else sky) and the counts.
+void ClassifyPixels(const FitOptions& o, const std::vector<float>& user, Reference* ref) {
+  Reference& r = *ref;
+  const int w = r.radiance.width, h = r.radiance.height;
   const double clip_threshold = r.clip_level > 0 ? o.clip_fraction * r.clip_level : INFINITY;
   const double cos_cone = std::cos(o.sun_cone_deg * M_PI / 180.0);
   r.pixel_class.assign(static_cast<size_t>(w) * h, PixelClass::kSky);
@@ -157,6 +153,32 @@ Reference LoadReference(const std::string& path, const FitOptions& o) {
       }
     }
   }
+}
+
+}  // namespace
+
+Reference LoadReference(const std::string& path, const FitOptions& o) {
+  Reference r;
+  r.path = path;
+  r.name = std::filesystem::path(path).stem().string();
+  capture::LatLongFrame frame = capture::ReadLatLongFrame(path, capture::RowMappingPolicy::kAccept);
+  r.sha256 = Sha256OfFile(path);
+  r.radiance = std::move(frame.radiance);
+  r.row_mapping = frame.row_mapping;
+  if (auto it = frame.extra.strings.find("skycalWarning"); it != frame.extra.strings.end()) {
+    r.warnings.push_back(path + ": " + it->second);
+  }
+  if (auto it = frame.extra.floats.find("skycalTimeOfDay"); it != frame.extra.floats.end()) {
+    if (!(it->second >= 0.0f && it->second < 24.0f)) {  // the file's fault, not a --time the user never gave
+      throw Error(path + ": attribute 'skycalTimeOfDay' = " + FormatNumber(it->second) + ": expected hours in [0, 24)");
+    }
+    r.time_of_day_h = it->second;
+  }
+  const int w = r.radiance.width, h = r.radiance.height;
+  SetSunDirection(path, o, frame, &r);
+  const std::vector<float> user = ReadUserMask(o, w, h);
+  r.clip_level = FindClipLevel(r.radiance);
+  ClassifyPixels(o, user, &r);
   if (r.counts.sky == 0) {
     throw Error(path + ": no valid sky pixel to fit (below horizon " + std::to_string(r.counts.below_horizon) +
                 ", invalid " + std::to_string(r.counts.invalid) + ", sun cone " + std::to_string(r.counts.sun_cone) +

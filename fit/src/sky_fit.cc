@@ -196,6 +196,103 @@ FitResult FitSky(const std::vector<Reference>& refs, const render::Preset& init,
   return FitSkyWithTerms(refs, init, o, renderer, probes, {});
 }
 
+namespace {
+
+// The linear start (fit/src/linear_stage.h): the LUT, g, L_z and the exposures at the
+// robust optimum of the linear structure; the Ceres levels then run only where needed
+// (`widths` keeps the levels still to solve).
+LinearStageOutcome RunLinearStartStage(const std::vector<Reference>& refs, const FitOptions& o, bool tied,
+                                       const std::vector<bool>& row_fitted, bool fit_overcast, bool needs_polish,
+                                       render::SkyRenderer& renderer, std::vector<int>* widths, DecisionFacts* facts,
+                                       FitState* state, FitResult* result) {
+  LinearStageOutcome linear;
+  if (!o.linear_start) return linear;
+  linear = RunLinearStage(refs, o, tied, row_fitted, fit_overcast, needs_polish, widths->back(), renderer, state,
+                          result);
+  if (widths->size() > 1 && o.skip_coarse_levels) facts->coarse_widths_skipped.assign(widths->begin(), widths->end() - 1);
+  if (!linear.polish && o.skip_coarse_levels) {
+    facts->polish_skipped = true;
+    widths->clear();
+  } else if (widths->size() > 1 && o.skip_coarse_levels) {
+    std::string skipped_widths;
+    for (size_t i = 0; i + 1 < widths->size(); ++i) skipped_widths += (i ? ", " : "") + std::to_string((*widths)[i]);
+    result->skipped.push_back({"coarse pyramid levels (" + skipped_widths + " wide)",
+                               "the linear start already placed the LUT and g at the optimum of the linear "
+                               "structure: only the finest level is polished"});
+    *widths = {widths->back()};
+  }
+  return linear;
+}
+
+SkyRowsTerm::Setup SkyRowsSetup(size_t n_refs, const FitOptions& o, bool tied, const LinearStageOutcome& linear) {
+  SkyRowsTerm::Setup sky_setup;
+  sky_setup.tied = tied;
+  sky_setup.loss = o.loss;
+  sky_setup.numeric_derivatives = o.numeric_derivatives;
+  sky_setup.use_ring_scales = linear.ran;
+  sky_setup.ring_scales = linear.ring_scales_per_reference.size() == n_refs
+                              ? linear.ring_scales_per_reference
+                              : std::vector<RingLossScales>(n_refs, linear.ring_scales.value_or(RingLossScales{}));
+  return sky_setup;
+}
+
+// The Ceres levels still to solve, coarse to fine.
+void SolveLevels(const std::vector<FitTerm*>& terms, const std::vector<Reference>& refs, const FitOptions& o,
+                 const std::vector<int>& widths, const LinearStageOutcome& linear, bool fit_overcast,
+                 Clock::time_point t_start, render::SkyRenderer& renderer, FitState* state, FitResult* result) {
+  LevelSolveOptions lo;
+  lo.count = widths.size();
+  lo.render_in_loop = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
+  lo.fit_haziness = o.fit_haziness;
+  lo.fit_overcast = fit_overcast;
+  lo.absolute = o.absolute;
+  lo.after_linear_start = o.linear_start;
+  lo.max_iterations = o.max_iterations_per_level;
+  lo.verbose = o.verbose;
+  lo.start = t_start;
+  lo.held = linear.held;
+  for (size_t li = 0; li < widths.size(); ++li) {
+    lo.width = widths[li];
+    lo.index = li;
+    // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
+    // above the finest) so a far start is not trapped by down-weighted pixels.
+    lo.loss_scale = linear.ran ? linear.loss_scale
+                               : o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
+    result->levels.push_back(SolveLevel(terms, refs, lo, renderer, state));
+    result->iterations += result->levels.back().iterations;
+    result->termination = result->levels.back().termination;
+  }
+}
+
+// Columns no pixel reached: the change (log) of the nearest observed column, per row.
+void ExtrapolateColumns(const std::set<std::pair<int, int>>& observed, const std::vector<bool>& row_fitted,
+                        DecisionFacts* facts, FitState* state, FitResult* result) {
+  facts->extrapolated_columns = ExtrapolateUnobservedColumns(observed, row_fitted, state);
+  if (facts->extrapolated_columns > 0) {
+    result->skipped.push_back({"LUT columns without observations",
+                               std::to_string(facts->extrapolated_columns) +
+                                   " (table, column) pairs no fitted pixel reaches (view elevations the reference "
+                                   "does not sample, e.g. within ~0.1 deg of the horizon): given the change of "
+                                   "the nearest observed column"});
+  }
+}
+
+// The fitted preset, and per reference its exposure, render and errors.
+void ReportReferences(const std::vector<Reference>& refs, const FitState& state, render::SkyRenderer& renderer,
+                      FitResult* result) {
+  result->preset = state.ToPreset();
+  render::ValidatePreset(result->preset, "fitted preset");
+  for (size_t r = 0; r < refs.size(); ++r) {
+    ReferenceFit& rf = result->references[r];
+    rf.exposure = std::exp(state.log_exposure[r]);
+    rf.rendered = RenderAtReference(refs[r], result->preset, renderer);
+    for (float& v : rf.rendered.pixels) v = static_cast<float>(v * rf.exposure);
+    rf.errors = CompareToReference(refs[r], rf.rendered);
+  }
+}
+
+}  // namespace
+
 FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Preset& init, const FitOptions& o,
                           render::SkyRenderer& renderer, const std::vector<const ProbeSamples*>& probes,
                           const std::vector<FitTerm*>& extra_terms) {
@@ -226,77 +323,22 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
   if (facts.overcast_held_inseparable) state.log_overcast_zenith += std::log(kFoldedOvercastFraction);
   std::vector<int> widths = o.pyramid_widths.empty() ? AutomaticPyramid(refs[0].radiance.width) : o.pyramid_widths;
   facts.finest_width = std::min(widths.back(), refs[0].radiance.width);
-  // The linear start (fit/src/linear_stage.h): the LUT, g, L_z and the exposures at the
-  // robust optimum of the linear structure; the Ceres levels then run only where needed.
-  LinearStageOutcome linear;
-  if (o.linear_start) {
-    // Terms beyond the linear structure (the probe, extra terms) need the Ceres polish.
-    linear = RunLinearStage(refs, o, tied, row_fitted, fit_overcast, probe.any() || !extra_terms.empty(), widths.back(),
-                            renderer, &state, &result);
-    if (widths.size() > 1 && o.skip_coarse_levels) facts.coarse_widths_skipped.assign(widths.begin(), widths.end() - 1);
-    if (!linear.polish && o.skip_coarse_levels) {
-      facts.polish_skipped = true;
-      widths.clear();
-    } else if (widths.size() > 1 && o.skip_coarse_levels) {
-      std::string skipped_widths;
-      for (size_t i = 0; i + 1 < widths.size(); ++i) skipped_widths += (i ? ", " : "") + std::to_string(widths[i]);
-      result.skipped.push_back({"coarse pyramid levels (" + skipped_widths + " wide)",
-                                "the linear start already placed the LUT and g at the optimum of the linear "
-                                "structure: only the finest level is polished"});
-      widths = {widths.back()};
-    }
-  }
+  // Terms beyond the linear structure (the probe, extra terms) need the Ceres polish.
+  const LinearStageOutcome linear = RunLinearStartStage(refs, o, tied, row_fitted, fit_overcast,
+                                                        probe.any() || !extra_terms.empty(), renderer, &widths,
+                                                        &facts, &state, &result);
 
-  SkyRowsTerm::Setup sky_setup;
-  sky_setup.tied = tied;
-  sky_setup.loss = o.loss;
-  sky_setup.numeric_derivatives = o.numeric_derivatives;
-  sky_setup.use_ring_scales = linear.ran;
-  sky_setup.ring_scales = linear.ring_scales_per_reference.size() == refs.size()
-                              ? linear.ring_scales_per_reference
-                              : std::vector<RingLossScales>(refs.size(), linear.ring_scales.value_or(RingLossScales{}));
-  SkyRowsTerm sky_rows(std::move(sky_setup));
+  SkyRowsTerm sky_rows(SkyRowsSetup(refs.size(), o, tied, linear));
   LutPriorTerm priors({&sky_rows, row_fitted, tied, o.prior_weight, o.smoothness});
   // Order matters only for the problem's block order: the sky rows, the probe, the
   // priors, then any extra term (a cloud-lighting term plugs in here, FitSkyWithTerms).
   std::vector<FitTerm*> terms = {&sky_rows, &probe, &priors};
   terms.insert(terms.end(), extra_terms.begin(), extra_terms.end());
-
-  LevelSolveOptions lo;
-  lo.count = widths.size();
-  lo.render_in_loop = o.backend == render::Backend::kVulkan && !o.numeric_derivatives;
-  lo.fit_haziness = o.fit_haziness;
-  lo.fit_overcast = fit_overcast;
-  lo.absolute = o.absolute;
-  lo.after_linear_start = o.linear_start;
-  lo.max_iterations = o.max_iterations_per_level;
-  lo.verbose = o.verbose;
-  lo.start = t_start;
-  lo.held = linear.held;
-  for (size_t li = 0; li < widths.size(); ++li) {
-    lo.width = widths[li];
-    lo.index = li;
-    // Graduated non-convexity: the robust loss starts wide on coarse levels (x2 per level
-    // above the finest) so a far start is not trapped by down-weighted pixels.
-    lo.loss_scale = linear.ran ? linear.loss_scale
-                               : o.loss_scale * std::pow(2.0, static_cast<double>(widths.size() - 1 - li));
-    result.levels.push_back(SolveLevel(terms, refs, lo, renderer, &state));
-    result.iterations += result.levels.back().iterations;
-    result.termination = result.levels.back().termination;
-  }
+  SolveLevels(terms, refs, o, widths, linear, fit_overcast, t_start, renderer, &state, &result);
 
   state.ApplyTiedRows();
-  // Columns no pixel reached: the change (log) of the nearest observed column, per row.
-  facts.extrapolated_columns =
-      ExtrapolateUnobservedColumns(widths.empty() ? linear.observed_columns : sky_rows.observed_columns(), row_fitted,
-                                   &state);
-  if (facts.extrapolated_columns > 0) {
-    result.skipped.push_back({"LUT columns without observations",
-                              std::to_string(facts.extrapolated_columns) +
-                                  " (table, column) pairs no fitted pixel reaches (view elevations the reference "
-                                  "does not sample, e.g. within ~0.1 deg of the horizon): given the change of "
-                                  "the nearest observed column"});
-  }
+  ExtrapolateColumns(widths.empty() ? linear.observed_columns : sky_rows.observed_columns(), row_fitted, &facts, &state,
+                     &result);
   // Move the LUT scale gauge onto the exposures (fit/src/fit_finish.h).
   if (!o.absolute) probe.MoveScaleGauge(MoveScaleGaugeToExposures(row_fitted, fit_overcast, &state), &state);
 
@@ -308,15 +350,7 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
   }
   facts.samples = linear.ran ? result.linear_start.samples() : sky_rows.last_residuals();
 
-  result.preset = state.ToPreset();
-  render::ValidatePreset(result.preset, "fitted preset");
-  for (size_t r = 0; r < refs.size(); ++r) {
-    ReferenceFit& rf = result.references[r];
-    rf.exposure = std::exp(state.log_exposure[r]);
-    rf.rendered = RenderAtReference(refs[r], result.preset, renderer);
-    for (float& v : rf.rendered.pixels) v = static_cast<float>(v * rf.exposure);
-    rf.errors = CompareToReference(refs[r], rf.rendered);
-  }
+  ReportReferences(refs, state, renderer, &result);
   for (const FitTerm* term : terms) term->Summarise(state, &result);
   RecordDecisions(refs, facts, &result);
   result.time_s = Seconds(t_start, Clock::now());
