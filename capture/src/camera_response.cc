@@ -268,61 +268,70 @@ std::vector<float> AnalyticResponse(ResponseModel model, int levels) {
   return curve;
 }
 
-std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// kWeighted / kAuto: the noise-weighted log response per channel; kAuto hands over to
+// Debevec's solve when the channels' curves share one shape.
+std::vector<float> RecoverWeighted(const std::vector<const BracketImage*>& images,
                                    const std::vector<double>& relative_exposure, const MergeOptions& o,
-                                   nlohmann::json* report) {
-  const auto t0 = std::chrono::steady_clock::now();
+                                   nlohmann::json* report, std::chrono::steady_clock::time_point t0) {
   const size_t n = images.size();
-  const BracketImage& first = *images.front();
   std::vector<float> curve;
-  nlohmann::json cal;
-  // Pixels: Debevec a few picked ones, Robertson a stride-subsampled grid.
-  std::vector<size_t> pixel_index;
-  if (o.response == ResponseModel::kWeighted || o.response == ResponseModel::kAuto) {
-    std::vector<double> ln_k(n);
-    for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
-    curve.assign(256 * 3, 0.0f);
-    std::vector<nlohmann::json> per_channel(3);
-    std::array<std::vector<double>, 3> g;
-    ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
-      for (int c = c0; c < c1; ++c) {
-        g[c] = RecoverWeightedLogResponse(images, ln_k, c, o, &per_channel[c]);
-        for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(std::exp(g[c][z] - g[c][255]));
-      }
-    });
-    cal = {{"method", "weighted"}, {"solver", "skycal (noise-weighted log response)"}, {"channels", per_channel}};
-    if (o.response == ResponseModel::kAuto) {
-      const double difference = ChannelShapeDifference(g, o.weighted_low_code, o.weighted_high_code);
-      nlohmann::json choice = {{"channel_shape_difference", difference}, {"tolerance", o.auto_shape_tolerance}};
-      if (difference <= o.auto_shape_tolerance) {
-        // One shape in every channel: Debevec's solve (bench/results/capture-response/capture-response.md:
-        // within 1.5x of the known-response merge on every shared curve once the chart
-        // balances the channels; the noise-weighted one is not, on 3-EV sets).
-        MergeOptions debevec = o;
-        debevec.response = ResponseModel::kDebevec;
-        nlohmann::json sub;
-        std::vector<float> d = RecoverResponse(images, relative_exposure, debevec, &sub);
-        nlohmann::json out = sub["calibration"];
-        choice["chose"] = "debevec";
-        choice["reason"] = "the channels' recovered curves have one shape";
-        out["auto"] = choice;
-        if (report) (*report)["calibration"] = out;
-        return d;
-      }
-      choice["chose"] = "weighted";
-      choice["reason"] = "the channels' recovered curves differ in shape";
-      cal["auto"] = choice;
+  std::vector<double> ln_k(n);
+  for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
+  curve.assign(256 * 3, 0.0f);
+  std::vector<nlohmann::json> per_channel(3);
+  std::array<std::vector<double>, 3> g;
+  ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
+    for (int c = c0; c < c1; ++c) {
+      g[c] = RecoverWeightedLogResponse(images, ln_k, c, o, &per_channel[c]);
+      for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(std::exp(g[c][z] - g[c][255]));
     }
-    cal["decreasing_steps"] = NormaliseResponse(&curve, 256);
-    cal["time_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (report) (*report)["calibration"] = cal;
-    return curve;
+  });
+  nlohmann::json cal = {{"method", "weighted"}, {"solver", "skycal (noise-weighted log response)"}, {"channels", per_channel}};
+  if (o.response == ResponseModel::kAuto) {
+    const double difference = ChannelShapeDifference(g, o.weighted_low_code, o.weighted_high_code);
+    nlohmann::json choice = {{"channel_shape_difference", difference}, {"tolerance", o.auto_shape_tolerance}};
+    if (difference <= o.auto_shape_tolerance) {
+      // One shape in every channel: Debevec's solve (bench/results/capture-response/capture-response.md:
+      // within 1.5x of the known-response merge on every shared curve once the chart
+      // balances the channels; the noise-weighted one is not, on 3-EV sets).
+      MergeOptions debevec = o;
+      debevec.response = ResponseModel::kDebevec;
+      nlohmann::json sub;
+      std::vector<float> d = RecoverResponse(images, relative_exposure, debevec, &sub);
+      nlohmann::json out = sub["calibration"];
+      choice["chose"] = "debevec";
+      choice["reason"] = "the channels' recovered curves have one shape";
+      out["auto"] = choice;
+      if (report) (*report)["calibration"] = out;
+      return d;
+    }
+    choice["chose"] = "weighted";
+    choice["reason"] = "the channels' recovered curves differ in shape";
+    cal["auto"] = choice;
   }
+  cal["decreasing_steps"] = NormaliseResponse(&curve, 256);
+  cal["time_ms"] = MsSince(t0);
+  if (report) (*report)["calibration"] = cal;
+  return curve;
+}
+
+// Pixels: Debevec a few picked ones, Robertson a stride-subsampled grid. The choice's
+// report goes into cal.
+std::vector<size_t> CalibrationPixels(const std::vector<const BracketImage*>& images, const MergeOptions& o,
+                                      nlohmann::json* cal) {
+  const BracketImage& first = *images.front();
+  std::vector<size_t> pixel_index;
   if (o.response == ResponseModel::kDebevec) {
     int candidates = 0, informative = 0;
     pixel_index = SelectDebevecSamples(images, o, &candidates, &informative);
-    cal = {{"method", "debevec"}, {"samples", pixel_index.size()}, {"candidates", candidates},
-           {"informative_candidates", informative}, {"lambda", o.lambda}};
+    *cal = {{"method", "debevec"}, {"samples", pixel_index.size()}, {"candidates", candidates},
+            {"informative_candidates", informative}, {"lambda", o.lambda}};
   } else if (o.response == ResponseModel::kRobertson) {
     const long long total = static_cast<long long>(first.width) * first.height;
     const int stride = o.calibration_max_pixels > 0 && total > o.calibration_max_pixels
@@ -330,59 +339,88 @@ std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& image
                            : 1;
     for (int y = 0; y < first.height; y += stride)
       for (int x = 0; x < first.width; x += stride) pixel_index.push_back(first.index(x, y));
-    cal = {{"method", "robertson"}, {"pixels", pixel_index.size()}, {"stride", stride},
-           {"max_iterations", o.robertson_max_iterations}, {"threshold", o.robertson_threshold}};
+    *cal = {{"method", "robertson"}, {"pixels", pixel_index.size()}, {"stride", stride},
+            {"max_iterations", o.robertson_max_iterations}, {"threshold", o.robertson_threshold}};
   } else {
     throw Error("internal: RecoverResponse called for an analytic response model");
   }
-  cal["solver"] = o.opencv_calibration ? "opencv" : "skycal (well-exposed samples only)";
+  return pixel_index;
+}
 
-  if (o.opencv_calibration) {
-    // The picked pixels as a 1 x n image per bracket (Debevec: OpenCV's grid over a 1 x n
-    // image takes every pixel, so it sees exactly our selection).
-    std::vector<cv::Mat> mats;
-    for (const BracketImage* img : images) {
-      cv::Mat m(1, static_cast<int>(pixel_index.size()), CV_8UC3);
-      for (size_t s = 0; s < pixel_index.size(); ++s)
-        for (int c = 0; c < 3; ++c) m.at<cv::Vec3b>(0, static_cast<int>(s))[c] = Code8(*img, pixel_index[s] + c);
-      mats.push_back(m);
-    }
-    const std::vector<float> times(relative_exposure.begin(), relative_exposure.end());
-    cv::Mat out;
-    if (o.response == ResponseModel::kDebevec)
-      cv::createCalibrateDebevec(static_cast<int>(pixel_index.size()), static_cast<float>(o.lambda), false)->process(mats, out, times);
-    else
-      cv::createCalibrateRobertson(o.robertson_max_iterations, static_cast<float>(o.robertson_threshold))->process(mats, out, times);
-    if (out.rows != 256 || out.type() != CV_32FC3) throw Error("OpenCV response calibration returned an unexpected curve");
-    curve = FromMat(out);
-  } else {
-    const WeightTable data_w = MakeWeights(o, 255, true), smooth_w = MakeWeights(o, 255, false);
-    std::vector<double> ln_k(n);
-    for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
-    curve.assign(256 * 3, 0.0f);
-    std::vector<int> iterations(3, 0);
-    // One channel per worker (the three solves are independent).
-    ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
-      for (int c = c0; c < c1; ++c) {
-        const std::vector<uint8_t> codes = ChannelCodes(images, pixel_index, c);
-        std::vector<double> lin(256);
-        if (o.response == ResponseModel::kDebevec) {
-          const std::vector<double> g = SolveDebevec(codes, n, ln_k, data_w, smooth_w, o.lambda);
-          for (int z = 0; z < 256; ++z) lin[z] = std::exp(g[z]);
-        } else {
-          lin = SolveRobertson(codes, n, relative_exposure, data_w, smooth_w, o.lambda, o.robertson_max_iterations,
-                               o.robertson_threshold, &iterations[c]);
-        }
-        for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(lin[z]);
-      }
-    });
-    if (o.response == ResponseModel::kRobertson) cal["iterations"] = iterations;
+// OpenCV's Debevec or Robertson calibration over the picked pixels.
+std::vector<float> CalibrateWithOpenCv(const std::vector<const BracketImage*>& images,
+                                       const std::vector<size_t>& pixel_index,
+                                       const std::vector<double>& relative_exposure, const MergeOptions& o) {
+  // The picked pixels as a 1 x n image per bracket (Debevec: OpenCV's grid over a 1 x n
+  // image takes every pixel, so it sees exactly our selection).
+  std::vector<cv::Mat> mats;
+  for (const BracketImage* img : images) {
+    cv::Mat m(1, static_cast<int>(pixel_index.size()), CV_8UC3);
+    for (size_t s = 0; s < pixel_index.size(); ++s)
+      for (int c = 0; c < 3; ++c) m.at<cv::Vec3b>(0, static_cast<int>(s))[c] = Code8(*img, pixel_index[s] + c);
+    mats.push_back(m);
   }
+  const std::vector<float> times(relative_exposure.begin(), relative_exposure.end());
+  cv::Mat out;
+  if (o.response == ResponseModel::kDebevec)
+    cv::createCalibrateDebevec(static_cast<int>(pixel_index.size()), static_cast<float>(o.lambda), false)->process(mats, out, times);
+  else
+    cv::createCalibrateRobertson(o.robertson_max_iterations, static_cast<float>(o.robertson_threshold))->process(mats, out, times);
+  if (out.rows != 256 || out.type() != CV_32FC3) throw Error("OpenCV response calibration returned an unexpected curve");
+  return FromMat(out);
+}
+
+// skycal's Debevec or Robertson solve over the picked pixels' well-exposed samples;
+// Robertson's iteration counts go into cal.
+std::vector<float> CalibrateWellExposed(const std::vector<const BracketImage*>& images,
+                                        const std::vector<size_t>& pixel_index,
+                                        const std::vector<double>& relative_exposure, const MergeOptions& o,
+                                        nlohmann::json* cal) {
+  const size_t n = images.size();
+  std::vector<float> curve;
+  const WeightTable data_w = MakeWeights(o, 255, true), smooth_w = MakeWeights(o, 255, false);
+  std::vector<double> ln_k(n);
+  for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
+  curve.assign(256 * 3, 0.0f);
+  std::vector<int> iterations(3, 0);
+  // One channel per worker (the three solves are independent).
+  ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
+    for (int c = c0; c < c1; ++c) {
+      const std::vector<uint8_t> codes = ChannelCodes(images, pixel_index, c);
+      std::vector<double> lin(256);
+      if (o.response == ResponseModel::kDebevec) {
+        const std::vector<double> g = SolveDebevec(codes, n, ln_k, data_w, smooth_w, o.lambda);
+        for (int z = 0; z < 256; ++z) lin[z] = std::exp(g[z]);
+      } else {
+        lin = SolveRobertson(codes, n, relative_exposure, data_w, smooth_w, o.lambda, o.robertson_max_iterations,
+                             o.robertson_threshold, &iterations[c]);
+      }
+      for (int z = 0; z < 256; ++z) curve[z * 3 + c] = static_cast<float>(lin[z]);
+    }
+  });
+  if (o.response == ResponseModel::kRobertson) (*cal)["iterations"] = iterations;
+  return curve;
+}
+
+}  // namespace
+
+std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
+                                   const std::vector<double>& relative_exposure, const MergeOptions& o,
+                                   nlohmann::json* report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.response == ResponseModel::kWeighted || o.response == ResponseModel::kAuto)
+    return RecoverWeighted(images, relative_exposure, o, report, t0);
+  nlohmann::json cal;
+  const std::vector<size_t> pixel_index = CalibrationPixels(images, o, &cal);
+  cal["solver"] = o.opencv_calibration ? "opencv" : "skycal (well-exposed samples only)";
+  std::vector<float> curve = o.opencv_calibration
+                                 ? CalibrateWithOpenCv(images, pixel_index, relative_exposure, o)
+                                 : CalibrateWellExposed(images, pixel_index, relative_exposure, o, &cal);
   int non_finite = 0;
   for (float v : curve) non_finite += !std::isfinite(v);
   cal["non_finite_codes_filled"] = non_finite;  // OpenCV's Robertson divides by a zero count for unseen codes
   cal["decreasing_steps"] = NormaliseResponse(&curve, 256);
-  cal["time_ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  cal["time_ms"] = MsSince(t0);
   if (report) (*report)["calibration"] = cal;
   return curve;
 }

@@ -108,16 +108,11 @@ nlohmann::json MergeOptionsToJson(const MergeOptions& o) {
           {"threads", o.threads}};
 }
 
-MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptions& options) {
-  const auto t_start = Clock::now();
-  std::string why;
-  if (!options.IsValid(&why)) throw Error("merge options: " + why);
-  const size_t n = brackets.size();
-  if (n < 2)
-    throw Error("HDR merge needs at least two exposures, got " + std::to_string(n) +
-                (n == 1 ? " (" + Label(brackets[0], 0) + ")" : std::string()));
+namespace {
 
-  // --- validation: images --------------------------------------------------------------
+// --- validation: images ------------------------------------------------------------------
+void ValidateImages(const std::vector<Bracket>& brackets) {
+  const size_t n = brackets.size();
   const BracketImage& first = brackets[0].image;
   for (size_t i = 0; i < n; ++i) {
     const BracketImage& im = brackets[i].image;
@@ -134,8 +129,16 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
       throw Error(name + ": " + std::to_string(im.bits) + "-bit, but " + Label(brackets[0], 0) + " is " +
                   std::to_string(first.bits) + "-bit; brackets must share a bit depth");
   }
+}
 
-  // --- validation: exposures -------------------------------------------------------------
+// Which of f-number and ISO enter the exposure factor k (each: known for every bracket).
+struct ExposureFields {
+  bool use_n = false, use_iso = false;
+};
+
+// --- validation: exposures ---------------------------------------------------------------
+ExposureFields ValidateExposures(const std::vector<Bracket>& brackets) {
+  const size_t n = brackets.size();
   int with_n = 0, with_iso = 0;
   for (size_t i = 0; i < n; ++i) {
     const Bracket& b = brackets[i];
@@ -160,9 +163,14 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
   };
   all_or_none(with_n, &Bracket::f_number, "f-number");
   all_or_none(with_iso, &Bracket::iso, "ISO");
-  const bool use_n = with_n == static_cast<int>(n), use_iso = with_iso == static_cast<int>(n);
+  return {with_n == static_cast<int>(n), with_iso == static_cast<int>(n)};
+}
 
-  MergeResult r;
+// Exposure factor k per bracket into r (factors, scale, aperture/ISO flag); returns the
+// bracket indices sorted by k. Throws when two brackets share an exposure.
+std::vector<size_t> ExposureOrder(const std::vector<Bracket>& brackets, ExposureFields fields, MergeResult& r) {
+  const size_t n = brackets.size();
+  const bool use_n = fields.use_n, use_iso = fields.use_iso;
   r.exposure_factors.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const Bracket& b = brackets[i];
@@ -182,62 +190,124 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
                   Num(brackets[b].exposure_time_s) + " s vs " + Num(brackets[a].exposure_time_s) +
                   " s, after f-number and ISO); each bracket needs a distinct exposure time");
   }
-  const double k_max = r.exposure_factors[order.back()];
   r.exposure_scale = 1.0 / r.exposure_factors[order[(n - 1) / 2]];
-  const auto t_validated = Clock::now();
+  return order;
+}
 
-  // --- response curve --------------------------------------------------------------------
-  nlohmann::json response_report;
-  std::vector<const BracketImage*> sorted_images(n);
-  std::vector<double> relative(n);
-  for (size_t s = 0; s < n; ++s) {
-    sorted_images[s] = &brackets[order[s]].image;
-    relative[s] = r.exposure_factors[order[s]] / k_max;
-  }
+// --- response curve ----------------------------------------------------------------------
+// Fills r.response_curve and r.response_levels (fixed, analytic or recovered from the
+// brackets sorted by exposure); returns the curve's source name.
+std::string ChooseResponse(const std::vector<Bracket>& brackets, const std::vector<const BracketImage*>& sorted_images,
+                           const std::vector<double>& relative, const MergeOptions& options, MergeResult& r,
+                           nlohmann::json* response_report) {
+  const BracketImage& first = brackets[0].image;
   const int levels = first.max_code() + 1;
-  std::string source;
   if (!options.response_curve.empty()) {
     r.response_curve = options.response_curve;
     const int given = static_cast<int>(r.response_curve.size() / 3);
     if (given == 65536 && first.bits == 8)
       throw Error("merge options: response_curve has 65536 levels but the brackets are 8-bit (" + Label(brackets[0], 0) + ")");
     r.response_levels = given;
-    source = "fixed_curve";
-  } else if (options.response == ResponseModel::kLinear || options.response == ResponseModel::kSrgb) {
+    return "fixed_curve";
+  }
+  if (options.response == ResponseModel::kLinear || options.response == ResponseModel::kSrgb) {
     r.response_curve = detail::AnalyticResponse(options.response, levels);
     r.response_levels = levels;
-    source = ResponseModelName(options.response);
-  } else {
-    r.response_curve = detail::RecoverResponse(sorted_images, relative, options, &response_report);
-    r.response_levels = 256;
-    source = ResponseModelName(options.response);
+    return ResponseModelName(options.response);
   }
-  const auto t_response = Clock::now();
+  r.response_curve = detail::RecoverResponse(sorted_images, relative, options, response_report);
+  r.response_levels = 256;
+  return ResponseModelName(options.response);
+}
 
-  // Lookup tables over the brackets' codes: linear value per channel, weight, class.
-  const std::vector<float> lut =
-      r.response_levels == levels ? r.response_curve : detail::ExpandResponse(r.response_curve);
-  const int max_code = first.max_code();
-  const detail::WeightTable weights = detail::MakeWeights(options, max_code);
-  const std::vector<float>& weight = weights.w;
-  const int low_code = weights.low_code, high_code = weights.high_code;
-  std::vector<float> inv_k(n), k_weight(n);
+// Lookup tables over the brackets' codes (linear value per channel, weight, class) and per
+// bracket (sorted by exposure) 1 / k, the exposure weight and the pixel plane.
+struct MergeTables {
+  std::vector<float> lut;
+  std::vector<float> weight;
+  int low_code = 0, high_code = 0, max_code = 0;
+  std::vector<float> inv_k, k_weight;
+  std::vector<const uint16_t*> planes;
+};
+
+MergeTables MakeTables(const MergeResult& r, const std::vector<size_t>& order, const std::vector<double>& relative,
+                       const std::vector<const BracketImage*>& sorted_images, const MergeOptions& options, int levels,
+                       int max_code) {
+  const size_t n = order.size();
+  MergeTables tb;
+  tb.lut = r.response_levels == levels ? r.response_curve : detail::ExpandResponse(r.response_curve);
+  tb.max_code = max_code;
+  detail::WeightTable weights = detail::MakeWeights(options, max_code);
+  tb.weight = std::move(weights.w);
+  tb.low_code = weights.low_code, tb.high_code = weights.high_code;
+  tb.inv_k.resize(n), tb.k_weight.resize(n), tb.planes.resize(n);
   for (size_t s = 0; s < n; ++s) {
-    inv_k[s] = static_cast<float>(1.0 / r.exposure_factors[order[s]]);
-    k_weight[s] = options.exposure_weighting ? static_cast<float>(relative[s]) : 1.0f;
+    tb.inv_k[s] = static_cast<float>(1.0 / r.exposure_factors[order[s]]);
+    tb.k_weight[s] = options.exposure_weighting ? static_cast<float>(relative[s]) : 1.0f;
+    tb.planes[s] = sorted_images[s]->rgb.data();
   }
-  const auto t_tables = Clock::now();
+  return tb;
+}
 
-  // --- per-pixel merge ---------------------------------------------------------------------
-  const int w = first.width, h = first.height;
+// One channel sample i = p * 3 + c across the brackets: the weighted mean of the
+// well-exposed ones, or a bound when none is (flags says which); counts into t.
+float MergeSample(const MergeTables& tb, size_t n, size_t i, int c, Tally& t, uint8_t& flags) {
+  const std::vector<float>& lut = tb.lut;
+  const std::vector<float>& weight = tb.weight;
+  const std::vector<float>& inv_k = tb.inv_k;
+  const std::vector<float>& k_weight = tb.k_weight;
+  const std::vector<const uint16_t*>& planes = tb.planes;
+  const int max_code = tb.max_code, low_code = tb.low_code, high_code = tb.high_code;
+  float sum = 0.0f, sum_w = 0.0f;
+  for (size_t s = 0; s < n; ++s) {
+    const int z = std::min<int>(planes[s][i], max_code);
+    const float wz = weight[z];
+    if (wz > 0.0f) {
+      const float ws = wz * k_weight[s];
+      sum += ws * lut[static_cast<size_t>(z) * 3 + c] * inv_k[s];
+      sum_w += ws;
+      ++t.good_samples[s];
+    } else if (z >= high_code) {
+      ++t.clipped_samples[s];
+    }
+  }
+  float e;
+  if (sum_w > 0.0f) {
+    e = sum / sum_w;
+  } else {
+    const int z_short = std::min<int>(planes[0][i], max_code), z_long = std::min<int>(planes[n - 1][i], max_code);
+    if (z_short >= high_code) {  // clipped even in the shortest: its value is a lower bound
+      e = lut[static_cast<size_t>(z_short) * 3 + c] * inv_k[0];
+      flags |= kPixelOverExposed;
+    } else if (z_long <= low_code) {  // black even in the longest: its value is an upper bound
+      e = lut[static_cast<size_t>(z_long) * 3 + c] * inv_k[n - 1];
+      flags |= kPixelUnderExposed;
+    } else {
+      // Black in some brackets, clipped in the others, well exposed in none: midway
+      // between the longest black bracket's bound and the shortest clipped one's.
+      size_t dark = 0, bright = n - 1;
+      for (size_t s = 0; s < n; ++s)
+        if (std::min<int>(planes[s][i], max_code) <= low_code) dark = s;
+      for (size_t s = n; s-- > 0;)
+        if (std::min<int>(planes[s][i], max_code) >= high_code) bright = s;
+      const int zd = std::min<int>(planes[dark][i], max_code), zb = std::min<int>(planes[bright][i], max_code);
+      e = 0.5f * (lut[static_cast<size_t>(zd) * 3 + c] * inv_k[dark] + lut[static_cast<size_t>(zb) * 3 + c] * inv_k[bright]);
+      flags |= kPixelGap;
+    }
+  }
+  return e;
+}
+
+// --- per-pixel merge ---------------------------------------------------------------------
+// Radiance, flags and well-measured mask into r; per-worker tallies, summed into r's
+// counts. Returns the per-bracket (sorted order) good and clipped channel-sample counts.
+std::pair<std::vector<long long>, std::vector<long long>> MergePixels(const MergeTables& tb, size_t n, int w, int h,
+                                                                      int threads, MergeResult& r) {
   r.radiance = ImageRGB(w, h);
   r.well_measured.assign(static_cast<size_t>(w) * h, 0.0f);
   r.flags.assign(static_cast<size_t>(w) * h, 0);
-  const int threads = detail::ResolveThreads(options.threads);
   std::vector<Tally> tallies(threads);  // fewer rows than threads: the unused ones stay zero
   for (auto& t : tallies) t.good_samples.assign(n, 0), t.clipped_samples.assign(n, 0);
-  std::vector<const uint16_t*> planes(n);
-  for (size_t s = 0; s < n; ++s) planes[s] = sorted_images[s]->rgb.data();
   detail::ParallelChunks(h, threads, [&](int y0, int y1, int worker) {
     // Counters live on this worker's stack and are stored once at the end: adjacent Tally
     // objects share cache lines, and per-pixel writes to them would serialise the workers.
@@ -248,43 +318,7 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
       uint8_t flags = 0;
       for (int c = 0; c < 3; ++c) {
         const size_t i = p * 3 + c;
-        float sum = 0.0f, sum_w = 0.0f;
-        for (size_t s = 0; s < n; ++s) {
-          const int z = std::min<int>(planes[s][i], max_code);
-          const float wz = weight[z];
-          if (wz > 0.0f) {
-            const float ws = wz * k_weight[s];
-            sum += ws * lut[static_cast<size_t>(z) * 3 + c] * inv_k[s];
-            sum_w += ws;
-            ++t.good_samples[s];
-          } else if (z >= high_code) {
-            ++t.clipped_samples[s];
-          }
-        }
-        float e;
-        if (sum_w > 0.0f) {
-          e = sum / sum_w;
-        } else {
-          const int z_short = std::min<int>(planes[0][i], max_code), z_long = std::min<int>(planes[n - 1][i], max_code);
-          if (z_short >= high_code) {  // clipped even in the shortest: its value is a lower bound
-            e = lut[static_cast<size_t>(z_short) * 3 + c] * inv_k[0];
-            flags |= kPixelOverExposed;
-          } else if (z_long <= low_code) {  // black even in the longest: its value is an upper bound
-            e = lut[static_cast<size_t>(z_long) * 3 + c] * inv_k[n - 1];
-            flags |= kPixelUnderExposed;
-          } else {
-            // Black in some brackets, clipped in the others, well exposed in none: midway
-            // between the longest black bracket's bound and the shortest clipped one's.
-            size_t dark = 0, bright = n - 1;
-            for (size_t s = 0; s < n; ++s)
-              if (std::min<int>(planes[s][i], max_code) <= low_code) dark = s;
-            for (size_t s = n; s-- > 0;)
-              if (std::min<int>(planes[s][i], max_code) >= high_code) bright = s;
-            const int zd = std::min<int>(planes[dark][i], max_code), zb = std::min<int>(planes[bright][i], max_code);
-            e = 0.5f * (lut[static_cast<size_t>(zd) * 3 + c] * inv_k[dark] + lut[static_cast<size_t>(zb) * 3 + c] * inv_k[bright]);
-            flags |= kPixelGap;
-          }
-        }
+        const float e = MergeSample(tb, n, i, c, t, flags);
         r.radiance.pixels[i] = std::isfinite(e) && e > 0.0f ? e : 0.0f;
       }
       r.flags[p] = flags;
@@ -298,7 +332,6 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
     }
     tallies[worker] = std::move(t);
   });
-  const auto t_merged = Clock::now();
 
   std::vector<long long> good(n, 0), clipped(n, 0);
   for (const Tally& t : tallies) {
@@ -308,10 +341,15 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
     r.gap += t.gap;
     for (size_t s = 0; s < n; ++s) good[s] += t.good_samples[s], clipped[s] += t.clipped_samples[s];
   }
-  const long long total = static_cast<long long>(w) * h;
-  r.not_well_measured = total - r.well_measured_pixels;
+  return {std::move(good), std::move(clipped)};
+}
 
-  // --- report ------------------------------------------------------------------------------
+// --- report: per bracket -----------------------------------------------------------------
+nlohmann::json BracketsReport(const std::vector<Bracket>& brackets, const std::vector<size_t>& order,
+                              ExposureFields fields, const MergeResult& r, const std::vector<long long>& good,
+                              const std::vector<long long>& clipped, long long total) {
+  const size_t n = brackets.size();
+  const bool use_n = fields.use_n, use_iso = fields.use_iso;
   nlohmann::json bj = nlohmann::json::array();
   std::vector<size_t> rank(n);
   for (size_t s = 0; s < n; ++s) rank[order[s]] = s;
@@ -329,6 +367,49 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
                   {"well_exposed_fraction", double(good[rank[i]]) / (3.0 * total)},
                   {"clipped_fraction", double(clipped[rank[i]]) / (3.0 * total)}});
   }
+  return bj;
+}
+
+}  // namespace
+
+MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptions& options) {
+  const auto t_start = Clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw Error("merge options: " + why);
+  const size_t n = brackets.size();
+  if (n < 2)
+    throw Error("HDR merge needs at least two exposures, got " + std::to_string(n) +
+                (n == 1 ? " (" + Label(brackets[0], 0) + ")" : std::string()));
+  ValidateImages(brackets);
+  const BracketImage& first = brackets[0].image;
+  const ExposureFields fields = ValidateExposures(brackets);
+  MergeResult r;
+  const std::vector<size_t> order = ExposureOrder(brackets, fields, r);
+  const double k_max = r.exposure_factors[order.back()];
+  const auto t_validated = Clock::now();
+
+  nlohmann::json response_report;
+  std::vector<const BracketImage*> sorted_images(n);
+  std::vector<double> relative(n);
+  for (size_t s = 0; s < n; ++s) {
+    sorted_images[s] = &brackets[order[s]].image;
+    relative[s] = r.exposure_factors[order[s]] / k_max;
+  }
+  const int levels = first.max_code() + 1;
+  const std::string source = ChooseResponse(brackets, sorted_images, relative, options, r, &response_report);
+  const auto t_response = Clock::now();
+
+  MergeTables tb = MakeTables(r, order, relative, sorted_images, options, levels, first.max_code());
+  const auto t_tables = Clock::now();
+
+  const int w = first.width, h = first.height;
+  const int threads = detail::ResolveThreads(options.threads);
+  const auto [good, clipped] = MergePixels(tb, n, w, h, threads, r);
+  const auto t_merged = Clock::now();
+  const long long total = static_cast<long long>(w) * h;
+  r.not_well_measured = total - r.well_measured_pixels;
+
+  // --- report ------------------------------------------------------------------------------
   response_report["source"] = source;
   response_report["levels"] = r.response_levels;
   response_report["normalisation"] = "top code = 1 per channel";
@@ -338,13 +419,13 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
       {"width", w},
       {"height", h},
       {"bits", first.bits},
-      {"brackets", bj},
+      {"brackets", BracketsReport(brackets, order, fields, r, good, clipped, total)},
       {"unit", r.exposure_uses_aperture_iso
                    ? "linear sensor value (full scale 1) / (t[s] * ISO/100 / N^2)"
                    : "linear sensor value (full scale 1) / t[s] (no f-number/ISO known)"},
       {"exposure_scale", r.exposure_scale},
-      {"exposure_uses_f_number", use_n},
-      {"exposure_uses_iso", use_iso},
+      {"exposure_uses_f_number", fields.use_n},
+      {"exposure_uses_iso", fields.use_iso},
       {"pixels",
        {{"total", total},
         {"well_measured", r.well_measured_pixels},
@@ -352,7 +433,7 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
         {"over_exposed", r.over_exposed},
         {"under_exposed", r.under_exposed},
         {"gap", r.gap}}},
-      {"codes", {{"black_at_or_below", low_code}, {"clipped_at_or_above", high_code}, {"max", max_code}}},
+      {"codes", {{"black_at_or_below", tb.low_code}, {"clipped_at_or_above", tb.high_code}, {"max", tb.max_code}}},
       {"response", response_report},
       {"options", MergeOptionsToJson(options)},
       {"threads", threads},

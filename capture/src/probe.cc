@@ -121,8 +121,12 @@ std::optional<std::array<double, 3>> BallNormalAt(const BallCircle& circle, cons
                                R[6] * u + R[7] * v + R[8] * z};
 }
 
-ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>& R,
-                              const std::optional<BallCircle>& circle_in, const ProbeOptions& options) {
+namespace {
+
+// The options, the image and the rotation checked; the ball circle (given or detected)
+// checked to be finite and inside the image.
+BallCircle ProbeCircle(const ImageRGB& image, const std::array<double, 9>& R,
+                       const std::optional<BallCircle>& circle_in, const ProbeOptions& options) {
   if (image.empty()) throw Error("probe: the image is empty");
   if (image.pixels.size() != static_cast<size_t>(image.width) * image.height * 3)
     throw Error("probe: the image's pixel buffer does not match its size");
@@ -144,30 +148,46 @@ ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>
       c.cy + c.radius_px > h - 1 + kTol)
     throw Error("probe: ball circle " + CircleText(c) + " lies (partly) outside the " + std::to_string(w) + "x" +
                 std::to_string(h) + " image");
+  return c;
+}
 
-  // Bins: rings of equal theta width up to theta_max, sectors of about the same width.
-  const double rho_max = 1.0 - options.edge_fraction;
-  const double theta_max = std::asin(rho_max);
-  const double dtheta = theta_max / options.rings;
-  std::vector<int> ring_first(options.rings + 1, 0), ring_sectors(options.rings, 1);
+// Bins: rings of equal theta width up to theta_max, sectors of about the same width.
+struct ProbeBins {
+  double rho_max = 0.0, dtheta = 0.0;
+  std::vector<int> ring_first, ring_sectors;
+  int count() const { return ring_first.back(); }
+};
+
+ProbeBins MakeProbeBins(const ProbeOptions& options) {
+  ProbeBins b;
+  b.rho_max = 1.0 - options.edge_fraction;
+  const double theta_max = std::asin(b.rho_max);
+  b.dtheta = theta_max / options.rings;
+  b.ring_first.assign(options.rings + 1, 0);
+  b.ring_sectors.assign(options.rings, 1);
   for (int k = 0; k < options.rings; ++k) {
-    const double mid = (k + 0.5) * dtheta;
-    ring_sectors[k] = std::max(1, static_cast<int>(std::lround(2.0 * kPi * std::sin(mid) / dtheta)));
-    ring_first[k + 1] = ring_first[k] + ring_sectors[k];
+    const double mid = (k + 0.5) * b.dtheta;
+    b.ring_sectors[k] = std::max(1, static_cast<int>(std::lround(2.0 * kPi * std::sin(mid) / b.dtheta)));
+    b.ring_first[k + 1] = b.ring_first[k] + b.ring_sectors[k];
   }
-  const int nbins = ring_first[options.rings];
-  struct Acc {
-    double n[3] = {0, 0, 0};
-    double l[3] = {0, 0, 0};
-    int count = 0;
-  };
-  std::vector<Acc> acc(nbins);
+  return b;
+}
 
+// Per bin: summed world normal (camera-to-world R), summed radiance, pixel count.
+struct ProbeAcc {
+  double n[3] = {0, 0, 0};
+  double l[3] = {0, 0, 0};
+  int count = 0;
+};
+
+// Walks the ball's pixels: counts (total, clipped, non-finite) and the brightest pixel
+// into m; the usable ones (inside rho_max, finite, unclipped) into their bin's acc.
+void AccumulateBall(const ImageRGB& image, const std::array<double, 9>& R, const BallCircle& c, const ProbeBins& bins,
+                    const ProbeOptions& options, ProbeMeasurement& m, std::vector<ProbeAcc>& acc) {
+  const int w = image.width, h = image.height;
+  const double rho_max = bins.rho_max, dtheta = bins.dtheta;
   // Pixels are floats: compare in float so a clamp written as float(clip_level) counts.
   const float clip_f = static_cast<float>(options.clip_level);
-  ProbeMeasurement m;
-  m.circle = c;
-  m.max_luminance = -1.0;
   const int x0 = std::max(0, static_cast<int>(std::floor(c.cx - c.radius_px)));
   const int x1 = std::min(w - 1, static_cast<int>(std::ceil(c.cx + c.radius_px)));
   const int y0 = std::max(0, static_cast<int>(std::floor(c.cy - c.radius_px)));
@@ -202,9 +222,9 @@ ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>
       const double theta = std::asin(std::min(1.0, rho));
       const int k = std::min(options.rings - 1, static_cast<int>(theta / dtheta));
       const double phi = std::atan2(v, u);  // (-pi, pi]
-      const int s = std::min(ring_sectors[k] - 1,
-                             std::max(0, static_cast<int>((phi + kPi) / (2.0 * kPi) * ring_sectors[k])));
-      Acc& a = acc[ring_first[k] + s];
+      const int s = std::min(bins.ring_sectors[k] - 1,
+                             std::max(0, static_cast<int>((phi + kPi) / (2.0 * kPi) * bins.ring_sectors[k])));
+      ProbeAcc& a = acc[bins.ring_first[k] + s];
       const double nz = -std::sqrt(std::max(0.0, 1.0 - rho * rho));
       const double nw[3] = {R[0] * u + R[1] * v + R[2] * nz, R[3] * u + R[4] * v + R[5] * nz,
                             R[6] * u + R[7] * v + R[8] * nz};
@@ -215,8 +235,22 @@ ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>
       ++a.count;
     }
   }
+}
+
+}  // namespace
+
+ProbeMeasurement MeasureProbe(const ImageRGB& image, const std::array<double, 9>& R,
+                              const std::optional<BallCircle>& circle_in, const ProbeOptions& options) {
+  const BallCircle c = ProbeCircle(image, R, circle_in, options);
+  const ProbeBins bins = MakeProbeBins(options);
+  std::vector<ProbeAcc> acc(bins.count());
+
+  ProbeMeasurement m;
+  m.circle = c;
+  m.max_luminance = -1.0;
+  AccumulateBall(image, R, c, bins, options, m, acc);
   if (m.max_luminance < 0.0) m.max_luminance = 0.0;
-  for (const Acc& a : acc) {
+  for (const ProbeAcc& a : acc) {
     if (a.count < options.min_pixels_per_sample) continue;
     const double len = std::sqrt(a.n[0] * a.n[0] + a.n[1] * a.n[1] + a.n[2] * a.n[2]);
     if (!(len > 0.0)) continue;

@@ -385,13 +385,11 @@ std::vector<RigCamera> ReadRigFile(const std::string& path) {
   return ParseRig(ReadJsonFile(path), path, std::filesystem::path(path).parent_path().string());
 }
 
-ImageRGB UnwrapToLatLong(const std::vector<std::pair<RigCamera, const ImageRGB*>>& cameras, int width, int height,
-                         std::vector<float>* coverage, const UnwrapOptions& options) {
-  if (width < 2 || height < 2) {
-    throw Error("unwrap: output size " + std::to_string(width) + "x" + std::to_string(height) + ": expected at least 2x2");
-  }
-  const int threads = std::max(1, options.threads);
-  const int max_aniso = std::max(1, options.max_anisotropy);
+namespace {
+
+// Each camera checked against its image (size, lens, rotation) and readied for sampling:
+// world-to-camera rotation, lat-long period, mip pyramid.
+std::vector<Camera> PrepareCameras(const std::vector<std::pair<RigCamera, const ImageRGB*>>& cameras, int threads) {
   std::vector<Camera> cams(cameras.size());
   for (size_t i = 0; i < cameras.size(); ++i) {
     const RigCamera& rc = cameras[i].first;
@@ -416,56 +414,93 @@ ImageRGB UnwrapToLatLong(const std::vector<std::pair<RigCamera, const ImageRGB*>
     c.period = img->width - 1;
     BuildPyramid(c, *img, threads);
   }
+  return cams;
+}
+
+// The output lat-long's columns (sin and cos of longitude) and its steps in radians per pixel.
+struct OutputGrid {
+  int width = 0, height = 0;
+  std::vector<double> sin_lon, cos_lon;
+  double dlon_dx = 0.0, dlat_dy = 0.0;
+};
+
+// Per output node of row y: world direction, its derivatives along x and y (the node's
+// footprint) and (r, g, b, weight) summed over the cameras, feather-weighted.
+std::vector<double> UnwrapRowSums(const std::vector<Camera>& cams, const OutputGrid& grid, int y, int max_aniso,
+                                  const UnwrapOptions& options) {
+  const int width = grid.width, height = grid.height;
+  const std::vector<double>& sin_lon = grid.sin_lon;
+  const std::vector<double>& cos_lon = grid.cos_lon;
+  const double dlon_dx = grid.dlon_dx, dlat_dy = grid.dlat_dy;
+  const double lat = latlong::Latitude(y, height);
+  const double sl = std::sin(lat), cl = std::cos(lat);
+  // Width of the node's footprint across longitude: the mean cos(latitude) over its band of
+  // +-half a row (core/latlong.h PixelSolidAngle), not zero at the poles.
+  const double top = std::min(lat - 0.5 * dlat_dy, kPi / 2), bottom = std::max(lat + 0.5 * dlat_dy, -kPi / 2);
+  const double c_band = (std::sin(top) - std::sin(bottom)) / (top - bottom);
+  std::vector<double> acc(static_cast<size_t>(width) * 4, 0.0);
+  std::vector<Vec3d> world(width), tx(width), ty(width), rays(width);
+  std::vector<Vec2d> pix(width);
+  std::vector<unsigned char> valid(width);
+  std::vector<std::array<double, 6>> jac(width);
+  for (int x = 0; x < width; ++x) {
+    world[x] = {sin_lon[x] * cl, sl, cos_lon[x] * cl};
+    tx[x] = {dlon_dx * cos_lon[x] * c_band, 0.0, -dlon_dx * sin_lon[x] * c_band};
+    ty[x] = {-dlat_dy * sin_lon[x] * sl, dlat_dy * cl, -dlat_dy * cos_lon[x] * sl};
+  }
+  for (const Camera& cam : cams) {
+    const Mat3& m = cam.world_to_camera;
+    auto apply = [&m](const Vec3d& v) {
+      return Vec3d{m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+                   m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
+    };
+    for (int x = 0; x < width; ++x) rays[x] = apply(world[x]);
+    RaysToPixels(cam.rig->lens, rays, pix, valid, jac);
+    for (int x = 0; x < width; ++x) {
+      if (!valid[x]) continue;
+      const double px = pix[x][0], py = pix[x][1];
+      const double feather = Feather(cam, px, py, options.feather_power);
+      if (!(feather > 0)) continue;
+      const Vec3d cx = apply(tx[x]), cy = apply(ty[x]);
+      const auto& J = jac[x];
+      const double a[2] = {J[0] * cx[0] + J[1] * cx[1] + J[2] * cx[2], J[3] * cx[0] + J[4] * cx[1] + J[5] * cx[2]};
+      const double b[2] = {J[0] * cy[0] + J[1] * cy[1] + J[2] * cy[2], J[3] * cy[0] + J[4] * cy[1] + J[5] * cy[2]};
+      double s[4];
+      SampleFootprint(cam, px, py, a, b, max_aniso, s);
+      for (int k = 0; k < 4; ++k) acc[static_cast<size_t>(x) * 4 + k] += feather * s[k];
+    }
+  }
+  return acc;
+}
+
+}  // namespace
+
+ImageRGB UnwrapToLatLong(const std::vector<std::pair<RigCamera, const ImageRGB*>>& cameras, int width, int height,
+                         std::vector<float>* coverage, const UnwrapOptions& options) {
+  if (width < 2 || height < 2) {
+    throw Error("unwrap: output size " + std::to_string(width) + "x" + std::to_string(height) + ": expected at least 2x2");
+  }
+  const int threads = std::max(1, options.threads);
+  const int max_aniso = std::max(1, options.max_anisotropy);
+  const std::vector<Camera> cams = PrepareCameras(cameras, threads);
 
   ImageRGB out(width, height);
   if (coverage) coverage->assign(static_cast<size_t>(width) * height, 0.0f);
-  std::vector<double> sin_lon(width), cos_lon(width);
+  OutputGrid grid;
+  grid.width = width, grid.height = height;
+  std::vector<double>& sin_lon = grid.sin_lon;
+  std::vector<double>& cos_lon = grid.cos_lon;
+  sin_lon.resize(width), cos_lon.resize(width);
   for (int x = 0; x < width; ++x) {
     const double lon = latlong::Longitude(x, width);
     sin_lon[x] = std::sin(lon);
     cos_lon[x] = std::cos(lon);
   }
   const double dlon_dx = -2.0 * kPi / (width - 1), dlat_dy = -kPi / (height - 1);
+  grid.dlon_dx = dlon_dx, grid.dlat_dy = dlat_dy;
 
   ParallelFor(height, threads, [&](int y) {
-    const double lat = latlong::Latitude(y, height);
-    const double sl = std::sin(lat), cl = std::cos(lat);
-    // Width of the node's footprint across longitude: the mean cos(latitude) over its band of
-    // +-half a row (core/latlong.h PixelSolidAngle), not zero at the poles.
-    const double top = std::min(lat - 0.5 * dlat_dy, kPi / 2), bottom = std::max(lat + 0.5 * dlat_dy, -kPi / 2);
-    const double c_band = (std::sin(top) - std::sin(bottom)) / (top - bottom);
-    std::vector<double> acc(static_cast<size_t>(width) * 4, 0.0);
-    std::vector<Vec3d> world(width), tx(width), ty(width), rays(width);
-    std::vector<Vec2d> pix(width);
-    std::vector<unsigned char> valid(width);
-    std::vector<std::array<double, 6>> jac(width);
-    for (int x = 0; x < width; ++x) {
-      world[x] = {sin_lon[x] * cl, sl, cos_lon[x] * cl};
-      tx[x] = {dlon_dx * cos_lon[x] * c_band, 0.0, -dlon_dx * sin_lon[x] * c_band};
-      ty[x] = {-dlat_dy * sin_lon[x] * sl, dlat_dy * cl, -dlat_dy * cos_lon[x] * sl};
-    }
-    for (const Camera& cam : cams) {
-      const Mat3& m = cam.world_to_camera;
-      auto apply = [&m](const Vec3d& v) {
-        return Vec3d{m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
-                     m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
-      };
-      for (int x = 0; x < width; ++x) rays[x] = apply(world[x]);
-      RaysToPixels(cam.rig->lens, rays, pix, valid, jac);
-      for (int x = 0; x < width; ++x) {
-        if (!valid[x]) continue;
-        const double px = pix[x][0], py = pix[x][1];
-        const double feather = Feather(cam, px, py, options.feather_power);
-        if (!(feather > 0)) continue;
-        const Vec3d cx = apply(tx[x]), cy = apply(ty[x]);
-        const auto& J = jac[x];
-        const double a[2] = {J[0] * cx[0] + J[1] * cx[1] + J[2] * cx[2], J[3] * cx[0] + J[4] * cx[1] + J[5] * cx[2]};
-        const double b[2] = {J[0] * cy[0] + J[1] * cy[1] + J[2] * cy[2], J[3] * cy[0] + J[4] * cy[1] + J[5] * cy[2]};
-        double s[4];
-        SampleFootprint(cam, px, py, a, b, max_aniso, s);
-        for (int k = 0; k < 4; ++k) acc[static_cast<size_t>(x) * 4 + k] += feather * s[k];
-      }
-    }
+    const std::vector<double> acc = UnwrapRowSums(cams, grid, y, max_aniso, options);
     for (int x = 0; x < width; ++x) {
       const double* q = &acc[static_cast<size_t>(x) * 4];
       if (coverage) (*coverage)[static_cast<size_t>(y) * width + x] = static_cast<float>(q[3]);

@@ -151,6 +151,85 @@ float PairMean(float a, float b) {
   return a > 0.0f && b > 0.0f ? static_cast<float>(std::sqrt(static_cast<double>(a) * b)) : 0.5f * (a + b);
 }
 
+// Candidates: well above the local median, relatively and against the noise (rows above
+// min_elevation_deg in a lat-long).
+std::vector<uint8_t> StarCandidates(const std::vector<float>& lum, const std::vector<float>& med, const Grid& g,
+                                    const StarRemovalOptions& o, double noise_sigma) {
+  const size_t n = static_cast<size_t>(g.w) * g.h;
+  const int y_end = g.latlong ? std::clamp(static_cast<int>(std::floor((0.5 - o.min_elevation_deg / 180.0) * g.h)), 0, g.h) : g.h;
+  std::vector<uint8_t> cand(n, 0);
+  for (int y = 0; y < y_end; ++y)
+    for (int x = 0; x < g.w; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.w + x;
+      cand[i] = lum[i] > med[i] * (1.0 + o.min_contrast) && lum[i] - med[i] > o.threshold_sigma * noise_sigma;
+    }
+  return cand;
+}
+
+// No other group's candidate within isolation_px of group k's bounding box.
+bool IsIsolated(const Group& grp, size_t k, const Grid& g, const std::vector<uint8_t>& cand,
+                const std::vector<int>& label, const StarRemovalOptions& o) {
+  for (int y = grp.y0 - o.isolation_px; y <= grp.y1 + o.isolation_px; ++y)
+    for (int x = grp.x0 - o.isolation_px; x <= grp.x1 + o.isolation_px; ++x) {
+      if (y < 0 || y >= g.h) break;
+      const size_t j = g.I(x, y);
+      if (cand[j] && label[j] != static_cast<int>(k) + 1) return false;
+    }
+  return true;
+}
+
+// The group and its halo, marked 2 (provisional: this star's region) in mask; then a guard
+// ring around it, marked 3, returned in *guard.
+std::vector<std::pair<int, int>> MarkRegion(const Group& grp, const Grid& g, int halo_px, std::vector<uint8_t>& mask,
+                                            std::vector<size_t>* guard) {
+  std::vector<std::pair<int, int>> region;
+  for (const auto& [px, py] : grp.px)
+    for (int dy = -halo_px; dy <= halo_px; ++dy)
+      for (int dx = -halo_px; dx <= halo_px; ++dx) {
+        if (py + dy < 0 || py + dy >= g.h) continue;
+        const size_t j = g.I(px + dx, py + dy);
+        if (mask[j] == 0) {
+          mask[j] = 2;  // provisional: this star's region
+          region.push_back({g.X(px + dx), py + dy});
+        }
+      }
+  // A guard ring around the region stays out of the medians too: a bright star's spread
+  // reaches past the halo (sigma 0.5 px at 30x the sky: +30% two pixels out).
+  for (const auto& [x, y] : region)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (y + dy < 0 || y + dy >= g.h) continue;
+        const size_t j = g.I(x + dx, y + dy);
+        if (mask[j] == 0) mask[j] = 3, guard->push_back(j);
+      }
+  return region;
+}
+
+// Each region pixel and channel: the median of the pair means (see RemoveStars) over
+// usable pairs, written into res.image. buf: scratch.
+void FillRegion(const std::vector<std::pair<int, int>>& region, const ImageRGB& image, const Grid& g,
+                const std::vector<uint8_t>& cand, int span, StarRemovalResult& res, std::vector<float>& buf) {
+  for (const auto& [x, y] : region) {
+    for (int c = 0; c < 3; ++c) {
+      buf.clear();
+      // A non-finite neighbour (an invalid pixel) never enters a replacement value.
+      auto usable = [&](int px, int py) {
+        return py >= 0 && py < g.h && res.mask[g.I(px, py)] < 2 && !cand[g.I(px, py)] &&
+               std::isfinite(image.pixels[3 * g.I(px, py) + c]);
+      };
+      for (int d = 1; d <= span; ++d) {
+        if (usable(x - d, y) && usable(x + d, y))
+          buf.push_back(PairMean(image.pixels[3 * g.I(x - d, y) + c], image.pixels[3 * g.I(x + d, y) + c]));
+        if (usable(x, y - d) && usable(x, y + d))
+          buf.push_back(PairMean(image.pixels[3 * g.I(x, y - d) + c], image.pixels[3 * g.I(x, y + d) + c]));
+      }
+      if (buf.empty()) continue;
+      std::nth_element(buf.begin(), buf.begin() + buf.size() / 2, buf.end());
+      res.image.pixels[3 * (static_cast<size_t>(y) * g.w + x) + c] = buf[buf.size() / 2];
+    }
+  }
+}
+
 }  // namespace
 
 StarRemovalResult RemoveStars(const ImageRGB& image, const StarRemovalOptions& o) {
@@ -165,14 +244,7 @@ StarRemovalResult RemoveStars(const ImageRGB& image, const StarRemovalOptions& o
   const std::vector<float> med = LocalMedian(lum, g, r);
   StarRemovalResult res;
   res.noise_sigma = NoiseSigma(lum, med);
-  // Candidates: well above the local median, relatively and against the noise.
-  const int y_end = g.latlong ? std::clamp(static_cast<int>(std::floor((0.5 - o.min_elevation_deg / 180.0) * g.h)), 0, g.h) : g.h;
-  std::vector<uint8_t> cand(n, 0);
-  for (int y = 0; y < y_end; ++y)
-    for (int x = 0; x < g.w; ++x) {
-      const size_t i = static_cast<size_t>(y) * g.w + x;
-      cand[i] = lum[i] > med[i] * (1.0 + o.min_contrast) && lum[i] - med[i] > o.threshold_sigma * res.noise_sigma;
-    }
+  const std::vector<uint8_t> cand = StarCandidates(lum, med, g, o, res.noise_sigma);
   std::vector<int> label;
   const std::vector<Group> groups = Groups(cand, g, &label);
   res.image = image;
@@ -193,61 +265,14 @@ StarRemovalResult RemoveStars(const ImageRGB& image, const StarRemovalOptions& o
       ++res.rejected_large;
       continue;
     }
-    bool isolated = true;
-    for (int y = grp.y0 - o.isolation_px; y <= grp.y1 + o.isolation_px && isolated; ++y)
-      for (int x = grp.x0 - o.isolation_px; x <= grp.x1 + o.isolation_px; ++x) {
-        if (y < 0 || y >= g.h) break;
-        const size_t j = g.I(x, y);
-        if (cand[j] && label[j] != static_cast<int>(k) + 1) {
-          isolated = false;
-          break;
-        }
-      }
-    if (!isolated) {
+    if (!IsIsolated(grp, k, g, cand, label, o)) {
       ++res.rejected_clustered;
       continue;
     }
     // Replace the group and its halo by the median of the window's other pixels, per channel.
-    std::vector<std::pair<int, int>> region;
-    for (const auto& [px, py] : grp.px)
-      for (int dy = -o.halo_px; dy <= o.halo_px; ++dy)
-        for (int dx = -o.halo_px; dx <= o.halo_px; ++dx) {
-          if (py + dy < 0 || py + dy >= g.h) continue;
-          const size_t j = g.I(px + dx, py + dy);
-          if (res.mask[j] == 0) {
-            res.mask[j] = 2;  // provisional: this star's region
-            region.push_back({g.X(px + dx), py + dy});
-          }
-        }
-    // A guard ring around the region stays out of the medians too: a bright star's spread
-    // reaches past the halo (sigma 0.5 px at 30x the sky: +30% two pixels out).
     std::vector<size_t> guard;
-    for (const auto& [x, y] : region)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (y + dy < 0 || y + dy >= g.h) continue;
-          const size_t j = g.I(x + dx, y + dy);
-          if (res.mask[j] == 0) res.mask[j] = 3, guard.push_back(j);
-        }
-    for (const auto& [x, y] : region) {
-      for (int c = 0; c < 3; ++c) {
-        buf.clear();
-        // A non-finite neighbour (an invalid pixel) never enters a replacement value.
-        auto usable = [&](int px, int py) {
-          return py >= 0 && py < g.h && res.mask[g.I(px, py)] < 2 && !cand[g.I(px, py)] &&
-                 std::isfinite(image.pixels[3 * g.I(px, py) + c]);
-        };
-        for (int d = 1; d <= span; ++d) {
-          if (usable(x - d, y) && usable(x + d, y))
-            buf.push_back(PairMean(image.pixels[3 * g.I(x - d, y) + c], image.pixels[3 * g.I(x + d, y) + c]));
-          if (usable(x, y - d) && usable(x, y + d))
-            buf.push_back(PairMean(image.pixels[3 * g.I(x, y - d) + c], image.pixels[3 * g.I(x, y + d) + c]));
-        }
-        if (buf.empty()) continue;
-        std::nth_element(buf.begin(), buf.begin() + buf.size() / 2, buf.end());
-        res.image.pixels[3 * (static_cast<size_t>(y) * g.w + x) + c] = buf[buf.size() / 2];
-      }
-    }
+    const std::vector<std::pair<int, int>> region = MarkRegion(grp, g, o.halo_px, res.mask, &guard);
+    FillRegion(region, image, g, cand, span, res, buf);
     for (const size_t j : guard) res.mask[j] = 0;
     for (const auto& [x, y] : region) res.mask[static_cast<size_t>(y) * g.w + x] = 1;
     res.pixels_replaced += static_cast<long long>(region.size());

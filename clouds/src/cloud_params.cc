@@ -16,6 +16,9 @@ const char* ToString(CloudIntegration i) {
 
 #define SC_CLOUD_FIELD(member) [](CloudParams& p) { return &p.member; }
 
+// A table (one entry per parameter: unit, range, default, meaning, member), data rather
+// than logic: kept whole so each parameter reads in one place, though it runs past the
+// house's 80-line limit on functions.
 const std::vector<CloudParamSpec>& CloudParameterSpecs() {
   using S = CloudParamSpec;
   static const std::vector<CloudParamSpec> specs = {

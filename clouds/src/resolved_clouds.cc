@@ -90,17 +90,11 @@ void ValidateCloudTextures(const CloudNoise& noise, const WeatherMap& weather, c
               "weather map (R coverage, G precipitation, B type)");
 }
 
-CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request) {
-  if (!scene.preset || !scene.params || !scene.noise || !scene.weather) throw Error("cloud render: incomplete scene");
-  std::string why;
-  if (!request.IsValid(&why)) throw Error("cloud render request: " + why);
-  const CloudParams& c = *scene.params;
-  ValidateCloudParams(c, "cloud parameters");
-  ValidateCloudTextures(*scene.noise, *scene.weather, "cloud textures");
-  const render::Preset& preset = *scene.preset;
-  const auto sun = latlong::Normalized(request.sun_dir, "sun direction");
+namespace {
 
-  CloudShadeD s{};
+// The cloud parameters into the shared model's uniforms (lengths in m; the wind offset in
+// m at time_s).
+void ShadeFromParams(const CloudParams& c, double time_s, CloudShadeD& s) {
   s.planet_radius = c.planet_radius_m;
   s.layer_bottom = c.layer_bottom_m;
   s.layer_top = c.layer_top_m;
@@ -113,8 +107,8 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.curl_strength = c.curl_strength_m;
   // Density at x is the texture at x - wind x time: the clouds drift with the wind.
   const double az = c.wind_direction_deg * kPi / 180.0;
-  s.wind_x = -std::sin(az) * c.wind_speed_m_s * request.time_s;
-  s.wind_z = -std::cos(az) * c.wind_speed_m_s * request.time_s;
+  s.wind_x = -std::sin(az) * c.wind_speed_m_s * time_s;
+  s.wind_z = -std::cos(az) * c.wind_speed_m_s * time_s;
   s.coverage_scale = c.coverage_scale;
   s.erosion = c.erosion;
   s.height_shaping = c.height_shaping;
@@ -141,10 +135,13 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.ms_b = c.ms_b;
   s.ms_c = c.ms_c;
   s.atmosphere_blend = c.atmosphere_blend_m;
-  s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
+}
 
-  // The light the atmosphere already models: direct sun at the ground, the clear sky's
-  // SH-9 (no disc: the sun is the direct term) and the lit ground below.
+// The light the atmosphere already models, into s: direct sun, the clear sky's SH-9 and
+// its irradiance on an upward face, the lit ground's radiance.
+void ShadeFromAtmosphere(const render::Preset& preset, const std::array<double, 3>& sun, CloudShadeD& s) {
+  // Direct sun at the ground, the clear sky's SH-9 (no disc: the sun is the direct term)
+  // and the lit ground below.
   // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
   // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
   // at dusk has no sunlit clouds rather than ones lit through the ground).
@@ -165,12 +162,10 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.ground_radiance = glsl::Vec3<double>(k * (e_sun[0] * cos_sun + s.sky_irradiance_up.x),
                                          k * (e_sun[1] * cos_sun + s.sky_irradiance_up.y),
                                          k * (e_sun[2] * cos_sun + s.sky_irradiance_up.z));
-  s.weather_width = scene.weather->width;
-  s.weather_height = scene.weather->height;
-  s.ms_octaves = static_cast<int>(c.ms_octaves);
-  s.integration = static_cast<int>(c.integration);
+}
 
-  const MarchOptions& m = request.march;
+// The march's step counts, shortcuts and thresholds into s.
+void ShadeFromMarch(const MarchOptions& m, CloudShadeD& s) {
   s.steps_zenith = m.steps_zenith;
   s.steps_horizon = m.steps_horizon;
   s.light_samples = m.light_samples;
@@ -186,6 +181,30 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   s.light_step = m.light_step_m;
   s.far_light_distance = m.far_light_distance_m;
   s.cone_spread = m.cone_spread;
+}
+
+}  // namespace
+
+CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request) {
+  if (!scene.preset || !scene.params || !scene.noise || !scene.weather) throw Error("cloud render: incomplete scene");
+  std::string why;
+  if (!request.IsValid(&why)) throw Error("cloud render request: " + why);
+  const CloudParams& c = *scene.params;
+  ValidateCloudParams(c, "cloud parameters");
+  ValidateCloudTextures(*scene.noise, *scene.weather, "cloud textures");
+  const render::Preset& preset = *scene.preset;
+  const auto sun = latlong::Normalized(request.sun_dir, "sun direction");
+
+  CloudShadeD s{};
+  ShadeFromParams(c, request.time_s, s);
+  s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
+  ShadeFromAtmosphere(preset, sun, s);
+  s.weather_width = scene.weather->width;
+  s.weather_height = scene.weather->height;
+  s.ms_octaves = static_cast<int>(c.ms_octaves);
+  s.integration = static_cast<int>(c.integration);
+
+  ShadeFromMarch(request.march, s);
   return s;
 }
 

@@ -234,18 +234,10 @@ struct Integrals {
   std::array<double, 3> rayleigh{}, mie{};  // integral of rho * T(o->x) * T(x->sun) ds, m
 };
 
-// Single scattering integrals for one view ray and one sun direction.
-Integrals IntegrateViewRay(const Atmosphere& atm, const AtmosphereOptions& opts, double r0, double sin_e,
-                           double cos_e, double cos_ts, double sin_ts, double cos_phi, std::vector<double>& nodes,
-                           std::vector<char>& lit) {
-  Integrals out;
-  const double length = atm.DistanceToTop(r0, sin_e);
-  if (!(length > 0.0)) return out;
-  const double mu = cos_e * sin_ts * cos_phi + sin_e * cos_ts;  // cos(view, sun)
-  const Interval shadow = ShadowOnRay(r0, sin_e, cos_ts, sin_ts, mu, atm.bottom(), length);
-
+// The view ray's integration nodes in [0, length], crowded toward the observer, with the
+// shadow's ends as nodes; lit[i]: segment i is outside the shadow. Returns whether any is.
+bool PlaceViewNodes(double length, const Interval& shadow, int n, std::vector<double>& nodes, std::vector<char>& lit) {
   nodes.clear();
-  const int n = opts.view_steps;
   for (int i = 0; i <= n; ++i) {
     const double u = static_cast<double>(i) / n;
     nodes.push_back(length * u * u);
@@ -272,7 +264,21 @@ Integrals IntegrateViewRay(const Atmosphere& atm, const AtmosphereOptions& opts,
     lit[i] = !shadow.contains(0.5 * (nodes[i] + nodes[i + 1]));
     any_lit = any_lit || lit[i];
   }
-  if (!any_lit) return out;
+  return any_lit;
+}
+
+// Single scattering integrals for one view ray and one sun direction.
+Integrals IntegrateViewRay(const Atmosphere& atm, const AtmosphereOptions& opts, double r0, double sin_e,
+                           double cos_e, double cos_ts, double sin_ts, double cos_phi, std::vector<double>& nodes,
+                           std::vector<char>& lit) {
+  Integrals out;
+  const double length = atm.DistanceToTop(r0, sin_e);
+  if (!(length > 0.0)) return out;
+  const double mu = cos_e * sin_ts * cos_phi + sin_e * cos_ts;  // cos(view, sun)
+  const Interval shadow = ShadowOnRay(r0, sin_e, cos_ts, sin_ts, mu, atm.bottom(), length);
+
+  if (!PlaceViewNodes(length, shadow, opts.view_steps, nodes, lit)) return out;
+  const size_t segs = nodes.size() - 1;
 
   const double p2 = r0 * r0 * cos_e * cos_e;
   const double os = r0 * cos_ts;
