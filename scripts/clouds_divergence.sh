@@ -48,7 +48,7 @@ for w in ("256", "128"):
             work_counts[m] = c["extra"]
             device[w] = c["extra"]["device"]
 med = statistics.median
-print("# Clouds: does lane divergence cap the optimisations on lavapipe? (issue 10)\n")
+print("# Clouds: does lane divergence cap the optimisations on lavapipe?\n")
 print(f"`scripts/clouds_divergence.sh {rounds} {repeats}`: the `clouds-divergence` suite (default_cloudy, sun 25 deg, "
       f"512x256, Vulkan) in {2 * rounds} processes alternating LP_NATIVE_VECTOR_WIDTH=256 and 128 (order swapped "
       f"each round); each process: per march the median of {repeats} renders after a warm-up. Below: medians over "

@@ -227,7 +227,7 @@ TEST(FitTerms, OvercastHeldInFfxvIsoAndFittedInFfxv) {
 namespace skycal {
 namespace {
 
-// Issue 9, skip decisions: the coarse levels' saving is estimated from this run when this
+// Skip decisions (docs/fitting.md): the coarse levels' saving is estimated from this run when this
 // run solved the finest level (--polish): that level's measured time x the skipped levels'
 // share of its samples; without the polish the bench estimate (the fit-decisions suite).
 TEST(FitTerms, CoarseLevelsSavedIsEstimatedFromThisRunWhenThePolishRan) {

@@ -1,4 +1,4 @@
-// The cloud lighting of photographs, whose cloud shapes no noise reproduces (issue 11,
+// The cloud lighting of photographs, whose cloud shapes no noise reproduces (docs/cloud-fitting.md,
 // regime 3): the controller behind `skycal fit --clouds stats`. The clear pixels have fitted
 // the atmosphere already (the caller's sky fit, cloud probability >= 0.5 left out); here the
 // cloud pixels fit the lighting by statistics (cloud_stats.h) against renders lit by the

@@ -1,11 +1,11 @@
 // The game export: the game's tables from calibrated presets: LUT textures as half-float
 // EXRs under one pre-exposure scale (FFXV multiplies exposure into every light source so
-// FP16 never clamps, DESIGN.md 1.1), and a time-of-day keyframe table (CSV + JSON, one row
+// FP16 never clamps: Miyamoto & Driancourt 2016), and a time-of-day keyframe table (CSV + JSON, one row
 // per key, one column per parameter: the shape of FFXV's weather file). Where a preset's
 // provenance names the sun direction it was fitted at (fit writes
 // provenance.final_errors[i].sun_direction), also: the sun's illuminance at the ground per
-// key, the sky's SH-9 (FFXV's diffuse lighting, DESIGN.md 1.1) and a fog colour and blurred
-// fog lat-long (Forza's fog cubemap, DESIGN.md 1.3).
+// key, the sky's SH-9 (FFXV's diffuse lighting) and a fog colour and blurred
+// fog lat-long (Forza Horizon 3's fog cubemap: Wood, GDC).
 #pragma once
 #include <string>
 #include <vector>
