@@ -1,4 +1,4 @@
-// Suite `cloud-stats-noise`: the shape noise of the cloud statistics (docs/cloud-fitting.md, regime 2),
+// Suite `cloud-stats-noise`: the shape noise of the cloud statistics (issue 11 regime 2),
 // measured at the truth — what `bench_cloud_stats noise` wrote (bench/results/cloud_stats_noise.md),
 // now a suite of `skycal bench`. Σ, the covariance of the statistics over D single shape draws
 // (independent weather maps of the same weather statistics), and J, the Jacobian of the
@@ -23,9 +23,9 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "skycal/cloudfit/cloud_stats_objective.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/bench/cloud_stats_suite_grids.h"
-#include "skycal/cloudfit/cloud_stats_objective.h"
 #include "skycal/core/error.h"
 #include "suite_util.h"
 #include "suites_internal.h"
@@ -67,6 +67,198 @@ struct NoiseAnalysis {
   long long renders = 0;
 };
 
+// The statistics of each of `draws` single shape draws at x.
+std::vector<std::vector<double>> DrawAll(const cloudfit::CloudStatsObjective& obj, const std::vector<double>& x, int draws,
+                                         const SuiteOptions& o, bool log_progress) {
+  std::vector<std::vector<double>> v(draws, std::vector<double>(obj.num_residuals()));
+  for (int d = 0; d < draws; ++d) {
+    if (!obj.DrawStatistics(x.data(), d, v[d].data())) throw Error("shape draw failed");
+    if (log_progress && d % 8 == 7)
+      o.Log("[cloud-stats-noise]   " + std::to_string(d + 1) + "/" + std::to_string(draws) + " shape draws");
+  }
+  return v;
+}
+
+// Σ over the draws of the statistics every draw and the model fill (keep: their indices),
+// and the bias of the other noise seed's draws: mean(seed 1) - mean(seed 101).
+struct DrawCovariance {
+  std::vector<int> keep;
+  Eigen::MatrixXd S;
+  Eigen::VectorXd bias;
+};
+
+DrawCovariance CovarianceOverDraws(const std::vector<std::vector<double>>& v,
+                                   const std::vector<std::vector<double>>& v_other, const std::vector<double>& m0) {
+  const int draws = static_cast<int>(v.size()), n = static_cast<int>(m0.size());
+  DrawCovariance r;
+  std::vector<int>& keep = r.keep;
+  // Keep the statistics every draw and the model have (a bin a draw leaves empty has no quantile).
+  for (int k = 0; k < n; ++k) {
+    bool ok = std::isfinite(m0[k]);
+    for (int d = 0; d < draws && ok; ++d) ok = std::isfinite(v[d][k]) && std::isfinite(v_other[d][k]);
+    if (ok) keep.push_back(k);
+  }
+  const int nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd X(draws, nk);
+  for (int d = 0; d < draws; ++d)
+    for (int i = 0; i < nk; ++i) X(d, i) = v[d][keep[i]];
+  const Eigen::RowVectorXd mean = X.colwise().mean();
+  const Eigen::MatrixXd Xc = X.rowwise() - mean;
+  r.S = Xc.transpose() * Xc / (draws - 1);
+  r.bias.resize(nk);  // mean(noise seed 1) - mean(noise seed 101), per statistic
+  for (int i = 0; i < nk; ++i) {
+    double a = 0.0;
+    for (int d = 0; d < draws; ++d) a += v_other[d][keep[i]];
+    r.bias(i) = a / draws - mean(i);
+  }
+  return r;
+}
+
+// J by central differences of the pooled model, columns per ln(parameter).
+Eigen::MatrixXd PooledJacobian(const cloudfit::CloudStatsObjective& obj, const std::vector<double>& x,
+                               const std::vector<int>& keep, const SuiteOptions& o) {
+  const int n = obj.num_residuals(), p = obj.num_parameters(), nk = static_cast<int>(keep.size());
+  Eigen::MatrixXd J(nk, p);
+  std::vector<double> xp = x, rp(n), rm(n);
+  for (int j = 0; j < p; ++j) {
+    const double h = obj.StepX(j, x[j]);
+    const double hi = std::min(x[j] + h, obj.UpperX(j)), lo = std::max(x[j] - h, obj.LowerX(j));
+    xp[j] = hi;
+    if (!obj.ModelStatistics(xp.data(), rp.data())) throw Error("model render failed");
+    xp[j] = lo;
+    if (!obj.ModelStatistics(xp.data(), rm.data())) throw Error("model render failed");
+    xp[j] = x[j];
+    for (int i = 0; i < nk; ++i) {
+      const double dv = rp[keep[i]] - rm[keep[i]];
+      J(i, j) = (std::isfinite(dv) ? dv : 0.0) / (hi - lo) * x[j];  // d stat / d ln p
+    }
+    o.Log("[cloud-stats-noise]   Jacobian column " + obj.Name(j));
+  }
+  return J;
+}
+
+// Weights: the first design's (bin shares), the diagonal GLS (1 / var), the shrunk full GLS
+// ((1 - lambda) Σ + lambda diag Σ)^-1; var: Σ's diagonal, floored at the noise sd floor.
+struct NoiseWeights {
+  Eigen::VectorXd var;
+  Eigen::MatrixXd W_share, W_diag, W_full;
+  double lambda = 0.5;
+};
+
+NoiseWeights MakeNoiseWeights(const cloudfit::CloudStatsObjective& obj, const Eigen::MatrixXd& S, const std::vector<int>& keep,
+                              const cloudfit::CloudStatsOptions& options) {
+  const int nk = static_cast<int>(keep.size());
+  NoiseWeights nw;
+  Eigen::VectorXd w_share(nk);
+  nw.var = S.diagonal();
+  for (int i = 0; i < nk; ++i) {
+    w_share(i) = obj.Weight(keep[i]) * obj.Weight(keep[i]);
+    nw.var(i) = std::max(nw.var(i), options.noise_sd_floor * options.noise_sd_floor);
+  }
+  nw.W_share = w_share.asDiagonal(), nw.W_diag = nw.var.cwiseInverse().asDiagonal();
+  const double lambda = nw.lambda;
+  Eigen::MatrixXd S_shrunk = (1.0 - lambda) * S;
+  S_shrunk.diagonal() += lambda * nw.var;
+  nw.W_full = S_shrunk.ldlt().solve(Eigen::MatrixXd::Identity(nk, nk));
+  return nw;
+}
+
+// The 3D noise texture is a shape draw too: one weather map (draw 0), the noise seeds the
+// seed pairs use (1-6 references, 101-106 models): the sd across them per statistic over
+// the sd across weather maps, sorted.
+std::vector<double> NoiseSeedSdRatios(const cloudfit::CloudStatsScene& model, const std::vector<cloudfit::CloudStatsReference>& refs,
+                                      clouds::CloudRenderer& renderer, const cloudfit::CloudStatsOptions& options,
+                                      const std::string& cache, const std::vector<double>& x, int n,
+                                      const std::vector<int>& keep, const Eigen::VectorXd& var) {
+  std::vector<std::vector<double>> vs;
+  for (uint64_t seed : {1, 2, 3, 4, 5, 6, 101, 102, 103, 104, 105, 106}) {
+    const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
+    cloudfit::CloudStatsScene ms = model;
+    ms.noise = &nz;
+    const cloudfit::CloudStatsObjective o2(refs, ms, renderer, options);
+    vs.emplace_back(n);
+    if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
+  }
+  std::vector<double> ratio;
+  for (int i = 0; i < static_cast<int>(keep.size()); ++i) {
+    double a = 0.0, a2 = 0.0;
+    int c = 0;
+    for (const auto& vv : vs)
+      if (std::isfinite(vv[keep[i]])) {
+        a += vv[keep[i]];
+        a2 += vv[keep[i]] * vv[keep[i]];
+        ++c;
+      }
+    if (c < 6) continue;
+    const double m = a / c, sd = std::sqrt(std::max(0.0, (a2 - c * m * m) / (c - 1)));
+    ratio.push_back(sd / std::sqrt(var(i)));
+  }
+  std::sort(ratio.begin(), ratio.end());
+  return ratio;
+}
+
+// One subset of the fields: singular values of diag(Σ)^-1/2 J, the predicted sd per weight
+// and (R, M), and the shift the noise seed's bias makes; Markdown into md, numbers returned.
+nlohmann::json SubsetTables(const Subset& sub, const Eigen::MatrixXd& J, const Eigen::MatrixXd& S,
+                            const Eigen::VectorXd& bias, const NoiseWeights& nw, int draws, int maps,
+                            std::ostringstream& md) {
+  const int nk = static_cast<int>(J.rows());
+  const Eigen::VectorXd& var = nw.var;
+  Eigen::MatrixXd Js(nk, sub.columns.size());
+  for (size_t c = 0; c < sub.columns.size(); ++c) Js.col(c) = J.col(sub.columns[c]);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(var.cwiseSqrt().cwiseInverse().asDiagonal() * Js);
+  md << "### " << sub.label << "\n\nSingular values of diag(Σ)^-1/2 J:";
+  nlohmann::json js = {{"singular_values", std::vector<double>(svd.singularValues().data(), svd.singularValues().data() + svd.singularValues().size())}};
+  for (int i = 0; i < svd.singularValues().size(); ++i) {
+    char b[32];
+    std::snprintf(b, sizeof b, " %.3g", svd.singularValues()(i));
+    md << b;
+  }
+  md << "\n\n| weights | R refs | M model draws |";
+  for (int c : sub.columns) md << " " << kFields[c] << " |";
+  md << "\n|---|---|---|";
+  for (size_t c = 0; c < sub.columns.size(); ++c) md << "---|";
+  md << "\n";
+  const std::vector<std::pair<std::string, const Eigen::MatrixXd*>> ws = {
+      {"bin shares", &nw.W_share}, {"diagonal GLS", &nw.W_diag}, {"shrunk GLS", &nw.W_full}};
+  for (const auto& [wname, W] : ws)
+    for (const auto& [R, M] : std::vector<std::pair<int, int>>{{1, maps}, {1, 1000000}, {3, maps}, {8, 16}}) {
+      const Eigen::VectorXd sd = PredictedSd(Js, *W, S, 1.0 / R + 1.0 / M);
+      md << "| " << wname << " | " << R << " | " << (M >= 1000000 ? std::string("inf") : std::to_string(M)) << " |";
+      for (int c = 0; c < sd.size(); ++c) md << " " << Pct(sd(c)) << " |";
+      md << "\n";
+      js["predicted_sd_ln"][wname][std::to_string(R) + "x" + std::to_string(M)] =
+          std::vector<double>(sd.data(), sd.data() + sd.size());
+    }
+  for (const auto& [wname, W] : ws) {
+    const Eigen::MatrixXd JtW = Js.transpose() * *W;
+    const Eigen::VectorXd shift = (JtW * Js).ldlt().solve(JtW * bias);
+    md << "| " << wname << ": shift from the noise seed (1 vs 101, mean of " << draws << " draws) | | |";
+    for (int c = 0; c < shift.size(); ++c) md << " " << (shift(c) >= 0 ? "+" : "-") << Pct(std::abs(shift(c))) << " |";
+    md << "\n";
+    js["noise_seed_shift_ln"][wname] = std::vector<double>(shift.data(), shift.data() + shift.size());
+  }
+  md << "\n";
+  return js;
+}
+
+// The analysis's heading and method paragraph.
+void WriteNoiseIntro(std::ostringstream& md, int draws, int maps, const cloudfit::CloudStatsOptions& options,
+                     clouds::CloudRenderer& renderer, int nk, int n, double lambda) {
+  md << "## Shape noise at the truth: predicted spread and what the statistics separate\n\n"
+     << "(" << draws << " draws, M = " << maps << "; " << options.render_width << "x" << options.render_height << " renders through " << renderer.Describe()
+     << "; the default bins and quantiles). Σ: covariance of the " << nk << " statistics (of " << n
+     << "; those every draw and the model fill) over " << draws
+     << " single shape draws (weather-map seeds 5000+, the model's noise seed 101) at default_cloudy's lighting, sun 25 deg up. "
+     << "J: central differences of the model's statistics pooled over M = " << maps
+     << " weather maps, per ln(parameter). Predicted sd of ln p for R references and M model draws: the sandwich "
+     << "A Σ (1/R + 1/M) A', A = (J'WJ)^-1 J'W, for W = the first design's bin-share weights, the diagonal GLS "
+     << "(W = diag Σ^-1) and a shrunk full GLS (W = ((1-λ)Σ + λ diag Σ)^-1, λ = " << lambda
+     << ": " << draws << " draws cannot estimate a full " << nk << "x" << nk << " Σ). Singular values of "
+     << "diag(Σ)^-1/2 J (per ln p; a direction with σ < 1 moves the statistics less than one draw's noise for "
+     << "a 100% change).\n\n";
+}
+
 NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRenderer& renderer, const SuiteOptions& o) {
   const int draws = plan.draws, maps = plan.model_maps;
   cloudfit::CloudStatsOptions options;
@@ -86,92 +278,33 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
   for (const auto& w : draw_maps) model.shape_draw_maps.push_back(&w);
   const std::vector<cloudfit::CloudStatsReference> refs = {scene.reference};  // the objective keeps a reference to it
   const cloudfit::CloudStatsObjective obj(refs, model, renderer, options);
-  const int n = obj.num_residuals(), p = obj.num_parameters();
+  const int n = obj.num_residuals();
   const std::vector<double> x = obj.InitialX();
   // Σ over the draws.
-  std::vector<std::vector<double>> v(draws, std::vector<double>(n));
-  for (int d = 0; d < draws; ++d) {
-    if (!obj.DrawStatistics(x.data(), d, v[d].data())) throw Error("shape draw failed");
-    if (d % 8 == 7) o.Log("[cloud-stats-noise]   " + std::to_string(d + 1) + "/" + std::to_string(draws) + " shape draws");
-  }
+  const std::vector<std::vector<double>> v = DrawAll(obj, x, draws, o, true);
   // The same draws with another noise seed (the seed pairs' references use seeds 1-6, the
   // model 101-106): a difference of the means is a bias no number of draws averages away.
   const clouds::CloudNoise other_noise = clouds::LoadOrGenerateCloudNoise(1, cache);
   cloudfit::CloudStatsScene model_other = model;
   model_other.noise = &other_noise;
   const cloudfit::CloudStatsObjective obj_other(refs, model_other, renderer, options);
-  std::vector<std::vector<double>> v_other(draws, std::vector<double>(n));
-  for (int d = 0; d < draws; ++d)
-    if (!obj_other.DrawStatistics(x.data(), d, v_other[d].data())) throw Error("shape draw failed");
+  const std::vector<std::vector<double>> v_other = DrawAll(obj_other, x, draws, o, false);
   o.Log("[cloud-stats-noise]   " + std::to_string(draws) + " draws with noise seed 1");
   std::vector<double> m0(n);
   if (!obj.ModelStatistics(x.data(), m0.data())) throw Error("model render failed");
-  // Keep the statistics every draw and the model have (a bin a draw leaves empty has no quantile).
-  std::vector<int> keep;
-  for (int k = 0; k < n; ++k) {
-    bool ok = std::isfinite(m0[k]);
-    for (int d = 0; d < draws && ok; ++d) ok = std::isfinite(v[d][k]) && std::isfinite(v_other[d][k]);
-    if (ok) keep.push_back(k);
-  }
-  const int nk = static_cast<int>(keep.size());
-  Eigen::MatrixXd X(draws, nk);
-  for (int d = 0; d < draws; ++d)
-    for (int i = 0; i < nk; ++i) X(d, i) = v[d][keep[i]];
-  const Eigen::RowVectorXd mean = X.colwise().mean();
-  const Eigen::MatrixXd Xc = X.rowwise() - mean;
-  const Eigen::MatrixXd S = Xc.transpose() * Xc / (draws - 1);
-  Eigen::VectorXd bias(nk);  // mean(noise seed 1) - mean(noise seed 101), per statistic
-  for (int i = 0; i < nk; ++i) {
-    double a = 0.0;
-    for (int d = 0; d < draws; ++d) a += v_other[d][keep[i]];
-    bias(i) = a / draws - mean(i);
-  }
-  // J by central differences of the pooled model, columns per ln(parameter).
-  Eigen::MatrixXd J(nk, p);
-  std::vector<double> xp = x, rp(n), rm(n);
-  for (int j = 0; j < p; ++j) {
-    const double h = obj.StepX(j, x[j]);
-    const double hi = std::min(x[j] + h, obj.UpperX(j)), lo = std::max(x[j] - h, obj.LowerX(j));
-    xp[j] = hi;
-    if (!obj.ModelStatistics(xp.data(), rp.data())) throw Error("model render failed");
-    xp[j] = lo;
-    if (!obj.ModelStatistics(xp.data(), rm.data())) throw Error("model render failed");
-    xp[j] = x[j];
-    for (int i = 0; i < nk; ++i) {
-      const double dv = rp[keep[i]] - rm[keep[i]];
-      J(i, j) = (std::isfinite(dv) ? dv : 0.0) / (hi - lo) * x[j];  // d stat / d ln p
-    }
-    o.Log("[cloud-stats-noise]   Jacobian column " + obj.Name(j));
-  }
-  // Weights: the first design's (bin shares), the diagonal GLS (1 / var), the shrunk full GLS.
-  Eigen::VectorXd w_share(nk), var = S.diagonal();
-  for (int i = 0; i < nk; ++i) {
-    w_share(i) = obj.Weight(keep[i]) * obj.Weight(keep[i]);
-    var(i) = std::max(var(i), options.noise_sd_floor * options.noise_sd_floor);
-  }
-  const Eigen::MatrixXd W_share = w_share.asDiagonal(), W_diag = var.cwiseInverse().asDiagonal();
-  const double lambda = 0.5;
-  Eigen::MatrixXd S_shrunk = (1.0 - lambda) * S;
-  S_shrunk.diagonal() += lambda * var;
-  const Eigen::MatrixXd W_full = S_shrunk.ldlt().solve(Eigen::MatrixXd::Identity(nk, nk));
+  const DrawCovariance cov = CovarianceOverDraws(v, v_other, m0);
+  const Eigen::MatrixXd& S = cov.S;
+  const int nk = static_cast<int>(cov.keep.size());
+  const Eigen::MatrixXd J = PooledJacobian(obj, x, cov.keep, o);
+  const NoiseWeights nw = MakeNoiseWeights(obj, S, cov.keep, options);
+  const Eigen::VectorXd& var = nw.var;
   const std::vector<Subset> subsets = {{"default four (extinction, g1, powder, ambient)", {0, 1, 2, 3}},
                                        {"extinction + ambient", {0, 3}},
                                        {"extinction + g1 + ambient", {0, 1, 3}},
                                        {"extinction + powder + ambient", {0, 2, 3}},
                                        {"all nine", {0, 1, 2, 3, 4, 5, 6, 7, 8}}};
   std::ostringstream md;
-  md << "## Shape noise at the truth: predicted spread and what the statistics separate\n\n"
-     << "(" << draws << " draws, M = " << maps << "; " << options.render_width << "x" << options.render_height << " renders through " << renderer.Describe()
-     << "; the default bins and quantiles). Σ: covariance of the " << nk << " statistics (of " << n
-     << "; those every draw and the model fill) over " << draws
-     << " single shape draws (weather-map seeds 5000+, the model's noise seed 101) at default_cloudy's lighting, sun 25 deg up. "
-     << "J: central differences of the model's statistics pooled over M = " << maps
-     << " weather maps, per ln(parameter). Predicted sd of ln p for R references and M model draws: the sandwich "
-     << "A Σ (1/R + 1/M) A', A = (J'WJ)^-1 J'W, for W = the first design's bin-share weights, the diagonal GLS "
-     << "(W = diag Σ^-1) and a shrunk full GLS (W = ((1-λ)Σ + λ diag Σ)^-1, λ = " << lambda
-     << ": " << draws << " draws cannot estimate a full " << nk << "x" << nk << " Σ). Singular values of "
-     << "diag(Σ)^-1/2 J (per ln p; a direction with σ < 1 moves the statistics less than one draw's noise for "
-     << "a 100% change).\n\n";
+  WriteNoiseIntro(md, draws, maps, options, renderer, nk, n, nw.lambda);
   nlohmann::json out = {{"draws", draws}, {"statistics", nk}, {"model_maps", maps},
                         {"render_width", options.render_width}};
   // Per-statistic noise and signal (median over statistics) for the reading.
@@ -180,39 +313,14 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
   std::sort(sds.begin(), sds.end());
   out["median_statistic_sd"] = sds[nk / 2];
   {
-    const Eigen::VectorXd z = bias.cwiseQuotient(var.cwiseSqrt()) * std::sqrt(static_cast<double>(draws) / 2.0);
+    const Eigen::VectorXd z = cov.bias.cwiseQuotient(var.cwiseSqrt()) * std::sqrt(static_cast<double>(draws) / 2.0);
     md << "Noise seed 1 vs 101 (same " << draws << " weather maps): the mean statistics differ by " << z.cwiseAbs().mean()
        << " standard errors (unpaired: conservative, the draws share their maps) on average (|z| > 3 for " << (z.array().abs() > 3.0).count() << " of " << nk
        << " statistics): a systematic difference the draws over weather maps do not contain.\n\n";
     out["noise_seed_mean_abs_z"] = z.cwiseAbs().mean();
   }
   {
-    // The 3D noise texture is a shape draw too: one weather map (draw 0), the noise seeds the
-    // seed pairs use (1-6 references, 101-106 models): the sd across them per statistic.
-    std::vector<std::vector<double>> vs;
-    for (uint64_t seed : {1, 2, 3, 4, 5, 6, 101, 102, 103, 104, 105, 106}) {
-      const clouds::CloudNoise nz = clouds::LoadOrGenerateCloudNoise(seed, cache);
-      cloudfit::CloudStatsScene ms = model;
-      ms.noise = &nz;
-      const cloudfit::CloudStatsObjective o2(refs, ms, renderer, options);
-      vs.emplace_back(n);
-      if (!o2.DrawStatistics(x.data(), 0, vs.back().data())) throw Error("noise-seed draw failed");
-    }
-    std::vector<double> ratio;
-    for (int i = 0; i < nk; ++i) {
-      double a = 0.0, a2 = 0.0;
-      int c = 0;
-      for (const auto& vv : vs)
-        if (std::isfinite(vv[keep[i]])) {
-          a += vv[keep[i]];
-          a2 += vv[keep[i]] * vv[keep[i]];
-          ++c;
-        }
-      if (c < 6) continue;
-      const double m = a / c, sd = std::sqrt(std::max(0.0, (a2 - c * m * m) / (c - 1)));
-      ratio.push_back(sd / std::sqrt(var(i)));
-    }
-    std::sort(ratio.begin(), ratio.end());
+    const std::vector<double> ratio = NoiseSeedSdRatios(model, refs, renderer, options, cache, x, n, cov.keep, var);
     const double med = ratio.empty() ? 0.0 : ratio[ratio.size() / 2];
     md << "Noise seeds as shape draws (12 seeds, one weather map): per statistic, sd across noise seeds / sd across "
        << "weather maps: median " << med << " (" << ratio.size() << " statistics; 10% / 90%: "
@@ -224,44 +332,7 @@ NoiseAnalysis AnalyseShapeNoise(const CloudStatsNoisePlan& plan, clouds::CloudRe
   }
   md << "Median shape-noise sd of a statistic: " << sds[nk / 2] << " (log radiance / share); 10% / 90%: " << sds[nk / 10]
      << " / " << sds[9 * nk / 10] << ".\n\n";
-  for (const auto& sub : subsets) {
-    Eigen::MatrixXd Js(nk, sub.columns.size());
-    for (size_t c = 0; c < sub.columns.size(); ++c) Js.col(c) = J.col(sub.columns[c]);
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(var.cwiseSqrt().cwiseInverse().asDiagonal() * Js);
-    md << "### " << sub.label << "\n\nSingular values of diag(Σ)^-1/2 J:";
-    nlohmann::json js = {{"singular_values", std::vector<double>(svd.singularValues().data(), svd.singularValues().data() + svd.singularValues().size())}};
-    for (int i = 0; i < svd.singularValues().size(); ++i) {
-      char b[32];
-      std::snprintf(b, sizeof b, " %.3g", svd.singularValues()(i));
-      md << b;
-    }
-    md << "\n\n| weights | R refs | M model draws |";
-    for (int c : sub.columns) md << " " << kFields[c] << " |";
-    md << "\n|---|---|---|";
-    for (size_t c = 0; c < sub.columns.size(); ++c) md << "---|";
-    md << "\n";
-    const std::vector<std::pair<std::string, const Eigen::MatrixXd*>> ws = {
-        {"bin shares", &W_share}, {"diagonal GLS", &W_diag}, {"shrunk GLS", &W_full}};
-    for (const auto& [wname, W] : ws)
-      for (const auto& [R, M] : std::vector<std::pair<int, int>>{{1, maps}, {1, 1000000}, {3, maps}, {8, 16}}) {
-        const Eigen::VectorXd sd = PredictedSd(Js, *W, S, 1.0 / R + 1.0 / M);
-        md << "| " << wname << " | " << R << " | " << (M >= 1000000 ? std::string("inf") : std::to_string(M)) << " |";
-        for (int c = 0; c < sd.size(); ++c) md << " " << Pct(sd(c)) << " |";
-        md << "\n";
-        js["predicted_sd_ln"][wname][std::to_string(R) + "x" + std::to_string(M)] =
-            std::vector<double>(sd.data(), sd.data() + sd.size());
-      }
-    for (const auto& [wname, W] : ws) {
-      const Eigen::MatrixXd JtW = Js.transpose() * *W;
-      const Eigen::VectorXd shift = (JtW * Js).ldlt().solve(JtW * bias);
-      md << "| " << wname << ": shift from the noise seed (1 vs 101, mean of " << draws << " draws) | | |";
-      for (int c = 0; c < shift.size(); ++c) md << " " << (shift(c) >= 0 ? "+" : "-") << Pct(std::abs(shift(c))) << " |";
-      md << "\n";
-      js["noise_seed_shift_ln"][wname] = std::vector<double>(shift.data(), shift.data() + shift.size());
-    }
-    md << "\n";
-    out["subsets"][sub.label] = js;
-  }
+  for (const auto& sub : subsets) out["subsets"][sub.label] = SubsetTables(sub, J, S, cov.bias, nw, draws, maps, md);
   return {md.str(), out, obj.renders()};
 }
 

@@ -176,6 +176,39 @@ CloudBenchScene LoadDefaultCloudyScene() {
   return s;
 }
 
+namespace {
+
+// Backend x march variant x steps x light samples x light step, one setting away from the
+// game's at a time; the CPU reference at the game's and the naive settings only.
+Grid CloudsGrid(bool quick) {
+  Grid grid;
+  grid.axes = {{"backend", {"vulkan", "cpu"}, "vulkan"},
+               {"march", quick ? std::vector<std::string>{"game", "naive"}
+                               : std::vector<std::string>{"game", "naive", "no-cheap-march", "no-step-back",
+                                                          "no-return-to-cheap", "no-opacity-stop", "no-cheap-light",
+                                                          "no-far-light"},
+                "game"},
+               {"steps", quick ? std::vector<std::string>{"32/64", "64/128"}
+                               : std::vector<std::string>{"16/32", "32/64", "64/128", "96/192", "128/256", "256/512"},
+                "64/128"},
+               {"light_samples", quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"},
+               // Metres between the 6 light samples (the cone's length / 6): 120 m covers only
+               // 720 m toward the sun, less than a cumulus is deep at low sun (the old default).
+               {"light_step", quick ? std::vector<std::string>{kDefaultLightStep} : std::vector<std::string>{"120", "240", "400"},
+                kDefaultLightStep}};
+  grid.skip = [](const Settings& c) -> std::string {
+    const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") +
+                            (Get(c, "light_samples") != "6") + (Get(c, "light_step") != kDefaultLightStep);
+    if (off_default > 1) return "one setting away from the game's at a time";
+    const bool game_or_naive = off_default == 0 || (Get(c, "march") == "naive");
+    if (Get(c, "backend") == "cpu" && !game_or_naive) return "the CPU reference is timed at the game's and the naive settings";
+    return "";
+  };
+  return grid;
+}
+
+}  // namespace
+
 Suite CloudsSuite() {
   Suite s;
   s.name = "clouds";
@@ -184,29 +217,7 @@ Suite CloudsSuite() {
   s.error_axis = "rel RMSE vs converged clouds";
   s.run = [](const SuiteOptions& o) {
     const CloudBenchScene scene = LoadDefaultCloudyScene();
-    Grid grid;
-    grid.axes = {{"backend", {"vulkan", "cpu"}, "vulkan"},
-                 {"march", o.quick ? std::vector<std::string>{"game", "naive"}
-                                   : std::vector<std::string>{"game", "naive", "no-cheap-march", "no-step-back",
-                                                              "no-return-to-cheap", "no-opacity-stop", "no-cheap-light",
-                                                              "no-far-light"},
-                  "game"},
-                 {"steps", o.quick ? std::vector<std::string>{"32/64", "64/128"}
-                                   : std::vector<std::string>{"16/32", "32/64", "64/128", "96/192", "128/256", "256/512"},
-                  "64/128"},
-                 {"light_samples", o.quick ? std::vector<std::string>{"6"} : std::vector<std::string>{"3", "6", "12"}, "6"},
-                 // Metres between the 6 light samples (the cone's length / 6): 120 m covers only
-                 // 720 m toward the sun, less than a cumulus is deep at low sun (the old default).
-                 {"light_step", o.quick ? std::vector<std::string>{kDefaultLightStep} : std::vector<std::string>{"120", "240", "400"},
-                  kDefaultLightStep}};
-    grid.skip = [](const Settings& c) -> std::string {
-      const int off_default = (Get(c, "march") != "game") + (Get(c, "steps") != "64/128") +
-                              (Get(c, "light_samples") != "6") + (Get(c, "light_step") != kDefaultLightStep);
-      if (off_default > 1) return "one setting away from the game's at a time";
-      const bool game_or_naive = off_default == 0 || (Get(c, "march") == "naive");
-      if (Get(c, "backend") == "cpu" && !game_or_naive) return "the CPU reference is timed at the game's and the naive settings";
-      return "";
-    };
+    const Grid grid = CloudsGrid(o.quick);
 
     const clouds::CloudRenderRequest error_req = CloudSuiteRequest(o.quick ? 64 : 256);
     const clouds::CloudRenderRequest time_req = CloudSuiteRequest(o.quick ? 128 : 512);

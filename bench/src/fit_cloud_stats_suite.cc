@@ -243,6 +243,118 @@ const CloudStatsConfig& FindCloudStatsConfig(const CloudStatsPlan& plan, const s
 
 namespace {
 
+// One configuration's section: its settings, a row per pair, the spread per parameter.
+std::string SeedPairSection(const CaseResult& c) {
+  const auto& x = c.extra;
+  std::string md = "\n## " + Get(c.settings, "config") + (c.is_default ? " (the default)" : "") + "\n\n" +
+        std::to_string(x["render_width"].get<int>()) + "x" + std::to_string(x["render_width"].get<int>() / 2) +
+        " renders; references per fit " + std::to_string(x["references_per_fit"].get<int>()) + "; model weather maps " +
+        std::to_string(x["model_weather_maps"].get<int>()) + ", renders per evaluation " +
+        std::to_string(x["model_renders"].get<int>()) + ", at most " + std::to_string(x["max_iterations"].get<int>()) +
+        " iterations; fitted: " + x["fitted"].get<std::string>() + "; residuals " +
+        (x["noise_draws"].get<int>() > 0 ? "whitened by the shape noise of " + std::to_string(x["noise_draws"].get<int>()) +
+                                               " draws at the start"
+                                         : std::string("weighted by bin share")) +
+        "; model noise textures " + std::to_string(x["model_noise_textures"].get<int>()) + Whitening(x) + ".\n\n" +
+        "| pair (noise/weather) | extinction | g1 | powder | ambient | albedo | cost start -> end | iterations | renders | "
+        "time (s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : x["runs"]) {
+    const auto seeds = [&](const char* key) {
+      return std::to_string(r[key][0].get<uint64_t>()) + "/" + std::to_string(r[key][1].get<uint64_t>());
+    };
+    md += "| " + (r["control_known_shapes"].get<bool>() ? std::string("control (same seeds)")
+                                                        : seeds("reference_seeds") + " vs " + seeds("model_seeds"));
+    for (const auto& [name, f] : StartFactors())
+      md += " | " + (r["parameters"].contains(name) ? SignedPct(r["parameters"][name]["rel_error"].get<double>())
+                                                    : std::string("-"));
+    md += " | " + FormatG(r["initial_cost"].get<double>()) + " -> " + FormatG(r["final_cost"].get<double>()) + " | " +
+          std::to_string(r["iterations"].get<int>()) + " | " + std::to_string(r["renders"].get<long long>()) + " | " +
+          FormatFixed(r["time_s"].get<double>(), 1) + " |\n";
+  }
+  md += "\n| spread over the unknown-shape pairs | median abs | max abs |\n|---|---|---|\n";
+  for (const auto& [name, f] : StartFactors())
+    if (x["spread"].contains(name))
+      md += "| " + name + " | " + FormatFixed(100.0 * x["spread"][name]["median_abs_rel_error"].get<double>(), 1) +
+          "% | " + FormatFixed(100.0 * x["spread"][name]["max_abs_rel_error"].get<double>(), 1) + "% |\n";
+  return md;
+}
+
+std::string SeedPairMarkdown(const std::string& suite_name, const std::vector<CaseResult>& cases) {
+  std::string md =
+      "# Cloud lighting from statistics, unknown shapes: seed pairs\n\n"
+      "`skycal bench --suite " + suite_name + "` (bench/src/fit_cloud_stats_suite.cc; numbers in `results.json`). "
+      "Reference: default_cloudy's lighting, sun 25 deg up at azimuth 30, noise seed / weather seed as listed; the fit "
+      "renders with the other seeds (other shapes, the same weather statistics) from the truth x (extinction 1.3 unless "
+      "the case says otherwise, g1 0.7, powder 0.7, ambient 1.3, albedo 0.7) for the fitted parameters, the others held at "
+      "the truth. Relative error (fitted - truth) / truth. Times on a shared machine (noisy).\n\n" +
+      CaseTable(cases, "median abs rel error", {{"pairs", [](const CaseResult& c) { return ExtraNumber(c, "pairs"); }}});
+  for (const CaseResult& c : cases) {
+    if (!c.extra.contains("runs")) continue;
+    md += SeedPairSection(c);
+  }
+  return md;
+}
+
+// The pairs' fits: error (median |rel error| of the fitted parameters), outcome and extra into c.
+void SummariseSeedPairs(CaseResult& c, const nlohmann::json& runs, const CloudStatsPlan& plan, const CloudStatsConfig& cfg,
+                        const cloudfit::CloudStatsOptions& options, const clouds::CloudRenderer& renderer) {
+  std::vector<double> fitted_errors;
+  nlohmann::json spread;
+  for (const auto& [name, f] : StartFactors()) {
+    std::vector<double> e;
+    for (const auto& r : runs)
+      if (!r["control_known_shapes"].get<bool>()) e.push_back(std::abs(r["parameters"][name]["rel_error"].get<double>()));
+    const bool is_fitted = std::find(options.fitted.begin(), options.fitted.end(), name) != options.fitted.end();
+    if (is_fitted) fitted_errors.insert(fitted_errors.end(), e.begin(), e.end());
+    spread[name] = {{"median_abs_rel_error", Median(e)},
+                    {"max_abs_rel_error", e.empty() ? 0.0 : *std::max_element(e.begin(), e.end())},
+                    {"fitted", is_fitted}};
+  }
+  c.error = Median(fitted_errors);
+  bool finite = std::isfinite(c.error);
+  for (const auto& r : runs) finite = finite && std::isfinite(r["final_cost"].get<double>());
+  if (!finite) {
+    c.outcome = Outcome::kNonFinite;
+    c.message = "non-finite fitted parameter or cost";
+  }
+  c.extra = {{"runs", runs},
+             {"spread", spread},
+             {"pairs", plan.pairs},
+             {"render_width", options.render_width},
+             {"references_per_fit", cfg.references},
+             {"model_weather_maps", cfg.model_maps},
+             {"model_renders", options.model_renders},
+             {"max_iterations", options.max_iterations},
+             {"fitted", Join(options.fitted)},
+             {"noise_draws", options.noise_draws},
+             {"noise_covariance", options.noise_covariance},
+             {"draw_noise_textures", cfg.draw_noises},
+             {"extinction_start", cfg.extinction_start},
+             {"model_noise_textures", cfg.model_noises},
+             {"renderer", renderer.Describe()},
+             {"results_file", cfg.results_file},
+             {"program_args", cfg.program_args}};
+}
+
+std::vector<CaseResult> RunSeedPairs(const std::string& suite_name, CloudStatsPlan (*plan_of)(bool), const SuiteOptions& o) {
+  const CloudStatsPlan plan = plan_of(o.quick);
+  const std::string cache = CloudStatsCacheDir();
+  const std::unique_ptr<clouds::CloudRenderer> renderer = CreateCloudStatsRenderer();
+  return RunGrid(suite_name, plan.grid, o, [&](CaseResult& c) {
+    const CloudStatsConfig& cfg = FindCloudStatsConfig(plan, Get(c.settings, "config"));
+    const cloudfit::CloudStatsOptions options = OptionsFor(plan, cfg);
+    nlohmann::json runs = nlohmann::json::array();
+    c.time = Measure(
+        [&] {
+          runs = nlohmann::json::array();
+          for (int k = cfg.references > 1 ? 1 : 0; k <= plan.pairs; ++k)
+            runs.push_back(RunPair(k, cfg, options, *renderer, cache, o));
+        },
+        0, 1);  // one run: each pair is a fit of seconds to minutes
+    SummariseSeedPairs(c, runs, plan, cfg, options, *renderer);
+  });
+}
+
 // The seed-pair suite over `plan_of(quick)`'s configurations (fit-cloud-stats and fit-cloud-stats-gls).
 Suite SeedPairSuite(const std::string& suite_name, const std::string& summary, CloudStatsPlan (*plan_of)(bool)) {
   Suite s;
@@ -250,104 +362,8 @@ Suite SeedPairSuite(const std::string& suite_name, const std::string& summary, C
   s.summary = summary;
   s.error_metric = "median |fitted / truth - 1| of the fitted lighting parameters over the unknown-shape seed pairs";
   s.error_axis = "median |rel error| of the fitted lighting";
-  s.markdown = [suite_name](const std::vector<CaseResult>& cases) {
-    std::string md =
-        "# Cloud lighting from statistics, unknown shapes: seed pairs\n\n"
-        "`skycal bench --suite " + suite_name + "` (bench/src/fit_cloud_stats_suite.cc; numbers in `results.json`). "
-        "Reference: default_cloudy's lighting, sun 25 deg up at azimuth 30, noise seed / weather seed as listed; the fit "
-        "renders with the other seeds (other shapes, the same weather statistics) from the truth x (extinction 1.3 unless "
-        "the case says otherwise, g1 0.7, powder 0.7, ambient 1.3, albedo 0.7) for the fitted parameters, the others held at "
-        "the truth. Relative error (fitted - truth) / truth. Times on a shared machine (noisy).\n\n" +
-        CaseTable(cases, "median abs rel error", {{"pairs", [](const CaseResult& c) { return ExtraNumber(c, "pairs"); }}});
-    for (const CaseResult& c : cases) {
-      if (!c.extra.contains("runs")) continue;
-      const auto& x = c.extra;
-      md += "\n## " + Get(c.settings, "config") + (c.is_default ? " (the default)" : "") + "\n\n" +
-            std::to_string(x["render_width"].get<int>()) + "x" + std::to_string(x["render_width"].get<int>() / 2) +
-            " renders; references per fit " + std::to_string(x["references_per_fit"].get<int>()) + "; model weather maps " +
-            std::to_string(x["model_weather_maps"].get<int>()) + ", renders per evaluation " +
-            std::to_string(x["model_renders"].get<int>()) + ", at most " + std::to_string(x["max_iterations"].get<int>()) +
-            " iterations; fitted: " + x["fitted"].get<std::string>() + "; residuals " +
-            (x["noise_draws"].get<int>() > 0 ? "whitened by the shape noise of " + std::to_string(x["noise_draws"].get<int>()) +
-                                                   " draws at the start"
-                                             : std::string("weighted by bin share")) +
-            "; model noise textures " + std::to_string(x["model_noise_textures"].get<int>()) + Whitening(x) + ".\n\n" +
-            "| pair (noise/weather) | extinction | g1 | powder | ambient | albedo | cost start -> end | iterations | renders | "
-            "time (s) |\n|---|---|---|---|---|---|---|---|---|---|\n";
-      for (const auto& r : x["runs"]) {
-        const auto seeds = [&](const char* key) {
-          return std::to_string(r[key][0].get<uint64_t>()) + "/" + std::to_string(r[key][1].get<uint64_t>());
-        };
-        md += "| " + (r["control_known_shapes"].get<bool>() ? std::string("control (same seeds)")
-                                                            : seeds("reference_seeds") + " vs " + seeds("model_seeds"));
-        for (const auto& [name, f] : StartFactors())
-          md += " | " + (r["parameters"].contains(name) ? SignedPct(r["parameters"][name]["rel_error"].get<double>())
-                                                        : std::string("-"));
-        md += " | " + FormatG(r["initial_cost"].get<double>()) + " -> " + FormatG(r["final_cost"].get<double>()) + " | " +
-              std::to_string(r["iterations"].get<int>()) + " | " + std::to_string(r["renders"].get<long long>()) + " | " +
-              FormatFixed(r["time_s"].get<double>(), 1) + " |\n";
-      }
-      md += "\n| spread over the unknown-shape pairs | median abs | max abs |\n|---|---|---|\n";
-      for (const auto& [name, f] : StartFactors())
-        if (x["spread"].contains(name))
-          md += "| " + name + " | " + FormatFixed(100.0 * x["spread"][name]["median_abs_rel_error"].get<double>(), 1) +
-              "% | " + FormatFixed(100.0 * x["spread"][name]["max_abs_rel_error"].get<double>(), 1) + "% |\n";
-    }
-    return md;
-  };
-  s.run = [suite_name, plan_of](const SuiteOptions& o) {
-    const CloudStatsPlan plan = plan_of(o.quick);
-    const std::string cache = CloudStatsCacheDir();
-    const std::unique_ptr<clouds::CloudRenderer> renderer = CreateCloudStatsRenderer();
-    return RunGrid(suite_name, plan.grid, o, [&](CaseResult& c) {
-      const CloudStatsConfig& cfg = FindCloudStatsConfig(plan, Get(c.settings, "config"));
-      const cloudfit::CloudStatsOptions options = OptionsFor(plan, cfg);
-      nlohmann::json runs = nlohmann::json::array();
-      c.time = Measure(
-          [&] {
-            runs = nlohmann::json::array();
-            for (int k = cfg.references > 1 ? 1 : 0; k <= plan.pairs; ++k)
-              runs.push_back(RunPair(k, cfg, options, *renderer, cache, o));
-          },
-          0, 1);  // one run: each pair is a fit of seconds to minutes
-      std::vector<double> fitted_errors;
-      nlohmann::json spread;
-      for (const auto& [name, f] : StartFactors()) {
-        std::vector<double> e;
-        for (const auto& r : runs)
-          if (!r["control_known_shapes"].get<bool>()) e.push_back(std::abs(r["parameters"][name]["rel_error"].get<double>()));
-        const bool is_fitted = std::find(options.fitted.begin(), options.fitted.end(), name) != options.fitted.end();
-        if (is_fitted) fitted_errors.insert(fitted_errors.end(), e.begin(), e.end());
-        spread[name] = {{"median_abs_rel_error", Median(e)},
-                        {"max_abs_rel_error", e.empty() ? 0.0 : *std::max_element(e.begin(), e.end())},
-                        {"fitted", is_fitted}};
-      }
-      c.error = Median(fitted_errors);
-      bool finite = std::isfinite(c.error);
-      for (const auto& r : runs) finite = finite && std::isfinite(r["final_cost"].get<double>());
-      if (!finite) {
-        c.outcome = Outcome::kNonFinite;
-        c.message = "non-finite fitted parameter or cost";
-      }
-      c.extra = {{"runs", runs},
-                 {"spread", spread},
-                 {"pairs", plan.pairs},
-                 {"render_width", options.render_width},
-                 {"references_per_fit", cfg.references},
-                 {"model_weather_maps", cfg.model_maps},
-                 {"model_renders", options.model_renders},
-                 {"max_iterations", options.max_iterations},
-                 {"fitted", Join(options.fitted)},
-                 {"noise_draws", options.noise_draws},
-                 {"noise_covariance", options.noise_covariance},
-                 {"draw_noise_textures", cfg.draw_noises},
-                 {"extinction_start", cfg.extinction_start},
-                 {"model_noise_textures", cfg.model_noises},
-                 {"renderer", renderer->Describe()},
-                 {"results_file", cfg.results_file},
-                 {"program_args", cfg.program_args}};
-    });
-  };
+  s.markdown = [suite_name](const std::vector<CaseResult>& cases) { return SeedPairMarkdown(suite_name, cases); };
+  s.run = [suite_name, plan_of](const SuiteOptions& o) { return RunSeedPairs(suite_name, plan_of, o); };
   return s;
 }
 

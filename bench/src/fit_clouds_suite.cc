@@ -85,6 +85,48 @@ Grid FitCloudsGrid(bool quick) {
   return grid;
 }
 
+namespace {
+
+// The fitted cloud lighting against the truth: error (RMS of |fitted / truth - 1| over the
+// parameters), outcome and extra (per parameter, the stages' times) into c.
+void ScoreCloudLighting(CaseResult& c, const cloudfit::SkyCloudFit& r, const cloudfit::CloudLighting& truth) {
+  const cloudfit::CloudLighting fitted = cloudfit::GetCloudLighting(r.clouds.fitted_params);
+  double sum = 0.0, worst = 0.0;
+  std::string worst_name;
+  nlohmann::json params = nlohmann::json::object();
+  for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
+    const double e = std::abs(fitted[k] / truth[k] - 1.0);
+    sum += e * e;
+    if (!(e <= worst)) {
+      worst = e;
+      worst_name = cloudfit::CloudLightingNames()[k];
+    }
+    const bool held = k < static_cast<int>(r.clouds.parameters.size()) && r.clouds.parameters[k].held;
+    params[cloudfit::CloudLightingNames()[k]] = {{"truth", truth[k]}, {"fitted", fitted[k]}, {"held", held}};
+  }
+  c.error = std::sqrt(sum / cloudfit::kCloudLightingParameters);
+  c.converged = r.clouds.fitted && std::isfinite(c.error);
+  if (!std::isfinite(c.error)) {
+    c.outcome = Outcome::kNonFinite;
+    c.message = "a fitted cloud lighting parameter is non-finite";
+  }
+  c.extra = {{"worst_parameter", worst_name},
+             {"worst_rel_error", worst},
+             {"parameters", params},
+             {"cloud_pixels", r.clouds.cloud_pixels},
+             {"cloud_log_rmse_initial", r.clouds.cloud_initial.log_rmse},
+             {"cloud_log_rmse_final", r.clouds.cloud_final.log_rmse},
+             {"sky_rel_rmse", r.sky.references.at(0).errors.rel_rmse},
+             {"stages_s", {{"cloud_renders", r.clouds.render_time_s}, {"jacobians", r.clouds.jacobian_time_s},
+                           {"conditioning", r.clouds.conditioning_time_s}, {"cloud_solve", r.clouds.time_s}}},
+             {"termination", r.clouds.termination},
+             {"iterations", r.clouds.iterations},
+             {"jacobian_evaluations", r.clouds.jacobians},
+             {"cloud_renders", r.clouds.renders}};
+}
+
+}  // namespace
+
 Suite FitCloudsSuite() {
   Suite s;
   s.name = "fit-clouds";
@@ -134,39 +176,7 @@ Suite FitCloudsSuite() {
                                     {}, shapes.get());
           },
           o.quick ? 0 : o.warmup, repeats);
-      const cloudfit::CloudLighting fitted = cloudfit::GetCloudLighting(r.clouds.fitted_params);
-      double sum = 0.0, worst = 0.0;
-      std::string worst_name;
-      nlohmann::json params = nlohmann::json::object();
-      for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
-        const double e = std::abs(fitted[k] / truth[k] - 1.0);
-        sum += e * e;
-        if (!(e <= worst)) {
-          worst = e;
-          worst_name = cloudfit::CloudLightingNames()[k];
-        }
-        const bool held = k < static_cast<int>(r.clouds.parameters.size()) && r.clouds.parameters[k].held;
-        params[cloudfit::CloudLightingNames()[k]] = {{"truth", truth[k]}, {"fitted", fitted[k]}, {"held", held}};
-      }
-      c.error = std::sqrt(sum / cloudfit::kCloudLightingParameters);
-      c.converged = r.clouds.fitted && std::isfinite(c.error);
-      if (!std::isfinite(c.error)) {
-        c.outcome = Outcome::kNonFinite;
-        c.message = "a fitted cloud lighting parameter is non-finite";
-      }
-      c.extra = {{"worst_parameter", worst_name},
-                 {"worst_rel_error", worst},
-                 {"parameters", params},
-                 {"cloud_pixels", r.clouds.cloud_pixels},
-                 {"cloud_log_rmse_initial", r.clouds.cloud_initial.log_rmse},
-                 {"cloud_log_rmse_final", r.clouds.cloud_final.log_rmse},
-                 {"sky_rel_rmse", r.sky.references.at(0).errors.rel_rmse},
-                 {"stages_s", {{"cloud_renders", r.clouds.render_time_s}, {"jacobians", r.clouds.jacobian_time_s},
-                               {"conditioning", r.clouds.conditioning_time_s}, {"cloud_solve", r.clouds.time_s}}},
-                 {"termination", r.clouds.termination},
-                 {"iterations", r.clouds.iterations},
-                 {"jacobian_evaluations", r.clouds.jacobians},
-                 {"cloud_renders", r.clouds.renders}};
+      ScoreCloudLighting(c, r, truth);
     });
   };
   return s;

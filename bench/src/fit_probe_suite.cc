@@ -96,105 +96,132 @@ Grid FitProbeGrid(bool quick) {
   return grid;
 }
 
+namespace {
+
+std::string FitProbeMarkdown(const std::vector<CaseResult>& cases) {
+  return "# skycal bench --suite fit-probe\n\nThe joint sky + gray-probe fit (what bench_probe_fit measured): synthetic "
+         "ffxv-iso truth, sun 35 deg tinted (0.85, 1, 1.12), ground albedo 0.25; reference 2% noise, clipped above "
+         "its 99.5th percentile; ball 0.18, 1% noise. Sun error: worst channel of the recovered illuminance at the "
+         "ground (the probe's; without one the fitted preset's); sky error: solid-angle RMS of fit / truth - 1 "
+         "against the clean sky, above the horizon, outside 3 deg of the sun. The scenarios lie to the fit: "
+         "`ball-albedo-5pct-high` tells it 0.189; `ground-held-low` holds the ground albedo at 0.1.\n\n" +
+         CaseTable(cases, "sun error (fraction)",
+                   {{"sky error %", [](const CaseResult& c) { return ExtraNumber(c, "sky_rel_rmse_vs_clean_truth", 100.0); }},
+                    {"g (truth 0.76)", [](const CaseResult& c) { return ExtraNumber(c, "haziness_g"); }},
+                    {"ground albedo (truth 0.25)", [](const CaseResult& c) { return ExtraNumber(c, "ground_albedo"); }},
+                    {"probe log RMSE", [](const CaseResult& c) { return ExtraNumber(c, "probe_log_rmse"); }},
+                    {"Ceres iterations", [](const CaseResult& c) { return ExtraNumber(c, "ceres_iterations"); }}}) +
+         "\nThe sun error is a fraction (0.011 = 1.1%).\n";
+}
+
+// The truth (tinted sun, ground 0.25), the fit's start, the sun and its illuminance at the
+// ground, the ball's samples; per size the reference's path and the clean truth's render.
+struct ProbeStudy {
+  render::Preset truth, start;
+  std::array<double, 3> sun{};
+  render::Rgb e_sun{};
+  fit::ProbeSamples probe;
+  std::map<std::string, std::string> ref_paths;
+  std::map<std::string, ImageRGB> clean;
+};
+
+ProbeStudy MakeProbeStudy(const SuiteOptions& o, const Grid& grid) {
+  ProbeStudy st;
+  render::Preset& truth = st.truth;
+  truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
+  const std::array<double, 3> tint_scale = {0.85, 1.0, 1.12};
+  for (int c = 0; c < 3; ++c) truth.sun_tint_rgb[c] *= tint_scale[c];
+  truth.ground_albedo = 0.25;
+  st.start = synthetic::PerturbedStart(truth, 3);
+  st.start.ground_albedo = 0.1;
+  for (int c = 0; c < 3; ++c) st.start.sun_tint_rgb[c] /= tint_scale[c];
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(kElevation, kAzimuth);
+  st.sun = sun;
+  st.e_sun = render::SunIlluminanceAtGround(truth, sun);
+  st.probe.path = "synthetic";
+  st.probe.albedo = kBallAlbedo;
+  st.probe.samples = synthetic::ProbeSamplesFor(truth, sun, st.e_sun, kBallAlbedo, 0.01, 7, 0.25);
+  o.Log("[fit-probe] truth: ffxv-iso, sun 35 deg tinted (0.85, 1, 1.12), ground 0.25; ball 0.18, " +
+        std::to_string(st.probe.samples.size()) + " samples");
+
+  // The references (the fit's input) and the clean truth (the sky error's) per size.
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  for (const std::string& size : grid.axes[2].values) {
+    const int w = std::stoi(size.substr(0, size.find('x')));
+    st.ref_paths[size] = WriteClippedReference(o.scratch.string(), truth, w);
+    render::RenderRequest req;
+    req.sun_dir = sun;
+    req.width = w;
+    req.height = w / 2;
+    st.clean[size] = cpu->Render(truth, req);
+  }
+  return st;
+}
+
+// One case: the fit (with the ball or without), timed; the sun's recovered illuminance
+// against the truth, the sky against the clean truth.
+void RunProbeCase(CaseResult& c, const SuiteOptions& o, const ProbeStudy& st,
+                  std::map<std::string, std::unique_ptr<render::SkyRenderer>>& renderers, int repeats) {
+  const std::string& scenario = Get(c.settings, "scenario");
+  fit::FitOptions f;
+  f.verbose = false;
+  f.absolute = true;
+  f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
+  f.probe_weight = std::stod(Get(c.settings, "probe_weight"));
+  f.fit_ground_albedo = scenario != "ground-held-low";  // held at the start's 0.1 (truth 0.25)
+  fit::ProbeSamples told = st.probe;
+  if (scenario == "ball-albedo-5pct-high") told.albedo = kBallAlbedo * 1.05;
+  const bool with_probe = Get(c.settings, "probe") == "on";
+  const std::string& size = Get(c.settings, "size");
+  const std::vector<fit::Reference> refs = {fit::LoadReference(st.ref_paths.at(size), f)};
+  std::vector<const fit::ProbeSamples*> probes;
+  if (with_probe) probes.push_back(&told);
+  fit::FitResult r;
+  c.time = Measure([&] { r = fit::FitSky(refs, st.start, f, *renderers.at(Get(c.settings, "backend")), probes); },
+                   o.warmup, repeats);
+  const fit::ReferenceFit& rf = r.references.at(0);
+  std::array<double, 3> recovered{};
+  if (with_probe) {
+    recovered = rf.sun.value().illuminance_model;
+  } else {
+    const render::Rgb e = render::SunIlluminanceAtGround(r.preset, st.sun);
+    for (int k = 0; k < 3; ++k) recovered[k] = e[k];
+  }
+  c.error = WorstChannelError(recovered, st.e_sun);
+  const double sky = SkyError(rf.rendered, st.clean.at(size), st.sun);
+  c.converged = std::isfinite(c.error) && std::isfinite(sky) && std::isfinite(r.preset.haziness_g);
+  if (!*c.converged) {
+    c.outcome = Outcome::kNonFinite;
+    c.message = "non-finite sun illuminance, sky error or g";
+  }
+  c.extra = {{"sky_rel_rmse_vs_clean_truth", sky},
+             {"haziness_g", r.preset.haziness_g},
+             {"truth_haziness_g", st.truth.haziness_g},
+             {"ground_albedo", r.preset.ground_albedo},
+             {"truth_ground_albedo", st.truth.ground_albedo},
+             {"sun_illuminance_model", recovered},
+             {"ceres_iterations", r.iterations}};
+  if (with_probe) {
+    c.extra["probe_log_rmse"] = rf.sun->log_rmse;
+    c.extra["probe_samples"] = told.samples.size();
+  }
+}
+
+}  // namespace
+
 Suite FitProbeSuite() {
   Suite s;
   s.name = "fit-probe";
   s.summary = "joint sky + gray-probe fit, sun clipped in the sky: probe on/off x backend x size x probe weight x scenario";
   s.error_metric = "worst channel of |E_sun / truth - 1|, the sun's illuminance at the ground (probe's, else the preset's)";
   s.error_axis = "sun illuminance error (worst channel)";
-  s.markdown = [](const std::vector<CaseResult>& cases) {
-    return "# skycal bench --suite fit-probe\n\nThe joint sky + gray-probe fit (what bench_probe_fit measured): synthetic "
-           "ffxv-iso truth, sun 35 deg tinted (0.85, 1, 1.12), ground albedo 0.25; reference 2% noise, clipped above "
-           "its 99.5th percentile; ball 0.18, 1% noise. Sun error: worst channel of the recovered illuminance at the "
-           "ground (the probe's; without one the fitted preset's); sky error: solid-angle RMS of fit / truth - 1 "
-           "against the clean sky, above the horizon, outside 3 deg of the sun. The scenarios lie to the fit: "
-           "`ball-albedo-5pct-high` tells it 0.189; `ground-held-low` holds the ground albedo at 0.1.\n\n" +
-           CaseTable(cases, "sun error (fraction)",
-                     {{"sky error %", [](const CaseResult& c) { return ExtraNumber(c, "sky_rel_rmse_vs_clean_truth", 100.0); }},
-                      {"g (truth 0.76)", [](const CaseResult& c) { return ExtraNumber(c, "haziness_g"); }},
-                      {"ground albedo (truth 0.25)", [](const CaseResult& c) { return ExtraNumber(c, "ground_albedo"); }},
-                      {"probe log RMSE", [](const CaseResult& c) { return ExtraNumber(c, "probe_log_rmse"); }},
-                      {"Ceres iterations", [](const CaseResult& c) { return ExtraNumber(c, "ceres_iterations"); }}}) +
-           "\nThe sun error is a fraction (0.011 = 1.1%).\n";
-  };
+  s.markdown = FitProbeMarkdown;
   s.run = [](const SuiteOptions& o) {
     const Grid grid = FitProbeGrid(o.quick);
-    render::Preset truth = synthetic::TruthPreset(render::ModelVariant::kFfxvIso);
-    const std::array<double, 3> tint_scale = {0.85, 1.0, 1.12};
-    for (int c = 0; c < 3; ++c) truth.sun_tint_rgb[c] *= tint_scale[c];
-    truth.ground_albedo = 0.25;
-    render::Preset start = synthetic::PerturbedStart(truth, 3);
-    start.ground_albedo = 0.1;
-    for (int c = 0; c < 3; ++c) start.sun_tint_rgb[c] /= tint_scale[c];
-    const auto sun = latlong::DirectionFromElevationAzimuthDeg(kElevation, kAzimuth);
-    const render::Rgb e_sun = render::SunIlluminanceAtGround(truth, sun);
-    fit::ProbeSamples probe;
-    probe.path = "synthetic";
-    probe.albedo = kBallAlbedo;
-    probe.samples = synthetic::ProbeSamplesFor(truth, sun, e_sun, kBallAlbedo, 0.01, 7, 0.25);
-    o.Log("[fit-probe] truth: ffxv-iso, sun 35 deg tinted (0.85, 1, 1.12), ground 0.25; ball 0.18, " +
-          std::to_string(probe.samples.size()) + " samples");
-
-    // The references (the fit's input) and the clean truth (the sky error's) per size.
-    auto cpu = render::CreateRenderer(render::Backend::kCpu);
-    std::map<std::string, std::string> ref_paths;
-    std::map<std::string, ImageRGB> clean;
-    for (const std::string& size : grid.axes[2].values) {
-      const int w = std::stoi(size.substr(0, size.find('x')));
-      ref_paths[size] = WriteClippedReference(o.scratch.string(), truth, w);
-      render::RenderRequest req;
-      req.sun_dir = sun;
-      req.width = w;
-      req.height = w / 2;
-      clean[size] = cpu->Render(truth, req);
-    }
+    const ProbeStudy st = MakeProbeStudy(o, grid);
     auto renderers = SkyRenderersByBackend();
     const int repeats = o.Repeats(o.quick ? 1 : 3);
-    return RunGrid("fit-probe", grid, o, [&](CaseResult& c) {
-      const std::string& scenario = Get(c.settings, "scenario");
-      fit::FitOptions f;
-      f.verbose = false;
-      f.absolute = true;
-      f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
-      f.probe_weight = std::stod(Get(c.settings, "probe_weight"));
-      f.fit_ground_albedo = scenario != "ground-held-low";  // held at the start's 0.1 (truth 0.25)
-      fit::ProbeSamples told = probe;
-      if (scenario == "ball-albedo-5pct-high") told.albedo = kBallAlbedo * 1.05;
-      const bool with_probe = Get(c.settings, "probe") == "on";
-      const std::string& size = Get(c.settings, "size");
-      const std::vector<fit::Reference> refs = {fit::LoadReference(ref_paths.at(size), f)};
-      std::vector<const fit::ProbeSamples*> probes;
-      if (with_probe) probes.push_back(&told);
-      fit::FitResult r;
-      c.time = Measure([&] { r = fit::FitSky(refs, start, f, *renderers.at(Get(c.settings, "backend")), probes); },
-                       o.warmup, repeats);
-      const fit::ReferenceFit& rf = r.references.at(0);
-      std::array<double, 3> recovered{};
-      if (with_probe) {
-        recovered = rf.sun.value().illuminance_model;
-      } else {
-        const render::Rgb e = render::SunIlluminanceAtGround(r.preset, sun);
-        for (int k = 0; k < 3; ++k) recovered[k] = e[k];
-      }
-      c.error = WorstChannelError(recovered, e_sun);
-      const double sky = SkyError(rf.rendered, clean.at(size), sun);
-      c.converged = std::isfinite(c.error) && std::isfinite(sky) && std::isfinite(r.preset.haziness_g);
-      if (!*c.converged) {
-        c.outcome = Outcome::kNonFinite;
-        c.message = "non-finite sun illuminance, sky error or g";
-      }
-      c.extra = {{"sky_rel_rmse_vs_clean_truth", sky},
-                 {"haziness_g", r.preset.haziness_g},
-                 {"truth_haziness_g", truth.haziness_g},
-                 {"ground_albedo", r.preset.ground_albedo},
-                 {"truth_ground_albedo", truth.ground_albedo},
-                 {"sun_illuminance_model", recovered},
-                 {"ceres_iterations", r.iterations}};
-      if (with_probe) {
-        c.extra["probe_log_rmse"] = rf.sun->log_rmse;
-        c.extra["probe_samples"] = told.samples.size();
-      }
-    });
+    return RunGrid("fit-probe", grid, o, [&](CaseResult& c) { RunProbeCase(c, o, st, renderers, repeats); });
   };
   return s;
 }

@@ -74,6 +74,32 @@ std::vector<FitReference> WriteReferences(const SuiteOptions& o, const fit::FitO
 
 }  // namespace
 
+namespace {
+
+// The case's fit options: base with the grid's start, loss, backend, polish, levels and
+// Jacobians.
+fit::FitOptions CaseFitOptions(const fit::FitOptions& base, const Settings& settings) {
+  fit::FitOptions f = base;
+  f.linear_start = Get(settings, "linear_start") == "on";
+  const std::string& loss = Get(settings, "loss");
+  f.loss = loss == "cauchy" ? fit::RobustLoss::kCauchy : loss == "huber" ? fit::RobustLoss::kHuber : fit::RobustLoss::kNone;
+  f.backend = render::ParseBackend(Get(settings, "backend"), "backend");
+  f.polish = Get(settings, "polish") == "on";
+  if (Get(settings, "pyramid") != "auto") {
+    f.pyramid_widths.clear();
+    for (const std::string& w : {std::string("128"), std::string("256")})
+      if (Get(settings, "pyramid").find(w) != std::string::npos) f.pyramid_widths.push_back(std::stoi(w));
+  }
+  if (Get(settings, "jacobian") == "numeric") {
+    f.numeric_derivatives = true;
+    f.pyramid_widths = {kWidth};  // bench_fit's baseline: one level, more iterations
+    f.max_iterations_per_level = 200;
+  }
+  return f;
+}
+
+}  // namespace
+
 Suite FitSuite() {
   Suite s;
   s.name = "fit";
@@ -112,22 +138,7 @@ Suite FitSuite() {
     auto renderers = SkyRenderersByBackend();
     const int repeats = o.Repeats(o.quick ? 1 : 3);
     return RunGrid("fit", grid, o, [&](CaseResult& c) {
-      fit::FitOptions f = base;
-      f.linear_start = Get(c.settings, "linear_start") == "on";
-      const std::string& loss = Get(c.settings, "loss");
-      f.loss = loss == "cauchy" ? fit::RobustLoss::kCauchy : loss == "huber" ? fit::RobustLoss::kHuber : fit::RobustLoss::kNone;
-      f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
-      f.polish = Get(c.settings, "polish") == "on";
-      if (Get(c.settings, "pyramid") != "auto") {
-        f.pyramid_widths.clear();
-        for (const std::string& w : {std::string("128"), std::string("256")})
-          if (Get(c.settings, "pyramid").find(w) != std::string::npos) f.pyramid_widths.push_back(std::stoi(w));
-      }
-      if (Get(c.settings, "jacobian") == "numeric") {
-        f.numeric_derivatives = true;
-        f.pyramid_widths = {kWidth};  // bench_fit's baseline: one level, more iterations
-        f.max_iterations_per_level = 200;
-      }
+      const fit::FitOptions f = CaseFitOptions(base, c.settings);
       render::SkyRenderer& r = *renderers.at(Get(c.settings, "backend"));
       std::vector<fit::FitResult> results(refs.size());
       // The numeric baseline takes seconds per fit: no warm-up, one run.

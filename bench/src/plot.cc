@@ -72,29 +72,17 @@ std::vector<std::string> WrapAtSpaces(const std::string& text, size_t width) {
   return lines;
 }
 
-void Draw(const ParetoPlot& p, const std::string& device, const std::string& path) {
-  plstream pls;
-  pls.sdev(device.c_str());
-  pls.sfnam(path.c_str());
-  pls.setopt("geometry", "1200x860");
-  pls.scol0(kBackground, 255, 255, 255);
-  pls.scol0(kInk, 0, 0, 0);
-  pls.scol0(kGrey, 170, 170, 170);
-  pls.scol0(kFront, 31, 90, 180);
-  pls.scol0(kDefault, 210, 30, 30);
-  pls.init();
-  // Plain numbers on the axes, never a separate "(x10^-3)" that collides with the title.
-  pls.sxax(12, 0);
-  pls.syax(12, 0);
-  pls.schr(0.0, 0.9);
-
+// The cases' times and errors, the axes they choose and which cases are on the front.
+struct PlotData {
   std::vector<double> t, e;
-  for (const CaseResult* c : p.cases) {
-    t.push_back(c->time.median_ms);
-    e.push_back(c->error);
-  }
-  const Axis ax = ChooseAxis(t), ay = ChooseAxis(e);
-  // Frame with room below for the key, left for the y label.
+  Axis ax, ay;
+  std::vector<bool> on_front;
+};
+
+// Frame with room below for the key, left for the y label; the title, axis labels and subtitle.
+void DrawFrame(plstream& pls, const ParetoPlot& p, const PlotData& d) {
+  const Axis &ax = d.ax, &ay = d.ay;
+  const std::vector<double>& e = d.e;
   pls.adv(0);
   pls.vpor(0.11, 0.97, 0.22, 0.86);
   pls.wind(ax.lo, ax.hi, ay.lo, ay.hi);
@@ -114,14 +102,17 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
   pls.mtex("l", 6.0, 0.5, 0.5, yl.c_str());
   pls.schr(0.0, 0.65);
   pls.mtex("t", 1.8, 0.5, 0.5, p.subtitle.c_str());
+}
 
-  std::vector<bool> on_front(p.cases.size(), false);
-  for (int i : p.front) on_front[i] = true;
+// Dominated cases as grey crosses; the front as a staircase in time order and filled circles.
+void DrawPoints(plstream& pls, const ParetoPlot& p, const PlotData& d) {
+  const Axis &ax = d.ax, &ay = d.ay;
+  const std::vector<double>&t = d.t, &e = d.e;
   // Dominated: grey crosses.
   pls.col0(kGrey);
   pls.ssym(0.0, 1.4);
   for (size_t i = 0; i < p.cases.size(); ++i) {
-    if (on_front[i]) continue;
+    if (d.on_front[i]) continue;
     const PLFLT x = ax.Map(t[i]), y = ay.Map(e[i]);
     pls.poin(1, &x, &y, 5);
   }
@@ -145,10 +136,18 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     const PLFLT x = ax.Map(t[i]), y = ay.Map(e[i]);
     pls.poin(1, &x, &y, 17);
   }
-  // Labels beside the points (front in blue first, then grey), small; a label that would
-  // overlap one already placed tries the other side, above and below, else is left out
-  // (every case is in results.csv). Boxes in fractions of the frame, character sizes
-  // measured on the 1200-pixel-wide output at this character scale.
+}
+
+// Labels beside the points (front in blue first, then grey), small; a label that would
+// overlap one already placed tries the other side, above and below, else is left out
+// (every case is in results.csv). Boxes in fractions of the frame, character sizes
+// measured on the 1200-pixel-wide output at this character scale. Returns the default's
+// tag position (fractions of the frame): below its ring (above when the ring is near the
+// bottom), kept inside the frame; its box is reserved before the other labels.
+std::pair<double, double> DrawLabels(plstream& pls, const ParetoPlot& p, const PlotData& d) {
+  const Axis &ax = d.ax, &ay = d.ay;
+  const std::vector<double>&t = d.t, &e = d.e;
+  const std::vector<bool>& on_front = d.on_front;
   pls.schr(0.0, 0.55);
   struct Box {
     double x0, x1, y0, y1;
@@ -159,8 +158,6 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
     if (on_front[i]) label_order.push_back(i);
   for (size_t i = 0; i < p.cases.size() && i < p.labels.size(); ++i)
     if (!on_front[i]) label_order.push_back(i);
-  // The default's tag: below its ring (above when the ring is near the bottom), kept inside
-  // the frame; its box is reserved before the other labels.
   double tag_fx = 0.5, tag_fy = 0.5;
   if (p.default_index >= 0) {
     const double fx = (ax.Map(t[p.default_index]) - ax.lo) / (ax.hi - ax.lo);
@@ -187,16 +184,47 @@ void Draw(const ParetoPlot& p, const std::string& device, const std::string& pat
       break;
     }
   }
+  return {tag_fx, tag_fy};
+}
+
+void Draw(const ParetoPlot& p, const std::string& device, const std::string& path) {
+  plstream pls;
+  pls.sdev(device.c_str());
+  pls.sfnam(path.c_str());
+  pls.setopt("geometry", "1200x860");
+  pls.scol0(kBackground, 255, 255, 255);
+  pls.scol0(kInk, 0, 0, 0);
+  pls.scol0(kGrey, 170, 170, 170);
+  pls.scol0(kFront, 31, 90, 180);
+  pls.scol0(kDefault, 210, 30, 30);
+  pls.init();
+  // Plain numbers on the axes, never a separate "(x10^-3)" that collides with the title.
+  pls.sxax(12, 0);
+  pls.syax(12, 0);
+  pls.schr(0.0, 0.9);
+
+  PlotData pd;
+  for (const CaseResult* c : p.cases) {
+    pd.t.push_back(c->time.median_ms);
+    pd.e.push_back(c->error);
+  }
+  pd.ax = ChooseAxis(pd.t), pd.ay = ChooseAxis(pd.e);
+  const Axis &ax = pd.ax, &ay = pd.ay;
+  DrawFrame(pls, p, pd);
+  pd.on_front.assign(p.cases.size(), false);
+  for (int i : p.front) pd.on_front[i] = true;
+  DrawPoints(pls, p, pd);
+  const auto [tag_fx, tag_fy] = DrawLabels(pls, p, pd);
   // The default: a red ring and its name.
   if (p.default_index >= 0 && p.default_index < static_cast<int>(p.cases.size())) {
     const int d = p.default_index;
-    const PLFLT x = ax.Map(t[d]), y = ay.Map(e[d]);
+    const PLFLT x = ax.Map(pd.t[d]), y = ay.Map(pd.e[d]);
     pls.col0(kDefault);
     pls.ssym(0.0, 3.5);
     pls.width(2.5);
     pls.poin(1, &x, &y, 4);
     pls.schr(0.0, 0.8);
-    const std::string tag = on_front[d] ? "default (on the front)" : "default (dominated)";
+    const std::string tag = pd.on_front[d] ? "default (on the front)" : "default (dominated)";
     pls.ptex(ax.lo + tag_fx * (ax.hi - ax.lo), ay.lo + tag_fy * (ay.hi - ay.lo), 1.0, 0.0, 0.5, tag.c_str());
   }
   // Key, below the x label.

@@ -188,20 +188,22 @@ void CloudsArea(Runner& run, const SuiteOptions& o) {
   }
 }
 
-void FitArea(Runner& run, const SuiteOptions& o) {
+// A reference sky of the fit area and the default start's error on it clean.
+struct StressSky {
+  std::string name, path;
+  double clean_error = 0.0;
+};
+
+// Two skies (four without --quick): CIE and baked atmospheres, written at kWidth. The
+// default start's error on each clean sky: "converged" means within 1.2x of it + 0.1%
+// (bench_fit_stress used the model's ceiling; this is cheaper and no looser in practice).
+std::vector<StressSky> StressSkies(const SuiteOptions& o, const fit::FitOptions& fo, const render::Preset& preset,
+                                   render::SkyRenderer& vulkan) {
   constexpr int kWidth = 256;
-  fit::FitOptions fo;
-  fo.verbose = false;
-  const render::Preset preset = render::LoadPreset(DefaultPresetPath());
-  auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
   const auto types = refsky::LoadCieSkyTypes(refsky::DefaultCieCsvPath());
   const auto variants = refsky::StandardAtmosphereVariants();
-  struct Sky {
-    std::string name, path;
-    double clean_error = 0.0;
-  };
-  std::vector<Sky> skies = {{"CIE 7 sun 45", (o.scratch / "stress_cie7.exr").string()},
-                            {"bake 0 sun 10", (o.scratch / "stress_bake0.exr").string()}};
+  std::vector<StressSky> skies = {{"CIE 7 sun 45", (o.scratch / "stress_cie7.exr").string()},
+                                  {"bake 0 sun 10", (o.scratch / "stress_bake0.exr").string()}};
   refsky::WriteCieReference(skies[0].path, types[6], latlong::DirectionFromElevationAzimuthDeg(45.0, 30.0), kWidth);
   refsky::WriteModelReference(skies[1].path, refsky::BakeVariant(variants[0]), latlong::DirectionFromElevationAzimuthDeg(10.0, -70.0), kWidth);
   if (!o.quick) {
@@ -210,21 +212,27 @@ void FitArea(Runner& run, const SuiteOptions& o) {
     skies.push_back({"bake 1 sun -3", (o.scratch / "stress_bake1.exr").string()});
     refsky::WriteModelReference(skies[3].path, refsky::BakeVariant(variants[1]), latlong::DirectionFromElevationAzimuthDeg(-3.0, -70.0), kWidth);
   }
-  // The default start's error on each clean sky: "converged" means within 1.2x of it + 0.1%
-  // (bench_fit_stress used the model's ceiling; this is cheaper and no looser in practice).
-  for (Sky& s : skies) s.clean_error = fit::FitSky({fit::LoadReference(s.path, fo)}, preset, fo, *vulkan).references[0].errors.rel_rmse;
+  for (StressSky& s : skies) s.clean_error = fit::FitSky({fit::LoadReference(s.path, fo)}, preset, fo, vulkan).references[0].errors.rel_rmse;
+  return skies;
+}
 
-  auto check = [&](CaseResult& c, const fit::FitResult& r, double tolerance_error) {
-    const double err = r.references.at(0).errors.rel_rmse;
-    const bool finite = PresetFinite(r.preset) && std::isfinite(err) && std::isfinite(r.references[0].exposure);
-    if (!finite) NonFinite(c, "non-finite preset, error or exposure");
-    c.error = err;
-    if (tolerance_error >= 0.0) c.converged = finite && err <= 1.2 * tolerance_error + 1e-3;
-  };
+// A fit's result checked: finite preset, error and exposure; converged when within 1.2x
+// of tolerance_error + 0.1% (tolerance_error < 0: no convergence expected).
+void CheckStressFit(CaseResult& c, const fit::FitResult& r, double tolerance_error) {
+  const double err = r.references.at(0).errors.rel_rmse;
+  const bool finite = PresetFinite(r.preset) && std::isfinite(err) && std::isfinite(r.references[0].exposure);
+  if (!finite) NonFinite(c, "non-finite preset, error or exposure");
+  c.error = err;
+  if (tolerance_error >= 0.0) c.converged = finite && err <= 1.2 * tolerance_error + 1e-3;
+}
+
+// Random starts: the LUTs scaled by 0.1..10 each, any g, the reference's exposure 1e-3..1e3.
+void RandomStartCases(Runner& run, const SuiteOptions& o, const std::vector<StressSky>& skies,
+                      const render::Preset& preset, const fit::FitOptions& fo, render::SkyRenderer& vulkan) {
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const int starts = o.quick ? 4 : 20;
-  for (const Sky& sky : skies) {
+  for (const StressSky& sky : skies) {
     const fit::Reference clean = fit::LoadReference(sky.path, fo);
     for (int k = 0; k < starts; ++k) {
       render::Preset start = preset;
@@ -242,12 +250,16 @@ void FitArea(Runner& run, const SuiteOptions& o) {
         for (float& v : ref.radiance.pixels) v = static_cast<float>(v * exposure);
         ref.clip_level *= exposure;
         c.extra = {{"table_scales", {scales[0], scales[1], scales[2]}}, {"g", start.haziness_g}, {"exposure", exposure}};
-        check(c, fit::FitSky({ref}, start, fo, *vulkan), sky.clean_error);
+        CheckStressFit(c, fit::FitSky({ref}, start, fo, vulkan), sky.clean_error);
       });
     }
   }
-  // Damaged references (the first sky): written as frames, loaded as a user's would be.
-  const capture::LatLongFrame frame = capture::ReadLatLongFrame(skies[0].path);
+}
+
+// Damaged references (the first sky): written as frames, loaded as a user's would be.
+void DamagedReferenceCases(Runner& run, const SuiteOptions& o, const StressSky& sky, const render::Preset& preset,
+                           const fit::FitOptions& fo, render::SkyRenderer& vulkan) {
+  const capture::LatLongFrame frame = capture::ReadLatLongFrame(sky.path);
   struct Damage {
     std::string name;
     std::function<void(ImageRGB&)> apply;
@@ -284,14 +296,24 @@ void FitArea(Runner& run, const SuiteOptions& o) {
   };
   int n = 0;
   for (const Damage& d : damages) {
-    run("fit", skies[0].name + " " + d.name, [&](CaseResult& c) {
+    run("fit", sky.name + " " + d.name, [&](CaseResult& c) {
       capture::LatLongFrame f = frame;
       d.apply(f.radiance);
       const std::string path = (o.scratch / ("stress_damaged_" + std::to_string(n++) + ".exr")).string();
       capture::WriteLatLongFrame(path, f);
-      check(c, fit::FitSky({fit::LoadReference(path, fo)}, preset, fo, *vulkan), d.expect_convergence ? skies[0].clean_error : -1.0);
+      CheckStressFit(c, fit::FitSky({fit::LoadReference(path, fo)}, preset, fo, vulkan), d.expect_convergence ? sky.clean_error : -1.0);
     });
   }
+}
+
+void FitArea(Runner& run, const SuiteOptions& o) {
+  fit::FitOptions fo;
+  fo.verbose = false;
+  const render::Preset preset = render::LoadPreset(DefaultPresetPath());
+  auto vulkan = render::CreateRenderer(render::Backend::kVulkan);
+  const std::vector<StressSky> skies = StressSkies(o, fo, preset, *vulkan);
+  RandomStartCases(run, o, skies, preset, fo, *vulkan);
+  DamagedReferenceCases(run, o, skies[0], preset, fo, *vulkan);
 }
 
 void CaptureArea(Runner& run, const SuiteOptions& o) {

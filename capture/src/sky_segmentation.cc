@@ -177,6 +177,98 @@ bool SkyMaskOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// The cues over the rows above the horizon: log luminance, gradient energy and darkness
+// below the sky's reference (natural-log units).
+struct SkyCues {
+  cv::Mat L, energy, dark;
+};
+
+SkyCues ComputeSkyCues(const ImageRGB& frame, int rows, const SkyMaskOptions& o) {
+  const int h = frame.height;
+  SkyCues q;
+  cv::Mat valid;
+  q.L = LogLuminance(frame, rows, &valid);
+  // Gradient energy: local RMS of log luminance about its own blur.
+  const cv::Mat residual = q.L - BlurWrapped(q.L, o.texture_sigma_px);
+  cv::sqrt(BlurWrapped(residual.mul(residual), 2.0 * o.texture_sigma_px), q.energy);
+  // Darkness below the sky's reference; 0.15 log units per degree of elevation at most
+  // (a CIE overcast sky darkens 0.03 per degree near the horizon, a twilight sky's far side
+  // more; buildings are darker by far more than that over their height).
+  const double row_deg = 180.0 / (h - 1);
+  q.dark = SkyReference(q.L, o.darkness_quantile, o.darkness_window_deg, 0.05 * row_deg) - q.L;
+  return q;
+}
+
+// Non-sky candidates (CV_8U 0/255): dark, or textured and somewhat dark; none near the sun.
+cv::Mat NonSkyCandidates(const SkyCues& q, const std::optional<std::array<double, 3>>& sun, int rows, int w, int h,
+                         const SkyMaskOptions& o) {
+  const double deg = 180.0 / M_PI;
+  cv::Mat candidates(rows, w, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (sun && o.sun_exclusion_deg > 0.0) {
+        const auto v = latlong::PixelDirection(x, y, w, h);
+        const double c = v[0] * (*sun)[0] + v[1] * (*sun)[1] + v[2] * (*sun)[2];
+        if (std::acos(std::clamp(c, -1.0, 1.0)) * deg < o.sun_exclusion_deg) continue;
+      }
+      const float d = q.dark.at<float>(y, x), e = q.energy.at<float>(y, x);
+      if (d > o.darkness_threshold || (e > o.texture_threshold && d > o.textured_darkness))
+        candidates.at<uchar>(y, x) = 255;
+    }
+  // Close small gaps (lattice, foliage) before the connectivity test.
+  cv::morphologyEx(candidates, candidates, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  return candidates;
+}
+
+// grabCut's seed labels: non-sky is its foreground. Definite: ground-connected and twice
+// as dark as the threshold. Definite sky: no candidate nearby, not dark, not textured.
+// Counts the (probable) foreground and background pixels.
+cv::Mat GrabCutSeeds(const SkyCues& q, const cv::Mat& candidates, const cv::Mat& kept, const SkyMaskOptions& o,
+                     long long* fg, long long* bg) {
+  const int rows = kept.rows, w = kept.cols;
+  cv::Mat gc_mask(rows, w, CV_8U);
+  cv::Mat near_candidate;
+  cv::dilate(candidates, near_candidate, cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float d = q.dark.at<float>(y, x), e = q.energy.at<float>(y, x);
+      uchar label;
+      if (kept.at<uchar>(y, x)) label = d > 2.0 * o.darkness_threshold ? cv::GC_FGD : cv::GC_PR_FGD;
+      else if (!near_candidate.at<uchar>(y, x) && d < 0.5 * o.darkness_threshold && e < o.texture_threshold)
+        label = cv::GC_BGD;
+      else label = cv::GC_PR_BGD;
+      gc_mask.at<uchar>(y, x) = label;
+      *fg += label == cv::GC_FGD || label == cv::GC_PR_FGD;
+      *bg += label == cv::GC_BGD || label == cv::GC_PR_BGD;
+    }
+  return gc_mask;
+}
+
+// The mask and its confidence over the rows above the horizon into m.
+void WriteSkyMask(const cv::Mat& non_sky, const cv::Mat& gc_mask, const cv::Mat& dark, const SkyMaskOptions& o,
+                  SkyMask& m) {
+  const int rows = non_sky.rows, w = non_sky.cols;
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const bool ns = non_sky.at<uchar>(y, x) != 0;
+      m.sky[i] = ns ? 0.0f : 1.0f;
+      m.non_sky_above_horizon += ns;
+      const uchar g = gc_mask.at<uchar>(y, x);
+      if (g == cv::GC_FGD || g == cv::GC_BGD) {
+        m.confidence[i] = 1.0f;
+      } else {
+        // Distance of the darkness cue from its threshold, in thresholds: 0.5 at the threshold.
+        const double t = std::abs(dark.at<float>(y, x) - o.darkness_threshold) / o.darkness_threshold;
+        m.confidence[i] = static_cast<float>(0.5 + 0.5 * std::min(1.0, t));
+      }
+    }
+}
+
+}  // namespace
+
 SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<double, 3>>& sun,
                         const SkyMaskOptions& o) {
   std::string why;
@@ -199,61 +291,22 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
   m.above_horizon = static_cast<long long>(rows) * w;
   if (rows < 2) return m;
 
-  cv::Mat valid;
-  const cv::Mat L = LogLuminance(frame, rows, &valid);
-  // Gradient energy: local RMS of log luminance about its own blur.
-  const cv::Mat residual = L - BlurWrapped(L, o.texture_sigma_px);
-  cv::Mat energy;
-  cv::sqrt(BlurWrapped(residual.mul(residual), 2.0 * o.texture_sigma_px), energy);
-  // Darkness below the sky's reference; 0.15 log units per degree of elevation at most
-  // (a CIE overcast sky darkens 0.03 per degree near the horizon, a twilight sky's far side
-  // more; buildings are darker by far more than that over their height).
-  const double row_deg = 180.0 / (h - 1);
-  const cv::Mat dark = SkyReference(L, o.darkness_quantile, o.darkness_window_deg, 0.05 * row_deg) - L;
-
-  cv::Mat candidates(rows, w, CV_8U, cv::Scalar(0));
-  for (int y = 0; y < rows; ++y)
-    for (int x = 0; x < w; ++x) {
-      if (sun && o.sun_exclusion_deg > 0.0) {
-        const auto v = latlong::PixelDirection(x, y, w, h);
-        const double c = v[0] * (*sun)[0] + v[1] * (*sun)[1] + v[2] * (*sun)[2];
-        if (std::acos(std::clamp(c, -1.0, 1.0)) * deg < o.sun_exclusion_deg) continue;
-      }
-      const float d = dark.at<float>(y, x), e = energy.at<float>(y, x);
-      if (d > o.darkness_threshold || (e > o.texture_threshold && d > o.textured_darkness))
-        candidates.at<uchar>(y, x) = 255;
-    }
-  // Close small gaps (lattice, foliage) before the connectivity test.
-  cv::morphologyEx(candidates, candidates, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
+  const SkyCues q = ComputeSkyCues(frame, rows, o);
+  const cv::Mat candidates = NonSkyCandidates(q, sun, rows, w, h, o);
   cv::Mat kept = KeepGroundConnected(candidates, band_top, &m.floating_candidates);
   m.ground_connected_candidates = cv::countNonZero(kept);
 
   cv::Mat non_sky = kept.clone();
   cv::Mat gc_mask(rows, w, CV_8U);
   if (o.grabcut && m.ground_connected_candidates > 0) {
-    // Non-sky is grabCut's foreground. Definite: ground-connected and twice as dark as the
-    // threshold. Definite sky: no candidate nearby, not dark, not textured.
-    cv::Mat near_candidate;
-    cv::dilate(candidates, near_candidate, cv::getStructuringElement(cv::MORPH_ELLIPSE, {7, 7}));
     long long fg = 0, bg = 0;
-    for (int y = 0; y < rows; ++y)
-      for (int x = 0; x < w; ++x) {
-        const float d = dark.at<float>(y, x), e = energy.at<float>(y, x);
-        uchar label;
-        if (kept.at<uchar>(y, x)) label = d > 2.0 * o.darkness_threshold ? cv::GC_FGD : cv::GC_PR_FGD;
-        else if (!near_candidate.at<uchar>(y, x) && d < 0.5 * o.darkness_threshold && e < o.texture_threshold)
-          label = cv::GC_BGD;
-        else label = cv::GC_PR_BGD;
-        gc_mask.at<uchar>(y, x) = label;
-        fg += label == cv::GC_FGD || label == cv::GC_PR_FGD;
-        bg += label == cv::GC_BGD || label == cv::GC_PR_BGD;
-      }
+    gc_mask = GrabCutSeeds(q, candidates, kept, o, &fg, &bg);
     if (fg > 0 && bg > 0) {
       cv::Mat bgd_model, fgd_model;
       // grabCut initialises its colour models by k-means from OpenCV's per-thread RNG: seed
       // it so the same frame gives the same mask whatever ran before in the process.
       cv::theRNG().state = 0x5EED5EEDull;
-      cv::grabCut(GrabCutImage(frame, rows, L), gc_mask, cv::Rect(), bgd_model, fgd_model, o.grabcut_iterations,
+      cv::grabCut(GrabCutImage(frame, rows, q.L), gc_mask, cv::Rect(), bgd_model, fgd_model, o.grabcut_iterations,
                   cv::GC_INIT_WITH_MASK);
       cv::Mat fg_now = (gc_mask == cv::GC_FGD) | (gc_mask == cv::GC_PR_FGD);
       long long dropped = 0;
@@ -266,22 +319,7 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
   if (o.dilate_px > 0)
     cv::dilate(non_sky, non_sky,
                cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * o.dilate_px + 1, 2 * o.dilate_px + 1}));
-
-  for (int y = 0; y < rows; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t i = static_cast<size_t>(y) * w + x;
-      const bool ns = non_sky.at<uchar>(y, x) != 0;
-      m.sky[i] = ns ? 0.0f : 1.0f;
-      m.non_sky_above_horizon += ns;
-      const uchar g = gc_mask.at<uchar>(y, x);
-      if (g == cv::GC_FGD || g == cv::GC_BGD) {
-        m.confidence[i] = 1.0f;
-      } else {
-        // Distance of the darkness cue from its threshold, in thresholds: 0.5 at the threshold.
-        const double t = std::abs(dark.at<float>(y, x) - o.darkness_threshold) / o.darkness_threshold;
-        m.confidence[i] = static_cast<float>(0.5 + 0.5 * std::min(1.0, t));
-      }
-    }
+  WriteSkyMask(non_sky, gc_mask, q.dark, o, m);
   return m;
 }
 

@@ -39,19 +39,25 @@ std::string ScratchPath() {
       .string();
 }
 
-void Draw(const Chart& chart, const std::string& path) {
-  // A log axis only where the values span more than a decade (PLplot labels decades).
-  Chart c = chart;
-  if (c.log_y) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (const ChartSeries& s : c.series) {
-      for (double y : s.y) {
-        if (std::isfinite(y) && y > 0.0) lo = std::min(lo, y), hi = std::max(hi, y);
-      }
-    }
-    c.log_y = std::isfinite(lo) && hi / lo > 10.0;
-  }
+// The plotted window in axis units (log10 y on a log axis): the points' range, padded.
+struct Window {
   double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+};
+
+// A log axis only where the values span more than a decade (PLplot labels decades).
+bool UseLogY(const Chart& c) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const ChartSeries& s : c.series) {
+    for (double y : s.y) {
+      if (std::isfinite(y) && y > 0.0) lo = std::min(lo, y), hi = std::max(hi, y);
+    }
+  }
+  return std::isfinite(lo) && hi / lo > 10.0;
+}
+
+Window ChartWindow(const Chart& c) {
+  Window wnd;
+  double &x0 = wnd.x0, &x1 = wnd.x1, &y0 = wnd.y0, &y1 = wnd.y1;
   for (const ChartSeries& s : c.series) {
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
       if (!Usable(c, s.x[i], s.y[i])) continue;
@@ -70,6 +76,43 @@ void Draw(const Chart& chart, const std::string& path) {
     y0 -= pad;
     y1 += pad;
   }
+  return wnd;
+}
+
+// One series' dots (and line, broken at unusable points) in its palette colour, and its
+// key line at line_at; returns the next key line's position.
+double DrawSeries(plstream& pls, const Chart& c, size_t k, double line_at) {
+  const ChartSeries& s = c.series[k];
+  pls.col0(2 + static_cast<int>(k % kPalette));
+  pls.width(2.0);
+  std::vector<PLFLT> xs, ys;
+  auto flush = [&]() {
+    if (s.line && xs.size() > 1) pls.line(static_cast<PLINT>(xs.size()), xs.data(), ys.data());
+    xs.clear();
+    ys.clear();
+  };
+  pls.ssym(0.0, 1.1);
+  for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
+    if (!Usable(c, s.x[i], s.y[i])) {
+      flush();
+      continue;
+    }
+    const PLFLT x = s.x[i], y = c.log_y ? std::log10(s.y[i]) : s.y[i];
+    xs.push_back(x);
+    ys.push_back(y);
+    pls.poin(1, &x, &y, 17);
+  }
+  flush();
+  pls.schr(0.0, 0.72);
+  pls.mtex("b", line_at, 0.0, 0.0, PlText((s.line ? "line and dots: " : "dots: ") + s.label).c_str());
+  return line_at + 1.9;
+}
+
+void Draw(const Chart& chart, const std::string& path) {
+  Chart c = chart;
+  if (c.log_y) c.log_y = UseLogY(c);
+  const Window wnd = ChartWindow(c);
+  const double x0 = wnd.x0, x1 = wnd.x1, y0 = wnd.y0, y1 = wnd.y1;
   const double mx = 0.04 * (x1 - x0), my = 0.08 * (y1 - y0);
 
   plstream pls;
@@ -98,32 +141,7 @@ void Draw(const Chart& chart, const std::string& path) {
   pls.mtex("b", 3.6, 0.5, 0.5, PlText(c.x_label).c_str());
   pls.mtex("l", 7.0, 0.5, 0.5, PlText(c.y_label + (c.log_y ? ", log scale" : "")).c_str());
   double line_at = 5.8;
-  for (size_t k = 0; k < c.series.size(); ++k) {
-    const ChartSeries& s = c.series[k];
-    pls.col0(2 + static_cast<int>(k % kPalette));
-    pls.width(2.0);
-    std::vector<PLFLT> xs, ys;
-    auto flush = [&]() {
-      if (s.line && xs.size() > 1) pls.line(static_cast<PLINT>(xs.size()), xs.data(), ys.data());
-      xs.clear();
-      ys.clear();
-    };
-    pls.ssym(0.0, 1.1);
-    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-      if (!Usable(c, s.x[i], s.y[i])) {
-        flush();
-        continue;
-      }
-      const PLFLT x = s.x[i], y = c.log_y ? std::log10(s.y[i]) : s.y[i];
-      xs.push_back(x);
-      ys.push_back(y);
-      pls.poin(1, &x, &y, 17);
-    }
-    flush();
-    pls.schr(0.0, 0.72);
-    pls.mtex("b", line_at, 0.0, 0.0, PlText((s.line ? "line and dots: " : "dots: ") + s.label).c_str());
-    line_at += 1.9;
-  }
+  for (size_t k = 0; k < c.series.size(); ++k) line_at = DrawSeries(pls, c, k, line_at);
   pls.col0(1);
   pls.schr(0.0, 0.72);
   for (const std::string& n : c.notes) {
