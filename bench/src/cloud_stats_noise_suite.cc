@@ -1,4 +1,4 @@
-// Suite `cloud-stats-noise`: the shape noise of the cloud statistics (issue 11 regime 2),
+// Suite `cloud-stats-noise`: the shape noise of the cloud statistics (docs/cloud-fitting.md, regime 2),
 // measured at the truth — what `bench_cloud_stats noise` wrote (bench/results/cloud_stats_noise.md),
 // now a suite of `skycal bench`. Σ, the covariance of the statistics over D single shape draws
 // (independent weather maps of the same weather statistics), and J, the Jacobian of the
