@@ -96,14 +96,10 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
 nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}, FitCloudOptions{}); }
 
 namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
-                                const FitCloudStatsOptions& cs) {
-  std::string why;
-  if (!o.IsValid(&why)) throw Error(why);
-  if (!co.IsValid(&why)) throw Error(why);
-  if (cs.enabled && !cs.IsValid(&why)) throw Error(why);
-  if (cs.enabled && !o.cloud_mask) throw Error("--clouds stats fits the atmosphere to the clear pixels: it needs --cloud-mask");
-  const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
+// Every file the fit reads, named by the option that gave it (StagedDirectory refuses an
+// --out that is one of them).
+std::vector<NamedPath> FitInputs(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
+                                 const std::string& init_path) {
   std::vector<NamedPath> read = PresetInputs("--init", init_path);
   for (const std::string& r : o.references) read.push_back({"--reference", r});
   if (!o.fit.mask_path.empty()) read.push_back({"--mask", o.fit.mask_path});
@@ -114,81 +110,82 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     read.push_back({"--reference " + r + "'s probe samples", p.string()});
   }
   for (const NamedPath& p : FitCloudInputs(co)) read.push_back(p);
-  StagedDirectory out(o.out_dir, "--out", "fit", read);  // fails early on an unusable --out
-  std::filesystem::create_directories(out.staging() / "fit");
-  render::Preset init = render::LoadPreset(init_path);
-  const std::unique_ptr<LoadedCloudShapes> cloud_shapes = LoadFitCloudShapes(co);  // a bad section fails early
+  return read;
+}
+
+// The references, each checked and (with --cloud-mask) its cloudy pixels left out.
+struct LoadedReferences {
   std::vector<fit::Reference> refs;
   std::vector<nlohmann::json> cloud_json;
   std::vector<std::vector<float>> cloud_probability;  // per reference, for --clouds stats
+};
+
+LoadedReferences LoadFitReferences(const FitVerbOptions& o, bool cloud_shapes) {
+  LoadedReferences l;
   std::set<std::string> names;
   for (const std::string& path : o.references) {
-    refs.push_back(fit::LoadReference(path, o.fit));
-    const fit::MaskCounts& n = refs.back().counts;  // the user's mask and the sun cone are choices, not damage
+    l.refs.push_back(fit::LoadReference(path, o.fit));
+    const fit::MaskCounts& n = l.refs.back().counts;  // the user's mask and the sun cone are choices, not damage
     RequireValidShare(path, n.sky, n.sky + n.invalid + n.clipped, "fittable sky pixels of those above the horizon "
                       "outside --mask and the sun cone");
-    if (!names.insert(refs.back().name).second) {
-      throw Error(path + ": two references share the name '" + refs.back().name + "' (fit/<name>.exr would collide)");
+    if (!names.insert(l.refs.back().name).second) {
+      throw Error(path + ": two references share the name '" + l.refs.back().name + "' (fit/<name>.exr would collide)");
     }
-    if (refs.back().row_mapping && (o.cloud_mask || cloud_shapes)) {
+    if (l.refs.back().row_mapping && (o.cloud_mask || cloud_shapes)) {
       throw Error(path + ": has horizon-biased rows (skycal resample): " +
                   std::string(o.cloud_mask ? "--cloud-mask" : "--cloud-preset (the cloud lighting fit)") +
                   " needs uniform 2:1 rows; fit the frame before resampling");
     }
     if (o.cloud_mask) {
-      const CloudMaskApplied cm = ApplyCloudMask(&refs.back(), DefaultPresetPath());
-      cloud_json.push_back(cm.ToJson());
-      cloud_probability.push_back(cm.probability);
+      const CloudMaskApplied cm = ApplyCloudMask(&l.refs.back(), DefaultPresetPath());
+      l.cloud_json.push_back(cm.ToJson());
+      l.cloud_probability.push_back(cm.probability);
       Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
                      std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
     }
-    const auto& r = refs.back();
+    const auto& r = l.refs.back();
     Log("fit", r.path + ": " + std::to_string(r.radiance.width) + "x" + std::to_string(r.radiance.height) + ", sun from " +
                    r.sun_source + " (elevation " + std::to_string(latlong::ElevationDeg(r.sun_dir)) + " deg), " +
                    std::to_string(r.counts.sky) + " sky pixels fitted");
     for (const auto& w : r.warnings) Log("fit", "warning: " + w);
   }
-  const auto probes = ProbesFor(po, refs);  // before the fit: a missing or bad file fails early
-  std::vector<const fit::ProbeSamples*> probe_ptrs;
-  for (const auto& p : probes) probe_ptrs.push_back(p ? &*p : nullptr);
-  fit::FitOptions fo = o.fit;
-  if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
-  auto renderer = render::CreateRenderer(fo.backend);
-  Log("fit", "objective backend: " + renderer->Describe());
-  cloudfit::SkyCloudFit joint = RunSkyCloudFit(co, refs, init, fo, *renderer, probe_ptrs, cloud_shapes.get());
-  nlohmann::json sky_refit;
-  if (cs.enabled)  // the cloud mask against the sky fit's own render; the atmosphere refitted if it moved
-    sky_refit = RefineCloudMaskAndRefitSky(cs, !o.fit.mask_path.empty(), &refs, &cloud_probability, joint.sky, [&] {
-      const render::Preset first = joint.sky.preset;
-      joint = RunSkyCloudFit(co, refs, first, fo, *renderer, probe_ptrs, cloud_shapes.get());
-    });
-  fit::FitResult& result = joint.sky;
-  result.preset.name = fs::path(o.out_dir).filename().string();
-  if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
+  return l;
+}
 
-  nlohmann::json per_ref = nlohmann::json::array();
-  nlohmann::json inputs = nlohmann::json::array();
-  nlohmann::json warnings = nlohmann::json::array();
-  std::vector<std::optional<fit::ProbeSun>> suns(refs.size());
-  std::vector<nlohmann::json> sun_json(refs.size());
+nlohmann::json ProbeSunJson(const fit::ProbeSun& s, const std::string& probe_path, bool absolute) {
+  nlohmann::json j = {{"observable", s.observable},
+                      {"visible", s.visible},
+                      {"illuminance_rgb", s.illuminance_ref},
+                      {"illuminance_rgb_model", s.illuminance_model},
+                      {"fitted_illuminance_rgb_model", s.fitted_model},
+                      {"fraction", s.fraction},
+                      {"residual", s.residual},
+                      {"log_rmse", s.log_rmse},
+                      {"samples", s.samples},
+                      {"sun_facing_samples", s.sun_facing_samples},
+                      {"ground_facing_samples", s.ground_facing_samples},
+                      {"probe", probe_path}};
+  if (!s.note.empty()) j["note"] = s.note;
+  if (absolute) j["illuminance_lux"] = s.lux;
+  return j;
+}
+
+// The sun each reference's probe saw (fit.json's references[i].sun), logged; a probe that
+// cannot observe the sun warns, or fails with --require-probe.
+struct ProbeSuns {
+  std::vector<std::optional<fit::ProbeSun>> suns;
+  std::vector<nlohmann::json> json;
+};
+
+ProbeSuns CollectProbeSuns(const std::vector<fit::Reference>& refs, const fit::FitResult& result,
+                           const std::vector<std::optional<fit::ProbeSamples>>& probes, const FitProbeOptions& po,
+                           bool absolute, nlohmann::json* warnings) {
+  ProbeSuns ps{std::vector<std::optional<fit::ProbeSun>>(refs.size()), std::vector<nlohmann::json>(refs.size())};
   for (size_t r = 0; r < refs.size(); ++r) {
     if (!probes[r]) continue;
     const fit::ProbeSun& s = *result.references[r].sun;
-    suns[r] = s;
-    sun_json[r] = {{"observable", s.observable},
-                   {"visible", s.visible},
-                   {"illuminance_rgb", s.illuminance_ref},
-                   {"illuminance_rgb_model", s.illuminance_model},
-                   {"fitted_illuminance_rgb_model", s.fitted_model},
-                   {"fraction", s.fraction},
-                   {"residual", s.residual},
-                   {"log_rmse", s.log_rmse},
-                   {"samples", s.samples},
-                   {"sun_facing_samples", s.sun_facing_samples},
-                   {"ground_facing_samples", s.ground_facing_samples},
-                   {"probe", probes[r]->path}};
-    if (!s.note.empty()) sun_json[r]["note"] = s.note;
-    if (fo.absolute) sun_json[r]["illuminance_lux"] = s.lux;
+    ps.suns[r] = s;
+    ps.json[r] = ProbeSunJson(s, probes[r]->path, absolute);
     Log("fit", refs[r].name + ": probe sun " + (!s.observable ? "not observable (" + s.note + ")"
                                                               : s.visible ? std::string("visible") : std::string("occluded")) +
                    ", fraction " + std::to_string(s.fraction) + ", E_sun (model) " +
@@ -196,35 +193,46 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
                    std::to_string(s.illuminance_model[2]) + ", probe log RMSE " + std::to_string(s.log_rmse));
     if (!s.observable) {
       if (po.require_probe) throw Error(refs[r].name + ": --require-probe: the probe cannot observe the sun: " + s.note);
-      warnings.push_back(refs[r].name + ": sun from the probe: " + s.note);
+      warnings->push_back(refs[r].name + ": sun from the probe: " + s.note);
     }
   }
-  {
-    std::vector<size_t> visible;
-    for (size_t r = 0; r < refs.size(); ++r) {
-      if (suns[r] && suns[r]->visible) visible.push_back(r);
-    }
-    if (visible.size() == 1) {
-      const size_t r = visible[0];
-      bool clamped = false;
-      result.preset.sun_tint_rgb = fit::SunTintFor(result.preset, refs[r].sun_dir, suns[r]->illuminance_model, &clamped);
-      sun_json[r]["sun_tint_rgb"] = result.preset.sun_tint_rgb;
-      if (clamped) {
-        const std::string w = refs[r].name + ": the probe's sun needs a sun_tint_rgb outside its bounds: clamped";
-        warnings.push_back(w);
-        Log("fit", "warning: " + w);
-      }
-    } else if (visible.size() > 1) {
-      for (size_t r : visible) {
-        sun_json[r]["sun_tint_rgb"] = fit::SunTintFor(result.preset, refs[r].sun_dir, suns[r]->illuminance_model, nullptr);
-      }
-      const std::string w = std::to_string(visible.size()) +
-                            " references see the sun on the probe: the preset's sun_tint_rgb is left as fitted "
-                            "(per-reference tints in fit.json)";
-      warnings.push_back(w);
+  return ps;
+}
+
+// One reference seeing the sun on its probe sets the preset's sun_tint_rgb; several leave it
+// as fitted and record each one's tint.
+void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, render::Preset* preset,
+                       nlohmann::json* warnings) {
+  std::vector<size_t> visible;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    if (ps->suns[r] && ps->suns[r]->visible) visible.push_back(r);
+  }
+  if (visible.size() == 1) {
+    const size_t r = visible[0];
+    bool clamped = false;
+    preset->sun_tint_rgb = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, &clamped);
+    ps->json[r]["sun_tint_rgb"] = preset->sun_tint_rgb;
+    if (clamped) {
+      const std::string w = refs[r].name + ": the probe's sun needs a sun_tint_rgb outside its bounds: clamped";
+      warnings->push_back(w);
       Log("fit", "warning: " + w);
     }
+  } else if (visible.size() > 1) {
+    for (size_t r : visible) {
+      ps->json[r]["sun_tint_rgb"] = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, nullptr);
+    }
+    const std::string w = std::to_string(visible.size()) +
+                          " references see the sun on the probe: the preset's sun_tint_rgb is left as fitted "
+                          "(per-reference tints in fit.json)";
+    warnings->push_back(w);
+    Log("fit", "warning: " + w);
   }
+}
+
+// fit/<name>.exr per reference, and its entries of fit.json (references, inputs, warnings).
+void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Reference>& refs,
+                        const fit::FitResult& result, const ProbeSuns& ps, nlohmann::json* per_ref,
+                        nlohmann::json* inputs, nlohmann::json* warnings) {
   for (size_t r = 0; r < refs.size(); ++r) {
     const auto& ref = refs[r];
     const auto& rf = result.references[r];
@@ -235,52 +243,47 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     frame.extra.strings["skycalReference"] = ref.path;
     frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
     capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);
-    per_ref.push_back({{"name", ref.name},
-                       {"path", ref.path},
-                       {"rel_rmse", rf.errors.rel_rmse},
-                       {"log_rmse", rf.errors.log_rmse},
-                       {"exposure", rf.exposure},
-                       {"sun_direction", ref.sun_dir},
-                       {"sun_elevation_deg", latlong::ElevationDeg(ref.sun_dir)},
-                       {"sun_source", ref.sun_source},
-                       {"observed_lut_rows", rf.observed_rows},
-                       {"clip_level", ref.clip_level},
-                       {"pixels", fit::MaskCountsToJson(ref.counts)}});
-    if (!sun_json[r].is_null()) per_ref.back()["sun"] = sun_json[r];
-    inputs.push_back({{"path", ref.path}, {"sha256", ref.sha256}});
-    for (const auto& w : ref.warnings) warnings.push_back(w);
+    per_ref->push_back({{"name", ref.name},
+                        {"path", ref.path},
+                        {"rel_rmse", rf.errors.rel_rmse},
+                        {"log_rmse", rf.errors.log_rmse},
+                        {"exposure", rf.exposure},
+                        {"sun_direction", ref.sun_dir},
+                        {"sun_elevation_deg", latlong::ElevationDeg(ref.sun_dir)},
+                        {"sun_source", ref.sun_source},
+                        {"observed_lut_rows", rf.observed_rows},
+                        {"clip_level", ref.clip_level},
+                        {"pixels", fit::MaskCountsToJson(ref.counts)}});
+    if (!ps.json[r].is_null()) per_ref->back()["sun"] = ps.json[r];
+    inputs->push_back({{"path", ref.path}, {"sha256", ref.sha256}});
+    for (const auto& w : ref.warnings) warnings->push_back(w);
   }
-  for (const auto& w : result.warnings) warnings.push_back(w);
-  const nlohmann::json resolved = ResolvedFitOptionsJson(fo);
-  nlohmann::json summary = fit::FitSummaryJson(result);
-  summary["references"] = per_ref;
-  summary["warnings"] = warnings;
-  summary["options"] = resolved;
-  summary["clouds"] = CloudReportJson(co, joint);
-  if (cs.enabled) {
-    std::vector<cloudfit::CloudStatsPhoto> photos;
-    for (size_t r = 0; r < refs.size(); ++r) {
-      const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
-      photos.push_back({&refs[r], cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
-    }
-    summary["clouds"]["mode"] = "stats";
-    summary["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by statistics "
-                                    "of the cloud pixels (fit.json's cloud_stats)";
-    cloudfit::CloudStatsPresetUpdate update;
-    summary["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, result, out.staging() / "fit", &update);
-    summary["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result.preset);
-    summary["cloud_stats"]["sky_refit"] = sky_refit;
+}
+
+// --clouds stats: the cloud lighting by statistics of the cloud pixels, into fit.json's
+// cloud_stats and the preset's clouds section.
+void RunCloudStatsStage(const FitCloudStatsOptions& cs, const LoadedReferences& l, const nlohmann::json& sky_refit,
+                        const StagedDirectory& out, fit::FitResult* result, nlohmann::json* summary) {
+  std::vector<cloudfit::CloudStatsPhoto> photos;
+  for (size_t r = 0; r < l.refs.size(); ++r) {
+    const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
+    photos.push_back({&l.refs[r], l.cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
   }
-  if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
-  const nlohmann::json provenance = {{"provenance",
-                                      {{"tool", std::string("skycal ") + kSkycalVersion},
-                                       {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
-                                       {"inputs", inputs},
-                                       {"options", resolved},
-                                       {"final_errors", per_ref}}}};
-  render::SavePreset(result.preset, out / "preset.json", &provenance);
-  // The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
-  // file) leaves them out, never the fit.
+  (*summary)["clouds"]["mode"] = "stats";
+  (*summary)["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by "
+                                     "statistics of the cloud pixels (fit.json's cloud_stats)";
+  cloudfit::CloudStatsPresetUpdate update;
+  (*summary)["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, *result, out.staging() / "fit", &update);
+  (*summary)["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result->preset);
+  (*summary)["cloud_stats"]["sky_refit"] = sky_refit;
+}
+
+// The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
+// file) leaves them out, never the fit. Then what the report reads beside the errors: the
+// images, the fitted sun at the ground (model units: lux with --absolute), the cloud mask.
+void WritePreviewsAndReportFields(const StagedDirectory& out, const FitVerbOptions& o, const LoadedReferences& l,
+                                  const fit::FitResult& result, nlohmann::json* summary) {
+  const std::vector<fit::Reference>& refs = l.refs;
   bool previews = true;
   try {
     WriteFitReport(out / "report.png", refs, result);
@@ -289,10 +292,8 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     previews = false;
     Log("fit", std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
   }
-  // What the report reads beside the errors: the images, the fitted sun at the ground
-  // (model units: lux with --absolute) and the cloud mask.
   for (size_t r = 0; r < refs.size(); ++r) {
-    nlohmann::json& j = summary["references"][r];
+    nlohmann::json& j = (*summary)["references"][r];
     if (previews) {
       j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
                      {"fit", "fit/" + refs[r].name + ".fit.png"},
@@ -300,8 +301,69 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
     }
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
     j["sun_illuminance_at_ground_lux"] = skycal::Rec709Luminance(sun);
-    if (o.cloud_mask) j["cloud_mask"] = cloud_json[r];
+    if (o.cloud_mask) j["cloud_mask"] = l.cloud_json[r];
   }
+}
+
+void CheckFitOptions(const FitVerbOptions& o, const FitCloudOptions& co, const FitCloudStatsOptions& cs) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  if (!co.IsValid(&why)) throw Error(why);
+  if (cs.enabled && !cs.IsValid(&why)) throw Error(why);
+  if (cs.enabled && !o.cloud_mask) throw Error("--clouds stats fits the atmosphere to the clear pixels: it needs --cloud-mask");
+}
+
+// The fit's stages: inputs read and checked, the sky (+ clouds) fit, the probe's sun, the
+// fit images, the cloud statistics, preset.json, previews, fit.json, then the commit.
+nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
+                                const FitCloudStatsOptions& cs) {
+  CheckFitOptions(o, co, cs);
+  const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
+  StagedDirectory out(o.out_dir, "--out", "fit", FitInputs(o, po, co, init_path));  // fails early on an unusable --out
+  std::filesystem::create_directories(out.staging() / "fit");
+  render::Preset init = render::LoadPreset(init_path);
+  const std::unique_ptr<LoadedCloudShapes> cloud_shapes = LoadFitCloudShapes(co);  // a bad section fails early
+  LoadedReferences l = LoadFitReferences(o, cloud_shapes != nullptr);
+  std::vector<fit::Reference>& refs = l.refs;
+  const auto probes = ProbesFor(po, refs);  // before the fit: a missing or bad file fails early
+  std::vector<const fit::ProbeSamples*> probe_ptrs;
+  for (const auto& p : probes) probe_ptrs.push_back(p ? &*p : nullptr);
+  fit::FitOptions fo = o.fit;
+  if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
+  auto renderer = render::CreateRenderer(fo.backend);
+  Log("fit", "objective backend: " + renderer->Describe());
+  cloudfit::SkyCloudFit joint = RunSkyCloudFit(co, refs, init, fo, *renderer, probe_ptrs, cloud_shapes.get());
+  nlohmann::json sky_refit;
+  if (cs.enabled)  // the cloud mask against the sky fit's own render; the atmosphere refitted if it moved
+    sky_refit = RefineCloudMaskAndRefitSky(cs, !o.fit.mask_path.empty(), &refs, &l.cloud_probability, joint.sky, [&] {
+      const render::Preset first = joint.sky.preset;
+      joint = RunSkyCloudFit(co, refs, first, fo, *renderer, probe_ptrs, cloud_shapes.get());
+    });
+  fit::FitResult& result = joint.sky;
+  result.preset.name = fs::path(o.out_dir).filename().string();
+  if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
+
+  nlohmann::json per_ref = nlohmann::json::array(), inputs = nlohmann::json::array(), warnings = nlohmann::json::array();
+  ProbeSuns ps = CollectProbeSuns(refs, result, probes, po, fo.absolute, &warnings);
+  ApplyProbeSunTint(refs, &ps, &result.preset, &warnings);
+  WriteReferenceFits(out, refs, result, ps, &per_ref, &inputs, &warnings);
+  for (const auto& w : result.warnings) warnings.push_back(w);
+  const nlohmann::json resolved = ResolvedFitOptionsJson(fo);
+  nlohmann::json summary = fit::FitSummaryJson(result);
+  summary["references"] = per_ref;
+  summary["warnings"] = warnings;
+  summary["options"] = resolved;
+  summary["clouds"] = CloudReportJson(co, joint);
+  if (cs.enabled) RunCloudStatsStage(cs, l, sky_refit, out, &result, &summary);
+  if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
+  const nlohmann::json provenance = {{"provenance",
+                                      {{"tool", std::string("skycal ") + kSkycalVersion},
+                                       {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
+                                       {"inputs", inputs},
+                                       {"options", resolved},
+                                       {"final_errors", per_ref}}}};
+  render::SavePreset(result.preset, out / "preset.json", &provenance);
+  WritePreviewsAndReportFields(out, o, l, result, &summary);
   if (fo.time_of_day_h) summary["time_of_day_h"] = *fo.time_of_day_h;
   summary["out"] = o.out_dir;
   WriteJsonFileAtomically(out / "fit.json", summary);
