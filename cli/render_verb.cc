@@ -79,13 +79,9 @@ std::array<double, 3> RenderOptions::SunDirection() const {
   return SunDirectionFromChoice(sun_elevation_deg, sun_azimuth_deg, sun_dir);
 }
 
-nlohmann::json RunRenderImpl(const RenderOptions& o) {
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  std::string why;
-  if (!o.IsValid(&why)) throw Error(why);
-  const std::string preset_path = o.preset_path.empty() ? DefaultPresetPath() : o.preset_path;
-  const clouds::MarchOptions march = CloudMarchOptions(o.clouds);
+namespace {
+// Outputs never over inputs, --png never over --out, and both writable before any render.
+void CheckRenderOutputs(const RenderOptions& o, const std::string& preset_path) {
   std::vector<NamedPath> outputs{{"--out", o.out_exr}};
   if (!o.out_png.empty()) outputs.push_back({"--png", o.out_png});
   std::vector<NamedPath> inputs = PresetInputs("--preset", preset_path);
@@ -95,12 +91,56 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   // Fail on unwritable outputs before spending time rendering.
   { AtomicOutput probe(o.out_exr); }
   if (!o.out_png.empty()) { AtomicOutput probe(o.out_png); }
+}
 
-  const render::Preset preset = render::LoadPreset(preset_path);
-  std::optional<CloudInputsLoaded> cloud_inputs;
-  if (o.clouds.enabled) cloud_inputs = LoadCloudInputs(o.clouds, preset, preset_path);  // before any time is spent
-  const auto sun = o.SunDirection();
-  const double elevation = latlong::ElevationDeg(sun), azimuth = latlong::AzimuthDeg(sun);
+// The clouds over the sky in `frame` (disc included: the clouds' transmittance hides it);
+// returns render --json's `clouds` object.
+nlohmann::json RenderCloudsOver(const RenderOptions& o, const render::Preset& preset, const CloudInputsLoaded& in,
+                                const clouds::MarchOptions& march, const latlong::Vec3d& sun,
+                                clouds::CloudRenderer& cloud_renderer, capture::LatLongFrame* frame) {
+  clouds::CloudRenderRequest cr;
+  cr.sun_dir = sun;
+  cr.width = o.width;
+  cr.height = o.height;
+  cr.time_s = o.clouds.time_s;
+  cr.march = march;
+  const clouds::CloudScene scene{&preset, &in.params, &in.noise, &in.weather};
+  const clouds::CloudImage cloud = cloud_renderer.Render(scene, cr);
+  frame->radiance = clouds::CompositeClouds(frame->radiance, cloud);
+  frame->planes.push_back({"cloudTransmittance", cloud.transmittance});
+  frame->extra.strings["skycalClouds"] = in.params_origin;
+  frame->extra.strings["skycalWeatherMap"] = in.weather_origin;
+  frame->extra.floats["skycalCloudTimeS"] = static_cast<float>(o.clouds.time_s);
+  double t_mean = 0.0;
+  for (float t : cloud.transmittance) t_mean += t / cloud.transmittance.size();
+  return {{"device", cloud_renderer.Describe()},
+          {"parameters", in.params_origin},
+          {"weather_map", in.weather_origin},
+          {"time_s", o.clouds.time_s},
+          {"transmittance_mean", t_mean},
+          {"steps", {march.steps_zenith, march.steps_horizon}},
+          {"light_samples", march.light_samples}};
+}
+
+// The EXR, then the optional PNG preview (no partial output: both files or none); returns
+// render --json's `png` object.
+nlohmann::json WriteRenderOutputs(const RenderOptions& o, capture::LatLongFrame* frame) {
+  PrepareImageForWrite("render", o.out_exr, &frame->radiance, o.half);
+  capture::WriteLatLongFrame(o.out_exr, *frame, o.half);
+  if (o.out_png.empty()) return nullptr;
+  try {
+    color::PreviewOptions po;
+    po.exposure_ev = o.png_exposure_ev;
+    const color::PreviewReport report = color::WritePreviewPng(frame->radiance, o.out_png, po);
+    return {{"path", o.out_png}, {"exposure_ev", report.exposure_ev}, {"view", report.view},
+            {"ocio_config", report.config_path}};
+  } catch (...) {
+    std::filesystem::remove(o.out_exr);
+    throw;
+  }
+}
+
+nlohmann::json SunBelowLutWarnings(const render::Preset& preset, double elevation) {
   nlohmann::json warnings = nlohmann::json::array();
   const double lut_min_elevation = 90.0 - preset.luts.grid.theta_max_deg;
   if (elevation < lut_min_elevation) {
@@ -108,6 +148,35 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
                        std::to_string(lut_min_elevation) + " deg): the last twilight row is used");
   }
   for (const auto& w : warnings) Log("render", "warning: " + w.get<std::string>());
+  return warnings;
+}
+
+nlohmann::json RadianceStats(const ImageRGB& radiance) {
+  double max_v = 0.0, sum = 0.0;
+  long long n = 0;
+  for (float v : radiance.pixels) {
+    max_v = std::max(max_v, static_cast<double>(v));
+    sum += v;
+    ++n;
+  }
+  return {{"max", max_v}, {"mean", n ? sum / n : 0.0}};
+}
+}  // namespace
+
+nlohmann::json RunRenderImpl(const RenderOptions& o) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  const std::string preset_path = o.preset_path.empty() ? DefaultPresetPath() : o.preset_path;
+  const clouds::MarchOptions march = CloudMarchOptions(o.clouds);
+  CheckRenderOutputs(o, preset_path);
+  const render::Preset preset = render::LoadPreset(preset_path);
+  std::optional<CloudInputsLoaded> cloud_inputs;
+  if (o.clouds.enabled) cloud_inputs = LoadCloudInputs(o.clouds, preset, preset_path);  // before any time is spent
+  const auto sun = o.SunDirection();
+  const double elevation = latlong::ElevationDeg(sun), azimuth = latlong::AzimuthDeg(sun);
+  const nlohmann::json warnings = SunBelowLutWarnings(preset, elevation);
 
   render::VulkanOptions vk;
   vk.validation = o.vulkan_validation;
@@ -131,31 +200,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   frame.radiance = renderer->Render(preset, request);
   const auto t_sky = Clock::now();
   nlohmann::json clouds_summary = nullptr;
-  if (cloud_inputs) {
-    // The clouds over the sky (disc included: the clouds' transmittance hides it).
-    clouds::CloudRenderRequest cr;
-    cr.sun_dir = sun;
-    cr.width = o.width;
-    cr.height = o.height;
-    cr.time_s = o.clouds.time_s;
-    cr.march = march;
-    const clouds::CloudScene scene{&preset, &cloud_inputs->params, &cloud_inputs->noise, &cloud_inputs->weather};
-    const clouds::CloudImage cloud = cloud_renderer->Render(scene, cr);
-    frame.radiance = clouds::CompositeClouds(frame.radiance, cloud);
-    frame.planes.push_back({"cloudTransmittance", cloud.transmittance});
-    frame.extra.strings["skycalClouds"] = cloud_inputs->params_origin;
-    frame.extra.strings["skycalWeatherMap"] = cloud_inputs->weather_origin;
-    frame.extra.floats["skycalCloudTimeS"] = static_cast<float>(o.clouds.time_s);
-    double t_mean = 0.0;
-    for (float t : cloud.transmittance) t_mean += t / cloud.transmittance.size();
-    clouds_summary = {{"device", cloud_renderer->Describe()},
-                      {"parameters", cloud_inputs->params_origin},
-                      {"weather_map", cloud_inputs->weather_origin},
-                      {"time_s", o.clouds.time_s},
-                      {"transmittance_mean", t_mean},
-                      {"steps", {march.steps_zenith, march.steps_horizon}},
-                      {"light_samples", march.light_samples}};
-  }
+  if (cloud_inputs) clouds_summary = RenderCloudsOver(o, preset, *cloud_inputs, march, sun, *cloud_renderer, &frame);
   const auto t_done = Clock::now();
   frame.sun_direction = sun;
   frame.extra.strings["skycalPreset"] = preset_path;
@@ -163,30 +208,8 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
   frame.extra.strings["skycalModel"] = render::ToString(preset.variant);
   frame.extra.strings["skycalBackend"] = render::ToString(o.backend);
   frame.extra.strings["skycalUnits"] = "cd/m^2 per channel, scene-linear Rec.709";
+  const nlohmann::json preview = WriteRenderOutputs(o, &frame);
 
-  PrepareImageForWrite("render", o.out_exr, &frame.radiance, o.half);
-  capture::WriteLatLongFrame(o.out_exr, frame, o.half);
-  nlohmann::json preview = nullptr;
-  if (!o.out_png.empty()) {
-    try {
-      color::PreviewOptions po;
-      po.exposure_ev = o.png_exposure_ev;
-      const color::PreviewReport report = color::WritePreviewPng(frame.radiance, o.out_png, po);
-      preview = {{"path", o.out_png}, {"exposure_ev", report.exposure_ev}, {"view", report.view},
-                 {"ocio_config", report.config_path}};
-    } catch (...) {
-      std::filesystem::remove(o.out_exr);  // no partial output: both files or none
-      throw;
-    }
-  }
-
-  double max_v = 0.0, sum = 0.0;
-  long long n = 0;
-  for (float v : frame.radiance.pixels) {
-    max_v = std::max(max_v, static_cast<double>(v));
-    sum += v;
-    ++n;
-  }
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   if (o.verbose)
     Log("render", "wrote " + o.out_exr + " (" + std::to_string(o.width) + "x" + std::to_string(o.height) + ", render " +
@@ -201,7 +224,7 @@ nlohmann::json RunRenderImpl(const RenderOptions& o) {
           {"size", {o.width, o.height}},
           {"out", o.out_exr},
           {"png", preview},
-          {"radiance_cd_m2", {{"max", max_v}, {"mean", n ? sum / n : 0.0}}},
+          {"radiance_cd_m2", RadianceStats(frame.radiance)},
           {"clouds", clouds_summary},
           {"time_ms",
            {{"init", ms(t_init, t_render)},
