@@ -186,6 +186,54 @@ bool ImportOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+// The frame's sun: --sun-dir, --detect-sun, or the source's own sunDirection attribute;
+// returns import --json's `sun` object (null when none) and names its source.
+struct ImportedSun {
+  nlohmann::json json = nullptr;
+  std::string source = "none";
+};
+
+ImportedSun ImportSun(const ImportOptions& o, const ExrRGB& src, capture::LatLongFrame* frame, nlohmann::json* warnings) {
+  std::string why;
+  ImportedSun is;
+  nlohmann::json& sun = is.json;
+  std::string& sun_source = is.source;
+  if (o.sun_dir) {
+    frame->sun_direction = latlong::Normalized(*o.sun_dir, "--sun-dir");
+    sun_source = "option";
+  } else if (o.detect_sun) {
+    auto d = capture::DetectSun(frame->radiance, &why, o.min_sun_contrast);
+    if (!d) throw Error(o.in_path + ": --detect-sun: no distinct sun found (" + why + "); nothing written");
+    frame->sun_direction = d->direction;
+    sun_source = "detected";
+    sun = {{"contrast", d->contrast},
+           {"peak_luminance", d->peak_luminance},
+           {"region_pixels", d->region_pixels},
+           {"clipped", d->clipped}};
+    if (d->clipped) {
+      warnings->push_back(o.in_path + ": the sun is clipped (a plateau at " + std::to_string(d->peak_luminance) +
+                          "): its disc radiance is unknown; the fit masks the sun cone and clipped pixels");
+    }
+  } else if (o.convention == SourceConvention::kExr) {
+    if (auto it = src.attributes.v3fs.find("sunDirection"); it != src.attributes.v3fs.end()) {
+      const auto& v = it->second;
+      frame->sun_direction = latlong::Normalized({v[0], v[1], v[2]}, (o.in_path + ": attribute 'sunDirection'").c_str());
+      sun_source = "attribute";
+    }
+  }
+  if (frame->sun_direction) {
+    const auto& s = *frame->sun_direction;
+    if (sun.is_null()) sun = nlohmann::json::object();
+    sun["direction"] = s;
+    sun["elevation_deg"] = latlong::ElevationDeg(s);
+    sun["azimuth_deg"] = latlong::AzimuthDeg(s);
+    sun["source"] = sun_source;
+  }
+  return is;
+}
+}  // namespace
+
 nlohmann::json RunImportImpl(const ImportOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
@@ -219,39 +267,9 @@ nlohmann::json RunImportImpl(const ImportOptions& o) {
                        " Inf pixels (lossy-compression ringing?): non-finite ones written as 0, which the fit masks like negative ones");
   }
 
-  nlohmann::json sun = nullptr;
-  std::string sun_source = "none";
-  if (o.sun_dir) {
-    frame.sun_direction = latlong::Normalized(*o.sun_dir, "--sun-dir");
-    sun_source = "option";
-  } else if (o.detect_sun) {
-    auto d = capture::DetectSun(frame.radiance, &why, o.min_sun_contrast);
-    if (!d) throw Error(o.in_path + ": --detect-sun: no distinct sun found (" + why + "); nothing written");
-    frame.sun_direction = d->direction;
-    sun_source = "detected";
-    sun = {{"contrast", d->contrast},
-           {"peak_luminance", d->peak_luminance},
-           {"region_pixels", d->region_pixels},
-           {"clipped", d->clipped}};
-    if (d->clipped) {
-      warnings.push_back(o.in_path + ": the sun is clipped (a plateau at " + std::to_string(d->peak_luminance) +
-                         "): its disc radiance is unknown; the fit masks the sun cone and clipped pixels");
-    }
-  } else if (o.convention == SourceConvention::kExr) {
-    if (auto it = src.attributes.v3fs.find("sunDirection"); it != src.attributes.v3fs.end()) {
-      const auto& v = it->second;
-      frame.sun_direction = latlong::Normalized({v[0], v[1], v[2]}, (o.in_path + ": attribute 'sunDirection'").c_str());
-      sun_source = "attribute";
-    }
-  }
-  if (frame.sun_direction) {
-    const auto& s = *frame.sun_direction;
-    if (sun.is_null()) sun = nlohmann::json::object();
-    sun["direction"] = s;
-    sun["elevation_deg"] = latlong::ElevationDeg(s);
-    sun["azimuth_deg"] = latlong::AzimuthDeg(s);
-    sun["source"] = sun_source;
-  }
+  const ImportedSun imported_sun = ImportSun(o, src, &frame, &warnings);
+  const nlohmann::json& sun = imported_sun.json;
+  const std::string& sun_source = imported_sun.source;
 
   const std::string file_name = fs::path(o.in_path).filename().string();
   frame.extra.strings["skycalSource"] = file_name + " sha256:" + sha;
