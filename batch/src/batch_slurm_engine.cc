@@ -70,67 +70,75 @@ void RequireSlurmClient() {
   }
 }
 
-nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& o) {
-  RequireSlurmClient();
-  const std::string sbatch = FindOnPath("sbatch"), squeue = FindOnPath("squeue"), scontrol = FindOnPath("scontrol");
-  const std::vector<int> pending = PendingChunks(out_dir, plan);
-  const std::string out_abs = fs::absolute(out_dir).string();
-  const std::string exe = SelfExecutable();
-  const fs::path sdir = fs::path(out_abs) / "slurm";
-  fs::create_directories(sdir);
-  if (std::error_code ec; fs::exists(sdir / "jobs.json", ec)) {  // an earlier submission still queued?
-    const nlohmann::json earlier = ReadJsonFile((sdir / "jobs.json").string());
-    std::string ids;
-    for (const char* k : {"array_job", "reduce_job"}) {
-      const std::string id = earlier.value(k, std::string());
-      if (!id.empty()) ids += (ids.empty() ? "" : ",") + id;
-    }
-    if (!ids.empty()) {
-      const Captured q = RunCapture({squeue, "-h", "-j", ids, "-o", "%i %T"});
-      if (q.status == 0 && q.out.find_first_not_of(" \n") != std::string::npos) {
-        throw Error("--out " + out_dir + ": its earlier Slurm jobs (" + ids + ") are still in the queue:\n" + q.out +
-                    "wait for them (or scancel them), then run again with --resume");
-      }
-    }
+namespace {
+// An earlier submission into the same --out still queued: refuse rather than race it.
+void RefuseIfEarlierJobsQueued(const std::string& out_dir, const fs::path& sdir, const std::string& squeue) {
+  std::error_code ec;
+  if (!fs::exists(sdir / "jobs.json", ec)) return;
+  const nlohmann::json earlier = ReadJsonFile((sdir / "jobs.json").string());
+  std::string ids;
+  for (const char* k : {"array_job", "reduce_job"}) {
+    const std::string id = earlier.value(k, std::string());
+    if (!id.empty()) ids += (ids.empty() ? "" : ",") + id;
   }
+  if (ids.empty()) return;
+  const Captured q = RunCapture({squeue, "-h", "-j", ids, "-o", "%i %T"});
+  if (q.status == 0 && q.out.find_first_not_of(" \n") != std::string::npos) {
+    throw Error("--out " + out_dir + ": its earlier Slurm jobs (" + ids + ") are still in the queue:\n" + q.out +
+                "wait for them (or scancel them), then run again with --resume");
+  }
+}
+
+std::string ShellQuote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// slurm/chunk.sh and slurm/reduce.sh: each execs this binary on one chunk, or the reduce.
+struct JobScripts {
+  std::string chunk, reduce;
+};
+
+JobScripts WriteJobScripts(const fs::path& sdir, const std::string& exe, const std::string& out_abs) {
   auto script = [&](const std::string& name, const std::string& body) {
     const std::string p = (sdir / name).string();
     WriteFileAtomically(p, "#!/bin/sh\n# written by skycal batch: one " + body);
     ::chmod(p.c_str(), 0755);
     return p;
   };
-  auto quote = [](const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-  };
-  const std::string chunk_sh =
-      script("chunk.sh", "chunk of the batch (the array task id is the chunk)\nexec " + quote(exe) +
-                             " batch --worker-chunk \"$SLURM_ARRAY_TASK_ID\" --out " + quote(out_abs) + "\n");
-  const std::string reduce_sh =
-      script("reduce.sh", "reduce of the batch\nexec " + quote(exe) + " batch --reduce --out " + quote(out_abs) + "\n");
+  JobScripts js;
+  js.chunk = script("chunk.sh", "chunk of the batch (the array task id is the chunk)\nexec " + ShellQuote(exe) +
+                                    " batch --worker-chunk \"$SLURM_ARRAY_TASK_ID\" --out " + ShellQuote(out_abs) + "\n");
+  js.reduce = script("reduce.sh", "reduce of the batch\nexec " + ShellQuote(exe) + " batch --reduce --out " +
+                                      ShellQuote(out_abs) + "\n");
+  return js;
+}
+
+// The pending chunks as one job array; returns its job id.
+std::string SubmitChunkArray(const std::string& sbatch, const std::vector<int>& pending, const std::string& out_abs,
+                             const BatchOptions& o, const std::string& chunk_sh) {
   std::string array;
   for (int c : pending) {  // appended piecewise: GCC 12 warns (-Wrestrict, a false positive) on "," + string
     if (!array.empty()) array += ',';
     array += std::to_string(c);
   }
-
-  nlohmann::json result = {{"engine", "slurm"}, {"chunks", pending.size()}};
-  std::string array_id;
-  std::vector<std::string> watch;
-  if (!pending.empty()) {
-    std::vector<std::string> args = {sbatch, "--parsable", "--job-name=skycal-batch", "--array=" + array,
-                                     "--chdir=" + out_abs, "--output=" + LogPath(out_abs, "chunk-%a.log")};
-    args.insert(args.end(), o.slurm_options.begin(), o.slurm_options.end());
-    args.push_back(chunk_sh);
-    const Captured c = RunCapture(args);
-    array_id = FirstToken(c.out);
-    if (c.status != 0 || array_id.empty()) {
-      throw Error("--engine slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) + "; its message is above)");
-    }
-    watch.push_back(array_id);
-    BatchLog("submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
+  std::vector<std::string> args = {sbatch, "--parsable", "--job-name=skycal-batch", "--array=" + array,
+                                   "--chdir=" + out_abs, "--output=" + LogPath(out_abs, "chunk-%a.log")};
+  args.insert(args.end(), o.slurm_options.begin(), o.slurm_options.end());
+  args.push_back(chunk_sh);
+  const Captured c = RunCapture(args);
+  const std::string array_id = FirstToken(c.out);
+  if (c.status != 0 || array_id.empty()) {
+    throw Error("--engine slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) + "; its message is above)");
   }
+  BatchLog("submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
+  return array_id;
+}
+
+// The reduce, after the array when there is one; a refusal cancels the array.
+std::string SubmitReduce(const std::string& sbatch, const std::string& array_id, const std::string& out_abs,
+                         const BatchOptions& o, const std::string& reduce_sh) {
   std::vector<std::string> rargs = {sbatch, "--parsable", "--job-name=skycal-reduce", "--chdir=" + out_abs,
                                     "--output=" + LogPath(out_abs, "reduce.log")};
   if (!array_id.empty()) {
@@ -146,12 +154,14 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
     throw Error("--engine slurm: sbatch refused the reduce job (" + DescribeWaitStatus(rc.status) +
                 "; its message is above); the chunk array " + array_id + " was cancelled");
   }
-  watch.push_back(reduce_id);
   BatchLog("submitted the reduce: job " + reduce_id + (array_id.empty() ? "" : " (afterok:" + array_id + ")"));
-  WriteJsonFileAtomically((sdir / "jobs.json").string(), {{"array_job", array_id}, {"reduce_job", reduce_id}, {"chunks", pending}});
-  result["array_job"] = array_id;
-  result["reduce_job"] = reduce_id;
+  return reduce_id;
+}
 
+// Polls squeue until every watched job has left the queue, printing progress; returns the
+// seconds waited.
+double WaitForQueue(const std::string& squeue, const std::vector<std::string>& watch, const std::string& out_dir,
+                    const BatchPlan& plan, const BatchOptions& o) {
   std::string ids;
   for (const auto& w : watch) ids += (ids.empty() ? "" : ",") + w;
   ProgressPrinter progress(CountBatchProgress(out_dir, plan).done);
@@ -176,24 +186,56 @@ nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan,
     progress.Update(CountBatchProgress(out_dir, plan), what);
     std::this_thread::sleep_for(std::chrono::duration<double>(o.poll_s));
   }
-  result["queue_s"] = std::chrono::duration<double>(Clock::now() - t0).count();
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The array's tasks and the reduce as scontrol last saw them; failed tasks are logged.
+void RecordJobStates(const std::string& scontrol, const std::string& array_id, const std::string& reduce_id,
+                     const std::string& out_abs, nlohmann::json* result) {
   if (!array_id.empty()) {
     const Captured s = RunCapture({scontrol, "show", "job", array_id});
-    result["tasks"] = ParseScontrol(s.out);
-    for (const auto& t : result["tasks"]) {
+    (*result)["tasks"] = ParseScontrol(s.out);
+    for (const auto& t : (*result)["tasks"]) {
       if (t.value("JobState", "") != "COMPLETED") {
         BatchLog("chunk " + t.value("ArrayTaskId", "?") + " (job " + t.value("JobId", "?") + "): " +
-                         t.value("JobState", "?") + ", exit " + t.value("ExitCode", "?") + " (log: " +
-                         LogPath(out_abs, "chunk-" + t.value("ArrayTaskId", "?") + ".log") + ")");
+                 t.value("JobState", "?") + ", exit " + t.value("ExitCode", "?") + " (log: " +
+                 LogPath(out_abs, "chunk-" + t.value("ArrayTaskId", "?") + ".log") + ")");
       }
     }
   }
   const Captured r = RunCapture({scontrol, "show", "job", reduce_id});
   const nlohmann::json rt = ParseScontrol(r.out);
-  result["reduce_state"] = rt.empty() ? "unknown (no longer listed by scontrol)" : rt[0].value("JobState", "?");
-  if (!rt.empty() && rt[0].contains("Reason")) result["reduce_reason"] = rt[0]["Reason"];
+  (*result)["reduce_state"] = rt.empty() ? "unknown (no longer listed by scontrol)" : rt[0].value("JobState", "?");
+  if (!rt.empty() && rt[0].contains("Reason")) (*result)["reduce_reason"] = rt[0]["Reason"];
+}
+}  // namespace
+
+// The chunks as a Slurm job array, the reduce after it, then the queue watched to the end.
+nlohmann::json RunSlurmEngine(const std::string& out_dir, const BatchPlan& plan, const BatchOptions& o) {
+  RequireSlurmClient();
+  const std::string sbatch = FindOnPath("sbatch"), squeue = FindOnPath("squeue"), scontrol = FindOnPath("scontrol");
+  const std::vector<int> pending = PendingChunks(out_dir, plan);
+  const std::string out_abs = fs::absolute(out_dir).string();
+  const fs::path sdir = fs::path(out_abs) / "slurm";
+  fs::create_directories(sdir);
+  RefuseIfEarlierJobsQueued(out_dir, sdir, squeue);
+  const JobScripts js = WriteJobScripts(sdir, SelfExecutable(), out_abs);
+
+  nlohmann::json result = {{"engine", "slurm"}, {"chunks", pending.size()}};
+  std::string array_id;
+  std::vector<std::string> watch;
+  if (!pending.empty()) {
+    array_id = SubmitChunkArray(sbatch, pending, out_abs, o, js.chunk);
+    watch.push_back(array_id);
+  }
+  const std::string reduce_id = SubmitReduce(sbatch, array_id, out_abs, o, js.reduce);
+  watch.push_back(reduce_id);
+  WriteJsonFileAtomically((sdir / "jobs.json").string(), {{"array_job", array_id}, {"reduce_job", reduce_id}, {"chunks", pending}});
+  result["array_job"] = array_id;
+  result["reduce_job"] = reduce_id;
+  result["queue_s"] = WaitForQueue(squeue, watch, out_dir, plan, o);
+  RecordJobStates(scontrol, array_id, reduce_id, out_abs, &result);
   return result;
 }
-
 
 }  // namespace skycal::batch
