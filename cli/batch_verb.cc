@@ -22,7 +22,7 @@ BatchOptions ParseBatchArgs(int argc, char** argv) {
                      "  skycal batch --references 'DIR/*.exr' --out DIR [--frames-per-job N] [--engine local|slurm]\n"
                      "               [--jobs N] [--resume] [--day-frames N] [fit options] [--json]",
                      "Each frame needs the EXR attributes sunDirection and skycalTimeOfDay (capture --time,\n"
-                     "render --time-of-day). Layout of DIR and the resume rules: README, Batch: a time-lapse day.");
+                     "render --time-of-day). Layout of DIR and the resume rules: docs/batch.md.");
   BatchOptions o;
   std::optional<std::string> engine;
   FitOptionArgs fa;

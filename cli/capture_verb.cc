@@ -14,6 +14,55 @@ namespace skycal::cli {
 
 nlohmann::json RunCaptureImpl(const CaptureOptions& o) { return capture::RunCapturePipeline(o); }
 
+namespace {
+// The single camera's lens flags, as typed; ApplyLensArgs checks and converts them.
+struct LensArgs {
+  std::optional<std::string> lens, center, kb_k, vignetting, rotation;
+  std::optional<double> fov, radius;
+};
+
+void ApplyLensArgs(const LensArgs& a, CaptureOptions* o) {
+  if (a.lens) {
+    auto m = capture::LensModelFromName(*a.lens);
+    if (!m) throw Error("--lens: unknown model '" + *a.lens + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
+    o->lens.model = *m;
+    o->lens_model_given = true;
+  }
+  if (a.fov) {
+    o->lens.fov_deg = *a.fov;
+    o->lens_fov_given = true;
+  }
+  if (a.center) {
+    const auto v = ParseNumberList(*a.center, "--lens-center");
+    if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
+    o->lens.center_x = v[0];
+    o->lens.center_y = v[1];
+    o->lens_center_given = true;
+  }
+  if (a.radius) {
+    o->lens.radius_px = *a.radius;
+    o->lens_radius_given = true;
+  }
+  if (a.kb_k) {
+    const auto v = ParseNumberList(*a.kb_k, "--kb-k");
+    if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
+    for (int i = 0; i < 4; ++i) o->lens.kb_k[i] = v[i];
+    o->kb_given = true;
+  }
+  if (a.vignetting) {
+    const auto v = ParseNumberList(*a.vignetting, "--vignetting");
+    if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
+    for (int i = 0; i < 3; ++i) o->lens.vignetting[i] = v[i];
+    o->vignetting_given = true;
+  }
+  if (a.rotation) {
+    const auto v = ParseNumberList(*a.rotation, "--camera-rotation");
+    if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
+    o->camera_ypr_deg = std::array<double, 3>{v[0], v[1], v[2]};
+  }
+}
+}  // namespace
+
 CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   VerbCommandLine cl(
       "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
@@ -27,8 +76,8 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
       "                 [--size WxH] --out FRAME.exr [--json]",
       "Stage timings (merge, colour, unwrap, sun, write) are in the JSON summary.");
   CaptureOptions o;
-  std::optional<std::string> exposure_times, response, lens, lens_center, kb_k, vignetting, rotation, size, chart_corners;
-  std::optional<double> lens_fov, lens_radius;
+  std::optional<std::string> exposure_times, response, size, chart_corners;
+  LensArgs la;
   bool json = false;
   cl.List("--brackets", &o.brackets, "IMG",
           "8/16-bit images of one camera, one per exposure (repeat the flag or list them)");
@@ -37,17 +86,16 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
           "EXIF put frames of a time-lapse on one scale)");
   cl.Text("--response", &response, "NAME",
           "camera response: auto (default: weighted's per-channel curves, or debevec's when\n"
-          "the channels' curves have one shape; README \"Capture: lat-long brackets and\n"
-          "camera-response recovery\"), debevec, weighted, robertson (recovered), linear, srgb");
-  cl.Text("--lens", &lens, "NAME",
+          "the channels' curves have one shape; docs/capture.md), debevec, weighted, robertson (recovered), linear, srgb");
+  cl.Text("--lens", &la.lens, "NAME",
           "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
           "stereographic or kannala-brandt");
-  cl.Number("--lens-fov-deg", &lens_fov, "F", "lens field of view in degrees (default 180)");
-  cl.Text("--lens-center", &lens_center, "X,Y", "lens centre in pixels (default: the image centre)");
-  cl.Number("--lens-radius", &lens_radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
-  cl.Text("--kb-k", &kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
-  cl.Text("--vignetting", &vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
-  cl.Text("--camera-rotation", &rotation, "Y,P,R",
+  cl.Number("--lens-fov-deg", &la.fov, "F", "lens field of view in degrees (default 180)");
+  cl.Text("--lens-center", &la.center, "X,Y", "lens centre in pixels (default: the image centre)");
+  cl.Number("--lens-radius", &la.radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
+  cl.Text("--kb-k", &la.kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
+  cl.Text("--vignetting", &la.vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
+  cl.Text("--camera-rotation", &la.rotation, "Y,P,R",
           "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
           "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"
           "panorama is already the world's lat-long)");
@@ -86,44 +134,7 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   if (chart_corners) o.chart_corners = ParseChartCorners(*chart_corners, "--chart-corners");
   if (exposure_times) o.exposure_times_s = ParseNumberList(*exposure_times, "--exposure-times");
   if (response) o.merge.response = capture::ParseResponseModel(*response, "--response");
-  if (lens) {
-    auto m = capture::LensModelFromName(*lens);
-    if (!m) throw Error("--lens: unknown model '" + *lens + "' (expected latlong, equidistant, equisolid, stereographic or kannala-brandt)");
-    o.lens.model = *m;
-    o.lens_model_given = true;
-  }
-  if (lens_fov) {
-    o.lens.fov_deg = *lens_fov;
-    o.lens_fov_given = true;
-  }
-  if (lens_center) {
-    const auto v = ParseNumberList(*lens_center, "--lens-center");
-    if (v.size() != 2) throw Error("--lens-center: expected X,Y in pixels");
-    o.lens.center_x = v[0];
-    o.lens.center_y = v[1];
-    o.lens_center_given = true;
-  }
-  if (lens_radius) {
-    o.lens.radius_px = *lens_radius;
-    o.lens_radius_given = true;
-  }
-  if (kb_k) {
-    const auto v = ParseNumberList(*kb_k, "--kb-k");
-    if (v.size() != 4) throw Error("--kb-k: expected K1,K2,K3,K4");
-    for (int i = 0; i < 4; ++i) o.lens.kb_k[i] = v[i];
-    o.kb_given = true;
-  }
-  if (vignetting) {
-    const auto v = ParseNumberList(*vignetting, "--vignetting");
-    if (v.size() != 3) throw Error("--vignetting: expected A,B,C");
-    for (int i = 0; i < 3; ++i) o.lens.vignetting[i] = v[i];
-    o.vignetting_given = true;
-  }
-  if (rotation) {
-    const auto v = ParseNumberList(*rotation, "--camera-rotation");
-    if (v.size() != 3) throw Error("--camera-rotation: expected YAW,PITCH,ROLL in degrees");
-    o.camera_ypr_deg = std::array<double, 3>{v[0], v[1], v[2]};
-  }
+  ApplyLensArgs(la, &o);
   if (size) {
     const auto wh = ParseSize(*size, "--size");
     o.width = wh[0];

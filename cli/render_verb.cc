@@ -278,7 +278,7 @@ RenderOptions ParseRenderArgs(int argc, char** argv) {
   cl.Text("--cloud-light-samples", &o.clouds.light_samples, "N", "with --clouds: samples toward the sun, 0..64 (default 6)");
   cl.Text("--cloud-cheap-light-opacity", &o.clouds.cheap_light_opacity, "O",
           "with --clouds: opacity 0..1 past which light samples read the base shape only (default 0.3, HZD's; 0.6: "
-          "about a quarter of the added error at the same lavapipe time, README \"Clouds: where the added error sits\")");
+          "about a quarter of the added error at the same lavapipe time, docs/cloud-model.md)");
   cl.Flag("--cloud-naive", &o.clouds.naive, "with --clouds: every HZD march optimisation off (for measurement)");
   cl.Parse(argc, argv);
   if (sun_dir) o.sun_dir = ParseVec3(*sun_dir, "--sun-dir");

@@ -68,7 +68,7 @@ WeatherOptions ParseWeatherArgs(int argc, char** argv) {
                      "                 [--coverage-contrast K] [--coverage-cells N] [--octaves N] ...",
                      "Each field is tileable noise remapped to its mean exactly (up to 1e-4) and scaled about it\n"
                      "by its contrast. Coverage: Perlin fBm dilated by Worley fBm (Horizon Zero Dawn's\n"
-                     "Perlin-Worley, for billowy patches). Map row 0 covers -z (see README, weather maps).");
+                     "Perlin-Worley, for billowy patches). Map row 0 covers -z (see docs/cloud-model.md, weather maps).");
   WeatherOptions o;
   clouds::WeatherNoiseOptions& n = o.noise;
   cl.Text("--out", &o.out, "W.exr", "the weather map EXR (written atomically)");
