@@ -58,7 +58,7 @@ void RequireReplaceable(const fs::path& dir, const std::string& shown, const std
   // Folders (empty ones too) and symbolic links to folders are not files: a folder holding
   // none of the listed files, and any link, are the user's.
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it) {
-    const std::string rel = fs::relative(it->path(), dir).generic_string();
+    const std::string rel = it->path().lexically_relative(dir).generic_string();  // a link's own name
     const bool link = it->is_symlink(), folder = !link && it->is_directory();
     if (!link && !folder) continue;
     bool ours = false;
