@@ -1,7 +1,9 @@
-# CTest labels of the gtest tests (docs/testing-labels.md). tests/CMakeLists.txt gives every
-# gtest test `fast`; CTest includes this file after gtest_discover_tests has added them
-# (TEST_INCLUDE_FILES), and the names below replace that label. A name that no longer exists
-# is ignored by CTest.
+# CTest labels of the gtest tests (docs/testing-labels.md). CTest includes this file after
+# gtest_discover_tests has added them (TEST_INCLUDE_FILES, through the build tree's
+# test_labels_include.cmake, which sets SKYCAL_TESTS_BINARY_DIR). The tests named below are
+# `slow` or `browser`; every other discovered test is `fast` (read from the discovery's
+# *_tests.cmake files). CTest appends labels, so each test is labelled once, here. A name
+# that no longer exists is ignored by CTest.
 #
 # How they were sorted (2026-11-28, this project's 2-core machine, shared): the binaries of
 # the first group were run whole, one at a time under `nice`, and gtest's per-test
@@ -15,6 +17,8 @@
 # Measured (ms, under load): cloud_noise, fit_cloud_stats, hdr_merge, render_parity,
 # response_recovery, lens_unwrap, clouds_parity; cli_test.
 set(SKYCAL_SLOW_TESTS_MEASURED
+  OutputSafety.InterruptedRunsLeaveNothingBehind                                # 12530 (quiet, whole suite)
+  Reliability.APresetInterruptedBetweenItsFilesIsOneWholePreset                 # 11330 (quiet, whole suite)
   CloudNoiseCache.AFlippedByteAnywhereIsRegeneratedWithAWarning                 # 13752
   CloudNoiseCache.AConsistentCacheWithAValueOutOfRangeIsRegeneratedWithAWarning # 6090
   CloudNoiseCache.ATruncatedCacheIsRegeneratedWithAWarning                      # 5326
@@ -84,3 +88,18 @@ set_tests_properties(${SKYCAL_SLOW_TESTS_MEASURED} ${SKYCAL_SLOW_TESTS_BY_CONTEN
 # Headless Chromium over the DevTools protocol (tests/report_browser_test.cc).
 set_tests_properties(ReportBrowser.DayExportAndBenchRenderInChromium ReportBrowser.ControlPageFailsEveryCheck
                      PROPERTIES LABELS browser)
+
+# Every other discovered test: fast.
+set(_skycal_not_fast ${SKYCAL_SLOW_TESTS_MEASURED} ${SKYCAL_SLOW_TESTS_BY_CONTENT}
+    ReportBrowser.DayExportAndBenchRenderInChromium ReportBrowser.ControlPageFailsEveryCheck)
+file(GLOB _skycal_discovered "${SKYCAL_TESTS_BINARY_DIR}/*_tests.cmake")
+foreach(_file IN LISTS _skycal_discovered)
+  file(STRINGS "${_file}" _lines REGEX "^add_test\\(\\[=\\[")
+  foreach(_line IN LISTS _lines)
+    string(REGEX REPLACE "^add_test\\(\\[=\\[([^]]+)\\]=\\].*" "\\1" _name "${_line}")
+    list(FIND _skycal_not_fast "${_name}" _index)
+    if(_index EQUAL -1)
+      set_tests_properties("${_name}" PROPERTIES LABELS fast)
+    endif()
+  endforeach()
+endforeach()
