@@ -4,6 +4,7 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/luminance.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -44,7 +45,7 @@ void RequireValidShare(const std::string& path, const ImageRGB& image) {
   for (long long i = 0; i < n; ++i) {
     const float* p = &image.pixels[3 * i];
     const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-    valid += finite && 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2] > 0.0 ? 1 : 0;
+    valid += finite && Rec709Luminance<double>(p[0], p[1], p[2]) > 0.0 ? 1 : 0;
   }
   RequireValidShare(path, valid, n, "every channel finite, luminance > 0");
 }

@@ -1,5 +1,7 @@
 #include "skycal/core/json_file.h"
 
+#include <sys/stat.h>
+
 #include <nlohmann/json.hpp>
 
 #include "skycal/core/atomic_file.h"
@@ -9,6 +11,12 @@
 namespace skycal {
 
 nlohmann::json ReadJsonFile(const std::string& path) {
+  // A FIFO or device would block the read (or never end): only a regular file is JSON here.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    throw Error(path + ": " + (S_ISDIR(st.st_mode) ? "is a directory" : "is not a regular file (a FIFO, socket or device)") +
+                ", expected a JSON file");
+  }
   const std::string text = ReadFile(path);
   try {
     return nlohmann::json::parse(text);

@@ -31,10 +31,15 @@ std::string PlText(const std::string& s) {
 
 bool Usable(const Chart& c, double x, double y) { return std::isfinite(x) && std::isfinite(y) && (!c.log_y || y > 0.0); }
 
-// A scratch file for PLplot's output in the system's temporary directory (removed after).
+// A scratch file for PLplot's output in the system's temporary directory (removed after);
+// /tmp where $TMPDIR names no directory (std::filesystem throws there, and a chart must not
+// take the report down).
 std::string ScratchPath() {
   static std::atomic<int> counter{0};
-  return (std::filesystem::temp_directory_path() /
+  std::error_code ec;
+  std::filesystem::path dir = std::filesystem::temp_directory_path(ec);
+  if (ec || !std::filesystem::is_directory(dir, ec)) dir = "/tmp";
+  return (dir /
           (".skycal-chart-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".svg"))
       .string();
 }
