@@ -59,7 +59,7 @@ bool Check(const std::string& device, std::string* why) {
     return false;
   }
   const std::string so = (fs::path(dir) / (module + ".so")).string();
-  void* handle = ::dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL);
+  void* handle = ::dlopen(so.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
   if (handle == nullptr) {
     const char* err = ::dlerror();
     *why = "PLplot's " + device + " module " + so + " does not load (" + (err ? err : "unknown error") + ")" + hint;
