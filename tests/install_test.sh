@@ -6,14 +6,19 @@
 # preset, a preview PNG through the bundled OCIO config), a fit of that render (the bundled
 # preset as the start) and the HTML report of the fit.
 # usage: install_test.sh CMAKE_COMMAND BUILD_DIR
+# Every step says where it failed (the line, the command and its status) and nothing is sent
+# to /dev/null: a failure in CI must explain itself from the test's own output.
 set -euo pipefail
+exec 2>&1
+trap 'echo "FAIL: line $LINENO: \"$BASH_COMMAND\" exited $?"' ERR
 CMAKE=$1
 BUILD=$2
-T=$(mktemp -d /tmp/skycal-install-test.XXXXXX)
+T=$(mktemp -d "${TMPDIR:-/tmp}/skycal-install-test.XXXXXX")
 trap 'rm -rf "$T"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
+echo "install: $BUILD -> $T/staged"
 
-"$CMAKE" --install "$BUILD" --prefix "$T/staged" >/dev/null
+"$CMAKE" --install "$BUILD" --prefix "$T/staged" >"$T/install.log" || { cat "$T/install.log"; fail "cmake --install"; }
 mv "$T/staged" "$T/moved"
 P=$(realpath "$T/moved")
 DATA="$P/share/skycal"
@@ -36,7 +41,7 @@ SKYCAL="$P/bin/skycal"
 grep -q "\"preset\": *\"$DATA/datasets/presets/default_clear.json\"" render.json || fail "render used $(grep preset render.json)"
 [ -s sky.exr ] && [ -s sky.png ] || fail "render wrote no EXR/PNG"
 
-"$SKYCAL" fit --reference sky.exr --quiet --backend cpu --out fit >/dev/null
+"$SKYCAL" fit --reference sky.exr --quiet --backend cpu --out fit >fit.log || { cat fit.log; fail "fit"; }
 grep -q "\"path\": *\"$DATA/datasets/presets/default_clear.json\"" fit/preset.json || fail "fit started from elsewhere"
 python3 - fit/fit.json <<'PY' || fail "fit.json"
 import json, sys
@@ -45,6 +50,6 @@ rmse = j["references"][0]["rel_rmse"]
 assert rmse < 0.01, f"rel_rmse {rmse} of a fit to the default preset's own render"
 PY
 
-"$SKYCAL" report fit --out report.html >/dev/null
+"$SKYCAL" report fit --out report.html >report.log || { cat report.log; fail "report"; }
 grep -q '<img' report.html || fail "report.html has no image"
 echo "PASS"
