@@ -26,7 +26,8 @@ CI_TARGETS=(conventions_test io_test linear_sky_test fit_cost_test fit_roundtrip
   fit_degenerate_test probe_cost_test probe_test shape_noise_covariance_test cloud_stats_test
   cloud_lighting_test clouds_model_test cloud_noise_test weather_map_test sky_model_test
   cie_sky_test workgroup_order_test compute_pipeline_test color_test hdr_merge_test
-  response_recovery_test lens_unwrap_test cloud_mask_test atmosphere_bake_test render_parity_test)
+  response_recovery_test lens_unwrap_test cloud_mask_test atmosphere_bake_test render_parity_test
+  appearance_test)
 bash scripts/setup.sh --deps-only
 
 # -O1: the usual sanitizer trade-off (readable stacks, tests ~2-3x a Release run); NDEBUG
