@@ -181,6 +181,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                  "--numeric-derivatives", "--quiet", "--probe-weight", "--probe-quadrature", "--no-ground-albedo",
                  "--worker-chunk", "--reduce", "--json"}},
       {"ceiling", {"--reference", "--init", "--model", "--sun-cone", "--mask", "--json"}},
+      {"compare", {"--photo", "--game", "--mask", "--band", "--min-elevation", "--json"}},
       {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-fov-deg", "--lens-center",
                    "--lens-radius", "--kb-k", "--vignetting", "--camera-rotation", "--rig", "--input-colorspace",
                    "--color-correction", "--chart", "--chart-corners", "--chart-label", "--remove-stars", "--star-window",
@@ -225,6 +226,34 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
     // Help wins wherever it appears, even after a bad option; -h is the same.
     EXPECT_EQ(Skycal(verb + " --frobnicate -h").out, r.out) << verb;
   }
+}
+
+// `compare` through the binary: a frame against itself is 0 in both numbers, against a frame
+// twice as bright ln 2 per pixel and ln 2 * sqrt(3/5) in appearance (core/appearance.h), and
+// bad input names the file and writes nothing.
+TEST(Cli, CompareGivesBothNumbersAndRefusesBadInput) {
+  ScratchDir dir("cli-compare");
+  const std::string sun = " --sun-elevation 20 --sun-azimuth 30 --size 64x32 --backend cpu";
+  ASSERT_EQ(Skycal("render" + sun + " --out " + (dir / "a.exr")).rc, 0);
+  ExrRGB b = ReadExrRGB(dir / "a.exr");
+  for (float& v : b.image.pixels) v *= 2.0f;
+  WriteExrRGB(dir / "b.exr", b.image, b.attributes);
+  const Result same = Skycal("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --json");
+  ASSERT_EQ(same.rc, 0) << same.err;
+  const auto js = nlohmann::json::parse(same.out);
+  EXPECT_EQ(js["per_pixel_log_rmse"].get<double>(), 0.0);
+  EXPECT_EQ(js["appearance_error"].get<double>(), 0.0);
+  const Result twice = Skycal("compare --photo " + (dir / "a.exr") + " --game " + (dir / "b.exr") + " --json");
+  ASSERT_EQ(twice.rc, 0) << twice.err;
+  const auto jt = nlohmann::json::parse(twice.out);
+  EXPECT_NEAR(jt["per_pixel_log_rmse"].get<double>(), std::log(2.0), 1e-3);
+  EXPECT_NEAR(jt["appearance_error"].get<double>(), std::log(2.0) * std::sqrt(0.6), 1e-3);
+  ASSERT_EQ(Skycal("render --sun-elevation 20 --sun-azimuth 30 --size 32x16 --backend cpu --out " + (dir / "small.exr")).rc, 0);
+  ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "small.exr"),
+                "small.exr: 32 x 16 pixels, expected the size of", dir);
+  ExpectFailure("compare --photo " + (dir / "a.exr"), "--game G.exr is required", dir);
+  ExpectFailure("compare --photo " + (dir / "nope.exr") + " --game " + (dir / "a.exr"), "nope.exr", dir);
+  ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --band 0", "--band 0", dir);
 }
 
 TEST(Cli, NoVulkanDeviceGivesAClearMessage) {

@@ -1,0 +1,23 @@
+// `skycal compare`: the game's image of a sky against the photograph, in the two numbers of
+// core/appearance.h (per-pixel log RMSE, appearance error), with the per-band statistics.
+#pragma once
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "skycal/core/appearance.h"
+
+namespace skycal::cli {
+
+struct CompareVerbOptions {
+  std::string photo;  // lat-long EXR, required
+  std::string game;   // lat-long EXR of the same size (e.g. `skycal render --clouds`), required
+  std::string mask;   // optional sky mask EXR (R > 0.5 is sky), e.g. from `skycal mask`
+  appearance::Options options;
+};
+
+nlohmann::json RunCompareImpl(const CompareVerbOptions& options);
+CompareVerbOptions ParseCompareArgs(int argc, char** argv);
+int RunCompare(int argc, char** argv);
+
+}  // namespace skycal::cli
