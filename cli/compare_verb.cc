@@ -1,5 +1,7 @@
 #include "compare_verb.h"
 
+#include <cmath>
+
 #include "command_line.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -23,7 +25,9 @@ nlohmann::json BandsJson(const std::vector<appearance::BandStats>& bands) {
 }  // namespace
 
 nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
-  const ImageRGB photo = ReadExrRGB(o.photo).image, game = ReadExrRGB(o.game).image;
+  const ImageRGB photo = ReadExrRGB(o.photo).image;
+  ImageRGB game = ReadExrRGB(o.game).image;
+  for (float& v : game.pixels) v = static_cast<float>(v * o.exposure);
   std::vector<float> sky;
   if (!o.mask.empty()) {
     const ImageRGB m = ReadExrRGB(o.mask).image;
@@ -41,6 +45,7 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
   return {{"photo", o.photo},
           {"game", o.game},
           {"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)},
+          {"exposure", o.exposure},
           {"sky_pixels", c.sky_pixels},
           {"per_pixel_log_rmse", c.per_pixel_log_rmse},
           {"appearance_error", c.appearance_error},
@@ -52,7 +57,7 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
 
 CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
   VerbCommandLine cl("compare", "skycal compare: the game's image of a sky against the photo (log RMSE, appearance)",
-                     "  skycal compare --photo P.exr --game G.exr [--mask MASK.exr] [--band DEG]\n"
+                     "  skycal compare --photo P.exr --game G.exr [--mask MASK.exr] [--exposure K] [--band DEG]\n"
                      "                 [--min-elevation DEG] [--json]",
                      "Per-pixel log RMSE (solid-angle weighted, over the sky pixels and channels) and the\n"
                      "appearance error (per elevation band: 10/50/90% quantiles of ln luminance, medians of\n"
@@ -62,6 +67,9 @@ CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
   cl.Text("--photo", &o.photo, "P.exr", "the photograph (lat-long EXR)");
   cl.Text("--game", &o.game, "G.exr", "the game's image of it, same size (e.g. skycal render --clouds)");
   cl.Text("--mask", &o.mask, "MASK.exr", "sky mask, same size (R > 0.5 is sky; e.g. skycal mask)");
+  cl.Number("--exposure", &o.exposure, "K",
+            "multiply the game image by K first: a fit's exposure (fit.json references[].exposure) takes\n"
+            "the preset's model units to the photo's (default 1)");
   cl.Number("--band", &o.options.band_deg, "DEG", "elevation band width (default 10)");
   cl.Number("--min-elevation", &o.options.min_elevation_deg, "DEG", "pixels below are left out (default 0)");
   bool json = false;
@@ -69,6 +77,8 @@ CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
   cl.Parse(argc, argv);
   if (o.photo.empty()) throw Error("compare: --photo P.exr is required");
   if (o.game.empty()) throw Error("compare: --game G.exr is required");
+  if (!(o.exposure > 0.0) || !std::isfinite(o.exposure))
+    throw Error("--exposure " + FormatNumber(o.exposure) + ": expected a finite factor > 0");
   if (o.options.band_deg <= 0.0 || o.options.band_deg > 90.0)
     throw Error("--band " + FormatNumber(o.options.band_deg) + ": must be in (0, 90] degrees");
   if (o.options.min_elevation_deg < -90.0 || o.options.min_elevation_deg >= 90.0)

@@ -13,6 +13,7 @@ struct CompareVerbOptions {
   std::string photo;  // lat-long EXR, required
   std::string game;   // lat-long EXR of the same size (e.g. `skycal render --clouds`), required
   std::string mask;   // optional sky mask EXR (R > 0.5 is sky), e.g. from `skycal mask`
+  double exposure = 1.0;  // the game image is multiplied by it first (fit.json's exposure)
   appearance::Options options;
 };
 

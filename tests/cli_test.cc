@@ -181,7 +181,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                  "--numeric-derivatives", "--quiet", "--probe-weight", "--probe-quadrature", "--no-ground-albedo",
                  "--worker-chunk", "--reduce", "--json"}},
       {"ceiling", {"--reference", "--init", "--model", "--sun-cone", "--mask", "--json"}},
-      {"compare", {"--photo", "--game", "--mask", "--band", "--min-elevation", "--json"}},
+      {"compare", {"--photo", "--game", "--mask", "--exposure", "--band", "--min-elevation", "--json"}},
       {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-fov-deg", "--lens-center",
                    "--lens-radius", "--kb-k", "--vignetting", "--camera-rotation", "--rig", "--input-colorspace",
                    "--color-correction", "--chart", "--chart-corners", "--chart-label", "--remove-stars", "--star-window",
@@ -248,6 +248,10 @@ TEST(Cli, CompareGivesBothNumbersAndRefusesBadInput) {
   const auto jt = nlohmann::json::parse(twice.out);
   EXPECT_NEAR(jt["per_pixel_log_rmse"].get<double>(), std::log(2.0), 1e-3);
   EXPECT_NEAR(jt["appearance_error"].get<double>(), std::log(2.0) * std::sqrt(0.6), 1e-3);
+  // --exposure 2 on the photo against itself is the same as the frame twice as bright.
+  const Result scaled = Skycal("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --exposure 2 --json");
+  ASSERT_EQ(scaled.rc, 0) << scaled.err;
+  EXPECT_EQ(nlohmann::json::parse(scaled.out)["per_pixel_log_rmse"].get<double>(), jt["per_pixel_log_rmse"].get<double>());
   ASSERT_EQ(Skycal("render --sun-elevation 20 --sun-azimuth 30 --size 32x16 --backend cpu --out " + (dir / "small.exr")).rc, 0);
   ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "small.exr"),
                 "small.exr: 32 x 16 pixels, expected the size of", dir);
