@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include <Eigen/Dense>
+
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
@@ -38,11 +40,18 @@ struct IndicatrixTable {
   }
 };
 
+// The models fitted at every candidate sun: ln Y = basis . beta + ln f_g(chi) + residual, beta
+// solved in closed form. kCie: one model per CIE type, z = ln Y - ln phi(Z), basis {1} (the
+// free scale). kPolynomial: one model per CIE indicatrix group, z = ln Y, basis
+// {1, u, .., u^degree} in u = sin(elevation) (a free smooth gradation).
 struct SkyModel {
-  std::vector<refsky::CieSkyType> types;
-  std::vector<int> group_of_type;         // index into tables
+  std::vector<int> cie_type;              // per model: the CIE type reported
+  std::vector<int> group_of_model;        // per model: index into tables
   std::vector<IndicatrixTable> tables;    // one per distinct (c, d, e)
-  std::vector<std::vector<double>> z;     // per type, per cell: ln Y - ln phi(Z)
+  std::vector<std::vector<double>> z;     // per model, per cell
+  int basis_size = 1;
+  std::vector<double> basis;              // per cell, basis_size values
+  std::vector<double> normal_inverse;     // (sum w b b^T)^-1, basis_size^2, row-major
 };
 
 struct Candidate {
@@ -106,66 +115,99 @@ std::vector<Cell> BinSky(const ImageRGB& img, const std::vector<float>& mask, co
   return cells;
 }
 
-// The CIE types, their indicatrix tables (shared by types of one indicatrix group) and, per
-// type and cell, ln Y - ln phi(Z): the part of the residual that does not move with the sun.
+IndicatrixTable Tabulate(const refsky::CieSkyType& t) {
+  IndicatrixTable table;
+  table.ln_f.resize(IndicatrixTable::kSize);
+  for (int i = 0; i < IndicatrixTable::kSize; ++i) {
+    const double chi = std::numbers::pi * i / (IndicatrixTable::kSize - 1);
+    // f > 0 for every standard type; the floor only guards a user table.
+    table.ln_f[i] = std::log(std::max(1e-6, refsky::CieIndicatrix(t, chi)));
+  }
+  return table;
+}
+
+// The basis per cell and the inverse of its weighted normal matrix (fixed: the basis depends
+// on the cell's elevation only, not on the sun).
+void SetBasis(const std::vector<Cell>& cells, int degree, SkyModel* m) {
+  const int k = degree + 1;
+  m->basis_size = k;
+  m->basis.resize(cells.size() * k);
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(k, k);
+  for (size_t i = 0; i < cells.size(); ++i) {
+    Eigen::VectorXd b(k);
+    for (int j = 0; j < k; ++j) b[j] = std::pow(cells[i].dir[1], j);
+    normal += cells[i].weight * b * b.transpose();
+    for (int j = 0; j < k; ++j) m->basis[i * k + j] = b[j];
+  }
+  const Eigen::MatrixXd inv = normal.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+  m->normal_inverse.assign(inv.data(), inv.data() + k * k);  // symmetric: layout does not matter
+}
+
+// The indicatrix tables (shared by types of one indicatrix group) and the models.
 SkyModel BuildModel(const std::vector<Cell>& cells, const SkySunOptions& o) {
   SkyModel m;
-  m.types = refsky::LoadCieSkyTypes(o.cie_csv_path.empty() ? refsky::DefaultCieCsvPath() : o.cie_csv_path);
+  const auto types = refsky::LoadCieSkyTypes(o.cie_csv_path.empty() ? refsky::DefaultCieCsvPath() : o.cie_csv_path);
   std::vector<const refsky::CieSkyType*> group_rep;
-  for (const auto& t : m.types) {
+  const bool cie = o.gradation == SkySunOptions::Gradation::kCie;
+  for (const auto& t : types) {
     int g = -1;
     for (size_t k = 0; k < group_rep.size(); ++k)
       if (group_rep[k]->c == t.c && group_rep[k]->d == t.d && group_rep[k]->e == t.e) g = static_cast<int>(k);
-    if (g < 0) {
+    const bool new_group = g < 0;
+    if (new_group) {
       g = static_cast<int>(group_rep.size());
       group_rep.push_back(&t);
-      IndicatrixTable table;
-      table.ln_f.resize(IndicatrixTable::kSize);
-      for (int i = 0; i < IndicatrixTable::kSize; ++i) {
-        const double chi = std::numbers::pi * i / (IndicatrixTable::kSize - 1);
-        // f > 0 for every standard type; the floor only guards a user table.
-        table.ln_f[i] = std::log(std::max(1e-6, refsky::CieIndicatrix(t, chi)));
-      }
-      m.tables.push_back(std::move(table));
+      m.tables.push_back(Tabulate(t));
     }
-    m.group_of_type.push_back(g);
+    if (!cie && !new_group) continue;  // kPolynomial: one model per indicatrix group
+    m.cie_type.push_back(t.type);
+    m.group_of_model.push_back(g);
     std::vector<double> z(cells.size());
-    for (size_t i = 0; i < cells.size(); ++i) z[i] = cells[i].ln_y - std::log(refsky::CieGradation(t, cells[i].dir[1]));
+    for (size_t i = 0; i < cells.size(); ++i)
+      z[i] = cells[i].ln_y - (cie ? std::log(refsky::CieGradation(t, cells[i].dir[1])) : 0.0);
     m.z.push_back(std::move(z));
   }
+  SetBasis(cells, cie ? 0 : o.polynomial_degree, &m);
   return m;
 }
 
-// Every type fitted for one sun direction; the scale in closed form (weighted mean of the
-// ln residual), the cost the weighted RMS about it. Returns the best type.
+// Every model fitted for one sun direction: beta = N^-1 sum w b r (r = z - ln f), the cost
+// sqrt((sum w r^2 - c^T N^-1 c) / sum w), the weighted RMS of the residual after the fit.
 Candidate Evaluate(const SkyModel& m, const std::vector<Cell>& cells, const Vec3d& sun,
                    std::vector<std::vector<double>>& ln_f) {
   const size_t n = cells.size();
+  const int k = m.basis_size;
   ln_f.resize(m.tables.size());
   for (size_t g = 0; g < m.tables.size(); ++g) ln_f[g].resize(n);
+  double sw = 0.0;
   for (size_t i = 0; i < n; ++i) {
     const Vec3d& v = cells[i].dir;
     const double chi = std::acos(std::clamp(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], -1.0, 1.0));
     for (size_t g = 0; g < m.tables.size(); ++g) ln_f[g][i] = m.tables[g].Lookup(chi);
+    sw += cells[i].weight;
   }
   Candidate best;
   best.dir = sun;
-  for (size_t t = 0; t < m.types.size(); ++t) {
+  std::vector<double> c(k), beta(k);
+  for (size_t t = 0; t < m.z.size(); ++t) {
     const std::vector<double>& z = m.z[t];
-    const std::vector<double>& f = ln_f[m.group_of_type[t]];
-    double sw = 0.0, swr = 0.0, swr2 = 0.0;
+    const std::vector<double>& f = ln_f[m.group_of_model[t]];
+    double swr2 = 0.0;
+    std::fill(c.begin(), c.end(), 0.0);
     for (size_t i = 0; i < n; ++i) {
       const double r = z[i] - f[i], w = cells[i].weight;
-      sw += w;
-      swr += w * r;
       swr2 += w * r * r;
+      for (int j = 0; j < k; ++j) c[j] += w * r * m.basis[i * k + j];
     }
-    const double mean = swr / sw;
-    const double cost = std::sqrt(std::max(0.0, swr2 / sw - mean * mean));
+    double explained = 0.0;
+    for (int a = 0; a < k; ++a) {
+      beta[a] = 0.0;
+      for (int b = 0; b < k; ++b) beta[a] += m.normal_inverse[a * k + b] * c[b];
+      explained += c[a] * beta[a];
+    }
+    const double cost = std::sqrt(std::max(0.0, (swr2 - explained) / sw));
     if (cost < best.cost) {
-      best.cost = cost;
-      best.type_index = static_cast<int>(t);
-      best.log_scale = mean;
+      best = Candidate{sun, cost, static_cast<int>(t), beta[0]};
     }
   }
   return best;
@@ -202,6 +244,8 @@ const Candidate& Best(const std::vector<Candidate>& all) {
                            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
 }
 
+std::vector<Cell> CheckedCells(const ImageRGB& img, const std::vector<float>& sky_mask, const SkySunOptions& o);
+
 }  // namespace
 
 std::string SkySunOptions::Invalid() const {
@@ -216,6 +260,8 @@ std::string SkySunOptions::Invalid() const {
     if (!s.empty()) return s;
   if (!(min_elevation_deg >= -90.0 && min_elevation_deg < 90.0))
     return "SkySunOptions::min_elevation_deg = " + FormatNumber(min_elevation_deg) + " must be in [-90, 90)";
+  if (polynomial_degree < 0 || polynomial_degree > 6)
+    return "SkySunOptions::polynomial_degree = " + std::to_string(polynomial_degree) + " must be in [0, 6]";
   if (min_cells < 3) return "SkySunOptions::min_cells = " + std::to_string(min_cells) + " must be at least 3";
   if (!(clip_value >= 0.0)) return "SkySunOptions::clip_value = " + FormatNumber(clip_value) + " must be >= 0";
   return "";
@@ -226,15 +272,24 @@ bool SkySunOptions::IsValid(std::string* why) const {
   return why->empty();
 }
 
-SkySunEstimate FitSunFromSky(const ImageRGB& img, const std::vector<float>& sky_mask, const SkySunOptions& o) {
+namespace {
+
+std::vector<Cell> CheckedCells(const ImageRGB& img, const std::vector<float>& sky_mask, const SkySunOptions& o) {
   if (const std::string why = o.Invalid(); !why.empty()) throw Error(why);
   if (!sky_mask.empty() && sky_mask.size() != static_cast<size_t>(img.width) * img.height)
     throw Error("sky sun: the sky mask has " + std::to_string(sky_mask.size()) + " values, the image " +
                 std::to_string(img.width) + " x " + std::to_string(img.height) + " pixels");
-  const std::vector<Cell> cells = BinSky(img, sky_mask, o);
+  std::vector<Cell> cells = BinSky(img, sky_mask, o);
   if (static_cast<int>(cells.size()) < o.min_cells)
     throw Error("sky sun: " + std::to_string(cells.size()) + " sky cells above the horizon, SkySunOptions::min_cells = " +
                 std::to_string(o.min_cells));
+  return cells;
+}
+
+}  // namespace
+
+SkySunEstimate FitSunFromSky(const ImageRGB& img, const std::vector<float>& sky_mask, const SkySunOptions& o) {
+  const std::vector<Cell> cells = CheckedCells(img, sky_mask, o);
   const SkyModel model = BuildModel(cells, o);
   std::vector<Candidate> all;
   SearchGrid(model, cells, 0.0, 0.0, 180.0, o.coarse_step_deg, o, &all);
@@ -249,19 +304,34 @@ SkySunEstimate FitSunFromSky(const ImageRGB& img, const std::vector<float>& sky_
   e.direction = best.dir;
   e.elevation_deg = latlong::ElevationDeg(best.dir);
   e.azimuth_deg = latlong::AzimuthDeg(best.dir);
-  e.sky_type = model.types[best.type_index].type;
+  e.sky_type = model.cie_type[best.type_index];
   e.log_rmse = best.cost;
   e.log_scale = best.log_scale;
   e.cells = static_cast<int>(cells.size());
   e.candidates = static_cast<int>(all.size());
-  e.uncertainty_deg = o.final_step_deg;
+  e.elevation_at_bound = e.elevation_deg <= o.min_elevation_deg + 0.5 * o.final_step_deg;
+  e.uncertainty_deg = e.elevation_uncertainty_deg = e.azimuth_uncertainty_deg = o.final_step_deg;
   const double limit = best.cost * (1.0 + o.relative_tolerance) + o.absolute_tolerance;
   for (const Candidate& c : all) {
     if (c.cost > limit) continue;
     ++e.candidates_within_tolerance;
     e.uncertainty_deg = std::max(e.uncertainty_deg, AngleDeg(c.dir, best.dir));
+    e.elevation_uncertainty_deg =
+        std::max(e.elevation_uncertainty_deg, std::abs(latlong::ElevationDeg(c.dir) - e.elevation_deg));
+    const double daz = std::remainder(latlong::AzimuthDeg(c.dir) - e.azimuth_deg, 360.0);
+    e.azimuth_uncertainty_deg = std::max(e.azimuth_uncertainty_deg, std::abs(daz));
   }
   return e;
+}
+
+double SkyFitCostAt(const ImageRGB& img, const std::vector<float>& sky_mask, const SkySunOptions& o,
+                    const std::array<double, 3>& sun, int* sky_type) {
+  const std::vector<Cell> cells = CheckedCells(img, sky_mask, o);
+  const SkyModel model = BuildModel(cells, o);
+  std::vector<std::vector<double>> ln_f;
+  const Candidate c = Evaluate(model, cells, latlong::Normalized(sun, "sky sun: the sun direction"), ln_f);
+  if (sky_type) *sky_type = model.cie_type[c.type_index];
+  return c.cost;
 }
 
 std::optional<SkySunEstimate> EstimateSunFromSky(const ImageRGB& img, const std::vector<float>& sky_mask,
@@ -271,6 +341,11 @@ std::optional<SkySunEstimate> EstimateSunFromSky(const ImageRGB& img, const std:
     *why = "the sky does not place the sun: candidates within tolerance of the best fit (log RMSE " +
            FormatNumber(e.log_rmse) + ") lie up to " + FormatNumber(e.uncertainty_deg) +
            " deg apart, SkySunOptions::max_uncertainty_deg = " + FormatNumber(o.max_uncertainty_deg);
+    return std::nullopt;
+  }
+  if (e.elevation_at_bound) {
+    *why = "the best fit's sun lies at the lowest elevation searched, SkySunOptions::min_elevation_deg = " +
+           FormatNumber(o.min_elevation_deg) + ": the sky places no minimum in elevation";
     return std::nullopt;
   }
   return e;

@@ -7,14 +7,17 @@
 //   1. The caller's sky pixels above the horizon are binned into cells of `cell_deg`; each
 //      cell holds the solid-angle weighted mean of ln Y (Rec.709 luminance) and its direction.
 //   2. For every candidate sun on a coarse grid (elevation `min_elevation_deg`..90, the sun
-//      below the horizon allowed) and every CIE type, the model ln L = ln s + ln phi(Z) +
-//      ln f(chi) is fitted with its free scale s in closed form (the weighted mean residual);
-//      the cost is the weighted RMS of the ln residual (the "log RMSE").
+//      below the horizon allowed) and every model, ln Y is fitted by linear least squares in
+//      closed form; the cost is the weighted RMS of the ln residual (the "log RMSE"). The
+//      models (Options::gradation): each CIE indicatrix f(chi) with a free polynomial
+//      gradation in sin(elevation) (default), or each CIE type's phi(Z) f(chi) with a free
+//      scale.
 //   3. The best candidate is refined on finer local grids.
 //   4. The uncertainty is the largest angle between the best direction and any candidate
 //      whose cost is within the tolerance (see Options) of the best, at least the finest
-//      step. The CIE types without a sun term (1, 3, 5: uniform in azimuth) fit every
-//      direction alike, so an overcast sky gets an uncertainty near 180 deg.
+//      step. The CIE indicatrix without a sun term (group 1, types 1, 3, 5: uniform in
+//      azimuth) fits every direction alike, so an overcast sky gets an uncertainty near
+//      180 deg.
 // The disc itself (and the aureole a lens flares) should be left out of the mask by the
 // caller: the CIE indicatrix does not model the disc.
 #pragma once
@@ -30,6 +33,14 @@ namespace skycal::skysun {
 struct SkySunOptions {
   // Path of the CIE general sky table; empty: refsky::DefaultCieCsvPath().
   std::string cie_csv_path;
+  // The gradation (the luminance's dependence on elevation alone). kCie: each CIE type's
+  // phi(Z) with a free scale (15 models). kPolynomial: a free polynomial of degree
+  // polynomial_degree in sin(elevation), with each CIE indicatrix f(chi) (6 models): the
+  // sun is placed by the sky's structure relative to the sun only, so a gradation the CIE
+  // types lack (strong horizon brightening, haze, lens vignetting) does not pull it.
+  enum class Gradation { kCie, kPolynomial };
+  Gradation gradation = Gradation::kPolynomial;
+  int polynomial_degree = 3;
   // Side of the cells the sky pixels are averaged into (deg). Smaller is slower.
   double cell_deg = 3.0;
   // Cells holding less than this fraction of a full cell's solid angle are dropped
@@ -69,10 +80,15 @@ struct SkySunEstimate {
   std::array<double, 3> direction{};  // unit vector toward the sun (core/latlong.h, +Y up)
   double elevation_deg = 0.0;         // may be negative (twilight)
   double azimuth_deg = 0.0;           // longitude of core/latlong.h, degrees
-  int sky_type = 0;                   // CIE general sky type 1..15 of the best fit
+  int sky_type = 0;                   // CIE type 1..15 of the best fit (kPolynomial: the first type of
+                                      // its indicatrix group)
   double log_rmse = 0.0;              // weighted RMS of ln(L / model) over the cells
-  double log_scale = 0.0;             // ln s of the best fit: L = s phi(Z) f(chi), L in the image's units
+  double log_scale = 0.0;             // kCie: ln s of L = s phi(Z) f(chi) (L in the image's units);
+                                      // kPolynomial: the polynomial's constant term
   double uncertainty_deg = 0.0;       // largest angle to a candidate within tolerance
+  double elevation_uncertainty_deg = 0.0;  // largest |elevation difference| among them
+  double azimuth_uncertainty_deg = 0.0;    // largest |azimuth difference| among them (deg of azimuth)
+  bool elevation_at_bound = false;    // the best lies at Options::min_elevation_deg (no interior minimum)
   int cells = 0;                      // sky cells fitted
   int candidates = 0;                 // candidate directions evaluated
   int candidates_within_tolerance = 0;
@@ -85,8 +101,16 @@ struct SkySunEstimate {
 // Options::min_cells usable cells.
 SkySunEstimate FitSunFromSky(const ImageRGB& latlong, const std::vector<float>& sky_mask, const SkySunOptions& options);
 
+// The cost (log RMSE of the best model) of one given sun, e.g. one from the time and place
+// (capture/solar_position.h), to compare with the estimate's; *sky_type (may be null) gets
+// the model's CIE type. Same errors as FitSunFromSky.
+double SkyFitCostAt(const ImageRGB& latlong, const std::vector<float>& sky_mask, const SkySunOptions& options,
+                    const std::array<double, 3>& sun, int* sky_type = nullptr);
+
 // FitSunFromSky, refusing (nothing, with the reason in *why) when the uncertainty is over
-// Options::max_uncertainty_deg: a sky without azimuthal structure does not place a sun.
+// Options::max_uncertainty_deg (a sky without azimuthal structure does not place a sun) or
+// the best sun lies on the lowest elevation searched (the cost still falls below it: a
+// sky the models do not describe, not a located sun).
 std::optional<SkySunEstimate> EstimateSunFromSky(const ImageRGB& latlong, const std::vector<float>& sky_mask,
                                                  const SkySunOptions& options, std::string* why);
 
