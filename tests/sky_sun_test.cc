@@ -77,6 +77,9 @@ TEST(SkySun, SyntheticCieSkiesRecoverTheSun) {
     EXPECT_LT(err, 2.0) << "type " << sc.type << " el " << sc.elevation_deg;
     EXPECT_LE(err, e.uncertainty_deg) << "type " << sc.type << " el " << sc.elevation_deg;
     EXPECT_LT(e.uncertainty_deg, 10.0);
+    // The truth itself fits within the tolerance of the best (SkySunOptions defaults).
+    const double at_truth = SkyFitCostAt(img, MaskDisc(img.width, img.height, sun, 15.0), SkySunOptions{}, sun);
+    EXPECT_LE(at_truth, e.log_rmse * 1.05 + 0.01);
   }
 }
 

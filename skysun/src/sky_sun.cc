@@ -139,7 +139,9 @@ void SetBasis(const std::vector<Cell>& cells, int degree, SkyModel* m) {
     normal += cells[i].weight * b * b.transpose();
     for (int j = 0; j < k; ++j) m->basis[i * k + j] = b[j];
   }
-  const Eigen::MatrixXd inv = normal.ldlt().solve(Eigen::MatrixXd::Identity(k, k));
+  // Pseudo-inverse: a mask leaving a narrow elevation band makes the powers of u nearly
+  // collinear; the minimum-norm fit keeps the cost right there.
+  const Eigen::MatrixXd inv = normal.completeOrthogonalDecomposition().pseudoInverse();
   m->normal_inverse.assign(inv.data(), inv.data() + k * k);  // symmetric: layout does not matter
 }
 
