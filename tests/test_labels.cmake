@@ -40,6 +40,7 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   Cli.BadInputIsRefusedClearlyAndLeavesNothing                                  # 40789
   Cli.FitBadInputLeavesNothing                                                  # 38695
   Cli.FitWritesItsOutputsAndExportMakesGameTables                               # 20394
+  SkySun.SyntheticCieSkiesRecoverTheSun                                         # 12100 (ctest -j2, load 10)
 )
 
 # Not timed: sorted by what they do (see above).
