@@ -12,13 +12,14 @@
 #include "finite_output.h"
 #include "option_values.h"
 #include "skycal/capture/latlong_frame.h"
-#include "skycal/capture/sun_detect.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/math_constants.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/sha256.h"
+#include "skycal/skysun/find_sun.h"
 #include "verb_common.h"
 
 // Blender's equirectangular mapping (Cycles kernel/geom `direction_to_equirectangular`,
@@ -203,17 +204,29 @@ ImportedSun ImportSun(const ImportOptions& o, const ExrRGB& src, capture::LatLon
     frame->sun_direction = latlong::Normalized(*o.sun_dir, "--sun-dir");
     sun_source = "option";
   } else if (o.detect_sun) {
-    auto d = capture::DetectSun(frame->radiance, &why, o.min_sun_contrast);
-    if (!d) throw Error(o.in_path + ": --detect-sun: no distinct sun found (" + why + "); nothing written");
-    frame->sun_direction = d->direction;
-    sun_source = "detected";
-    sun = {{"contrast", d->contrast},
-           {"peak_luminance", d->peak_luminance},
-           {"region_pixels", d->region_pixels},
-           {"clipped", d->clipped}};
-    if (d->clipped) {
-      warnings->push_back(o.in_path + ": the sun is clipped (a plateau at " + std::to_string(d->peak_luminance) +
-                          "): its disc radiance is unknown; the fit masks the sun cone and clipped pixels");
+    const auto f = skysun::FindSun(frame->radiance, o.min_sun_contrast, skysun::SkySunOptions{}, &why);
+    if (!f) throw Error(o.in_path + ": --detect-sun: " + why + "; nothing written");
+    frame->sun_direction = f->direction;
+    if (f->source == "disc") {
+      sun_source = "detected";
+      sun = {{"contrast", f->disc_contrast},
+             {"peak_luminance", f->disc_peak_luminance},
+             {"region_pixels", f->disc_region_pixels},
+             {"clipped", f->disc_clipped}};
+      if (f->disc_clipped) {
+        warnings->push_back(o.in_path + ": the sun is clipped (a plateau at " + std::to_string(f->disc_peak_luminance) +
+                            "): its disc radiance is unknown; the fit masks the sun cone and clipped pixels");
+      }
+    } else {
+      sun_source = "sky-estimate";
+      sun = {{"uncertainty_deg", f->uncertainty_deg},
+             {"log_rmse", f->sky->log_rmse},
+             {"cie_type", f->sky->sky_type},
+             {"no_disc", f->disc_refusal}};
+      frame->extra.floats["skycalSunUncertaintyDeg"] = static_cast<float>(f->uncertainty_deg);
+      warnings->push_back(o.in_path + ": no sun disc (" + f->disc_refusal +
+                          "): the sun is placed from the sky's luminance pattern, uncertain by " +
+                          FormatNumber(f->uncertainty_deg) + " deg (docs/capture.md)");
     }
   } else if (o.convention == SourceConvention::kExr) {
     if (auto it = src.attributes.v3fs.find("sunDirection"); it != src.attributes.v3fs.end()) {
@@ -327,8 +340,9 @@ ImportOptions ParseImportArgs(int argc, char** argv) {
           "convention: nodes at i / (W - 1))");
   cl.Text("--sun-dir", &sun_dir, "X,Y,Z", "sun direction in the OUTPUT frame (+Y up), written as sunDirection");
   cl.Flag("--detect-sun", &o.detect_sun,
-          "find the sun in the converted frame (capture::DetectSun); refuses\n"
-          "(exit 1, nothing written) when there is no distinct sun");
+          "find the sun in the converted frame: its disc, else placed from the\n"
+          "sky's luminance pattern with an uncertainty (docs/capture.md); refuses\n"
+          "(exit 1, nothing written) when neither places it");
   cl.Number("--min-sun-contrast", &o.min_sun_contrast, "C", "--detect-sun's peak / median luminance threshold (default 20)");
   cl.Flag("--half", &o.half, "write half floats (default float)");
   cl.Flag("--json", &json, "print a JSON summary on stdout (the log goes to stderr)");

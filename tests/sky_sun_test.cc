@@ -1,5 +1,6 @@
 // skysun::FitSunFromSky: the sun placed from the sky with its disc masked out.
 #include "skycal/skysun/sky_sun.h"
+#include "skycal/skysun/find_sun.h"
 
 #include <gtest/gtest.h>
 
@@ -235,6 +236,38 @@ TEST(SkySun, RealSkyHeldOut) {
   EXPECT_LE(r.error_deg, r.estimate.uncertainty_deg);
   EXPECT_GT(r.estimate.log_rmse, 0.2);
   EXPECT_GT(r.estimate.uncertainty_deg, SkySunOptions{}.max_uncertainty_deg);
+}
+
+// FindSun: the disc when the frame shows one; else the sky's pattern over the automatic sky
+// mask (no hand mask, no disc region left out), within its uncertainty; else nothing, with
+// both reasons (the overcast control).
+TEST(SkySun, FindSunTakesTheDiscElseTheSky) {
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(35.3, 121.4);
+  std::string why;
+  // A disc of 3 x 3 pixels at 1e6 cd/m^2 (a 512 x 256 render's pixels are wider than the
+  // sun's 0.53 degrees, so the renderer's own disc may fall between pixel centres).
+  ImageRGB disc = RenderGameSky(sun);
+  const auto px = latlong::PixelPosition(sun, disc.width, disc.height);
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int c = 0; c < 3; ++c)
+        disc.at(static_cast<int>(std::lround(px[0])) + dx, static_cast<int>(std::lround(px[1])) + dy, c) = 1e6f;
+  const auto with_disc = FindSun(disc, 20.0, SkySunOptions{}, &why);
+  ASSERT_TRUE(with_disc.has_value()) << why;
+  EXPECT_EQ(with_disc->source, "disc");
+  EXPECT_LT(AngleDeg(with_disc->direction, sun), 1.0);
+  const auto hidden = FindSun(RenderGameSky(sun), 20.0, SkySunOptions{}, &why);
+  ASSERT_TRUE(hidden.has_value()) << why;
+  EXPECT_EQ(hidden->source, "sky");
+  EXPECT_FALSE(hidden->disc_refusal.empty());
+  const double err = AngleDeg(hidden->direction, sun);
+  std::printf("FindSun without a disc: error %.2f deg, uncertainty %.2f deg\n", err, hidden->uncertainty_deg);
+  EXPECT_LE(err, hidden->uncertainty_deg);
+  EXPECT_LT(err, 12.0);
+  const auto overcast = FindSun(RenderCie(1, sun, 0.02), 20.0, SkySunOptions{}, &why);
+  EXPECT_FALSE(overcast.has_value());
+  EXPECT_NE(why.find("no sun disc"), std::string::npos) << why;
+  EXPECT_NE(why.find("the sky does not place the sun"), std::string::npos) << why;
 }
 
 }  // namespace
