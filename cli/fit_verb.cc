@@ -26,7 +26,7 @@
 #include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
-#include "skycal/fit/fit_json.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/render/irradiance.h"

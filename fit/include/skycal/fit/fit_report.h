@@ -1,5 +1,5 @@
 // What a sky fit reports beside the preset: typed, so the fit never builds JSON; the cli's
-// fit verb serialises it into fit.json (skycal/fit/fit_json.h).
+// fit verb serialises it into fit.json (skycal/fit/fit_result_file.h).
 #pragma once
 #include <optional>
 #include <string>

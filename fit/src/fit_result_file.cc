@@ -1,4 +1,4 @@
-#include "skycal/fit/fit_json.h"
+#include "skycal/fit/fit_result_file.h"
 
 namespace skycal::fit {
 namespace {
