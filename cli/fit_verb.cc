@@ -116,7 +116,7 @@ std::vector<NamedPath> FitInputs(const FitVerbOptions& o, const FitProbeOptions&
 // The references, each checked and (with --cloud-mask) its cloudy pixels left out.
 struct LoadedReferences {
   std::vector<fit::Reference> refs;
-  std::vector<nlohmann::json> cloud_json;
+  std::vector<fit::FitCloudMaskEntry> cloud_mask;
   std::vector<std::vector<float>> cloud_probability;  // per reference, for --clouds stats
 };
 
@@ -138,7 +138,7 @@ LoadedReferences LoadFitReferences(const FitVerbOptions& o, bool cloud_shapes) {
     }
     if (o.cloud_mask) {
       const CloudMaskApplied cm = ApplyCloudMask(&l.refs.back(), DefaultPresetPath());
-      l.cloud_json.push_back(cm.ToJson());
+      l.cloud_mask.push_back(cm.Entry());
       l.cloud_probability.push_back(cm.probability);
       Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
                      std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
@@ -305,7 +305,7 @@ void WritePreviewsAndReportFields(const StagedDirectory& out, const FitVerbOptio
     }
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
     e.sun_illuminance_at_ground_lux = skycal::Rec709Luminance(sun);
-    if (o.cloud_mask) e.cloud_mask = l.cloud_json[r];
+    if (o.cloud_mask) e.cloud_mask = l.cloud_mask[r];
   }
 }
 

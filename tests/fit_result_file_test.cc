@@ -102,7 +102,7 @@ FitResultFile FullFile() {
   f.references[0].sun = sun;
   f.references[0].images = fit::FitReferenceImages{"fit/a.reference.png", "fit/a.fit.png", "fit/a.error.png"};
   f.references[0].sun_illuminance_at_ground_lux = 1.0 / 7.0;
-  f.references[1].cloud_mask = {{"cloudy_pixels", 1234}, {"fraction", 0.15}, {"threshold", 0.5}, {"source", "x"}};
+  f.references[1].cloud_mask = fit::FitCloudMaskEntry{1234, 0.15, 0.5, "estimated: against x"};
   f.warnings = {"w1", "w2"};
   f.options = {{"model", "ffxv"}, {"backend", "cpu"}};
   f.clouds = {{"mode", "off"}, {"fitted", false}};

@@ -144,7 +144,12 @@ nlohmann::json FitReferenceEntryJson(const FitReferenceEntry& r) {
   if (r.sun) j["sun"] = ToJson(*r.sun);
   if (r.images) j["images"] = {{"reference", r.images->reference}, {"fit", r.images->fit}, {"error", r.images->error}};
   if (r.sun_illuminance_at_ground_lux) j["sun_illuminance_at_ground_lux"] = *r.sun_illuminance_at_ground_lux;
-  if (!r.cloud_mask.is_null()) j["cloud_mask"] = r.cloud_mask;
+  if (r.cloud_mask) {
+    j["cloud_mask"] = {{"cloudy_pixels", r.cloud_mask->cloudy_pixels},
+                       {"fraction", r.cloud_mask->fraction},
+                       {"threshold", r.cloud_mask->threshold},
+                       {"source", r.cloud_mask->source}};
+  }
   return j;
 }
 
@@ -430,6 +435,13 @@ void Read(const At& a, FitProbeSunEntry* x) {
   Optional(a, "note", &x->note);
   Optional(a, "illuminance_lux", &x->illuminance_lux);
   Optional(a, "sun_tint_rgb", &x->sun_tint_rgb);
+}
+
+void Read(const At& a, FitCloudMaskEntry* x) {
+  Required(a, "fraction", &x->fraction);
+  Optional(a, "cloudy_pixels", &x->cloudy_pixels);
+  Optional(a, "threshold", &x->threshold);
+  Optional(a, "source", &x->source);
 }
 
 void Read(const At& a, FitReferenceImages* x) {

@@ -115,7 +115,7 @@ ReferenceRecord ReadReference(const fs::path& dir, const std::string& file, size
     rec.probe_sun_fraction = r.sun->fraction;
     rec.probe_sun_lux = r.sun->illuminance_lux;
   }
-  if (!r.cloud_mask.is_null()) rec.cloudy_fraction = JsonAt{r.cloud_mask, file, at + ".cloud_mask"}.Number("fraction");
+  if (r.cloud_mask) rec.cloudy_fraction = Finite(r.cloud_mask->fraction, file, at + ".cloud_mask.fraction");
   if (r.pixels) {
     const nlohmann::json counts = fit::MaskCountsToJson(*r.pixels);  // by class name, as fit.json lists them
     for (const auto& [k, v] : counts.items()) rec.pixels.emplace_back(k, v.get<long long>());

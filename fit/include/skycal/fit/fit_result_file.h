@@ -39,6 +39,16 @@ struct FitProbeSunEntry {
   bool operator==(const FitProbeSunEntry&) const = default;
 };
 
+// references[i].cloud_mask (fit --cloud-mask): the sky pixels whose cloud probability reached
+// the threshold, left out of the fit.
+struct FitCloudMaskEntry {
+  long long cloudy_pixels = 0;
+  double fraction = 0.0;   // of the sky pixels before masking
+  double threshold = 0.5;  // cloud probability
+  std::string source;      // "mask.cloud channel" or "estimated: ..."
+  bool operator==(const FitCloudMaskEntry&) const = default;
+};
+
 // references[i].images: the previews, relative to the fit directory.
 struct FitReferenceImages {
   std::string reference, fit, error;
@@ -58,7 +68,7 @@ struct FitReferenceEntry {
   std::optional<FitProbeSunEntry> sun;
   std::optional<FitReferenceImages> images;        // absent when the previews were skipped
   std::optional<double> sun_illuminance_at_ground_lux;  // the fitted preset's sun (model units)
-  nlohmann::json cloud_mask;                       // fit --cloud-mask's record; null without it
+  std::optional<FitCloudMaskEntry> cloud_mask;
   bool operator==(const FitReferenceEntry&) const = default;
 };
 
