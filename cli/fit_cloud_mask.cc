@@ -10,9 +10,7 @@
 
 namespace skycal::cli {
 
-nlohmann::json CloudMaskApplied::ToJson() const {
-  return {{"cloudy_pixels", cloudy_pixels}, {"fraction", fraction}, {"threshold", 0.5}, {"source", source}};
-}
+fit::FitCloudMaskEntry CloudMaskApplied::Entry() const { return {cloudy_pixels, fraction, 0.5, source}; }
 
 CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path) {
   const int w = ref->radiance.width, h = ref->radiance.height;

@@ -7,8 +7,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 
 namespace skycal::cli {
@@ -17,8 +16,8 @@ struct CloudMaskApplied {
   long long cloudy_pixels = 0;  // sky pixels taken out
   double fraction = 0.0;        // of the sky pixels before masking
   std::string source;           // "mask.cloud channel" or "estimated against <preset>"
-  std::vector<float> probability;  // per pixel of the frame (fit --clouds stats reads it; not in ToJson)
-  nlohmann::json ToJson() const;
+  std::vector<float> probability;  // per pixel of the frame (fit --clouds stats reads it; not in fit.json)
+  fit::FitCloudMaskEntry Entry() const;  // fit.json's references[i].cloud_mask
 };
 
 // Reclassifies `ref` in place. Throws skycal::Error naming the reference when no sky pixel is

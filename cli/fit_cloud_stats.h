@@ -1,9 +1,9 @@
 // `skycal fit --clouds stats`: the cloud lighting of photographs, whose cloud shapes no noise
 // reproduces (docs/cloud-fitting.md, regime 3). The verb's side of it: the --cloud-stats-* flags, their
 // check, the call of cloudfit::FitPhotoCloudStats (skycal/cloudfit/photo_cloud_stats.h: the
-// stages and what each means), fit.json's `cloud_stats` object written from its result, and
-// the panels fit/<ref>.clouds.{reference,fit,error}.png. The library names its options'
-// fields in its errors; this side names the flags.
+// stages and what each means), fit.json's `cloud_stats` object (its fields:
+// skycal/cloudfit/photo_cloud_stats_json.h) and the panels fit/<ref>.clouds.{reference,fit,
+// error}.png. The library names its options' fields in its errors; this side names the flags.
 #pragma once
 #include <filesystem>
 #include <functional>

@@ -48,17 +48,15 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
                                      const render::Preset& init, const fit::FitOptions& fo, render::SkyRenderer& renderer,
                                      const std::vector<const fit::ProbeSamples*>& probes, const LoadedCloudShapes* shapes);
 
-// fit.json's `clouds` object (a day: `keyframes`, one per reference in time order).
+// fit.json's `clouds` object (a day: `keyframes`, one per reference in time order):
+// cloudfit::CloudReportJson with these options.
 nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::SkyCloudFit& f);
 
-// A day's cloud keyframes (<stem>.cloud_keyframes.json): {"keys": [{time_of_day_h,
-// reference, lighting {name: value}, cloud_pixels}], "units": {name: unit}}, in time order.
-nlohmann::json CloudDayKeyframesJson(const cloudfit::SkyCloudFit& f);
 
 // With fitted clouds: the preset gains the clouds section (fitted lighting; a day: the
 // earliest reference's) naming a copy of the weather map written beside preset.json as
 // <stem>.weather.exr; a day of references also writes <stem>.cloud_keyframes.json
-// (CloudDayKeyframesJson), which `skycal export` turns into one keyframe per time of day.
+// (cloudfit::CloudDayKeyframesJson), which `skycal export` turns into one keyframe per time of day.
 void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes& shapes,
                         const std::filesystem::path& preset_json, render::Preset* preset);
 

@@ -26,7 +26,7 @@
 #include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
-#include "skycal/fit/fit_json.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/render/irradiance.h"
@@ -116,7 +116,7 @@ std::vector<NamedPath> FitInputs(const FitVerbOptions& o, const FitProbeOptions&
 // The references, each checked and (with --cloud-mask) its cloudy pixels left out.
 struct LoadedReferences {
   std::vector<fit::Reference> refs;
-  std::vector<nlohmann::json> cloud_json;
+  std::vector<fit::FitCloudMaskEntry> cloud_mask;
   std::vector<std::vector<float>> cloud_probability;  // per reference, for --clouds stats
 };
 
@@ -138,7 +138,7 @@ LoadedReferences LoadFitReferences(const FitVerbOptions& o, bool cloud_shapes) {
     }
     if (o.cloud_mask) {
       const CloudMaskApplied cm = ApplyCloudMask(&l.refs.back(), DefaultPresetPath());
-      l.cloud_json.push_back(cm.ToJson());
+      l.cloud_mask.push_back(cm.Entry());
       l.cloud_probability.push_back(cm.probability);
       Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
                      std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
@@ -152,40 +152,42 @@ LoadedReferences LoadFitReferences(const FitVerbOptions& o, bool cloud_shapes) {
   return l;
 }
 
-nlohmann::json ProbeSunJson(const fit::ProbeSun& s, const std::string& probe_path, bool absolute) {
-  nlohmann::json j = {{"observable", s.observable},
-                      {"visible", s.visible},
-                      {"illuminance_rgb", s.illuminance_ref},
-                      {"illuminance_rgb_model", s.illuminance_model},
-                      {"fitted_illuminance_rgb_model", s.fitted_model},
-                      {"fraction", s.fraction},
-                      {"residual", s.residual},
-                      {"log_rmse", s.log_rmse},
-                      {"samples", s.samples},
-                      {"sun_facing_samples", s.sun_facing_samples},
-                      {"ground_facing_samples", s.ground_facing_samples},
-                      {"probe", probe_path}};
-  if (!s.note.empty()) j["note"] = s.note;
-  if (absolute) j["illuminance_lux"] = s.lux;
-  return j;
+fit::FitProbeSunEntry ProbeSunEntry(const fit::ProbeSun& s, const std::string& probe_path, bool absolute) {
+  fit::FitProbeSunEntry e;
+  e.observable = s.observable;
+  e.visible = s.visible;
+  e.illuminance_rgb = s.illuminance_ref;
+  e.illuminance_rgb_model = s.illuminance_model;
+  e.fitted_illuminance_rgb_model = s.fitted_model;
+  e.fraction = s.fraction;
+  e.residual = s.residual;
+  e.log_rmse = s.log_rmse;
+  e.samples = s.samples;
+  e.sun_facing_samples = s.sun_facing_samples;
+  e.ground_facing_samples = s.ground_facing_samples;
+  e.probe = probe_path;
+  e.note = s.note;
+  if (absolute) e.illuminance_lux = s.lux;
+  return e;
 }
 
 // The sun each reference's probe saw (fit.json's references[i].sun), logged; a probe that
 // cannot observe the sun warns, or fails with --require-probe.
 struct ProbeSuns {
   std::vector<std::optional<fit::ProbeSun>> suns;
-  std::vector<nlohmann::json> json;
+  std::vector<std::optional<fit::FitProbeSunEntry>> entries;
 };
 
 ProbeSuns CollectProbeSuns(const std::vector<fit::Reference>& refs, const fit::FitResult& result,
                            const std::vector<std::optional<fit::ProbeSamples>>& probes, const FitProbeOptions& po,
-                           bool absolute, nlohmann::json* warnings) {
-  ProbeSuns ps{std::vector<std::optional<fit::ProbeSun>>(refs.size()), std::vector<nlohmann::json>(refs.size())};
+                           bool absolute, std::vector<std::string>* warnings) {
+  ProbeSuns ps{std::vector<std::optional<fit::ProbeSun>>(refs.size()),
+               std::vector<std::optional<fit::FitProbeSunEntry>>(refs.size())};
   for (size_t r = 0; r < refs.size(); ++r) {
     if (!probes[r]) continue;
     const fit::ProbeSun& s = *result.references[r].sun;
     ps.suns[r] = s;
-    ps.json[r] = ProbeSunJson(s, probes[r]->path, absolute);
+    ps.entries[r] = ProbeSunEntry(s, probes[r]->path, absolute);
     Log("fit", refs[r].name + ": probe sun " + (!s.observable ? "not observable (" + s.note + ")"
                                                               : s.visible ? std::string("visible") : std::string("occluded")) +
                    ", fraction " + std::to_string(s.fraction) + ", E_sun (model) " +
@@ -202,7 +204,7 @@ ProbeSuns CollectProbeSuns(const std::vector<fit::Reference>& refs, const fit::F
 // One reference seeing the sun on its probe sets the preset's sun_tint_rgb; several leave it
 // as fitted and record each one's tint.
 void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, render::Preset* preset,
-                       nlohmann::json* warnings) {
+                       std::vector<std::string>* warnings) {
   std::vector<size_t> visible;
   for (size_t r = 0; r < refs.size(); ++r) {
     if (ps->suns[r] && ps->suns[r]->visible) visible.push_back(r);
@@ -211,7 +213,7 @@ void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, r
     const size_t r = visible[0];
     bool clamped = false;
     preset->sun_tint_rgb = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, &clamped);
-    ps->json[r]["sun_tint_rgb"] = preset->sun_tint_rgb;
+    ps->entries[r]->sun_tint_rgb = preset->sun_tint_rgb;
     if (clamped) {
       const std::string w = refs[r].name + ": the probe's sun needs a sun_tint_rgb outside its bounds: clamped";
       warnings->push_back(w);
@@ -219,7 +221,7 @@ void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, r
     }
   } else if (visible.size() > 1) {
     for (size_t r : visible) {
-      ps->json[r]["sun_tint_rgb"] = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, nullptr);
+      ps->entries[r]->sun_tint_rgb = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, nullptr);
     }
     const std::string w = std::to_string(visible.size()) +
                           " references see the sun on the probe: the preset's sun_tint_rgb is left as fitted "
@@ -229,10 +231,11 @@ void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, r
   }
 }
 
-// fit/<name>.exr per reference, and its entries of fit.json (references, inputs, warnings).
+// fit/<name>.exr per reference, and its entries of fit.json (references, warnings) and of
+// preset.json's provenance (inputs).
 void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Reference>& refs,
-                        const fit::FitResult& result, const ProbeSuns& ps, nlohmann::json* per_ref,
-                        nlohmann::json* inputs, nlohmann::json* warnings) {
+                        const fit::FitResult& result, const ProbeSuns& ps, fit::FitResultFile* file,
+                        nlohmann::json* inputs) {
   for (size_t r = 0; r < refs.size(); ++r) {
     const auto& ref = refs[r];
     const auto& rf = result.references[r];
@@ -243,46 +246,48 @@ void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Refer
     frame.extra.strings["skycalReference"] = ref.path;
     frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
     capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);
-    per_ref->push_back({{"name", ref.name},
-                        {"path", ref.path},
-                        {"rel_rmse", rf.errors.rel_rmse},
-                        {"log_rmse", rf.errors.log_rmse},
-                        {"exposure", rf.exposure},
-                        {"sun_direction", ref.sun_dir},
-                        {"sun_elevation_deg", latlong::ElevationDeg(ref.sun_dir)},
-                        {"sun_source", ref.sun_source},
-                        {"observed_lut_rows", rf.observed_rows},
-                        {"clip_level", ref.clip_level},
-                        {"pixels", fit::MaskCountsToJson(ref.counts)}});
-    if (!ps.json[r].is_null()) per_ref->back()["sun"] = ps.json[r];
+    fit::FitReferenceEntry e;
+    e.name = ref.name;
+    e.path = ref.path;
+    e.rel_rmse = rf.errors.rel_rmse;
+    e.log_rmse = rf.errors.log_rmse;
+    e.exposure = rf.exposure;
+    e.sun_direction = ref.sun_dir;
+    e.sun_elevation_deg = latlong::ElevationDeg(ref.sun_dir);
+    e.sun_source = ref.sun_source;
+    e.observed_lut_rows = rf.observed_rows;
+    e.clip_level = ref.clip_level;
+    e.pixels = ref.counts;
+    e.sun = ps.entries[r];
+    file->references.push_back(std::move(e));
     inputs->push_back({{"path", ref.path}, {"sha256", ref.sha256}});
-    for (const auto& w : ref.warnings) warnings->push_back(w);
+    for (const auto& w : ref.warnings) file->warnings.push_back(w);
   }
 }
 
 // --clouds stats: the cloud lighting by statistics of the cloud pixels, into fit.json's
 // cloud_stats and the preset's clouds section.
 void RunCloudStatsStage(const FitCloudStatsOptions& cs, const LoadedReferences& l, const nlohmann::json& sky_refit,
-                        const StagedDirectory& out, fit::FitResult* result, nlohmann::json* summary) {
+                        const StagedDirectory& out, fit::FitResult* result, fit::FitResultFile* file) {
   std::vector<cloudfit::CloudStatsPhoto> photos;
   for (size_t r = 0; r < l.refs.size(); ++r) {
     const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
     photos.push_back({&l.refs[r], l.cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
   }
-  (*summary)["clouds"]["mode"] = "stats";
-  (*summary)["clouds"]["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by "
-                                     "statistics of the cloud pixels (fit.json's cloud_stats)";
+  file->clouds["mode"] = "stats";
+  file->clouds["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by "
+                             "statistics of the cloud pixels (fit.json's cloud_stats)";
   cloudfit::CloudStatsPresetUpdate update;
-  (*summary)["cloud_stats"] = RunCloudStatsOnPhotos(cs, photos, *result, out.staging() / "fit", &update);
-  (*summary)["cloud_stats"]["preset"] = AttachCloudStats(update, out / "preset.json", &result->preset);
-  (*summary)["cloud_stats"]["sky_refit"] = sky_refit;
+  file->cloud_stats = RunCloudStatsOnPhotos(cs, photos, *result, out.staging() / "fit", &update);
+  file->cloud_stats["preset"] = AttachCloudStats(update, out / "preset.json", &result->preset);
+  file->cloud_stats["sky_refit"] = sky_refit;
 }
 
 // The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
 // file) leaves them out, never the fit. Then what the report reads beside the errors: the
 // images, the fitted sun at the ground (model units: lux with --absolute), the cloud mask.
 void WritePreviewsAndReportFields(const StagedDirectory& out, const FitVerbOptions& o, const LoadedReferences& l,
-                                  const fit::FitResult& result, nlohmann::json* summary) {
+                                  const fit::FitResult& result, fit::FitResultFile* file) {
   const std::vector<fit::Reference>& refs = l.refs;
   bool previews = true;
   try {
@@ -293,15 +298,14 @@ void WritePreviewsAndReportFields(const StagedDirectory& out, const FitVerbOptio
     Log("fit", std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
   }
   for (size_t r = 0; r < refs.size(); ++r) {
-    nlohmann::json& j = (*summary)["references"][r];
+    fit::FitReferenceEntry& e = file->references[r];
     if (previews) {
-      j["images"] = {{"reference", "fit/" + refs[r].name + ".reference.png"},
-                     {"fit", "fit/" + refs[r].name + ".fit.png"},
-                     {"error", "fit/" + refs[r].name + ".error.png"}};
+      e.images = fit::FitReferenceImages{"fit/" + refs[r].name + ".reference.png", "fit/" + refs[r].name + ".fit.png",
+                                         "fit/" + refs[r].name + ".error.png"};
     }
     const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
-    j["sun_illuminance_at_ground_lux"] = skycal::Rec709Luminance(sun);
-    if (o.cloud_mask) j["cloud_mask"] = l.cloud_json[r];
+    e.sun_illuminance_at_ground_lux = skycal::Rec709Luminance(sun);
+    if (o.cloud_mask) e.cloud_mask = l.cloud_mask[r];
   }
 }
 
@@ -343,39 +347,37 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
   result.preset.name = fs::path(o.out_dir).filename().string();
   if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
 
-  nlohmann::json per_ref = nlohmann::json::array(), inputs = nlohmann::json::array(), warnings = nlohmann::json::array();
-  ProbeSuns ps = CollectProbeSuns(refs, result, probes, po, fo.absolute, &warnings);
-  ApplyProbeSunTint(refs, &ps, &result.preset, &warnings);
-  WriteReferenceFits(out, refs, result, ps, &per_ref, &inputs, &warnings);
-  for (const auto& w : result.warnings) warnings.push_back(w);
-  const nlohmann::json resolved = ResolvedFitOptionsJson(fo);
-  nlohmann::json summary = fit::FitSummaryJson(result);
-  summary["references"] = per_ref;
-  summary["warnings"] = warnings;
-  summary["options"] = resolved;
-  summary["clouds"] = CloudReportJson(co, joint);
-  if (cs.enabled) RunCloudStatsStage(cs, l, sky_refit, out, &result, &summary);
+  fit::FitResultFile file = fit::FitResultFileFrom(result);  // the fit's own part; the rest below
+  nlohmann::json inputs = nlohmann::json::array();
+  ProbeSuns ps = CollectProbeSuns(refs, result, probes, po, fo.absolute, &file.warnings);
+  ApplyProbeSunTint(refs, &ps, &result.preset, &file.warnings);
+  WriteReferenceFits(out, refs, result, ps, &file, &inputs);
+  for (const auto& w : result.warnings) file.warnings.push_back(w);
+  file.options = ResolvedFitOptionsJson(fo);
+  file.clouds = CloudReportJson(co, joint);
+  if (cs.enabled) RunCloudStatsStage(cs, l, sky_refit, out, &result, &file);
   if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
+  nlohmann::json final_errors = nlohmann::json::array();  // the references' entries before the previews
+  for (const fit::FitReferenceEntry& e : file.references) final_errors.push_back(fit::FitReferenceEntryJson(e));
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
                                        {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
                                        {"inputs", inputs},
-                                       {"options", resolved},
-                                       {"final_errors", per_ref}}}};
+                                       {"options", file.options},
+                                       {"final_errors", final_errors}}}};
   render::SavePreset(result.preset, out / "preset.json", &provenance);
-  WritePreviewsAndReportFields(out, o, l, result, &summary);
-  if (fo.time_of_day_h) summary["time_of_day_h"] = *fo.time_of_day_h;
-  summary["out"] = o.out_dir;
-  WriteJsonFileAtomically(out / "fit.json", summary);
+  WritePreviewsAndReportFields(out, o, l, result, &file);
+  file.time_of_day_h = fo.time_of_day_h;
+  file.out = o.out_dir;
+  fit::WriteFitResultFile(out / "fit.json", file);
   if (o.report) WriteVerbReport("fit", out.staging().string());
   out.Commit();
-  for (const auto& r : per_ref) {
-    Log("fit", r["name"].get<std::string>() + ": rel RMSE " + std::to_string(100.0 * r["rel_rmse"].get<double>()) +
-                   "%, log RMSE " + std::to_string(r["log_rmse"].get<double>()));
+  for (const fit::FitReferenceEntry& e : file.references) {
+    Log("fit", e.name + ": rel RMSE " + std::to_string(100.0 * e.rel_rmse) + "%, log RMSE " + std::to_string(e.log_rmse));
   }
   Log("fit", "wrote " + o.out_dir + " in " + std::to_string(result.time_s) + " s (" +
                  std::to_string(result.iterations) + " iterations)");
-  return summary;
+  return fit::FitResultFileJson(file);
 }
 }  // namespace
 

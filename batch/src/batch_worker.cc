@@ -8,6 +8,7 @@
 
 #include "batch_process.h"
 #include "skycal/export/game_export.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/report/report.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
@@ -101,15 +102,15 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchH
                      ")");
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      const nlohmann::json s = hooks.fit(fo);
-      const nlohmann::json& r = s.at("references").at(0);
+      const fit::FitResultFile s = fit::FitResultFileFromJson(hooks.fit(fo), fit_dir + "/fit.json");
+      const fit::FitReferenceEntry& r = s.references.at(0);
       state["status"] = "ok";
-      state["rel_rmse"] = r.at("rel_rmse");
-      state["log_rmse"] = r.at("log_rmse");
-      state["exposure"] = r.at("exposure");
-      state["haziness_g"] = s.at("haziness_g");
-      state["fit_time_s"] = s.at("time_s");
-      state["iterations"] = s.at("iterations");
+      state["rel_rmse"] = r.rel_rmse;
+      state["log_rmse"] = r.log_rmse;
+      state["exposure"] = r.exposure;
+      state["haziness_g"] = s.haziness_g;
+      state["fit_time_s"] = s.time_s;
+      state["iterations"] = s.iterations;
       warm = (fs::path(fit_dir) / "preset.json").string();
       ++fitted;
     } catch (const std::exception& e) {
@@ -171,7 +172,7 @@ nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hook
   day.report = false;  // part of the batch's report
   BatchLog("reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
                    " frames -> " + day.out_dir);
-  const nlohmann::json day_summary = hooks.fit(day);
+  const fit::FitResultFile day_summary = fit::FitResultFileFromJson(hooks.fit(day), day.out_dir + "/fit.json");
   // The keyframe tables: one key per frame, from each frame's own preset.
   exporter::ExportOptions ex;
   for (const BatchFrame& f : plan.frames) ex.presets.push_back((fs::path(FrameFitDir(out_dir, f.name)) / "preset.json").string());
@@ -183,8 +184,8 @@ nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hook
 
 
   nlohmann::json day_refs = nlohmann::json::array();
-  for (const auto& r : day_summary.at("references")) {
-    day_refs.push_back({{"name", r.at("name")}, {"rel_rmse", r.at("rel_rmse")}, {"log_rmse", r.at("log_rmse")}});
+  for (const fit::FitReferenceEntry& r : day_summary.references) {
+    day_refs.push_back({{"name", r.name}, {"rel_rmse", r.rel_rmse}, {"log_rmse", r.log_rmse}});
   }
   nlohmann::json batch = {
       {"ok", true},
@@ -197,8 +198,8 @@ nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hook
         {"cold_started_frames", cold_n},
         {"cold_mean", cold_n ? cold_s / cold_n : 0.0},
         {"note", "each frame's fit time (fit.json time_s), seconds; warm = started from the previous frame's preset"}}},
-      {"day", {{"dir", "day"}, {"frames", day_idx.size()}, {"haziness_g", day_summary.at("haziness_g")},
-               {"time_s", day_summary.at("time_s")}, {"references", day_refs}}},
+      {"day", {{"dir", "day"}, {"frames", day_idx.size()}, {"haziness_g", day_summary.haziness_g},
+               {"time_s", day_summary.time_s}, {"references", day_refs}}},
       {"tables", {{"dir", "tables"}, {"summary", tables}}},
       {"reduce_s", Seconds(t0, std::chrono::steady_clock::now())}};
   WriteJsonFileAtomically((fs::path(out_dir) / "batch.json").string(), batch);

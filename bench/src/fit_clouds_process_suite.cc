@@ -15,7 +15,7 @@
 #include "render_verb.h"
 #include "skycal/bench/last_suite_grids.h"
 #include "skycal/core/error.h"
-#include "skycal/core/json_file.h"
+#include "skycal/fit/fit_result_file.h"
 #include "suite_util.h"
 #include "suites_internal.h"
 
@@ -29,8 +29,6 @@ FitCloudsProcessPlan FitCloudsProcessGridPlan(bool quick) {
 }
 
 namespace {
-
-double Number(const nlohmann::json& j, const char* key) { return j.contains(key) ? j[key].get<double>() : std::nan(""); }
 
 std::string Markdown(const std::vector<CaseResult>& cases) {
   std::string md =
@@ -96,16 +94,16 @@ Suite FitCloudsProcessSuite() {
           },
           o.quick ? 0 : o.warmup, o.Repeats(1));
       const std::string fit_json = out + "/fit.json";
-      const nlohmann::json j = ReadJsonFile(fit_json);
-      if (!j.contains("clouds")) throw Error(fit_json + ": no 'clouds' section (expected with --clouds on)");
-      const nlohmann::json& cl = j["clouds"];
-      c.error = j.at("references").at(0).at("rel_rmse").get<double>();
+      const fit::FitResultFile j = fit::ReadFitResultFile(fit_json);
+      if (j.clouds.is_null()) throw Error(fit_json + ": no 'clouds' section (expected with --clouds on)");
+      const nlohmann::json& cl = j.clouds;
+      c.error = j.references.at(0).rel_rmse;
       if (!std::isfinite(c.error)) {
         c.outcome = Outcome::kNonFinite;
         c.message = fit_json + ": non-finite rel_rmse";
       }
       c.extra = {{"cpu_s", cpu_s},
-                 {"fit_time_s", Number(j, "time_s")},
+                 {"fit_time_s", j.time_s},
                  {"cloud_pixels", cl.at("cloud_pixels").at("count")},
                  {"cloud_log_rmse_initial", cl.at("cloud_pixels").at("initial").at("log_rmse")},
                  {"cloud_log_rmse_final", cl.at("cloud_pixels").at("final").at("log_rmse")},

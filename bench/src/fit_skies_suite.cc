@@ -23,9 +23,9 @@
 #include <filesystem>
 
 #include "skycal/core/error.h"
-#include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
 #include "skycal/fit/ceiling.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
@@ -193,8 +193,7 @@ void RunFitSkiesCase(CaseResult& c, const FitSkiesContext& x) {
           if (path == "process") {
             if (x.exe_error || x.exe.empty()) throw Error("fit-skies: path=process needs /proc/self/exe (the skycal binary)");
             RunFitProcess(x.exe, skies[i].path, (o.scratch / "skies_process_out").string());
-            const nlohmann::json j = ReadJsonFile((o.scratch / "skies_process_out" / "fit.json").string());
-            errors[i] = j.at("references").at(0).at("rel_rmse").get<double>();
+            errors[i] = fit::ReadFitResultFile((o.scratch / "skies_process_out" / "fit.json").string()).references.at(0).rel_rmse;
           } else {
             results[i] = fit::FitSky({skies[i].ref}, x.start, f, *x.renderers.at(Get(c.settings, "backend")));
             errors[i] = results[i].references.at(0).errors.rel_rmse;

@@ -1,6 +1,7 @@
 #include "sources.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -8,6 +9,8 @@
 #include "json_fields.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/json_schema.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/report/html.h"
 
 namespace skycal::report {
@@ -52,18 +55,25 @@ void RequireInside(const fs::path& dir, const fs::path& p, const std::string& wh
   }
 }
 
-std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, const std::string& kind,
-                      const std::string& name) {
-  if (images) {
-    const JsonAt f = images->Child(kind);
-    fs::path p = dir / f.String();
-    if (!fs::is_regular_file(p)) p = MatchReplacedName(p);
-    if (!fs::is_regular_file(p)) throw Error(f.Where() + ": the image '" + p.string() + "' does not exist");
-    RequireInside(dir, p, f.Where());
-    return p.string();
-  }
+// A listed image: `where` names its field.
+std::string ListedImagePath(const fs::path& dir, const std::string& listed, const std::string& where) {
+  fs::path p = dir / listed;
+  if (!fs::is_regular_file(p)) p = MatchReplacedName(p);
+  if (!fs::is_regular_file(p)) throw Error(where + ": the image '" + p.string() + "' does not exist");
+  RequireInside(dir, p, where);
+  return p.string();
+}
+
+std::string UnlistedImagePath(const fs::path& dir, const std::string& kind, const std::string& name) {
   const fs::path p = dir / "fit" / (name + "." + kind + ".png");
   return fs::is_regular_file(p) ? p.string() : std::string();
+}
+
+std::string ImagePath(const fs::path& dir, const std::optional<JsonAt>& images, const std::string& kind,
+                      const std::string& name) {
+  if (!images) return UnlistedImagePath(dir, kind, name);
+  const JsonAt f = images->Child(kind);
+  return ListedImagePath(dir, f.String(), f.Where());
 }
 
 // The `parameters` object of fit.json's `clouds` or `cloud_stats`: per cloud-lighting
@@ -85,61 +95,69 @@ void ReadCloudParameters(const JsonAt& parent, std::vector<FitRecord::CloudParam
   }
 }
 
-ReferenceRecord ReadReference(const fs::path& dir, const JsonAt& r) {
+// A number the report shows as a value: NaN (written as null) is refused, named.
+double Finite(double v, const std::string& file, const std::string& field) {
+  if (!std::isfinite(v)) throw Error(JsonField(file, field) + ": expected a finite number");
+  return v;
+}
+
+ReferenceRecord ReadReference(const fs::path& dir, const std::string& file, size_t i, const fit::FitReferenceEntry& r) {
+  const std::string at = "references[" + std::to_string(i) + "]";
   ReferenceRecord rec;
-  rec.name = r.String("name");
-  rec.rel_rmse = r.Number("rel_rmse");
-  rec.log_rmse = r.Number("log_rmse");
-  rec.exposure = r.OptionalNumber("exposure").value_or(1.0);
-  rec.sun_elevation_deg = r.OptionalNumber("sun_elevation_deg");
-  rec.sun_lux_model = r.OptionalNumber("sun_illuminance_at_ground_lux");
-  if (const auto sun = r.Optional("sun")) {
-    rec.probe_sun_visible = sun->Child("visible").Boolean();
-    rec.probe_sun_fraction = sun->OptionalNumber("fraction");
-    rec.probe_sun_lux = sun->OptionalNumber("illuminance_lux");
+  rec.name = r.name;
+  rec.rel_rmse = Finite(r.rel_rmse, file, at + ".rel_rmse");
+  rec.log_rmse = Finite(r.log_rmse, file, at + ".log_rmse");
+  rec.exposure = r.exposure;
+  rec.sun_elevation_deg = r.sun_elevation_deg;
+  rec.sun_lux_model = r.sun_illuminance_at_ground_lux;
+  if (r.sun) {
+    rec.probe_sun_visible = r.sun->visible;
+    rec.probe_sun_fraction = r.sun->fraction;
+    rec.probe_sun_lux = r.sun->illuminance_lux;
   }
-  if (const auto cm = r.Optional("cloud_mask")) rec.cloudy_fraction = cm->Number("fraction");
-  if (const auto px = r.Optional("pixels")) {
-    px->RequireObject();
-    for (const auto& [k, v] : px->value.items()) rec.pixels.emplace_back(k, static_cast<long long>(px->Number(k)));
+  if (r.cloud_mask) rec.cloudy_fraction = Finite(r.cloud_mask->fraction, file, at + ".cloud_mask.fraction");
+  if (r.pixels) {
+    const nlohmann::json counts = fit::MaskCountsToJson(*r.pixels);  // by class name, as fit.json lists them
+    for (const auto& [k, v] : counts.items()) rec.pixels.emplace_back(k, v.get<long long>());
   }
-  const auto images = r.Optional("images");
-  rec.image_reference = ImagePath(dir, images, "reference", rec.name);
-  rec.image_fit = ImagePath(dir, images, "fit", rec.name);
-  rec.image_error = ImagePath(dir, images, "error", rec.name);
+  for (const auto& [kind, image] : {std::pair{"reference", &rec.image_reference}, std::pair{"fit", &rec.image_fit},
+                                    std::pair{"error", &rec.image_error}}) {
+    if (!r.images) {
+      *image = UnlistedImagePath(dir, kind, rec.name);
+      continue;
+    }
+    const std::string listed = std::string(kind) == "reference" ? r.images->reference
+                               : std::string(kind) == "fit"     ? r.images->fit
+                                                                : r.images->error;
+    *image = ListedImagePath(dir, listed, JsonField(file, at + ".images." + kind));
+  }
   return rec;
 }
 
 // The convergence curves: the linear start's Gauss-Newton steps (grouped by level width),
 // a day's joint steps, and each Ceres level's iterations.
-std::vector<CostCurve> ReadConvergence(const JsonAt& doc) {
+std::vector<CostCurve> ReadConvergence(const fit::FitResultFile& doc) {
   std::vector<CostCurve> curves;
-  if (const auto ls = doc.Optional("linear_start")) {
-    if (const auto steps = ls->Optional("cost_per_step")) {
-      for (size_t i = 0; i < steps->Size(); ++i) {
-        const JsonAt s = steps->Index(i);
-        const std::string label = "linear start, " + FormatNumber(s.Number("width")) + " wide (Gauss-Newton steps)";
-        if (curves.empty() || curves.back().label != label) curves.push_back({label, {}});
-        curves.back().cost.push_back(s.Number("cost"));
-      }
+  if (doc.linear_start.single) {
+    for (const fit::CostStep& s : doc.linear_start.single->cost_per_step) {
+      const std::string label = "linear start, " + FormatNumber(s.width) + " wide (Gauss-Newton steps)";
+      if (curves.empty() || curves.back().label != label) curves.push_back({label, {}});
+      curves.back().cost.push_back(s.cost);
     }
-    const std::vector<double> joint = ls->Numbers("joint_robust_cost_per_step");
-    if (!joint.empty()) curves.push_back({"linear start, the day's joint steps", joint});
   }
-  if (const auto levels = doc.Optional("levels")) {
-    for (size_t i = 0; i < levels->Size(); ++i) {
-      const JsonAt l = levels->Index(i);
-      std::string size = "level " + std::to_string(i);
-      if (const auto sz = l.Optional("size"); sz && sz->Size() == 2) {
-        size = FormatNumber(sz->Index(0).Number()) + "x" + FormatNumber(sz->Index(1).Number());
-      }
-      CostCurve c{"Ceres " + size + " (iterations)", l.Numbers("cost_per_iteration")};
-      if (c.cost.empty()) {  // fit.json from before cost_per_iteration: the two ends
-        c.cost = {l.Number("initial_cost"), l.Number("final_cost")};
-        c.label += ", start and end only";
-      }
-      curves.push_back(std::move(c));
+  if (doc.linear_start.day && !doc.linear_start.day->joint_robust_cost_per_step.empty()) {
+    curves.push_back({"linear start, the day's joint steps", doc.linear_start.day->joint_robust_cost_per_step});
+  }
+  for (size_t i = 0; i < doc.levels.size(); ++i) {
+    const fit::LevelReport& l = doc.levels[i];
+    const std::string size = l.width > 0 && l.height > 0 ? FormatNumber(l.width) + "x" + FormatNumber(l.height)
+                                                          : "level " + std::to_string(i);
+    CostCurve c{"Ceres " + size + " (iterations)", l.cost_per_iteration};
+    if (c.cost.empty()) {  // fit.json from before cost_per_iteration: the two ends
+      c.cost = {l.initial_cost, l.final_cost};
+      c.label += ", start and end only";
     }
+    curves.push_back(std::move(c));
   }
   return curves;
 }
@@ -177,56 +195,24 @@ std::vector<std::pair<std::string, std::string>> ReadSkipped(const JsonAt& doc) 
   return out;
 }
 
-FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
-  FitRecord f;
-  f.dir = dir.string();
-  f.label = Label(root, dir);
-  f.json_path = (dir / "fit.json").string();
-  const nlohmann::json doc = ReadJsonObject(f.json_path);
-  const JsonAt j{doc, f.json_path, ""};
-  const JsonAt refs = j.Child("references");
-  if (refs.Size() == 0) throw Error(refs.Where() + ": expected at least one reference");
-  for (size_t i = 0; i < refs.Size(); ++i) f.references.push_back(ReadReference(dir, refs.Index(i)));
-  f.haziness_g = j.Number("haziness_g");
-  f.time_s = j.OptionalNumber("time_s").value_or(NAN);
-  f.iterations = static_cast<int>(j.OptionalNumber("iterations").value_or(0));
-  f.termination = j.OptionalString("termination").value_or("");
-  f.time_of_day_h = j.OptionalNumber("time_of_day_h");
-  if (const auto o = j.Optional("options")) {
-    f.model = o->OptionalString("model").value_or("");
-    f.backend = o->OptionalString("backend").value_or("");
-    f.loss = o->OptionalString("loss").value_or("");
-  }
-  if (const auto d = j.Optional("decisions")) {
-    for (size_t i = 0; i < d->Size(); ++i) {
-      const JsonAt e = d->Index(i);
-      DecisionRecord r;
-      r.what = e.String("what");
-      r.why = e.String("why");
-      r.saved_ms = e.Number("saved_ms");
-      r.saved_ms_basis = e.OptionalString("saved_ms_basis").value_or("");
-      r.rel_rmse_change = e.OptionalNumber("rel_rmse_change");
-      r.rel_rmse_change_basis = e.OptionalString("rel_rmse_change_basis").value_or("");
-      f.decisions.push_back(std::move(r));
-    }
-  }
-  f.skipped = ReadSkipped(j);
-  if (const auto w = j.Optional("warnings")) {
-    for (size_t i = 0; i < w->Size(); ++i) f.warnings.push_back(w->Index(i).String());
-  }
-  f.convergence = ReadConvergence(j);
-  if (const auto c = j.Optional("clouds")) {
-    if (const auto b = c->Optional("fitted")) f.clouds_fitted = b->Boolean();
-    f.clouds_decision = c->OptionalString("decision").value_or("");
+// fit.json's `clouds` and `cloud_stats` (JSON objects inside the typed file).
+void ReadCloudSections(const fit::FitResultFile& doc, const fs::path& dir, const std::string& file, FitRecord* f) {
+  nlohmann::json sections = nlohmann::json::object();
+  if (!doc.clouds.is_null()) sections["clouds"] = doc.clouds;
+  if (!doc.cloud_stats.is_null()) sections["cloud_stats"] = doc.cloud_stats;
+  const JsonAt clouds{sections, file, ""};
+  if (const auto c = clouds.Optional("clouds")) {
+    if (const auto b = c->Optional("fitted")) f->clouds_fitted = b->Boolean();
+    f->clouds_decision = c->OptionalString("decision").value_or("");
     if (const auto px = c->Optional("cloud_pixels")) {
-      if (const auto i = px->Optional("initial")) f.cloud_pixels_log_rmse_initial = i->OptionalNumber("log_rmse");
-      if (const auto e = px->Optional("final")) f.cloud_pixels_log_rmse_final = e->OptionalNumber("log_rmse");
+      if (const auto i = px->Optional("initial")) f->cloud_pixels_log_rmse_initial = i->OptionalNumber("log_rmse");
+      if (const auto e = px->Optional("final")) f->cloud_pixels_log_rmse_final = e->OptionalNumber("log_rmse");
     }
-    ReadCloudParameters(*c, &f.cloud_parameters);
+    ReadCloudParameters(*c, &f->cloud_parameters);
   }
-  if (const auto cs = j.Optional("cloud_stats")) {
-    f.clouds_fitted = true;
-    ReadCloudParameters(*cs, &f.cloud_parameters);
+  if (const auto cs = clouds.Optional("cloud_stats")) {
+    f->clouds_fitted = true;
+    ReadCloudParameters(*cs, &f->cloud_parameters);
     if (const auto refs = cs->Optional("references")) {
       for (size_t i = 0; i < refs->Size(); ++i) {
         const JsonAt r = refs->Index(i);
@@ -241,14 +227,46 @@ FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
         p.atmosphere_log_rmse = e.Child("atmosphere_only").Child("whole_sky").Number("log_rmse");
         p.clouds_rel_rmse = e.Child("with_cloud_statistics").Child("whole_sky").Number("rel_rmse");
         p.clouds_log_rmse = e.Child("with_cloud_statistics").Child("whole_sky").Number("log_rmse");
-        f.cloud_stats_panels.push_back(std::move(p));
+        f->cloud_stats_panels.push_back(std::move(p));
       }
     }
   }
+}
+
+// fit.json through its typed reader (skycal/fit/fit_result_file.h: the schema version, the
+// required fields and their types); `clouds` and `cloud_stats` are read here, their fields named.
+FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
+  FitRecord f;
+  f.dir = dir.string();
+  f.label = Label(root, dir);
+  f.json_path = (dir / "fit.json").string();
+  const fit::FitResultFile doc = fit::ReadFitResultFile(f.json_path);
+  for (size_t i = 0; i < doc.references.size(); ++i) {
+    f.references.push_back(ReadReference(dir, f.json_path, i, doc.references[i]));
+  }
+  f.haziness_g = Finite(doc.haziness_g, f.json_path, "haziness_g");
+  f.time_s = doc.time_s;
+  f.iterations = doc.iterations;
+  f.termination = doc.termination;
+  f.time_of_day_h = doc.time_of_day_h;
+  if (!doc.options.is_null()) {
+    const JsonAt o{doc.options, f.json_path, "options"};
+    f.model = o.OptionalString("model").value_or("");
+    f.backend = o.OptionalString("backend").value_or("");
+    f.loss = o.OptionalString("loss").value_or("");
+  }
+  for (const fit::FitDecision& d : doc.decisions) {
+    f.decisions.push_back({d.what, d.why, d.saved_ms_basis, d.rel_rmse_change_basis, d.saved_ms, d.rel_rmse_change});
+  }
+  for (const fit::SkipNote& n : doc.skipped) f.skipped.emplace_back(n.block, n.reason);
+  f.warnings = doc.warnings;
+  f.convergence = ReadConvergence(doc);
+  ReadCloudSections(doc, dir, f.json_path, &f);
   if (fs::is_regular_file(dir / "preset.json")) f.parameters = ReadParameters((dir / "preset.json").string());
   if (fs::is_regular_file(dir / "report.png")) f.sheet_png = (dir / "report.png").string();
   return f;
 }
+
 
 ExportRecord ReadExport(const fs::path& root, const fs::path& dir) {
   ExportRecord e;

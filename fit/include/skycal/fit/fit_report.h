@@ -1,5 +1,6 @@
 // What a sky fit reports beside the preset: typed, so the fit never builds JSON; the cli's
-// fit verb serialises it into fit.json (skycal/fit/fit_json.h).
+// fit verb serialises it into fit.json (skycal/fit/fit_result_file.h). Compared member by
+// member (operator==: exact, the round-trip tests of fit.json use it).
 #pragma once
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@ namespace skycal::fit {
 // A parameter block or pass the fit left out, and why (fit.json `skipped`).
 struct SkipNote {
   std::string block, reason;
+  bool operator==(const SkipNote&) const = default;
 };
 
 // A decision of what not to evaluate or fit, with what it saved (fit.json `decisions`).
@@ -24,6 +26,7 @@ struct FitDecision {
   std::string saved_ms_basis;
   std::optional<double> rel_rmse_change;
   std::string rel_rmse_change_basis;
+  bool operator==(const FitDecision&) const = default;
 };
 
 // A LUT row no reference's sun angle constrains (held at the initial preset).
@@ -31,6 +34,7 @@ struct UnobservedRow {
   int row = 0;
   double sun_zenith_deg = 0.0;
   std::string reason;
+  bool operator==(const UnobservedRow&) const = default;
 };
 
 // One Ceres pyramid level (fit.json `levels`).
@@ -45,6 +49,7 @@ struct LevelReport {
   int renders = 0;                       // backend renders at new evaluation points
   int probe_final_solve_iterations = 0;  // the sun / ground refit after the finest level
   double time_s = 0.0;
+  bool operator==(const LevelReport&) const = default;
 };
 
 // The render check of the linear stage: the backend must reproduce the linear values.
@@ -53,6 +58,7 @@ struct RenderCheckReport {
   double max_relative_difference = 0.0;
   double threshold = 0.0;
   double time_s = 0.0;
+  bool operator==(const RenderCheckReport&) const = default;
 };
 
 // The robust log cost after one Gauss-Newton step of the linear start (the convergence
@@ -62,11 +68,13 @@ struct RenderCheckReport {
 struct CostStep {
   int width = 0;
   double cost = 0.0;
+  bool operator==(const CostStep&) const = default;
 };
 
 // The robust loss scale of one ring of angular distance from the sun (log units).
 struct RingScaleReport {
   double from_deg = 0.0, to_deg = 0.0, scale = 0.0;
+  bool operator==(const RingScaleReport&) const = default;
 };
 
 // The linear start of one reference (fit/src/linear_start.h).
@@ -84,6 +92,7 @@ struct LinearStartSingleReport {
   std::vector<CostStep> cost_per_step;
   double time_s = 0.0;
   std::optional<RenderCheckReport> render_check;
+  bool operator==(const LinearStartSingleReport&) const = default;
 };
 
 // A day's linear start: each reference on its own, combined, then joint steps.
@@ -98,6 +107,7 @@ struct LinearStartDayReport {
   RenderCheckReport render_check;
   std::vector<std::pair<std::string, LinearStartSingleReport>> references;  // name, report
   double time_s = 0.0;
+  bool operator==(const LinearStartDayReport&) const = default;
 };
 
 // Exactly one of the two when the linear start ran; neither with --no-linear-start.
@@ -108,6 +118,7 @@ struct LinearStartReportOut {
   double time_s() const { return single ? single->time_s : day ? day->time_s : 0.0; }
   double loss_scale() const { return single ? single->loss_scale : day ? day->loss_scale : 0.0; }
   long long samples() const { return single ? single->samples : day ? day->joint_samples : 0; }
+  bool operator==(const LinearStartReportOut&) const = default;
 };
 
 // With probe samples (fit.json `probe`).
@@ -121,6 +132,7 @@ struct ProbeReport {
   bool ground_albedo_fitted = false;
   double ground_albedo_value = 0.0, ground_albedo_initial = 0.0;
   std::string ground_albedo_reason;  // empty when fitted
+  bool operator==(const ProbeReport&) const = default;
 };
 
 }  // namespace skycal::fit

@@ -25,6 +25,7 @@ enum class PixelClass : uint8_t {
 
 struct MaskCounts {
   long long sky = 0, below_horizon = 0, sun_cone = 0, invalid = 0, clipped = 0, user_masked = 0;
+  bool operator==(const MaskCounts&) const = default;
 };
 
 struct Reference {

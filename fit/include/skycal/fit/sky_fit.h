@@ -60,7 +60,7 @@ struct ReferenceFit {
   std::optional<ProbeSun> sun;     // with probe samples
 };
 
-// Typed throughout (fit_report.h); skycal/fit/fit_json.h writes it into fit.json.
+// Typed throughout (fit_report.h); skycal/fit/fit_result_file.h writes it into fit.json.
 struct FitResult {
   render::Preset preset;
   std::vector<ReferenceFit> references;
