@@ -33,7 +33,8 @@ bool BatchOptions::IsValid(std::string* why) const {
   if (jobs < 0) return bad("jobs = " + std::to_string(jobs) + " (expected a positive integer, or 0: the machine's cores)");
   if (day_frames < 0)
     return bad("day_frames = " + std::to_string(day_frames) + " (expected 0: all frames, or a positive integer)");
-  if (!(poll_s >= 0.05 && poll_s <= 600.0)) return bad("poll_s = " + FormatNumber(poll_s) + " (expected seconds in [0.05, 600])");
+  if (!(poll_s >= 0.05 && poll_s <= 600.0))
+    return bad("poll_s = " + FormatNumber(poll_s) + " (expected seconds in [0.05, 600])");
   if (fit.sun_dir || fit.time_of_day_h)
     return bad("fit.sun_dir and fit.time_of_day_h must be unset (a batch takes each frame's sun direction and time "
                "from its EXR attributes)");
@@ -89,14 +90,16 @@ nlohmann::json RunSlurm(const BatchOptions& o, const BatchPlan& plan, nlohmann::
   if (p.done == p.total && !fs::exists(bj, ec)) {
     throw Error("every frame is fitted but the reduce job " + engine.value("reduce_job", std::string("?")) + " ended " +
                 engine.value("reduce_state", std::string("?")) + " without batch.json: see " +
-                (fs::path(o.out_dir) / "logs/reduce.log").string() + "; run again with BatchOptions::resume to reduce again");
+                (fs::path(o.out_dir) / "logs/reduce.log").string() +
+                "; run again with BatchOptions::resume to reduce again");
   }
   if (p.done != p.total) {
     throw Error(std::to_string(p.total - p.done) + " of " + std::to_string(p.total) + " frames are not fitted; the reduce job " +
                 engine.value("reduce_job", std::string("?")) + " is " + engine.value("reduce_state", std::string("?")) +
                 (engine.contains("reduce_reason") ? " (" + engine["reduce_reason"].get<std::string>() + ")" : std::string()) +
                 " (logs in " + (fs::path(o.out_dir) / "logs").string() + "):" + DescribeUnfinishedFrames(o.out_dir, plan, 10) +
-                "\nthe other frames are kept: run again with BatchOptions::resume to resubmit only the missing or failed ones");
+                "\nthe other frames are kept: run again with BatchOptions::resume to resubmit only the missing or "
+                "failed ones");
   }
   return ReadJsonFile(bj.string());
 }

@@ -78,10 +78,11 @@ std::vector<std::string> ExpandReferenceGlob(const std::string& pattern) {
   }
   ::globfree(&g);
   if (rc == GLOB_NOMATCH || paths.empty()) {
-    throw Error("BatchOptions::references_glob = '" + pattern + "': matches no file (expected lat-long EXR frames; quote the glob so the "
-                "shell does not expand it)");
+    throw Error("BatchOptions::references_glob = '" + pattern +
+                "': matches no file (expected lat-long EXR frames; quote the glob so the shell does not expand it)");
   }
-  if (rc != 0) throw Error("BatchOptions::references_glob = '" + pattern + "': the glob could not be read (a directory is unreadable)");
+  if (rc != 0)
+    throw Error("BatchOptions::references_glob = '" + pattern + "': the glob could not be read (a directory is unreadable)");
   std::sort(paths.begin(), paths.end());
   return paths;
 }

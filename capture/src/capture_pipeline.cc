@@ -173,7 +173,8 @@ std::optional<ColorCorrection> CaptureColorCorrection(const CaptureOptions& o,
     try {
       j = nlohmann::json::parse(ReadFile(o.color_correction_path));
     } catch (const nlohmann::json::exception& e) {
-      throw Error("CaptureOptions::color_correction_path = " + o.color_correction_path + ": not valid JSON (" + e.what() + ")");
+      throw Error("CaptureOptions::color_correction_path = " + o.color_correction_path + ": not valid JSON (" + e.what() +
+                  ")");
     }
     return ColorCorrectionFromJson(j, o.color_correction_path);
   }
