@@ -98,7 +98,35 @@ batch::BatchHooks CliBatchHooks() {
 
 }  // namespace
 
-nlohmann::json RunBatchImpl(const BatchOptions& o) { return batch::RunBatch(o, CliBatchHooks()); }
+namespace {
+
+// The batch library's messages name BatchOptions' fields (and FitOptions' for the forwarded
+// fit options); the user set them with these flags.
+std::string WithBatchFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"BatchOptions::references_glob", "--references"},
+                                     {"BatchOptions::out_dir", "--out"},
+                                     {"BatchOptions::frames_per_job", "--frames-per-job"},
+                                     {"BatchOptions::engine", "--engine"},
+                                     {"BatchOptions::jobs", "--jobs"},
+                                     {"BatchOptions::resume", "--resume"},
+                                     {"BatchOptions::day_frames", "--day-frames"},
+                                     {"BatchOptions::poll_s", "--poll"},
+                                     {"BatchOptions::worker_chunk", "--worker-chunk"},
+                                     {"BatchOptions::reduce_only", "--reduce"}};
+  return WithFitFlags(FieldsAsFlags(message, kFlags));
+}
+
+}  // namespace
+
+nlohmann::json RunBatchImpl(const BatchOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(WithBatchFlags(why));
+  try {
+    return batch::RunBatch(o, CliBatchHooks());
+  } catch (const Error& e) {
+    throw Error(WithBatchFlags(e.what()));
+  }
+}
 
 int RunBatch(int argc, char** argv) {
   return RunVerb("batch", WantsJson(argc, argv), [&]() { return RunBatchImpl(ParseBatchArgs(argc, argv)); });

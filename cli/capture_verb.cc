@@ -12,7 +12,48 @@
 
 namespace skycal::cli {
 
-nlohmann::json RunCaptureImpl(const CaptureOptions& o) { return capture::RunCapturePipeline(o); }
+namespace {
+
+// The capture library's messages name CaptureOptions' fields; the user set them with these flags.
+std::string WithCaptureFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {
+      {"CaptureOptions::brackets", "--brackets"},
+      {"CaptureOptions::exposure_times_s", "--exposure-times"},
+      {"CaptureOptions::rig_path", "--rig"},
+      {"CaptureOptions::lens_model_given", "--lens"},
+      {"CaptureOptions::lens.model", "--lens"},
+      {"CaptureOptions::lens_fov_given", "--lens-fov-deg"},
+      {"CaptureOptions::lens_center_given", "--lens-center"},
+      {"CaptureOptions::lens_radius_given", "--lens-radius"},
+      {"CaptureOptions::kb_given", "--kb-k"},
+      {"CaptureOptions::vignetting_given", "--vignetting"},
+      {"CaptureOptions::camera_ypr_deg", "--camera-rotation"},
+      {"CaptureOptions::input_colorspace", "--input-colorspace"},
+      {"CaptureOptions::color_correction_path", "--color-correction"},
+      {"CaptureOptions::chart_path", "--chart"},
+      {"CaptureOptions::chart_corners", "--chart-corners"},
+      {"CaptureOptions::remove_stars", "--remove-stars"},
+      {"CaptureOptions::stars", "--star-window, --star-sigma, --star-contrast, --star-max-pixels"},
+      {"CaptureOptions::time_iso", "--time"},
+      {"CaptureOptions::latitude_deg", "--lat"},
+      {"CaptureOptions::longitude_deg", "--lon"},
+      {"CaptureOptions::north_longitude_deg", "--north-longitude"},
+      {"CaptureOptions::width x height", "--size"},
+      {"CaptureOptions::out", "--out"}};
+  return FieldsAsFlags(message, kFlags);
+}
+
+}  // namespace
+
+nlohmann::json RunCaptureImpl(const CaptureOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(WithCaptureFlags(why));
+  try {
+    return capture::RunCapturePipeline(o);
+  } catch (const Error& e) {
+    throw Error(WithCaptureFlags(e.what()));
+  }
+}
 
 namespace {
 // The single camera's lens flags, as typed; ApplyLensArgs checks and converts them.

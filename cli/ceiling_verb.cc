@@ -4,6 +4,7 @@
 
 #include "command_line.h"
 #include "finite_output.h"
+#include "fit_option_args.h"
 #include "skycal/core/error.h"
 #include "skycal/fit/ceiling.h"
 #include "skycal/fit/reference.h"
@@ -55,7 +56,7 @@ CeilingVerbOptions ParseCeilingArgs(int argc, char** argv) {
   if (model) o.fit.variant = render::ParseModelVariant(*model, "--model");
   o.fit.verbose = false;
   std::string why;
-  if (!o.fit.IsValid(&why)) throw Error(why);
+  if (!o.fit.IsValid(&why)) throw Error(WithFitFlags(why));
   return o;
 }
 

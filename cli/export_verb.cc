@@ -9,7 +9,29 @@
 
 namespace skycal::cli {
 
-nlohmann::json RunExportImpl(const ExportOptions& o) { return exporter::ExportGameTables(o); }
+namespace {
+
+// The export library's messages name ExportOptions' fields; the user set them with these flags.
+std::string WithExportFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"ExportOptions::presets", "--preset"},
+                                     {"ExportOptions::out_dir", "--out"},
+                                     {"ExportOptions::headroom", "--headroom"},
+                                     {"ExportOptions::fog_sigma_deg", "--fog-sigma-deg"},
+                                     {"ExportOptions::report = false", "--no-report"}};
+  return FieldsAsFlags(message, kFlags);
+}
+
+}  // namespace
+
+nlohmann::json RunExportImpl(const ExportOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(WithExportFlags(why));
+  try {
+    return exporter::ExportGameTables(o);
+  } catch (const Error& e) {
+    throw Error(WithExportFlags(e.what()));
+  }
+}
 
 ExportOptions ParseExportArgs(int argc, char** argv) {
   VerbCommandLine cl(

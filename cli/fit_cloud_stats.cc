@@ -62,20 +62,15 @@ std::string SunWhy(const cloudfit::CloudStatsPresetUpdate& u) {
 }  // namespace
 
 std::string WithCloudStatsFlags(const std::string& message) {
-  static const std::pair<const char*, const char*> kFlags[] = {
-      {"FitPhotoCloudStats: ", "--clouds stats: "},
-      {"PhotoCloudStatsOptions::width = ", "--cloud-stats-width "},
-      {"PhotoCloudStatsOptions::maps = ", "--cloud-stats-maps "},
-      {"PhotoCloudStatsOptions::renders = ", "cloud stats renders per evaluation "},
-      {"PhotoCloudStatsOptions::max_iterations = ", "--cloud-stats-iterations "},
-      {"PhotoCloudStatsOptions::sun = ", "--cloud-stats-sun "},
-      {"PhotoCloudStatsOptions::probability = ", "--cloud-stats-probability "},
-      {"PhotoCloudStatsOptions::sun_scale = ", "--cloud-stats-sun-scale "}};
-  std::string m = message;
-  for (const auto& [field, flag] : kFlags)
-    for (size_t at = m.find(field); at != std::string::npos; at = m.find(field, at))
-      m.replace(at, std::string(field).size(), flag);
-  return m;
+  static const FieldFlag kFlags[] = {{"FitPhotoCloudStats:", "--clouds stats:"},
+                                     {"PhotoCloudStatsOptions::width", "--cloud-stats-width"},
+                                     {"PhotoCloudStatsOptions::maps", "--cloud-stats-maps"},
+                                     {"PhotoCloudStatsOptions::renders", "cloud stats renders per evaluation"},
+                                     {"PhotoCloudStatsOptions::max_iterations", "--cloud-stats-iterations"},
+                                     {"PhotoCloudStatsOptions::sun", "--cloud-stats-sun"},
+                                     {"PhotoCloudStatsOptions::probability", "--cloud-stats-probability"},
+                                     {"PhotoCloudStatsOptions::sun_scale", "--cloud-stats-sun-scale"}};
+  return FieldsAsFlags(message, kFlags);
 }
 
 bool FitCloudStatsOptions::IsValid(std::string* why) const {

@@ -38,12 +38,10 @@ bool FitCloudOptions::IsValid(std::string* why) const {
   co.hold = hold;
   if (!co.IsValid(why)) {
     // The library names its fields; the user set them with these flags.
-    static const std::pair<const char*, const char*> kFlags[] = {
-        {"CloudLightingOptions::samples = ", "--cloud-samples "},
-        {"CloudLightingOptions::day_smoothness = ", "--cloud-day-smoothness "},
-        {"CloudLightingOptions::hold = ", "--cloud-hold "}};
-    for (const auto& [field, flag] : kFlags)
-      if (why->starts_with(field)) *why = flag + why->substr(std::string(field).size());
+    static const FieldFlag kFlags[] = {{"CloudLightingOptions::samples", "--cloud-samples"},
+                                       {"CloudLightingOptions::day_smoothness", "--cloud-day-smoothness"},
+                                       {"CloudLightingOptions::hold", "--cloud-hold"}};
+    *why = FieldsAsFlags(*why, kFlags);
     return false;
   }
   return true;
@@ -85,7 +83,17 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
     d.why = "--clouds auto: no cloud shapes given (--cloud-preset): clouds off without looking (the cloud mask "
             "was not computed); their pixels, if any, count in the sky terms";
   } else {
-    d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);
+    // The library names the mode and the shapes; the user gave them with --clouds and --cloud-preset.
+    static const FieldFlag kFlags[] = {{"CloudMode on", "--clouds on"},
+                                       {"CloudMode off", "--clouds off"},
+                                       {"CloudMode auto", "--clouds auto"},
+                                       {"KnownCloudShapes", "--cloud-preset"}};
+    try {
+      d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);
+    } catch (const Error& e) {
+      throw Error(FieldsAsFlags(e.what(), kFlags));
+    }
+    d.why = FieldsAsFlags(d.why, kFlags);
   }
   if (fo.verbose) Log("fit", "clouds: " + d.why);  // fit --quiet and skycal bench: off
   cloudfit::CloudLightingOptions co;

@@ -5,6 +5,7 @@
 
 #include "option_values.h"
 #include "skycal/core/error.h"
+#include "verb_common.h"
 
 namespace skycal::cli {
 namespace {
@@ -49,6 +50,22 @@ void RegisterFitOptionArgs(VerbCommandLine& cl, FitOptionArgs* a, fit::FitOption
   cl.Integer("--probe-quadrature", &f->probe_quadrature_width, -1e9, 1e9, "expected an integer width", "W",
              "lat-long width of the sky irradiance quadrature (default 128)");
   cl.Flag("--no-ground-albedo", &a->no_ground_albedo, "hold the ground albedo at the initial preset's value");
+}
+
+std::string WithFitFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"FitOptions::sun_cone_deg", "--sun-cone"},
+                                     {"FitOptions::clip_fraction", "--clip-fraction"},
+                                     {"FitOptions::loss_scale", "--loss-scale"},
+                                     {"FitOptions::linear_width", "--linear-width"},
+                                     {"FitOptions::max_iterations_per_level", "--max-iterations"},
+                                     {"FitOptions::smoothness", "--smoothness"},
+                                     {"FitOptions::prior_weight", "--prior-weight"},
+                                     {"FitOptions::pyramid_widths", "--pyramid"},
+                                     {"FitOptions::sun_dir", "--sun-dir"},
+                                     {"FitOptions::probe_weight", "--probe-weight"},
+                                     {"FitOptions::probe_quadrature_width", "--probe-quadrature"},
+                                     {"FitOptions::time_of_day_h", "--time"}};
+  return FieldsAsFlags(message, kFlags);
 }
 
 void ApplyFitOptionArgs(const FitOptionArgs& a, fit::FitOptions* f) {

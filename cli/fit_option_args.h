@@ -27,6 +27,10 @@ void RegisterFitOptionArgs(VerbCommandLine& cl, FitOptionArgs* args, fit::FitOpt
 // After Parse: the texts and negated flags into `fit`. Throws skycal::Error naming the option.
 void ApplyFitOptionArgs(const FitOptionArgs& args, fit::FitOptions* fit);
 
+// FitOptions::IsValid's message with each field written as the flag that sets it
+// ("FitOptions::sun_cone_deg = 90 (...)" -> "--sun-cone 90 (...)"), for every verb that fits.
+std::string WithFitFlags(const std::string& message);
+
 // The options a fit ran with, as fit.json and the preset's provenance record them.
 nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo);
 

@@ -85,7 +85,9 @@ bool FitVerbOptions::IsValid(std::string* why) const {
     *why = "--out DIR is required";
     return false;
   }
-  return fit.IsValid(why);
+  if (fit.IsValid(why)) return true;
+  *why = WithFitFlags(*why);  // the library names FitOptions' fields; the user gave flags
+  return false;
 }
 
 namespace {

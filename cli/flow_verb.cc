@@ -9,7 +9,20 @@
 
 namespace skycal::cli {
 
-nlohmann::json RunFlowImpl(const FlowOptions& o) { return capture::WriteFlowVectors(o); }
+nlohmann::json RunFlowImpl(const FlowOptions& o) {
+  // The library names FlowOptions' fields; the user set them with these flags.
+  static const FieldFlag kFlags[] = {{"FlowOptions::a", "frame A.exr"},
+                                     {"FlowOptions::b", "frame B.exr"},
+                                     {"FlowOptions::out", "--out"},
+                                     {"FlowOptions::scale", "--scale"}};
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(FieldsAsFlags(why, kFlags));
+  try {
+    return capture::WriteFlowVectors(o);
+  } catch (const Error& e) {
+    throw Error(FieldsAsFlags(e.what(), kFlags));
+  }
+}
 
 FlowOptions ParseFlowArgs(int argc, char** argv) {
   VerbCommandLine cl("flow",

@@ -17,6 +17,12 @@ void LogSkippedPlots(const std::string& verb, const report::ReportSummary& s) {
                 s.plots_skipped_why + "; the results are complete");
 }
 
+// The report library's messages name ReportOptions' fields; the user set them with these flags.
+std::string WithReportFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"ReportOptions::out_path", "--out"}, {"ReportOptions::max_depth", "--depth"}};
+  return FieldsAsFlags(message, kFlags);
+}
+
 }  // namespace
 
 bool ReportVerbOptions::IsValid(std::string* why) const {
@@ -24,14 +30,21 @@ bool ReportVerbOptions::IsValid(std::string* why) const {
     *why = "expected the directory to report on: skycal report DIR [--out report.html]";
     return false;
   }
-  return report.IsValid(why);
+  if (report.IsValid(why)) return true;
+  *why = WithReportFlags(*why);
+  return false;
 }
 
 nlohmann::json RunReportImpl(const ReportVerbOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   Log("report", "reading " + o.dir);
-  const report::ReportSummary s = report::WriteReport(o.dir, o.report);
+  report::ReportSummary s;
+  try {
+    s = report::WriteReport(o.dir, o.report);
+  } catch (const Error& e) {
+    throw Error(WithReportFlags(e.what()));
+  }
   Log("report", "wrote " + s.path + " (" + std::to_string(s.bytes / 1024) + " KiB: " + std::to_string(s.fits) + " fit(s), " +
                     std::to_string(s.frames) + " frame(s), " + std::to_string(s.exports) + " export(s), " +
                     std::to_string(s.benches) + " bench run(s), " + std::to_string(s.images) + " images, " +

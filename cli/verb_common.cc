@@ -1,5 +1,6 @@
 #include "verb_common.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <iostream>
@@ -9,6 +10,24 @@
 #include "skycal/render/preset.h"
 
 namespace skycal::cli {
+
+std::string FieldsAsFlags(std::string message, std::span<const FieldFlag> table) {
+  auto is_name = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (const FieldFlag& e : table) {
+    const std::string field = e.field, flag = e.flag;
+    for (size_t at = message.find(field); at != std::string::npos; at = message.find(field, at)) {
+      const size_t end = at + field.size();
+      if (end < message.size() && is_name(message[end])) {
+        at = end;
+        continue;
+      }
+      const bool valued = message.compare(end, 3, " = ") == 0;
+      message.replace(at, valued ? field.size() + 3 : field.size(), valued ? flag + " " : flag);
+      at += flag.size();
+    }
+  }
+  return message;
+}
 
 void Log(const std::string& verb, const std::string& message) { std::cerr << "[" << verb << "] " << message << std::endl; }
 

@@ -2,6 +2,7 @@
 // mapping of errors to exit codes (0 success, 1 failure).
 #pragma once
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,19 @@ int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::js
 
 // A preset as inputs for file_safety.h: its JSON (role `option`) and every LUT EXR it names.
 std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json);
+
+// A library option's field as its error messages name it ("FitOptions::sun_cone_deg") and the
+// flag that sets it ("--sun-cone"). The libraries name fields, never flags; each verb keeps the
+// table of the fields it sets next to where it registers the flags.
+struct FieldFlag {
+  const char* field;
+  const char* flag;
+};
+
+// `message` with every field of `table` written as its flag: "Struct::field = value" becomes
+// "--flag value", a bare "Struct::field" becomes "--flag". A field matches only as a whole
+// name (not followed by a letter, digit or '_'), so "X::width" leaves "X::width_px" alone.
+std::string FieldsAsFlags(std::string message, std::span<const FieldFlag> table);
 
 // --json among the arguments: known before parsing, so that a parse error is reported as JSON too.
 bool WantsJson(int argc, char** argv);

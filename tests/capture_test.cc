@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "capture_verb.h"
+#include "skycal/capture/capture_pipeline.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -224,6 +225,24 @@ TEST(Capture, LatLongBracketsKeepTheirOrientationThroughTheBinary) {
   EXPECT_EQ(kb.rc, 1);
   EXPECT_NE(kb.err.find("need --lens kannala-brandt"), std::string::npos) << kb.err;
   EXPECT_EQ(dir.CountEntries(), before);
+}
+
+// The library names CaptureOptions' fields and their values; the CLI writes them as flags
+// (tests/command_line_test.cc).
+TEST(CaptureOptions, IsValidNamesTheFieldAndItsValue) {
+  capture::CaptureOptions o;
+  o.brackets = {"a.png", "b.png"};
+  o.out = "f.exr";
+  std::string why;
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.width = 100;
+  o.height = 100;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "CaptureOptions::width x height = 100x100 (expected a 2:1 lat-long between 16x8 and 16384x8192 pixels)");
+  o.width = 200;
+  o.north_longitude_deg = 400.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "CaptureOptions::north_longitude_deg = 400 (expected degrees in [-360, 360])");
 }
 
 }  // namespace

@@ -6,13 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "batch_verb.h"
 #include "capture_verb.h"
 #include "command_line.h"
 #include "export_verb.h"
 #include "fit_verb.h"
+#include "flow_verb.h"
 #include "render_verb.h"
+#include "report_verb.h"
 #include "skycal/core/error.h"
 #include "sun_verb.h"
+#include "verb_common.h"
 
 namespace skycal::cli {
 namespace {
@@ -111,6 +115,85 @@ TEST(CommandLine, ErrorsNameTheOption) {
   EXPECT_EQ(ErrorOf(ParseFitArgs, {"--sun-elevation", "10"}), "--sun-elevation and --sun-azimuth go together");
   EXPECT_EQ(ErrorOf(ParseCaptureArgs, {"--exposure-times", "0.1,nan"}),
             "--exposure-times: expected a finite number, got 'nan'");
+}
+
+
+// The libraries name their options' fields (Ceres style); the verbs write them as the flags.
+TEST(CommandLine, FieldsAsFlagsRewritesWholeFieldNamesOnly) {
+  const FieldFlag table[] = {{"X::width", "--width"}, {"X::out", "--out"}};
+  EXPECT_EQ(FieldsAsFlags("X::width = 7 (expected an even width)", table), "--width 7 (expected an even width)");
+  EXPECT_EQ(FieldsAsFlags("X::out: needs X::width", table), "--out: needs --width");
+  // A longer name that starts with a field's is another field: left alone.
+  EXPECT_EQ(FieldsAsFlags("X::width_px = 7, X::outer = 1", table), "X::width_px = 7, X::outer = 1");
+  EXPECT_EQ(FieldsAsFlags("X::width = 1, X::width = 2", table), "--width 1, --width 2");
+  EXPECT_EQ(FieldsAsFlags("Y::width = 7", table), "Y::width = 7");
+}
+
+// What the user sees: the library's field named as the flag that set it, with its value.
+template <typename Parse, typename Run>
+std::string RunErrorOf(Parse parse, Run run, std::vector<std::string> words) {
+  Argv a(std::move(words));
+  try {
+    run(parse(a.argc(), a.argv()));
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(CommandLine, LibraryFieldsReachTheUserAsTheirFlags) {
+  BatchOptions (*parse_batch)(int, char**) = ParseBatchArgs;
+  auto fit = [](const FitCommandLine& c) {
+    std::string why;
+    if (!c.options.IsValid(&why)) throw Error(why);
+  };
+  EXPECT_EQ(RunErrorOf(ParseFitArgs, fit, {"--reference", "a.exr", "--out", "d", "--sun-cone", "90"}),
+            "--sun-cone 90 (expected degrees in [0, 45])");
+  EXPECT_EQ(RunErrorOf(ParseFitArgs, fit, {"--reference", "a.exr", "--out", "d", "--pyramid", "64,32"}),
+            "--pyramid 64,32 (expected increasing even widths in [16, 16384] pixels; 32 is not)");
+  EXPECT_EQ(RunErrorOf(ParseCaptureArgs, RunCaptureImpl, {"--brackets", "a.png", "b.png", "--north-longitude", "400", "--out", "f.exr"}),
+            "--north-longitude 400 (expected degrees in [-360, 360])");
+  EXPECT_EQ(RunErrorOf(ParseCaptureArgs, RunCaptureImpl, {"--brackets", "a.png", "b.png", "--lat", "10", "--out", "f.exr"}),
+            "--time, --lat and --lon go together (the sun by NREL SPA needs all three)");
+  EXPECT_EQ(RunErrorOf(ParseExportArgs, RunExportImpl, {"--preset", "p.json", "--out", "g", "--headroom", "2"}),
+            "--headroom 2 (expected a fraction in (0, 1])");
+  EXPECT_EQ(RunErrorOf(parse_batch, RunBatchImpl, {"--references", "d/*.exr", "--out", "b", "--poll", "0.01"}),
+            "--poll 0.01 (expected seconds in [0.05, 600])");
+  EXPECT_EQ(RunErrorOf(parse_batch, RunBatchImpl, {"--references", "d/*.exr", "--out", "b", "--loss-scale", "0"}),
+            "--loss-scale 0 (expected natural-log units in (0, 10])");
+  EXPECT_EQ(RunErrorOf(ParseFlowArgs, RunFlowImpl, {"a.exr", "b.exr", "--out", "v.png"}),
+            "--out v.png (expected a path ending in .exr; V.png and V.json are written beside it)");
+  auto report = [](const ReportVerbOptions& o) {
+    std::string why;
+    if (!o.IsValid(&why)) throw Error(why);
+  };
+  EXPECT_EQ(RunErrorOf(ParseReportArgs, report, {"dir", "--out", "r.txt"}),
+            "--out r.txt: the HTML report is written there, expected a name ending in .html or .htm");
+}
+
+// The library's own texts: the field and its value, never a flag.
+TEST(ExportOptions, IsValidNamesTheFieldAndItsValue) {
+  ExportOptions o;
+  o.presets = {"p.json"};
+  o.out_dir = "g";
+  o.fog_sigma_deg = 45.0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "ExportOptions::fog_sigma_deg = 45 (expected degrees in (0, 30])");
+}
+
+TEST(BatchOptions, IsValidNamesTheFieldAndItsValue) {
+  BatchOptions o;
+  o.references_glob = "d/*.exr";
+  o.out_dir = "b";
+  o.frames_per_job = 0;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "BatchOptions::frames_per_job = 0 (expected a positive integer)");
+  o.frames_per_job = 8;
+  o.fit.clip_fraction = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FitOptions::clip_fraction = 1.5 (expected a fraction in (0, 1])");
 }
 
 }  // namespace

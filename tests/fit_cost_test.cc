@@ -10,6 +10,7 @@
 #include "fit_state.h"
 #include "sky_row_cost.h"
 #include "skycal/core/latlong.h"
+#include "skycal/fit/fit_options.h"
 #include "test_presets.h"
 
 namespace skycal::fit {
@@ -103,6 +104,24 @@ TEST(FitCost, JacobiansMatchNumericDifferences) {
       }
     }
   }
+}
+
+// Ceres style: the field, its value and the expectation; never a command-line flag.
+TEST(FitOptions, IsValidNamesTheFieldAndItsValue) {
+  std::string why;
+  EXPECT_TRUE(FitOptions{}.IsValid(&why)) << why;
+  FitOptions o;
+  o.sun_cone_deg = -3.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FitOptions::sun_cone_deg = -3 (expected degrees in [0, 45])");
+  o = FitOptions{};
+  o.probe_quadrature_width = 130;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FitOptions::probe_quadrature_width = 130 (expected a lat-long width in [16, 2048] pixels, a multiple of 4)");
+  o = FitOptions{};
+  o.time_of_day_h = 24.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FitOptions::time_of_day_h = 24 (expected hours in [0, 24))");
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "flow_verb.h"
 #include "run_binary.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/optical_flow.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "test_util.h"
@@ -184,6 +185,17 @@ TEST(Flow, FramesOfTwoSizesAreRefused) {
   const auto one = testing::RunSkycal(SKYCAL_BINARY, "flow " + (dir / "a.exr") + " --out " + (dir / "v.exr"));
   EXPECT_EQ(one.rc, 1);
   EXPECT_NE(one.err.find("expected two frames"), std::string::npos) << one.err;
+}
+
+TEST(FlowOptions, IsValidNamesTheFieldAndItsValue) {
+  capture::FlowOptions o;
+  o.a = "a.exr";
+  o.b = "b.exr";
+  o.out = "v.exr";
+  o.scale = 17;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FlowOptions::scale = 17 (expected an integer in [1, 16]: 1 / scale of the frames' size)");
 }
 
 }  // namespace

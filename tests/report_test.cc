@@ -318,5 +318,13 @@ TEST(ReportInput, CloudStatisticsOfAPhotoFromFitJson) {
   EXPECT_NE(e.find("cloud_stats.references[0].images.error"), std::string::npos) << e;
 }
 
+TEST(ReportOptions, IsValidNamesTheFieldAndItsValue) {
+  report::ReportOptions o;
+  o.max_depth = 9;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "ReportOptions::max_depth = 9 (expected directory levels searched below DIR in [0, 8])");
+}
+
 }  // namespace
 }  // namespace skycal

@@ -9,47 +9,35 @@
 #include "batch_process.h"
 #include "batch_worker.h"
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 
 namespace skycal::batch {
 namespace fs = std::filesystem;
 
 bool BatchOptions::IsValid(std::string* why) const {
-  if (out_dir.empty()) {
-    *why = "--out DIR is required";
+  // Ceres style: the field, its value, what was expected.
+  auto bad = [&](const std::string& m) {
+    *why = "BatchOptions::" + m;
     return false;
-  }
+  };
+  if (out_dir.empty()) return bad("out_dir is required (the batch directory)");
   if (worker_chunk >= 0 || reduce_only) {
-    if (worker_chunk >= 0 && reduce_only) {
-      *why = "--worker-chunk and --reduce are separate modes";
-      return false;
-    }
-    return true;  // the rest comes from the plan in --out
+    if (worker_chunk >= 0 && reduce_only)
+      return bad("worker_chunk = " + std::to_string(worker_chunk) + " and BatchOptions::reduce_only are separate modes");
+    return true;  // the rest comes from the plan in out_dir
   }
-  if (references_glob.empty()) {
-    *why = "--references 'GLOB' is required (e.g. 'day/*.exr', quoted)";
-    return false;
-  }
-  if (frames_per_job < 1) {
-    *why = "--frames-per-job: expected a positive integer";
-    return false;
-  }
-  if (jobs < 0) {
-    *why = "--jobs: expected a positive integer (0: the machine's cores)";
-    return false;
-  }
-  if (day_frames < 0) {
-    *why = "--day-frames: expected 0 (all frames) or a positive integer";
-    return false;
-  }
-  if (!(poll_s >= 0.05 && poll_s <= 600.0)) {
-    *why = "--poll: expected seconds in [0.05, 600]";
-    return false;
-  }
-  if (fit.sun_dir || fit.time_of_day_h) {
-    *why = "a batch takes each frame's sun direction and time from its EXR attributes";
-    return false;
-  }
+  if (references_glob.empty()) return bad("references_glob is required (a glob such as 'day/*.exr')");
+  if (frames_per_job < 1)
+    return bad("frames_per_job = " + std::to_string(frames_per_job) + " (expected a positive integer)");
+  if (jobs < 0) return bad("jobs = " + std::to_string(jobs) + " (expected a positive integer, or 0: the machine's cores)");
+  if (day_frames < 0)
+    return bad("day_frames = " + std::to_string(day_frames) + " (expected 0: all frames, or a positive integer)");
+  if (!(poll_s >= 0.05 && poll_s <= 600.0))
+    return bad("poll_s = " + FormatNumber(poll_s) + " (expected seconds in [0.05, 600])");
+  if (fit.sun_dir || fit.time_of_day_h)
+    return bad("fit.sun_dir and fit.time_of_day_h must be unset (a batch takes each frame's sun direction and time "
+               "from its EXR attributes)");
   return fit.IsValid(why);
 }
 
@@ -88,7 +76,7 @@ nlohmann::json RunLocal(const BatchOptions& o, const BatchPlan& plan, int jobs, 
   if (p.done != p.total) {
     throw Error(std::to_string(p.total - p.done) + " of " + std::to_string(p.total) + " frames are not fitted (logs in " +
                 (fs::path(o.out_dir) / "logs").string() + "):" + DescribeUnfinishedFrames(o.out_dir, plan, 10) +
-                "\nthe other frames are kept: fix the cause and run again with --resume (no reduce was run)");
+                "\nthe other frames are kept: fix the cause and run again with BatchOptions::resume (no reduce was run)");
   }
   return RunBatchReduce(o.out_dir, hooks);
 }
@@ -102,14 +90,16 @@ nlohmann::json RunSlurm(const BatchOptions& o, const BatchPlan& plan, nlohmann::
   if (p.done == p.total && !fs::exists(bj, ec)) {
     throw Error("every frame is fitted but the reduce job " + engine.value("reduce_job", std::string("?")) + " ended " +
                 engine.value("reduce_state", std::string("?")) + " without batch.json: see " +
-                (fs::path(o.out_dir) / "logs/reduce.log").string() + "; run again with --resume to reduce again");
+                (fs::path(o.out_dir) / "logs/reduce.log").string() +
+                "; run again with BatchOptions::resume to reduce again");
   }
   if (p.done != p.total) {
     throw Error(std::to_string(p.total - p.done) + " of " + std::to_string(p.total) + " frames are not fitted; the reduce job " +
                 engine.value("reduce_job", std::string("?")) + " is " + engine.value("reduce_state", std::string("?")) +
                 (engine.contains("reduce_reason") ? " (" + engine["reduce_reason"].get<std::string>() + ")" : std::string()) +
                 " (logs in " + (fs::path(o.out_dir) / "logs").string() + "):" + DescribeUnfinishedFrames(o.out_dir, plan, 10) +
-                "\nthe other frames are kept: run again with --resume to resubmit only the missing or failed ones");
+                "\nthe other frames are kept: run again with BatchOptions::resume to resubmit only the missing or "
+                "failed ones");
   }
   return ReadJsonFile(bj.string());
 }
@@ -123,7 +113,7 @@ nlohmann::json RunBatch(const BatchOptions& o, const BatchHooks& hooks) {
   if (o.reduce_only) return RunBatchReduce(o.out_dir, hooks);
 
   const auto t0 = std::chrono::steady_clock::now();
-  if (o.engine == BatchEngine::kSlurm) RequireSlurmClient();  // before --out is touched
+  if (o.engine == BatchEngine::kSlurm) RequireSlurmClient();  // before out_dir is touched
   BatchPlan plan;
   plan.frames = ScanBatchFrames(ExpandReferenceGlob(o.references_glob));
   plan.chunks = ChunkFrames(static_cast<int>(plan.frames.size()), o.frames_per_job);

@@ -22,7 +22,7 @@ namespace {
 
 constexpr const char* kPlanFile = "batch_plan.json";
 constexpr const char* kLockFile = ".batch.lock";
-const char* const kHow = "; choose another --out, or delete it yourself if it is yours to delete";
+const char* const kHow = "; choose another BatchOptions::out_dir, or delete it yourself if it is yours to delete";
 
 nlohmann::json FrameToJson(const BatchFrame& f) {
   return {{"path", f.path},          {"name", f.name},         {"time_of_day_h", f.time_of_day_h},
@@ -69,7 +69,7 @@ std::string IdentityDifference(const nlohmann::json& have, const nlohmann::json&
 }  // namespace
 
 std::vector<std::string> ExpandReferenceGlob(const std::string& pattern) {
-  if (pattern.empty()) throw Error("--references: expected a glob such as 'DIR/*.exr'");
+  if (pattern.empty()) throw Error("BatchOptions::references_glob is empty (expected a glob such as 'DIR/*.exr')");
   glob_t g{};
   const int rc = ::glob(pattern.c_str(), 0, nullptr, &g);
   std::vector<std::string> paths;
@@ -78,10 +78,11 @@ std::vector<std::string> ExpandReferenceGlob(const std::string& pattern) {
   }
   ::globfree(&g);
   if (rc == GLOB_NOMATCH || paths.empty()) {
-    throw Error("--references '" + pattern + "': matches no file (expected lat-long EXR frames; quote the glob so the "
-                "shell does not expand it)");
+    throw Error("BatchOptions::references_glob = '" + pattern +
+                "': matches no file (expected lat-long EXR frames; quote the glob so the shell does not expand it)");
   }
-  if (rc != 0) throw Error("--references '" + pattern + "': the glob could not be read (a directory is unreadable)");
+  if (rc != 0)
+    throw Error("BatchOptions::references_glob = '" + pattern + "': the glob could not be read (a directory is unreadable)");
   std::sort(paths.begin(), paths.end());
   return paths;
 }
@@ -129,12 +130,12 @@ std::vector<BatchFrame> ScanBatchFrames(const std::vector<std::string>& paths) {
   if (!no_sun.empty()) {
     throw Error(std::to_string(no_sun.size()) + " frame(s) without a sun direction (the EXR attribute 'sunDirection', "
                 "a V3f toward the sun, as capture and render write it): " + list(no_sun) +
-                "; a batch does not guess the sun per frame: add it (skycal capture --time/--lat/--lon, or import "
-                "--detect-sun) or leave those frames out");
+                "; a batch does not guess the sun per frame: add it (skycal capture given the time and place, or "
+                "skycal import detecting the sun) or leave those frames out");
   }
   if (!no_time.empty()) {
     throw Error(std::to_string(no_time.size()) + " frame(s) without a time of day (the EXR attribute 'skycalTimeOfDay', "
-                "hours, as capture --time and render --time-of-day write it): " + list(no_time) +
+                "hours, as capture and render write it when given the time): " + list(no_time) +
                 "; a batch orders its frames by time");
   }
   for (const BatchFrame& f : frames) {
@@ -231,7 +232,7 @@ bool EmptyButLock(const fs::path& dir) {
 
 BatchLock PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& plan, bool resume) {
   const fs::path dir = fs::absolute(out_dir).lexically_normal();
-  const std::string shown = "--out " + out_dir;
+  const std::string shown = "BatchOptions::out_dir = " + out_dir;
   std::error_code ec;
   if (fs::exists(dir, ec)) {
     if (!fs::is_directory(dir, ec)) throw Error(shown + ": exists and is not a directory");
@@ -249,7 +250,8 @@ BatchLock PrepareBatchDirectory(const std::string& out_dir, const BatchPlan& pla
       if (!resume) {
         const BatchProgress p = CountBatchProgress(dir.string(), plan);
         throw Error(shown + ": already holds this batch (" + std::to_string(p.done) + " of " + std::to_string(p.total) +
-                    " frames done): pass --resume to fit only the missing or failed frames, or choose another --out");
+                    " frames done): pass BatchOptions::resume to fit only the missing or failed frames, or choose another "
+                    "BatchOptions::out_dir");
       }
     } else if (!EmptyButLock(dir)) {
       throw Error(shown + ": directory exists and is not a skycal batch directory (no " + kPlanFile +

@@ -62,11 +62,12 @@ std::string FirstToken(std::string s) {
 void RequireSlurmClient() {
   const std::string sbatch = FindOnPath("sbatch");
   if (sbatch.empty()) {
-    throw Error("--engine slurm: sbatch not found on PATH (install the Slurm client, Debian's slurm-client, and point "
-                "SLURM_CONF at the cluster's slurm.conf; or use --engine local)");
+    throw Error("BatchOptions::engine = slurm: sbatch not found on PATH (install the Slurm client, Debian's "
+                "slurm-client, and point SLURM_CONF at the cluster's slurm.conf; or use BatchOptions::engine = local)");
   }
   if (FindOnPath("squeue").empty() || FindOnPath("scontrol").empty()) {
-    throw Error("--engine slurm: squeue or scontrol not found on PATH beside " + sbatch + " (the Slurm client)");
+    throw Error("BatchOptions::engine = slurm: squeue or scontrol not found on PATH beside " + sbatch +
+                " (the Slurm client)");
   }
 }
 
@@ -84,8 +85,8 @@ void RefuseIfEarlierJobsQueued(const std::string& out_dir, const fs::path& sdir,
   if (ids.empty()) return;
   const Captured q = RunCapture({squeue, "-h", "-j", ids, "-o", "%i %T"});
   if (q.status == 0 && q.out.find_first_not_of(" \n") != std::string::npos) {
-    throw Error("--out " + out_dir + ": its earlier Slurm jobs (" + ids + ") are still in the queue:\n" + q.out +
-                "wait for them (or scancel them), then run again with --resume");
+    throw Error("BatchOptions::out_dir = " + out_dir + ": its earlier Slurm jobs (" + ids + ") are still in the queue:\n" +
+                q.out + "wait for them (or scancel them), then run again with BatchOptions::resume");
   }
 }
 
@@ -130,7 +131,8 @@ std::string SubmitChunkArray(const std::string& sbatch, const std::vector<int>& 
   const Captured c = RunCapture(args);
   const std::string array_id = FirstToken(c.out);
   if (c.status != 0 || array_id.empty()) {
-    throw Error("--engine slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) + "; its message is above)");
+    throw Error("BatchOptions::engine = slurm: sbatch refused the chunk array (" + DescribeWaitStatus(c.status) +
+                "; its message is above)");
   }
   BatchLog("submitted the chunk array: job " + array_id + " (" + std::to_string(pending.size()) + " tasks: " + array + ")");
   return array_id;
@@ -151,7 +153,7 @@ std::string SubmitReduce(const std::string& sbatch, const std::string& array_id,
   const std::string reduce_id = FirstToken(rc.out);
   if (rc.status != 0 || reduce_id.empty()) {
     if (!array_id.empty()) RunCapture({FindOnPath("scancel"), array_id});
-    throw Error("--engine slurm: sbatch refused the reduce job (" + DescribeWaitStatus(rc.status) +
+    throw Error("BatchOptions::engine = slurm: sbatch refused the reduce job (" + DescribeWaitStatus(rc.status) +
                 "; its message is above); the chunk array " + array_id + " was cancelled");
   }
   BatchLog("submitted the reduce: job " + reduce_id + (array_id.empty() ? "" : " (afterok:" + array_id + ")"));

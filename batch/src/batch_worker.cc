@@ -50,7 +50,7 @@ void WriteBatchReport(const std::string& out_dir) {
   try {
     s = report::WriteReport(out_dir, ro);
   } catch (const Error& e) {
-    throw Error(std::string("report.html: ") + e.what() + " (--no-report leaves the report out)");
+    throw Error(std::string("report.html: ") + e.what() + " (the report of the batch's fits)");
   }
   BatchLog("report.html: " + std::to_string(s.images) + " images, " + std::to_string(s.plots) + " plots, " +
            std::to_string(s.bytes / 1024) + " KiB");
@@ -61,7 +61,7 @@ void WriteBatchReport(const std::string& out_dir) {
 nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchHooks& hooks) {
   const BatchPlan plan = LoadBatchPlan(out_dir);
   if (chunk < 0 || chunk >= static_cast<int>(plan.chunks.size())) {
-    throw Error("--worker-chunk " + std::to_string(chunk) + ": the plan in " + out_dir + " has " +
+    throw Error("BatchOptions::worker_chunk = " + std::to_string(chunk) + ": the plan in " + out_dir + " has " +
                 std::to_string(plan.chunks.size()) + " chunks");
   }
   const BatchOptions o = hooks.parse_options(plan.argv);
@@ -148,7 +148,7 @@ nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hook
   if (p.done != p.total) {
     throw Error("reduce: " + std::to_string(p.total - p.done) + " of " + std::to_string(p.total) +
                 " frames are not fitted:" + DescribeUnfinishedFrames(out_dir, plan, 10) +
-                "\nrun `skycal batch --resume` with the same options to fit them");
+                "\nrun the batch again with BatchOptions::resume and the same options to fit them");
   }
   nlohmann::json frames = nlohmann::json::array();
   double warm_s = 0, cold_s = 0;

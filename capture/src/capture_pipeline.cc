@@ -14,6 +14,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/sha256.h"
 #include "skycal/core/version.h"
@@ -48,33 +49,69 @@ std::array<double, 3> CaptureOptions::CameraRotationDeg() const {
 }
 
 namespace {
-// The lens flags given must fit the input: refused, never silently dropped.
+// The lens settings given must fit the input: refused, never silently dropped. Messages name
+// CaptureOptions' fields (the CLI writes them as its flags).
 bool LensFlagsFitTheInput(const CaptureOptions& o, std::string* why) {
-  std::vector<std::string> lens_flags;
-  if (o.lens_fov_given) lens_flags.push_back("--lens-fov-deg");
-  if (o.lens_center_given) lens_flags.push_back("--lens-center");
-  if (o.lens_radius_given) lens_flags.push_back("--lens-radius");
-  if (o.kb_given) lens_flags.push_back("--kb-k");
-  if (o.vignetting_given) lens_flags.push_back("--vignetting");
+  std::vector<std::string> given;
+  if (o.lens_fov_given) given.push_back("CaptureOptions::lens_fov_given");
+  if (o.lens_center_given) given.push_back("CaptureOptions::lens_center_given");
+  if (o.lens_radius_given) given.push_back("CaptureOptions::lens_radius_given");
+  if (o.kb_given) given.push_back("CaptureOptions::kb_given");
+  if (o.vignetting_given) given.push_back("CaptureOptions::vignetting_given");
   auto joined = [](const std::vector<std::string>& v) {
     std::string s;
     for (const auto& f : v) s += (s.empty() ? "" : ", ") + f;
     return s;
   };
-  if (!o.rig_path.empty() && (o.lens_model_given || !lens_flags.empty() || o.camera_ypr_deg)) {
-    *why = "--rig: the rig file gives each camera's lens and rotation; drop --lens, --camera-rotation and the "
-           "other lens flags";
+  if (!o.rig_path.empty() && (o.lens_model_given || !given.empty() || o.camera_ypr_deg)) {
+    if (o.camera_ypr_deg) given.insert(given.begin(), "CaptureOptions::camera_ypr_deg");
+    if (o.lens_model_given) given.insert(given.begin(), "CaptureOptions::lens_model_given");
+    *why = "CaptureOptions::rig_path = " + o.rig_path + ": the rig file gives each camera's lens and rotation; drop " +
+           joined(given);
     return false;
   }
-  if (o.lens.model == LensModel::kLatLong && !lens_flags.empty()) {
-    *why = "--lens latlong: " + joined(lens_flags) +
+  if (o.lens.model == LensModel::kLatLong && !given.empty()) {
+    *why = "CaptureOptions::lens.model = latlong: " + joined(given) +
            " describe a fisheye's image circle; a lat-long input has none (it spans 360 x 180 degrees, its "
-           "centre and radius follow from its size). Drop them, or give the fisheye model with --lens";
+           "centre and radius follow from its size). Drop them, or give the fisheye model";
     return false;
   }
   if (o.kb_given && o.lens.model != LensModel::kKannalaBrandt) {
-    *why = std::string("--kb-k: Kannala-Brandt coefficients need --lens kannala-brandt (got --lens ") +
-           LensModelName(o.lens.model) + ")";
+    *why = std::string("CaptureOptions::kb_given: Kannala-Brandt coefficients need CaptureOptions::lens.model = "
+                       "kannala-brandt (got ") + LensModelName(o.lens.model) + ")";
+    return false;
+  }
+  return true;
+}
+
+// The place and the colour: the sun by NREL SPA needs time and place together; one colour
+// source at a time.
+bool PlaceAndColorFit(const CaptureOptions& o, std::string* why) {
+  const bool any_place = !o.time_iso.empty() || o.latitude_deg || o.longitude_deg;
+  const bool all_place = !o.time_iso.empty() && o.latitude_deg && o.longitude_deg;
+  if (any_place && !all_place) {
+    *why = "CaptureOptions::time_iso, CaptureOptions::latitude_deg and CaptureOptions::longitude_deg go together "
+           "(the sun by NREL SPA needs all three)";
+    return false;
+  }
+  if (!(std::abs(o.north_longitude_deg) <= 360.0)) {
+    *why = "CaptureOptions::north_longitude_deg = " + FormatNumber(o.north_longitude_deg) +
+           " (expected degrees in [-360, 360])";
+    return false;
+  }
+  if (!o.chart_path.empty() && !o.color_correction_path.empty()) {
+    *why = "CaptureOptions::chart_path and CaptureOptions::color_correction_path: give one (a chart image fits the "
+           "correction now, a color correction file reads one skycal chart wrote)";
+    return false;
+  }
+  if (o.chart_corners && o.chart_path.empty()) {
+    *why = "CaptureOptions::chart_corners: needs CaptureOptions::chart_path (the image the corners are in)";
+    return false;
+  }
+  if ((!o.chart_path.empty() || !o.color_correction_path.empty()) && o.input_colorspace != "lin_rec709") {
+    *why = std::string(o.chart_path.empty() ? "CaptureOptions::color_correction_path" : "CaptureOptions::chart_path") +
+           " with CaptureOptions::input_colorspace = " + o.input_colorspace +
+           ": the chart's 3x3 already takes camera RGB to lin_rec709; drop one of them";
     return false;
   }
   return true;
@@ -83,61 +120,37 @@ bool LensFlagsFitTheInput(const CaptureOptions& o, std::string* why) {
 
 bool CaptureOptions::IsValid(std::string* why) const {
   if (brackets.empty() == rig_path.empty()) {
-    *why = "give either --brackets IMG... (one camera) or --rig RIG.json";
+    *why = "give either CaptureOptions::brackets (one camera's images) or CaptureOptions::rig_path (a rig file)";
     return false;
   }
   if (!LensFlagsFitTheInput(*this, why)) return false;
   if (!brackets.empty() && brackets.size() < 2) {
-    *why = "--brackets: at least two exposures are needed to merge (got 1)";
+    *why = "CaptureOptions::brackets: at least two exposures are needed to merge (got 1)";
     return false;
   }
   if (!exposure_times_s.empty() && exposure_times_s.size() != brackets.size()) {
-    *why = "--exposure-times: " + std::to_string(exposure_times_s.size()) + " times for " +
+    *why = "CaptureOptions::exposure_times_s: " + std::to_string(exposure_times_s.size()) + " times for " +
            std::to_string(brackets.size()) + " brackets";
     return false;
   }
   if (width < 16 || height < 8 || width > 16384 || width != 2 * height) {
-    *why = "--size: expected a 2:1 lat-long between 16x8 and 16384x8192";
+    *why = "CaptureOptions::width x height = " + std::to_string(width) + "x" + std::to_string(height) +
+           " (expected a 2:1 lat-long between 16x8 and 16384x8192 pixels)";
     return false;
   }
   if (out.size() < 5 || out.substr(out.size() - 4) != ".exr") {
-    *why = "--out: expected a path ending in .exr";
+    *why = "CaptureOptions::out = " + out + " (expected a path ending in .exr)";
     return false;
   }
-  const bool any_place = !time_iso.empty() || latitude_deg || longitude_deg;
-  const bool all_place = !time_iso.empty() && latitude_deg && longitude_deg;
-  if (any_place && !all_place) {
-    *why = "--time, --lat and --lon go together (the sun by NREL SPA needs all three)";
-    return false;
-  }
-  if (!(std::abs(north_longitude_deg) <= 360.0)) {
-    *why = "--north-longitude: expected degrees in [-360, 360]";
-    return false;
-  }
-  if (!chart_path.empty() && !color_correction_path.empty()) {
-    *why = "--chart and --color-correction: give one (--chart fits the correction from a chart image now, "
-           "--color-correction reads one skycal chart wrote)";
-    return false;
-  }
-  if (chart_corners && chart_path.empty()) {
-    *why = "--chart-corners: needs --chart IMG (the image the corners are in)";
-    return false;
-  }
-  if ((!chart_path.empty() || !color_correction_path.empty()) && input_colorspace != "lin_rec709") {
-    *why = std::string(chart_path.empty() ? "--color-correction" : "--chart") +
-           " with --input-colorspace " + input_colorspace +
-           ": the chart's 3x3 already takes camera RGB to lin_rec709; drop one of them";
-    return false;
-  }
+  if (!PlaceAndColorFit(*this, why)) return false;
   if (!remove_stars && !(stars == StarRemovalOptions{})) {
-    *why = "--star-window, --star-sigma, --star-contrast, --star-max-pixels: only with --remove-stars "
+    *why = "CaptureOptions::stars: only with CaptureOptions::remove_stars "
            "(without it no star is removed and they would do nothing)";
     return false;
   }
   if (remove_stars && !stars.IsValid(why)) return false;
   return merge.IsValid(why);
 }
-
 
 nlohmann::json ChartSummary(const ColorCorrection& c) {
   const nlohmann::json j = ColorCorrectionToJson(c);
@@ -160,7 +173,8 @@ std::optional<ColorCorrection> CaptureColorCorrection(const CaptureOptions& o,
     try {
       j = nlohmann::json::parse(ReadFile(o.color_correction_path));
     } catch (const nlohmann::json::exception& e) {
-      throw Error(o.color_correction_path + ": --color-correction: not valid JSON (" + e.what() + ")");
+      throw Error("CaptureOptions::color_correction_path = " + o.color_correction_path + ": not valid JSON (" + e.what() +
+                  ")");
     }
     return ColorCorrectionFromJson(j, o.color_correction_path);
   }
@@ -184,19 +198,19 @@ CapturePlan PlanCapture(const CaptureOptions& o) {
   CapturePlan plan;
   // Inputs first (the rig names its cameras' images): --out must replace none of them.
   std::vector<NamedPath> inputs;
-  for (const auto& p : o.brackets) inputs.push_back({"--brackets", p});
-  if (!o.chart_path.empty()) inputs.push_back({"--chart", o.chart_path});
-  if (!o.color_correction_path.empty()) inputs.push_back({"--color-correction", o.color_correction_path});
+  for (const auto& p : o.brackets) inputs.push_back({"CaptureOptions::brackets", p});
+  if (!o.chart_path.empty()) inputs.push_back({"CaptureOptions::chart_path", o.chart_path});
+  if (!o.color_correction_path.empty()) inputs.push_back({"CaptureOptions::color_correction_path", o.color_correction_path});
   if (!o.rig_path.empty()) {
-    inputs.push_back({"--rig", o.rig_path});
+    inputs.push_back({"CaptureOptions::rig_path", o.rig_path});
     plan.rig_cameras = ReadRigFile(o.rig_path);
     for (const auto& cam : plan.rig_cameras)
-      inputs.push_back({"--rig " + o.rig_path + " camera '" + cam.name + "' image", cam.image});
+      inputs.push_back({"CaptureOptions::rig_path = " + o.rig_path + " camera '" + cam.name + "' image", cam.image});
   }
-  RefuseOutputsOverInputs({{"--out", o.out}}, inputs);
+  RefuseOutputsOverInputs({{"CaptureOptions::out", o.out}}, inputs);
   { AtomicOutput probe(o.out); }  // fail early on an unwritable destination
   if (!o.time_iso.empty()) {
-    plan.spa_input = ParseIso8601(o.time_iso, "--time");
+    plan.spa_input = ParseIso8601(o.time_iso, "CaptureOptions::time_iso");
     plan.spa_input.latitude_deg = *o.latitude_deg;
     plan.spa_input.longitude_deg = *o.longitude_deg;
     plan.spa = ComputeSolarPosition(plan.spa_input);
@@ -231,7 +245,7 @@ RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
   const std::array<double, 3> ypr = o.CameraRotationDeg();
   cam.rotation = RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
   if (cam.lens.model == LensModel::kLatLong && !o.camera_ypr_deg)
-    Progress(o, "--lens latlong: camera rotation = identity (the input is already a world lat-long)");
+    Progress(o, "lens model latlong: camera rotation = identity (the input is already a world lat-long)");
   cam.name = "camera";
   return cam;
 }
@@ -266,7 +280,7 @@ CameraImages LoadRigStage(const std::vector<RigCamera>& rig_cameras, nlohmann::j
     r.images.push_back(std::move(exr.image));
     r.sources.push_back({{"path", cam.image}, {"sha256", Sha256OfFile(cam.image)}});
   }
-  skipped->push_back({{"stage", "merge"}, {"reason", "--rig: the cameras' images are HDR already"}});
+  skipped->push_back({{"stage", "merge"}, {"reason", "rig: the cameras' images are HDR already"}});
   return r;
 }
 
@@ -347,7 +361,7 @@ SunResult SunStage(const CaptureOptions& o, const std::optional<SpaResult>& spa,
       sun["camera_heading_offset_deg"] = offset;
       sun["suggested_north_longitude_deg"] = std::remainder(o.north_longitude_deg + offset, 360.0);
       Progress(o, "camera heading: the detected sun is " + std::to_string(offset) +
-                      " deg of longitude from the SPA sun; --north-longitude " +
+                      " deg of longitude from the SPA sun; CaptureOptions::north_longitude_deg = " +
                       std::to_string(sun["suggested_north_longitude_deg"].get<double>()) + " aligns them");
     } else {
       r.direction = d->direction;
@@ -356,7 +370,9 @@ SunResult SunStage(const CaptureOptions& o, const std::optional<SpaResult>& spa,
     sun["detection"] = "no distinct sun: " + detect_why;
   }
   if (!r.direction)
-    skipped->push_back({{"stage", "sunDirection"}, {"reason", "no --time/--lat/--lon and no sun detected"}});
+    skipped->push_back({{"stage", "sunDirection"},
+                        {"reason", "no time and place (CaptureOptions::time_iso, latitude_deg, longitude_deg) and no sun "
+                                   "detected"}});
   return r;
 }
 

@@ -118,15 +118,15 @@ void ZenithCapFlow(const ImageRGB& a, const ImageRGB& b, double lo, double hi, s
 
 bool FlowOptions::IsValid(std::string* why) const {
   if (a.empty() || b.empty()) {
-    *why = "two frames are required: skycal flow A.exr B.exr --out V.exr";
+    *why = "FlowOptions::a and FlowOptions::b are required (two consecutive frames)";
     return false;
   }
   if (out.size() < 5 || out.substr(out.size() - 4) != ".exr") {
-    *why = "--out: expected a path ending in .exr (V.png and V.json are written beside it)";
+    *why = "FlowOptions::out = " + out + " (expected a path ending in .exr; V.png and V.json are written beside it)";
     return false;
   }
   if (scale < 1 || scale > 16) {
-    *why = "--scale: expected an integer in [1, 16]";
+    *why = "FlowOptions::scale = " + std::to_string(scale) + " (expected an integer in [1, 16]: 1 / scale of the frames' size)";
     return false;
   }
   return true;
@@ -270,7 +270,7 @@ nlohmann::json WriteFlowVectors(const FlowOptions& o) {
   const std::filesystem::path exr(o.out);
   const std::string png = std::filesystem::path(exr).replace_extension(".png").string();
   const std::string sidecar = std::filesystem::path(exr).replace_extension(".json").string();
-  RefuseOutputsOverInputs({{"--out", o.out}, {"--out's 8-bit image", png}, {"--out's sidecar", sidecar}},
+  RefuseOutputsOverInputs({{"FlowOptions::out", o.out}, {"FlowOptions::out's 8-bit image", png}, {"FlowOptions::out's sidecar", sidecar}},
                           {{"frame A", o.a}, {"frame B", o.b}});
   const LatLongFrame fa = ReadLatLongFrame(o.a), fb = ReadLatLongFrame(o.b);
   const int w = fa.radiance.width, h = fa.radiance.height;

@@ -288,7 +288,7 @@ CloudDecision DecideClouds(CloudMode mode, const std::vector<fit::Reference>& re
   const auto t0 = Clock::now();
   CloudDecision d;
   if (mode == CloudMode::kOff) {
-    d.why = "--clouds off: the sky alone is fitted; no cloud is marched";
+    d.why = "CloudMode off: the sky alone is fitted; no cloud is marched";
     return d;
   }
   const std::string none_cloudy_ref = [&]() -> std::string {
@@ -318,27 +318,27 @@ CloudDecision DecideClouds(CloudMode mode, const std::vector<fit::Reference>& re
                            " are cloud (" + FormatNumber(100.0 * d.cloud_fraction) + "%, cloud mask probability >= 0.5)";
   if (mode == CloudMode::kOn) {
     if (!none_cloudy_ref.empty()) {
-      throw Error(none_cloudy_ref + ": --clouds on but the reference has no cloud pixels (cloud mask probability >= 0.5; " +
-                  seen + "): fit it with --clouds off or auto");
+      throw Error(none_cloudy_ref + ": CloudMode on but the reference has no cloud pixels (cloud mask probability >= 0.5; " +
+                  seen + "): fit it with CloudMode off or auto");
     }
-    if (!shapes_given) throw Error("--clouds on needs the cloud shapes: --cloud-preset PRESET.json (a clouds section)");
+    if (!shapes_given) throw Error("CloudMode on needs the cloud shapes: KnownCloudShapes (a preset's clouds section)");
     d.march = true;
-    d.why = "--clouds on: " + seen;
+    d.why = "CloudMode on: " + seen;
     return d;
   }
   if (d.cloud_fraction < min_cloud_fraction) {
-    d.why = "--clouds auto: clear (" + seen + ", below " + FormatNumber(100.0 * min_cloud_fraction) +
+    d.why = "CloudMode auto: clear (" + seen + ", below " + FormatNumber(100.0 * min_cloud_fraction) +
             "%): no cloud is marched and every cloud parameter is held";
     return d;
   }
   if (!shapes_given) {
-    d.why = "--clouds auto: " + seen +
-            ", but no cloud shapes were given (--cloud-preset): the known-shapes term cannot run; clouds off (their "
+    d.why = "CloudMode auto: " + seen +
+            ", but no cloud shapes were given (KnownCloudShapes): the known-shapes term cannot run; clouds off (their "
             "pixels still count in the sky terms)";
     return d;
   }
   d.march = true;
-  d.why = "--clouds auto: cloudy (" + seen + "): the cloud lighting joins the fit";
+  d.why = "CloudMode auto: cloudy (" + seen + "): the cloud lighting joins the fit";
   return d;
 }
 

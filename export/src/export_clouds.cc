@@ -116,7 +116,7 @@ void ExportCloudKeyframes(const std::vector<render::Preset>& presets, const std:
     return;
   }
   if (!without.empty()) {
-    skipped->push_back({{"block", "cloud keyframes of " + without}, {"reason", "no clouds section (fit --clouds)"}});
+    skipped->push_back({{"block", "cloud keyframes of " + without}, {"reason", "no clouds section (a cloud fit writes it)"}});
   }
   std::stable_sort(keys.begin(), keys.end(), [](const CloudKey& a, const CloudKey& b) { return a.time_h < b.time_h; });
   for (size_t k = 1; k < keys.size(); ++k) {

@@ -14,6 +14,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
@@ -65,7 +66,9 @@ ImageRGB BlurredLatLong(const ImageRGB& sky, double sigma_deg, int out_w, int ou
   const double deg_per_px = 180.0 / (h - 1);
   const double sigma_px = sigma_deg / deg_per_px;
   const int pad = static_cast<int>(std::ceil(3.0 * sigma_px));
-  if (pad >= h) throw Error("--fog-sigma-deg: blur too wide for the " + std::to_string(sky.width) + "x" + std::to_string(h) + " sky");
+  if (pad >= h)
+    throw Error("ExportOptions::fog_sigma_deg = " + FormatNumber(sigma_deg) + ": blur too wide for the " +
+                std::to_string(sky.width) + "x" + std::to_string(h) + " sky");
   cv::Mat padded(h + 2 * pad, period + 2 * pad, CV_32FC3);
   const int half_turn = (period + 1) / 2;
   for (int py = 0; py < padded.rows; ++py) {
@@ -120,19 +123,19 @@ constexpr double kHalfMinNormal = 6.103515625e-05;
 
 bool ExportOptions::IsValid(std::string* why) const {
   if (presets.empty()) {
-    *why = "at least one --preset is required";
+    *why = "ExportOptions::presets is empty (expected at least one preset JSON)";
     return false;
   }
   if (out_dir.empty()) {
-    *why = "--out GAME_DIR is required";
+    *why = "ExportOptions::out_dir is required (the game directory)";
     return false;
   }
   if (!(headroom > 0.0 && headroom <= 1.0)) {
-    *why = "--headroom: expected a fraction in (0, 1]";
+    *why = "ExportOptions::headroom = " + FormatNumber(headroom) + " (expected a fraction in (0, 1])";
     return false;
   }
   if (!(fog_sigma_deg > 0.0 && fog_sigma_deg <= 30.0)) {
-    *why = "--fog-sigma-deg: expected degrees in (0, 30]";
+    *why = "ExportOptions::fog_sigma_deg = " + FormatNumber(fog_sigma_deg) + " (expected degrees in (0, 30])";
     return false;
   }
   return true;
@@ -375,7 +378,7 @@ std::vector<size_t> KeyedPresets(const std::vector<render::Preset>& presets, nlo
   for (size_t i = 0; i < presets.size(); ++i)
     if (std::isfinite(presets[i].time_of_day_h)) keyed.push_back(i);
   if (keyed.empty()) {
-    skipped->push_back({{"block", "keyframe table"}, {"reason", "no preset carries time_of_day_h (fit --time H)"}});
+    skipped->push_back({{"block", "keyframe table"}, {"reason", "no preset carries time_of_day_h (a fit given the time of day records it)"}});
     return keyed;
   }
   if (keyed.size() < presets.size()) {
@@ -437,7 +440,7 @@ void WriteExportReport(const std::string& staging_dir) {
   try {
     s = report::WriteReport(staging_dir, ro);
   } catch (const Error& e) {
-    throw Error(std::string("report.html: ") + e.what() + " (--no-report leaves the report out)");
+    throw Error(std::string("report.html: ") + e.what() + " (ExportOptions::report = false leaves the report out)");
   }
   Log("report.html: " + std::to_string(s.images) + " images, " + std::to_string(s.plots) + " plots, " +
       std::to_string(s.bytes / 1024) + " KiB");
@@ -452,9 +455,9 @@ nlohmann::json ExportGameTables(const ExportOptions& o) {
   for (const std::string& p : o.presets) {
     const std::vector<std::string> files = render::PresetFiles(p);  // the JSON, then every LUT EXR it names
     for (size_t i = 0; i < files.size(); ++i)
-      inputs.push_back({i == 0 ? std::string("--preset") : "--preset " + p + "'s LUT", files[i]});
+      inputs.push_back({i == 0 ? std::string("ExportOptions::presets") : "ExportOptions::presets " + p + "'s LUT", files[i]});
   }
-  StagedDirectory out(o.out_dir, "--out", "export", inputs);
+  StagedDirectory out(o.out_dir, "ExportOptions::out_dir", "export", inputs);
   const std::vector<render::Preset> presets = LoadNamedPresets(o.presets);
   const double scale = PreExposureScale(o, presets);
   nlohmann::json manifest_presets = nlohmann::json::array(), skipped = nlohmann::json::array();

@@ -78,7 +78,7 @@ namespace {
 void SetSunDirection(const std::string& path, const FitOptions& o, const capture::LatLongFrame& frame, Reference* ref) {
   Reference& r = *ref;
   if (o.sun_dir) {
-    r.sun_dir = latlong::Normalized(*o.sun_dir, "--sun-dir");
+    r.sun_dir = latlong::Normalized(*o.sun_dir, "FitOptions::sun_dir");
     r.sun_source = "option";
   } else if (frame.sun_direction) {
     r.sun_dir = *frame.sun_direction;

@@ -52,7 +52,7 @@ bool PlanSharedBlocks(const FitState& state, const FitOptions& o, FitResult* res
                              "isotropic table spans, so L_z is not separable from it: folded into that table (L_z "
                              "held at 1e-6 of the initial preset's)"});
   }
-  if (o.absolute) result->skipped.push_back({"exposure", "--absolute: references are calibrated"});
+  if (o.absolute) result->skipped.push_back({"exposure", "FitOptions::absolute: references are calibrated"});
   if (!o.fit_haziness) result->skipped.push_back({"haziness_g", "disabled by option"});
   return fit_overcast;
 }

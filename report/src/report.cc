@@ -75,20 +75,21 @@ std::vector<NamedPath> InputsOf(const Sources& s) {
 
 bool ReportOptions::IsValid(std::string* why) const {
   if (max_fit_sections < 1) {
-    *why = "report: max_fit_sections must be >= 1";
+    *why = "ReportOptions::max_fit_sections = " + std::to_string(max_fit_sections) + " (expected >= 1)";
     return false;
   }
   if (max_depth < 0 || max_depth > 8) {
-    *why = "report: max_depth must be in [0, 8] (directory levels searched below DIR)";
+    *why = "ReportOptions::max_depth = " + std::to_string(max_depth) +
+           " (expected directory levels searched below DIR in [0, 8])";
     return false;
   }
   if (!out_path.empty() && fs::is_directory(out_path)) {
-    *why = "--out " + out_path + ": is a directory (expected the HTML file to write)";
+    *why = "ReportOptions::out_path = " + out_path + ": is a directory (expected the HTML file to write)";
     return false;
   }
   if (!out_path.empty()) {
     try {
-      RequireExtension("--out", out_path, {".html", ".htm"}, "the HTML report");
+      RequireExtension("ReportOptions::out_path =", out_path, {".html", ".htm"}, "the HTML report");
     } catch (const Error& e) {
       *why = e.what();
       return false;
@@ -104,7 +105,7 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
   if (root.filename().empty()) root = root.parent_path();
   const std::string out_path = o.out_path.empty() ? (root / "report.html").string() : o.out_path;
   const Sources s = FindSources(root.string(), o.max_depth);
-  RefuseOutputsOverInputs({{"--out", out_path}}, InputsOf(s));
+  RefuseOutputsOverInputs({{"ReportOptions::out_path", out_path}}, InputsOf(s));
 
   PageCounts counts;
   ReportSummary sum;

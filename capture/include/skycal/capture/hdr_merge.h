@@ -39,7 +39,7 @@ enum class ResponseModel {
   kSrgb,       // inverse sRGB transfer function (IEC 61966-2-1), e.g. camera JPEGs
 };
 const char* ResponseModelName(ResponseModel m);  // "weighted", "debevec", "robertson", "linear", "srgb"
-// Parses the names above; throws skycal::Error naming `what` (e.g. "--response") otherwise.
+// Parses the names above; throws skycal::Error naming `what` (e.g. "MergeOptions::response") otherwise.
 ResponseModel ParseResponseModel(const std::string& name, const std::string& what);
 
 // Well-exposedness weight of a normalised code value v = code / max code, in [0, 1].

@@ -78,7 +78,7 @@ SpaResult ComputeSolarPosition(const SpaInput& input);
 // -hh:mm, +hhmm or +hh; a space may replace the T; years may carry a sign and more digits
 // (-0500-03-01T..., +10000 is refused later by the range check). A missing offset, a field
 // out of range (month 13, day 31 in April, 25:00) or trailing text throws skycal::Error
-// naming `what` (e.g. "--time") and the field.
+// naming `what` (e.g. "CaptureOptions::time_iso") and the field.
 SpaInput ParseIso8601(const std::string& text, const std::string& what = "time");
 
 // Unit vector toward the sun in the project's lat-long frame (core/latlong.h: +Y up,

@@ -160,7 +160,8 @@ struct CloudDecision {
   double cloud_fraction = 0.0;  // cloudy / sky pixels (mask probability >= 0.5)
   double time_s = 0.0;          // the mask's cost
 };
-// Throws skycal::Error for --clouds on without a cloud pixel (naming the reference) or
+// Messages name the mode ("CloudMode on: ...") and the shapes (KnownCloudShapes).
+// Throws skycal::Error for CloudMode on without a cloud pixel (naming the reference) or
 // without shapes. Several references (a day): the fraction is over all of them, and each
 // needs a time of day (the prior's axis) when clouds are marched.
 CloudDecision DecideClouds(CloudMode mode, const std::vector<fit::Reference>& refs, const render::Preset& init,

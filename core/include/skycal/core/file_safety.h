@@ -9,7 +9,7 @@
 
 namespace skycal {
 
-// A path and what it is to the user, for messages: "--image", "preset LUT luts.rayleigh".
+// A path and what it is to the user, for messages: "--image", "CaptureOptions::out", "preset LUT luts.rayleigh".
 struct NamedPath {
   std::string role;
   std::string path;

@@ -23,7 +23,7 @@ inline constexpr const char* kOutputMarker = ".skycal-output.json";
 
 class StagedDirectory {
  public:
-  // `option` names the flag for messages (e.g. "--out"); `verb` is written to the marker.
+  // `option` names the option for messages (a library's field, "ExportOptions::out_dir", or a verb's flag); `verb` is written to the marker.
   // Throws skycal::Error, before anything is written, when `dir` cannot be replaced.
   StagedDirectory(const std::string& dir, const std::string& option, const std::string& verb,
                   const std::vector<NamedPath>& inputs);
