@@ -217,6 +217,36 @@ TEST(Reliability, AFlowWhoseSidecarCannotBeWrittenKeepsThePreviousVectors) {
   EXPECT_EQ(Hidden(dir), std::vector<std::string>{});
 }
 
+TEST(Reliability, TheCloudNoiseCacheNeverCreatesAMissingHome) {
+  // HOME names a missing directory (XDG_CACHE_HOME unset): the render succeeds with one
+  // warning line and creates nothing; XDG_CACHE_HOME under a missing parent, the same; an
+  // existing HOME gets $HOME/.cache/skycal with the cache file.
+  ScratchDir dir("rel-noise-home");
+  const std::string clouds = "render" + kSun + "--size 32x16 --backend cpu --clouds --out ";
+  const struct {
+    std::string env, missing;
+  } cases[] = {{"env -u XDG_CACHE_HOME HOME=" + (dir / "missing"), dir / "missing"},
+               {"XDG_CACHE_HOME=" + (dir / "gone/cache"), dir / "gone"}};
+  for (const auto& c : cases) {
+    const ProcessResult r = Skycal(clouds + (dir / "c.exr"), c.env);
+    ASSERT_EQ(r.rc, 0) << c.env << ": " << r.err;
+    EXPECT_FALSE(fs::exists(c.missing)) << c.env;
+    size_t lines = 0;
+    for (size_t at = r.err.find("cloud noise not cached"); at != std::string::npos;
+         at = r.err.find("cloud noise not cached", at + 1))
+      ++lines;
+    EXPECT_EQ(lines, 1u) << r.err;
+    EXPECT_TRUE(Has(r.err, "'" + c.missing + "'")) << r.err;
+  }
+  fs::create_directory(dir.path() / "home");
+  const ProcessResult r = Skycal(clouds + (dir / "c.exr"), "env -u XDG_CACHE_HOME HOME=" + (dir / "home"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_FALSE(Has(r.err, "cloud noise not cached")) << r.err;
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir.path() / "home/.cache/skycal")) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+}
+
 // A 64 x 32 lat-long of the binary's render with NaN and +inf written into two columns.
 std::string DirtyFrame(const ScratchDir& dir, const std::string& clean) {
   capture::LatLongFrame f = capture::ReadLatLongFrame(clean);
