@@ -66,7 +66,7 @@ CloudInputsLoaded LoadCloudInputs(const CloudOptions& o, const render::Preset& p
                 "coverage, precipitation, type)");
   }
   in.weather = clouds::LoadWeatherMap(in.weather_origin, in.params.weather_extent_m);
-  in.noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::DefaultCloudNoiseCacheDir());
+  in.noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   return in;
 }
 

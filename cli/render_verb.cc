@@ -15,6 +15,8 @@
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/color/preview.h"
 #include "skycal/core/error.h"
+#include "skycal/core/atomic_output_group.h"
+#include "skycal/core/output_kind.h"
 #include "skycal/core/latlong.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/composite.h"
@@ -122,21 +124,28 @@ nlohmann::json RenderCloudsOver(const RenderOptions& o, const render::Preset& pr
           {"light_samples", march.light_samples}};
 }
 
-// The EXR, then the optional PNG preview (no partial output: both files or none); returns
-// render --json's `png` object.
+// The EXR and the optional PNG preview, committed together (AtomicOutputGroup): a failed
+// preview (OCIO, encoding) leaves every file that existed before the run as it was, and
+// writes neither. Returns render --json's `png` object.
 nlohmann::json WriteRenderOutputs(const RenderOptions& o, capture::LatLongFrame* frame) {
   PrepareImageForWrite("render", o.out_exr, &frame->radiance, o.half);
-  capture::WriteLatLongFrame(o.out_exr, *frame, o.half);
-  if (o.out_png.empty()) return nullptr;
+  if (o.out_png.empty()) {
+    capture::WriteLatLongFrame(o.out_exr, *frame, o.half);
+    return nullptr;
+  }
+  RefuseReplacingAPresetLut(o.out_exr);
+  AtomicOutputGroup group;
   try {
+    const std::string exr = group.Add(o.out_exr), png = group.Add(o.out_png);
+    capture::WriteLatLongFrame(exr, *frame, o.half);
     color::PreviewOptions po;
     po.exposure_ev = o.png_exposure_ev;
-    const color::PreviewReport report = color::WritePreviewPng(frame->radiance, o.out_png, po);
+    const color::PreviewReport report = color::WritePreviewPng(frame->radiance, png, po);
+    group.Commit();
     return {{"path", o.out_png}, {"exposure_ev", report.exposure_ev}, {"view", report.view},
             {"ocio_config", report.config_path}};
-  } catch (...) {
-    std::filesystem::remove(o.out_exr);
-    throw;
+  } catch (const Error& e) {
+    throw Error(group.Unstaged(e.what()));
   }
 }
 

@@ -149,6 +149,7 @@ TEST(Capture, BadInputIsRefusedAndNothingIsWritten) {
   o.lens.radius_px = 5000.0;
   o.lens_radius_given = true;
   expect(o, "radius");
+  expect(o, "merged from '" + o.brackets[0] + "' and the other brackets");  // the lens's image is named
   o = BaseOptions(s, out);
   o.time_iso = "2024-13-01T10:00:00Z";
   o.latitude_deg = 10.0;

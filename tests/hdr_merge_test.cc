@@ -320,6 +320,30 @@ TEST(HdrMergeErrors, DifferentSizes) {
   EXPECT_NE(m.find("small_0.png"), std::string::npos) << m;
 }
 
+TEST(HdrMergeErrors, FailedResponseRecoveryNamesEachFileAndTheField) {
+  // Every bracket black but the longest (code 100 everywhere): no pixel has two codes in the
+  // recovery's range, and the message names the options field, each file shortest first
+  // with its time and its share of usable samples (0% black, 100% for the longest).
+  auto br = SmallBrackets();
+  br[0].image.rgb.assign(br[0].image.rgb.size(), 0);
+  br[1].image.rgb.assign(br[1].image.rgb.size(), 0);
+  br[2].image.rgb.assign(br[2].image.rgb.size(), 100);
+  for (ResponseModel model : {ResponseModel::kWeighted, ResponseModel::kRobertson}) {
+    MergeOptions o;
+    o.response = model;
+    const std::string m = ErrorOf([&] { MergeBrackets(br, o); });
+    EXPECT_NE(m.find("merge options field 'response' = " + std::string(ResponseModelName(model))), std::string::npos)
+        << m;
+    const size_t a = m.find("'small_0.png' (t = 0.01 s, 0%)"), b = m.find("'small_1.png' (t = 0.04 s, 0%)"),
+                 c = m.find("'small_2.png' (t = 0.16 s, 100%)");
+    EXPECT_NE(a, std::string::npos) << m;
+    EXPECT_NE(b, std::string::npos) << m;
+    EXPECT_NE(c, std::string::npos) << m;
+    EXPECT_LT(a, b) << m;
+    EXPECT_LT(b, c) << m;
+  }
+}
+
 TEST(HdrMergeErrors, DifferentBitDepths) {
   auto br = SmallBrackets();
   br[2].image.bits = 16;

@@ -7,6 +7,7 @@
 #include "linear_sky.h"
 #include "linear_start.h"
 #include "pyramid.h"
+#include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/fit/reference.h"
 #include "skycal/refsky/reference_skies.h"
@@ -136,6 +137,39 @@ TEST(LinearSky, RobustScalesWidenOnlyWhereTheMisfitIsCoherent) {
   EXPECT_EQ(r.At(179.0), r.ring[RingLossScales::kRings - 1]);
   EXPECT_NEAR(WeightedMedianAbs({-3.0, 1.0, 2.0}, {1.0, 1.0, 1.0}), 2.0, 0.0);
   EXPECT_NEAR(WeightedMedianAbs({-3.0, 1.0, 2.0}, {10.0, 1.0, 1.0}), 3.0, 0.0);
+}
+
+TEST(LinearSky, RefusesLevelsOfDifferentSizesBeforeReadingThemAndNamesBothFiles) {
+  // A 128x64 level beside a 64x32 one: the sizes are checked before any pixel is read (the
+  // total weight used to be summed with the first level's size over every level), and the
+  // message names each reference's file and level size.
+  testing::ScratchDir dir("linear-sizes");
+  OwnSky s = OwnRender(dir, render::ModelVariant::kFfxv, 30.0, 0.0);
+  Reference small = s.ref;
+  small.path = "/data/sky-small.exr";
+  const FitLevel small_level = BuildLevel(small, 64);
+  ASSERT_EQ(small_level.width, 64);
+  ASSERT_EQ(small_level.height, 32);
+  LinearSkyOptions lo;
+  lo.unknowns = LinearUnknowns::kFreeRows;
+  lo.row_fitted.assign(s.state.preset.luts.grid.n_theta, true);
+  std::string message;
+  try {
+    const LinearSky sky(s.state, {&s.level, &small_level}, {s.ref, small}, lo);
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("level sizes differ"), std::string::npos) << message;
+  EXPECT_NE(message.find("'/data/sky-small.exr' gives a 64x32 level"), std::string::npos) << message;
+  EXPECT_NE(message.find("'" + s.ref.path + "' a 128x64 one"), std::string::npos) << message;
+  // One level per reference.
+  message.clear();
+  try {
+    const LinearSky sky(s.state, {&s.level}, {s.ref, small}, lo);
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("1 levels for 2 references"), std::string::npos) << message;
 }
 
 }  // namespace

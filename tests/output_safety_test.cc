@@ -18,6 +18,8 @@
 #include <thread>
 
 #include "run_binary.h"
+#include "skycal/core/atomic_output_group.h"
+#include "skycal/core/error.h"
 #include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/sha256.h"
 #include "test_util.h"
@@ -206,6 +208,57 @@ TEST(OutputSafety, TheNextRunRemovesTemporariesOfDeadRunsOnly) {
   EXPECT_FALSE(fs::exists(dir.path() / (".fitted.tmp-" + d)));
   EXPECT_TRUE(fs::exists(dir.path() / (".other.exr.tmp-" + alive + "-3")));
   EXPECT_TRUE(fs::exists(dir.path() / ".notes.tmp-draft"));
+}
+
+std::string Text(const fs::path& p) {
+  std::ifstream f(p);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+void Put(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+TEST(OutputSafety, AGroupOfFilesIsCommittedTogetherOrNotAtAll) {
+  ScratchDir dir("group-commit");
+  Put(dir / "a.txt", "old a");
+  {  // committed: both new, nothing staged left
+    AtomicOutputGroup g;
+    const std::string a = g.Add(dir / "a.txt"), b = g.Add(dir / "b.txt");
+    EXPECT_EQ(fs::path(a).filename(), "a.txt");
+    EXPECT_NE(fs::path(a).parent_path(), dir.path());
+    Put(a, "new a");
+    Put(b, "new b");
+    EXPECT_EQ(Text(dir / "a.txt"), "old a");  // nothing changes before Commit
+    EXPECT_FALSE(fs::exists(dir / "b.txt"));
+    g.Commit();
+  }
+  EXPECT_EQ(Text(dir / "a.txt"), "new a");
+  EXPECT_EQ(Text(dir / "b.txt"), "new b");
+  EXPECT_EQ(Leftovers(dir.path()), std::vector<std::string>{});
+  {  // the second rename fails (a directory appeared there): the first file is put back
+    AtomicOutputGroup g;
+    const std::string a = g.Add(dir / "a.txt"), c = g.Add(dir / "c.txt");
+    Put(a, "newer a");
+    Put(c, "new c");
+    fs::create_directory(dir.path() / "c.txt");
+    Put(dir / "c.txt/inside", "x");
+    std::string message;
+    try {
+      g.Commit();
+    } catch (const Error& e) {
+      message = g.Unstaged(e.what());
+    }
+    EXPECT_NE(message.find(dir / "c.txt"), std::string::npos) << message;
+    EXPECT_NE(message.find("put back"), std::string::npos) << message;
+  }
+  EXPECT_EQ(Text(dir / "a.txt"), "new a");
+  EXPECT_TRUE(fs::is_directory(dir / "c.txt"));
+  EXPECT_EQ(Leftovers(dir.path()), std::vector<std::string>{});
+  {  // not committed: nothing changes, nothing staged left
+    AtomicOutputGroup g;
+    Put(g.Add(dir / "a.txt"), "abandoned");
+  }
+  EXPECT_EQ(Text(dir / "a.txt"), "new a");
+  EXPECT_EQ(Leftovers(dir.path()), std::vector<std::string>{});
 }
 
 TEST(OutputSafety, TemporaryNamesAreRecognisedExactly) {

@@ -162,6 +162,91 @@ TEST(Reliability, APresetInterruptedBetweenItsFilesIsOneWholePreset) {
   }
 }
 
+// Entries of `dir` whose name starts with '.' (staging directories, temporaries).
+std::vector<std::string> Hidden(const ScratchDir& dir) {
+  std::vector<std::string> hidden;
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    if (e.path().filename().string().rfind(".", 0) == 0) hidden.push_back(e.path().filename().string());
+  return hidden;
+}
+
+TEST(Reliability, AFailedPreviewKeepsTheEarlierRendersExr) {
+  // render --png with OCIO naming a missing config: the preview fails after the EXR was
+  // rendered; the EXR that was there before the run stays byte for byte, no PNG appears.
+  ScratchDir dir("rel-render-png");
+  const std::string exr = Render(dir, "sky.exr");
+  const std::string before = Sha256OfFile(exr);
+  const ProcessResult r = Skycal("render" + kSun + "--size 32x16 --backend cpu --out " + exr + " --png " +
+                                     (dir / "sky.png"),
+                                 "OCIO=" + (dir / "missing.ocio"));
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_TRUE(Has(r.err, "missing.ocio")) << r.err;
+  EXPECT_FALSE(Has(r.err, ".tmp-")) << "the message names a staging path: " << r.err;
+  EXPECT_EQ(Sha256OfFile(exr), before);
+  EXPECT_FALSE(fs::exists(dir / "sky.png"));
+  EXPECT_EQ(Hidden(dir), std::vector<std::string>{});
+  // Both written: the new EXR and its PNG together.
+  const ProcessResult ok =
+      Skycal("render" + kSun + "--size 32x16 --backend cpu --out " + exr + " --png " + (dir / "sky.png"));
+  ASSERT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_NE(Sha256OfFile(exr), before);
+  EXPECT_TRUE(fs::is_regular_file(dir / "sky.png"));
+  EXPECT_EQ(Hidden(dir), std::vector<std::string>{});
+}
+
+TEST(Reliability, AFlowWhoseSidecarCannotBeWrittenKeepsThePreviousVectors) {
+  // The sidecar's path is a directory: the run fails, and the previous run's EXR and PNG
+  // are kept (they used to be replaced, then removed when the sidecar failed).
+  ScratchDir dir("rel-flow");
+  const std::string a = Render(dir, "a.exr");
+  const ProcessResult rb = Skycal(" render --sun-elevation 20 --sun-azimuth 34 --size 64x32 --backend cpu --out " +
+                                  (dir / "b.exr"));
+  ASSERT_EQ(rb.rc, 0) << rb.err;
+  ASSERT_EQ(Skycal("flow " + a + " " + (dir / "b.exr") + " --out " + (dir / "v.exr")).rc, 0);
+  const std::string exr_before = Sha256OfFile(dir / "v.exr"), png_before = Sha256OfFile(dir / "v.png");
+  fs::remove(dir / "v.json");
+  fs::create_directory(dir / "v.json");
+  const ProcessResult r = Skycal("flow " + (dir / "b.exr") + " " + a + " --out " + (dir / "v.exr"));
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_TRUE(Has(r.err, dir / "v.json")) << r.err;
+  ASSERT_TRUE(fs::exists(dir / "v.exr"));
+  ASSERT_TRUE(fs::exists(dir / "v.png"));
+  EXPECT_EQ(Sha256OfFile(dir / "v.exr"), exr_before);
+  EXPECT_EQ(Sha256OfFile(dir / "v.png"), png_before);
+  EXPECT_TRUE(fs::is_directory(dir / "v.json"));
+  EXPECT_EQ(Hidden(dir), std::vector<std::string>{});
+}
+
+TEST(Reliability, TheCloudNoiseCacheNeverCreatesAMissingHome) {
+  // HOME names a missing directory (XDG_CACHE_HOME unset): the render succeeds with one
+  // warning line and creates nothing; XDG_CACHE_HOME under a missing parent, the same; an
+  // existing HOME gets $HOME/.cache/skycal with the cache file.
+  ScratchDir dir("rel-noise-home");
+  const std::string clouds = "render" + kSun + "--size 32x16 --backend cpu --clouds --out ";
+  const struct {
+    std::string env, missing;
+  } cases[] = {{"env -u XDG_CACHE_HOME HOME=" + (dir / "missing"), dir / "missing"},
+               {"XDG_CACHE_HOME=" + (dir / "gone/cache"), dir / "gone"}};
+  for (const auto& c : cases) {
+    const ProcessResult r = Skycal(clouds + (dir / "c.exr"), c.env);
+    ASSERT_EQ(r.rc, 0) << c.env << ": " << r.err;
+    EXPECT_FALSE(fs::exists(c.missing)) << c.env;
+    size_t lines = 0;
+    for (size_t at = r.err.find("cloud noise not cached"); at != std::string::npos;
+         at = r.err.find("cloud noise not cached", at + 1))
+      ++lines;
+    EXPECT_EQ(lines, 1u) << r.err;
+    EXPECT_TRUE(Has(r.err, "'" + c.missing + "'")) << r.err;
+  }
+  fs::create_directory(dir.path() / "home");
+  const ProcessResult r = Skycal(clouds + (dir / "c.exr"), "env -u XDG_CACHE_HOME HOME=" + (dir / "home"));
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_FALSE(Has(r.err, "cloud noise not cached")) << r.err;
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir.path() / "home/.cache/skycal")) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+}
+
 // A 64 x 32 lat-long of the binary's render with NaN and +inf written into two columns.
 std::string DirtyFrame(const ScratchDir& dir, const std::string& clean) {
   capture::LatLongFrame f = capture::ReadLatLongFrame(clean);

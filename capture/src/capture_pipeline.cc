@@ -241,7 +241,11 @@ RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
   }
   if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
   if (cam.lens.model == LensModel::kLatLong) cam.lens = LatLongLens(cam.width, cam.height);
-  if (!cam.lens.IsValid(&why, cam.width, cam.height)) throw Error("lens: " + why);
+  if (!cam.lens.IsValid(&why, cam.width, cam.height)) {
+    throw Error("lens for the " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image merged from " +
+                (o.brackets.empty() ? std::string("the brackets") : "'" + o.brackets[0] + "' and the other brackets") +
+                ": " + why);
+  }
   const std::array<double, 3> ypr = o.CameraRotationDeg();
   cam.rotation = RotationFromYawPitchRollDeg(ypr[0], ypr[1], ypr[2]);
   if (cam.lens.model == LensModel::kLatLong && !o.camera_ypr_deg)

@@ -195,11 +195,36 @@ std::vector<size_t> ExposureOrder(const std::vector<Bracket>& brackets, Exposure
 }
 
 // --- response curve ----------------------------------------------------------------------
+// A failed recovery's context: the options field that chose it and each bracket (shortest
+// exposure first) with its time and the share of its channel samples inside the codes the
+// recovery reads (merge options weighted_low_code..weighted_high_code, on the 8-bit scale),
+// so an all-black or all-clipped file is named.
+std::string RecoveryContext(const std::vector<Bracket>& brackets, const std::vector<size_t>& order,
+                            const MergeOptions& o) {
+  const int shift = brackets[0].image.bits == 16 ? 8 : 0;
+  std::ostringstream s;
+  s << "response recovery (merge options field 'response' = " << ResponseModelName(o.response) << ") from "
+    << order.size() << " brackets, shortest exposure first, each with its share of channel samples in codes "
+    << o.weighted_low_code << ".." << o.weighted_high_code << " (8-bit scale):";
+  for (size_t i : order) {
+    const BracketImage& im = brackets[i].image;
+    size_t inside = 0;
+    for (uint16_t v : im.rgb) {
+      const int z = v >> shift;
+      inside += z >= o.weighted_low_code && z <= o.weighted_high_code;
+    }
+    const double share = im.rgb.empty() ? 0.0 : 100.0 * static_cast<double>(inside) / static_cast<double>(im.rgb.size());
+    s << " '" << Label(brackets[i], i) << "' (t = " << Num(brackets[i].exposure_time_s) << " s, " << Num(share) << "%)";
+    if (i != order.back()) s << ",";
+  }
+  return s.str();
+}
+
 // Fills r.response_curve and r.response_levels (fixed, analytic or recovered from the
 // brackets sorted by exposure); returns the curve's source name.
-std::string ChooseResponse(const std::vector<Bracket>& brackets, const std::vector<const BracketImage*>& sorted_images,
-                           const std::vector<double>& relative, const MergeOptions& options, MergeResult& r,
-                           nlohmann::json* response_report) {
+std::string ChooseResponse(const std::vector<Bracket>& brackets, const std::vector<size_t>& order,
+                           const std::vector<const BracketImage*>& sorted_images, const std::vector<double>& relative,
+                           const MergeOptions& options, MergeResult& r, nlohmann::json* response_report) {
   const BracketImage& first = brackets[0].image;
   const int levels = first.max_code() + 1;
   if (!options.response_curve.empty()) {
@@ -215,7 +240,11 @@ std::string ChooseResponse(const std::vector<Bracket>& brackets, const std::vect
     r.response_levels = levels;
     return ResponseModelName(options.response);
   }
-  r.response_curve = detail::RecoverResponse(sorted_images, relative, options, response_report);
+  try {
+    r.response_curve = detail::RecoverResponse(sorted_images, relative, options, response_report);
+  } catch (const Error& e) {
+    throw Error(RecoveryContext(brackets, order, options) + ": " + e.what());
+  }
   r.response_levels = 256;
   return ResponseModelName(options.response);
 }
@@ -396,7 +425,7 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
     relative[s] = r.exposure_factors[order[s]] / k_max;
   }
   const int levels = first.max_code() + 1;
-  const std::string source = ChooseResponse(brackets, sorted_images, relative, options, r, &response_report);
+  const std::string source = ChooseResponse(brackets, order, sorted_images, relative, options, r, &response_report);
   const auto t_response = Clock::now();
 
   MergeTables tb = MakeTables(r, order, relative, sorted_images, options, levels, first.max_code());

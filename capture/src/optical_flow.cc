@@ -13,6 +13,8 @@
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/zenith_cap.h"
 #include "skycal/core/atomic_file.h"
+#include "skycal/core/atomic_output_group.h"
+#include "skycal/core/output_kind.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
@@ -241,24 +243,24 @@ nlohmann::json FlowSidecar(const FlowOptions& o, const QuantizedFlow& q, int w, 
           {"components", components}};
 }
 
-// Three files, each atomic; a failure on a later one removes the earlier ones (all or none).
+// Three files committed together (AtomicOutputGroup): a failure on any of them leaves the
+// previous three, or none, in place.
 void WriteFlowFiles(const std::string& exr, const std::string& png, const std::string& sidecar, const EncodedFlow& e,
                     const nlohmann::json& meta) {
   std::vector<uint8_t> png_bytes;
   if (!cv::imencode(".png", e.codes, png_bytes)) throw Error(png + ": PNG encoding failed");
   ExrAttributes attrs;
   attrs.strings["skycalFlow"] = meta.dump();
-  std::vector<std::string> written;
+  RefuseReplacingAPresetLut(exr);
+  AtomicOutputGroup group;
   try {
-    WriteExrRGBWithPlanes(exr, e.rgb, e.planes, attrs);
-    written.push_back(exr);
-    WriteFileAtomically(png, std::string(png_bytes.begin(), png_bytes.end()));
-    written.push_back(png);
-    WriteFileAtomically(sidecar, meta.dump(2) + "\n");
-  } catch (...) {
-    std::error_code ec;
-    for (const std::string& f : written) std::filesystem::remove(f, ec);
-    throw;
+    const std::string staged_exr = group.Add(exr), staged_png = group.Add(png), staged_sidecar = group.Add(sidecar);
+    WriteExrRGBWithPlanes(staged_exr, e.rgb, e.planes, attrs);
+    WriteFileAtomically(staged_png, std::string(png_bytes.begin(), png_bytes.end()));
+    WriteFileAtomically(staged_sidecar, meta.dump(2) + "\n");
+    group.Commit();
+  } catch (const Error& err) {
+    throw Error(group.Unstaged(err.what()));
   }
 }
 

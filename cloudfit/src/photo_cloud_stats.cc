@@ -111,7 +111,7 @@ PhotoCloudStatsResult FitPhotoCloudStats(const PhotoCloudStatsOptions& o, const 
   out.cloud_preset = CloudSunPreset(o, out.photos, sky.preset);
   const std::unique_ptr<clouds::CloudRenderer> renderer = CreateStatsRenderer(o);
   const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(
-      o.noise_seed, o.noise_cache_dir.empty() ? clouds::DefaultCloudNoiseCacheDir() : o.noise_cache_dir);
+      o.noise_seed, o.noise_cache_dir.empty() ? clouds::UsableCloudNoiseCacheDir() : o.noise_cache_dir);
   out.coverage = MatchCoverage(o, so, out.photos, out.cloud_preset, noise, *renderer);
   out.fit = FitStatistics(o, so, out.photos, out.coverage, noise, *renderer, sky.preset, &out.cloud_preset);
   const CloudStatsResult& res = out.fit.result;

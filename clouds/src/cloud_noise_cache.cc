@@ -141,4 +141,18 @@ std::string DefaultCloudNoiseCacheDir() {
   return "";
 }
 
+std::string UsableCloudNoiseCacheDir() {
+  const std::string dir = DefaultCloudNoiseCacheDir();
+  if (dir.empty()) return dir;
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  const bool from_xdg = xdg && xdg[0] == '/';
+  // The directory that must exist: two levels above .cache/skycal, one above <xdg>/skycal's <xdg>.
+  const std::filesystem::path anchor = std::filesystem::path(dir).parent_path().parent_path();
+  std::error_code ec;
+  if (std::filesystem::is_directory(anchor, ec)) return dir;
+  Warn("cloud noise not cached: " + std::string(from_xdg ? "the parent of $XDG_CACHE_HOME, '" : "$HOME, '") +
+       anchor.string() + "', is not a directory (it is not created); generating the noise in memory");
+  return "";
+}
+
 }  // namespace skycal::clouds

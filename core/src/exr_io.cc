@@ -86,23 +86,6 @@ std::string NotAFileWhy(const std::string& path) {
   return "is not a regular file (a FIFO, socket or device)";
 }
 
-// A preset's LUT table (attribute skycalLut, written by render's SavePreset) is replaced
-// only by another LUT: an image written over it would leave a preset that no longer loads.
-void RefuseReplacingAPresetLut(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return;
-  std::string lut;
-  try {
-    const Imf::InputFile file(path.c_str());
-    if (const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>("skycalLut")) lut = a->value();
-  } catch (const std::exception&) {
-    return;  // not a readable EXR: AtomicOutput's kind check speaks for it
-  }
-  if (!lut.empty()) {
-    throw Error(path + ": refusing to replace it, it is a preset's LUT table ('" + lut +
-                "'); the preset would no longer load (choose another output path)");
-  }
-}
 
 void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
   for (const auto& [name, value] : a.strings) header.insert(name, Imf::StringAttribute(value));
@@ -245,6 +228,23 @@ void LimitOpenExrAllocations() {
 }
 
 }  // namespace
+
+// Declared in output_kind.h; here, where EXR headers are read.
+void RefuseReplacingAPresetLut(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return;
+  std::string lut;
+  try {
+    const Imf::InputFile file(path.c_str());
+    if (const auto* a = file.header().findTypedAttribute<Imf::StringAttribute>("skycalLut")) lut = a->value();
+  } catch (const std::exception&) {
+    return;  // not a readable EXR: AtomicOutput's kind check speaks for it
+  }
+  if (!lut.empty()) {
+    throw Error(path + ": refusing to replace it, it is a preset's LUT table ('" + lut +
+                "'); the preset would no longer load (choose another output path)");
+  }
+}
 
 ExrWriteReport WriteExrRGB(const std::string& path, const ImageRGB& image,
                            const ExrAttributes& attributes, ExrPixelType type) {

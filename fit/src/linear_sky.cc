@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <cstdlib>
 
@@ -47,11 +48,41 @@ double TotalWeight(const std::vector<const FitLevel*>& levels, int w, int h, int
   return total_weight;
 }
 
+std::string LevelName(const Reference& ref, size_t r) {
+  return ref.path.empty() ? "reference " + std::to_string(r) : "reference '" + ref.path + "'";
+}
+
+std::string SizeOf(const FitLevel& lv) { return std::to_string(lv.width) + "x" + std::to_string(lv.height); }
+
+// Every level must exist, match its reference and share the first level's size before any
+// pixel is read: TotalWeight and the rows index each level with the first one's size.
+void CheckLevels(const std::vector<const FitLevel*>& levels, const std::vector<Reference>& refs) {
+  if (levels.empty() || levels.size() != refs.size()) {
+    throw Error("LinearSky: " + std::to_string(levels.size()) + " levels for " + std::to_string(refs.size()) +
+                " references (one level per reference, at least one)");
+  }
+  const FitLevel& first = *levels[0];
+  for (size_t r = 0; r < levels.size(); ++r) {
+    const FitLevel& lv = *levels[r];
+    const size_t pixels = static_cast<size_t>(std::max(lv.width, 0)) * static_cast<size_t>(std::max(lv.height, 0));
+    if (lv.width != first.width || lv.height != first.height) {
+      throw Error("LinearSky: level sizes differ: " + LevelName(refs[r], r) + " gives a " + SizeOf(lv) + " level, " +
+                  LevelName(refs[0], 0) + " a " + SizeOf(first) + " one (every level must have the same size)");
+    }
+    if (lv.weight.size() != pixels || lv.radiance.size() != 3 * pixels) {
+      throw Error("LinearSky: the " + SizeOf(lv) + " level of " + LevelName(refs[r], r) + " holds " +
+                  std::to_string(lv.weight.size()) + " weights and " + std::to_string(lv.radiance.size()) +
+                  " radiance values (expected " + std::to_string(pixels) + " and " + std::to_string(3 * pixels) + ")");
+    }
+  }
+}
+
 }  // namespace
 
 LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& levels,
                      const std::vector<Reference>& refs, LinearSkyOptions options)
-    : state_(state), o_(std::move(options)), n_refs_(static_cast<int>(refs.size())), width_(levels.at(0)->width) {
+    : state_(state), o_(std::move(options)), n_refs_(static_cast<int>(refs.size())), width_(levels.empty() ? 0 : levels[0]->width) {
+  CheckLevels(levels, refs);
   const auto& grid = state.preset.luts.grid;
   const int w = levels.at(0)->width, h = levels.at(0)->height;
   const bool single = refs.size() == 1;
@@ -72,9 +103,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   const double total_weight = TotalWeight(levels, w, h, stride);
   size_t sample = 0;
   for (size_t r = 0; r < refs.size(); ++r) {
-    const FitLevel& lv = *levels[r];
-    if (lv.width != w || lv.height != h) throw Error("LinearSky: level sizes differ");
-    AddReferenceRows(r, lv, refs[r], total_weight, &sample);
+    AddReferenceRows(r, *levels[r], refs[r], total_weight, &sample);
   }
   held_overcast_zenith_ = std::exp(state.log_overcast_zenith);
   if (o_.unknowns == LinearUnknowns::kFreeRows) {

@@ -41,6 +41,14 @@ CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir)
 // rule), else $HOME/.cache/skycal; "" when neither is known (then no cache is used).
 std::string DefaultCloudNoiseCacheDir();
 
+// DefaultCloudNoiseCacheDir() when the directory it is made under exists: $HOME for
+// $HOME/.cache/skycal, the parent of $XDG_CACHE_HOME for $XDG_CACHE_HOME/skycal (the XDG
+// spec lets a program create a missing XDG_CACHE_HOME, not the tree above it). Otherwise
+// "" after one warning line on stderr naming the missing directory: a HOME pointing
+// nowhere (a service account, a container) is never created, and the noise is generated
+// in memory.
+std::string UsableCloudNoiseCacheDir();
+
 // Texels with wrap-around (texel N is texel 0, -1 is N - 1): exact reads for tests and for
 // the CPU model's trilinear filtering. `c` is the channel (base 0..3, detail and curl 0..2).
 float BaseTexel(const CloudNoise& noise, int x, int y, int z, int c);

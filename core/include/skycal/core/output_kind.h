@@ -16,6 +16,12 @@ namespace skycal {
 // naming the path and what was found.
 void RefuseReplacingAnotherKind(const std::string& path);
 
+// A preset's LUT table (an EXR with attribute skycalLut) is replaced only by another LUT:
+// an image written over it would leave a preset that no longer loads. The EXR writer asks
+// this for images; outputs staged elsewhere first (AtomicOutputGroup) ask it for their
+// destination. Throws skycal::Error naming the path and the LUT.
+void RefuseReplacingAPresetLut(const std::string& path);
+
 // Throws when `path` ends in the extension of another format than `extension` (".exr",
 // ".json", ".png"): EXR bytes in `w.png` or JSON in `notes.csv` would be unreadable to the
 // tool the name suggests, and the user's file of that name would be gone. Names with no
