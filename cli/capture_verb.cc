@@ -40,7 +40,7 @@ std::string WithCaptureFlags(const std::string& message) {
       {"CaptureOptions::north_longitude_deg", "--north-longitude"},
       {"CaptureOptions::width x height", "--size"},
       {"CaptureOptions::out", "--out"}};
-  return FieldsAsFlags(message, kFlags);
+  return WithStarFlags(FieldsAsFlags(message, kFlags));
 }
 
 }  // namespace

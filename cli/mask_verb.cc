@@ -29,7 +29,15 @@ bool MaskOptions::IsValid(std::string* why) const {
     *why = "--out: expected an output path ending in .exr";
     return false;
   }
-  return segmentation.IsValid(why);
+  if (segmentation.IsValid(why)) return true;
+  // The library names SkyMaskOptions' fields; the user set them with these flags.
+  static const FieldFlag kFlags[] = {{"SkyMaskOptions::horizon_deg", "--horizon-deg"},
+                                     {"SkyMaskOptions::darkness_threshold", "--darkness"},
+                                     {"SkyMaskOptions::texture_threshold", "--texture"},
+                                     {"SkyMaskOptions::ground_band_deg", "--ground-band-deg"},
+                                     {"SkyMaskOptions::dilate_px", "--dilate"}};
+  *why = FieldsAsFlags(*why, kFlags);
+  return false;
 }
 
 nlohmann::json RunMaskImpl(const MaskOptions& o) {

@@ -32,12 +32,9 @@ bool StarsOptions::IsValid(std::string* why) const {
     *why = "--mask-out: the same path as --out";
     return false;
   }
-  std::string w;
-  if (!removal.IsValid(&w)) {
-    *why = "star options: " + w;
-    return false;
-  }
-  return true;
+  if (removal.IsValid(why)) return true;
+  *why = WithStarFlags(*why);
+  return false;
 }
 
 nlohmann::json RunStarsImpl(const StarsOptions& o) {
@@ -79,6 +76,14 @@ nlohmann::json RunStarsImpl(const StarsOptions& o) {
   j["mask_out"] = o.mask_out;
   j["reference"] = o.reference;
   return j;
+}
+
+std::string WithStarFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"StarRemovalOptions::window_px", "--star-window"},
+                                     {"StarRemovalOptions::threshold_sigma", "--star-sigma"},
+                                     {"StarRemovalOptions::min_contrast", "--star-contrast"},
+                                     {"StarRemovalOptions::max_star_pixels", "--star-max-pixels"}};
+  return FieldsAsFlags(message, kFlags);
 }
 
 void RegisterStarOptions(VerbCommandLine& cl, capture::StarRemovalOptions* o) {

@@ -25,5 +25,7 @@ StarsOptions ParseStarsArgs(int argc, char** argv);
 int RunStars(int argc, char** argv);
 // The removal options' flags (shared with capture --remove-stars).
 void RegisterStarOptions(VerbCommandLine& cl, capture::StarRemovalOptions* o);
+// `message` with StarRemovalOptions' fields written as the flags RegisterStarOptions registers.
+std::string WithStarFlags(const std::string& message);
 
 }  // namespace skycal::cli

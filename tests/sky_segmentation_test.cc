@@ -131,7 +131,8 @@ TEST(SkySegmentation, MaskVerbRefusesBadInputAndWritesNothing) {
   EXPECT_EQ(WEXITSTATUS(std::system(cmd2.c_str())), 1);
   std::ifstream err(dir / "err2.txt");
   const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("horizon_deg"), std::string::npos) << text;
+  // The library names SkyMaskOptions::horizon_deg; the user typed --horizon-deg.
+  EXPECT_NE(text.find("--horizon-deg 45 (expected [-10, 30] deg)"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(out));
   std::filesystem::remove_all(dir);
 }

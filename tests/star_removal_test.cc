@@ -114,6 +114,21 @@ TEST(StarRemoval, ExtendedAndClusteredSourcesStay) {
   EXPECT_THROW(capture::RemoveStars(img, bad), Error);
 }
 
+// The library names StarRemovalOptions' field and value; `skycal stars` says the flag.
+TEST(StarRemoval, OptionsNameTheFieldAndTheVerbTheFlag) {
+  capture::StarRemovalOptions bad;
+  bad.window_px = 4;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_EQ(why, "StarRemovalOptions::window_px = 4: expected an odd number in [3, 31] pixels");
+  testing::ScratchDir dir("stars-flags");
+  const auto r = testing::RunSkycal(SKYCAL_BINARY, "stars --reference " + (dir / "night.exr") + " --out " +
+                                                       (dir / "clean.exr") + " --star-window 4");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--star-window 4: expected an odd number in [3, 31] pixels"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.CountEntries(), 0);
+}
+
 // The real night sky (Poly Haven via Blender, 1024x512) through `skycal stars`.
 TEST(StarRemoval, RealNightSkyThroughTheBinary) {
   testing::ScratchDir dir("stars");

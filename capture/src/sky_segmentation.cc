@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
 
@@ -15,7 +16,7 @@ namespace {
 bool InRange(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 bool Fail(std::string* why, const std::string& field, double value, const std::string& expected) {
-  *why = "sky mask: " + field + " = " + std::to_string(value) + " (expected " + expected + ")";
+  *why = "SkyMaskOptions::" + field + " = " + FormatNumber(value) + " (expected " + expected + ")";
   return false;
 }
 

@@ -1,3 +1,4 @@
+#include "skycal/core/format_number.h"
 #include "skycal/capture/star_removal.h"
 
 #include <algorithm>
@@ -12,27 +13,29 @@ namespace skycal::capture {
 
 bool StarRemovalOptions::IsValid(std::string* why) const {
   if (window_px < 3 || window_px > 31 || window_px % 2 == 0) {
-    *why = "window_px: expected an odd number in [3, 31] pixels, got " + std::to_string(window_px);
+    *why = "StarRemovalOptions::window_px = " + std::to_string(window_px) + ": expected an odd number in [3, 31] pixels";
     return false;
   }
   if (!(min_contrast >= 0.0 && std::isfinite(min_contrast))) {
-    *why = "min_contrast: expected >= 0 (relative to the local median)";
+    *why = "StarRemovalOptions::min_contrast = " + FormatNumber(min_contrast) + ": expected >= 0 (relative to the local median)";
     return false;
   }
   if (!(threshold_sigma > 0.0 && std::isfinite(threshold_sigma))) {
-    *why = "threshold_sigma: expected > 0 (times the noise)";
+    *why = "StarRemovalOptions::threshold_sigma = " + FormatNumber(threshold_sigma) + ": expected > 0 (times the noise)";
     return false;
   }
   if (max_star_pixels < 1 || max_star_extent_px < 1) {
-    *why = "max_star_pixels, max_star_extent_px: expected >= 1";
+    *why = "StarRemovalOptions::max_star_pixels = " + std::to_string(max_star_pixels) + ", StarRemovalOptions::max_star_extent_px = " +
+           std::to_string(max_star_extent_px) + ": expected >= 1";
     return false;
   }
   if (isolation_px < 0 || halo_px < 0 || halo_px > window_px / 2) {
-    *why = "isolation_px, halo_px: expected >= 0 (halo_px at most half the window)";
+    *why = "StarRemovalOptions::isolation_px = " + std::to_string(isolation_px) + ", StarRemovalOptions::halo_px = " +
+           std::to_string(halo_px) + ": expected >= 0 (halo_px at most half the window)";
     return false;
   }
   if (!(min_elevation_deg >= -90.0 && min_elevation_deg <= 90.0)) {
-    *why = "min_elevation_deg: expected degrees in [-90, 90]";
+    *why = "StarRemovalOptions::min_elevation_deg = " + FormatNumber(min_elevation_deg) + ": expected degrees in [-90, 90]";
     return false;
   }
   return true;
