@@ -383,6 +383,65 @@ nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& 
 }
 }  // namespace
 
+namespace {
+
+// The --clouds family of fit's options (docs/cloud-fitting.md).
+void RegisterFitCloudArgs(VerbCommandLine& cl, FitCommandLine* c) {
+  cl.Text("--clouds", &c->clouds.mode, "MODE",
+          "auto (default), on, off or stats: fit the cloud lighting too (on: per reference; a day\n"
+          "of references adds a smoothness prior over time of day, --cloud-day-smoothness).\n"
+          "auto: on when the reference's cloud mask finds >= 1% cloud pixels and\n"
+          "--cloud-preset gives the shapes; a clear reference never marches clouds.\n"
+          "stats: unknown shapes (a photograph): implies --cloud-mask; the atmosphere\n"
+          "fits the clear pixels, then the cloud lighting fits statistics of the cloud\n"
+          "pixels (fit.json's cloud_stats, fit/<ref>.clouds.*.png)");
+  cl.Text("--cloud-preset", &c->clouds.preset, "PRESET.json",
+          "the known cloud shapes: a preset whose clouds section (shape fields, start\n"
+          "lighting) and weather map rendered the reference (e.g. default_cloudy.json)");
+  cl.Number("--cloud-time", &c->clouds.time_s, "S",
+            "wind time of the references' clouds, seconds (default: each reference's\n"
+            "skycalCloudTimeS attribute, written by render --clouds, else 0)");
+  cl.Number("--cloud-day-smoothness", &c->clouds.day_smoothness, "L",
+            "a day of >= 3 references: weight of the second-difference prior on each cloud\n"
+            "lighting parameter over time of day (relative change per h^2; default 0.02, 0: off)");
+  cl.Integer("--cloud-samples", &c->clouds.samples, -1e9, 1e9, "expected an integer", "N",
+             "cloud pixels in the Jet Jacobian (default 256; all when fewer)");
+  cl.Repeatable("--cloud-hold", &c->clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");
+  cl.Integer("--cloud-stats-width", &c->cloud_stats.width, 16, 1024, "expected pixels in [16, 1024]", "PX",
+             "--clouds stats: width of the statistics' lat-long renders (default 128; the\n"
+             "frame's width must be a multiple)");
+  cl.Integer("--cloud-stats-maps", &c->cloud_stats.maps, 1, 16, "expected an integer in [1, 16]", "N",
+             "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
+  cl.Integer("--cloud-stats-iterations", &c->cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",
+             "--clouds stats: Ceres iterations at most (default 12)");
+  cl.Text("--cloud-stats-sun", &c->cloud_stats.sun, "photo|model",
+          "--clouds stats: the sun lighting the model's clouds: the photo's disc (lux in model\n"
+          "units, fit.json's sun_check; default photo) or the fitted preset's (model)");
+  cl.Text("--cloud-stats-probability", &c->cloud_stats.probability, "fitted|initial",
+          "--clouds stats: the cloud probability's clear-sky expectation: also the sky fit's own\n"
+          "render (cloud where both say so; default fitted) or --cloud-mask's alone (initial)");
+  cl.Text("--cloud-stats-sun-scale", &c->cloud_stats.sun_scale, "fit|off",
+          "--clouds stats: fit: albedo held at water's physical 0.9999, a scale on the sun (>= 1 where\n"
+          "the disc is saturated) fitted with the ambient (default); off: the sun as measured, albedo fitted");
+}
+
+// --clouds MODE as the controllers take it: stats means unknown shapes, the statistics stage
+// and --cloud-mask, with no known-shapes term.
+void ApplyFitCloudMode(FitCommandLine* c) {
+  c->cloud_stats.renders = 2 * c->cloud_stats.maps;
+  if (c->clouds.mode != "auto" && c->clouds.mode != "on" && c->clouds.mode != "off" && c->clouds.mode != "stats") {
+    throw Error("--clouds: unknown mode '" + c->clouds.mode + "' (expected auto, on, off or stats)");
+  }
+  if (c->clouds.mode == "stats") {
+    if (!c->clouds.preset.empty()) throw Error("--clouds stats: the shapes are unknown: --cloud-preset does not apply");
+    c->cloud_stats.enabled = true;
+    c->clouds.mode = "off";  // no known-shapes term
+    c->options.cloud_mask = true;
+  }
+}
+
+}  // namespace
+
 FitCommandLine ParseFitArgs(int argc, char** argv) {
   VerbCommandLine cl("fit", "skycal fit: fit the sky model to HDR reference skies",
                      "  skycal fit --reference REF.exr [--reference REF2.exr ...] [--model ffxv|ffxv-iso]\n"
@@ -421,55 +480,10 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
           "fit/<ref>.{reference,fit,error}.png, report.png, fit.json, report.html");
   bool no_report = false;
   cl.Flag("--no-report", &no_report, "do not write DIR/report.html (skycal report)");
-  cl.Text("--clouds", &c.clouds.mode, "MODE",
-          "auto (default), on, off or stats: fit the cloud lighting too (on: per reference; a day\n"
-          "of references adds a smoothness prior over time of day, --cloud-day-smoothness).\n"
-          "auto: on when the reference's cloud mask finds >= 1% cloud pixels and\n"
-          "--cloud-preset gives the shapes; a clear reference never marches clouds.\n"
-          "stats: unknown shapes (a photograph): implies --cloud-mask; the atmosphere\n"
-          "fits the clear pixels, then the cloud lighting fits statistics of the cloud\n"
-          "pixels (fit.json's cloud_stats, fit/<ref>.clouds.*.png)");
-  cl.Text("--cloud-preset", &c.clouds.preset, "PRESET.json",
-          "the known cloud shapes: a preset whose clouds section (shape fields, start\n"
-          "lighting) and weather map rendered the reference (e.g. default_cloudy.json)");
-  cl.Number("--cloud-time", &c.clouds.time_s, "S",
-            "wind time of the references' clouds, seconds (default: each reference's\n"
-            "skycalCloudTimeS attribute, written by render --clouds, else 0)");
-  cl.Number("--cloud-day-smoothness", &c.clouds.day_smoothness, "L",
-            "a day of >= 3 references: weight of the second-difference prior on each cloud\n"
-            "lighting parameter over time of day (relative change per h^2; default 0.02, 0: off)");
-  cl.Integer("--cloud-samples", &c.clouds.samples, -1e9, 1e9, "expected an integer", "N",
-             "cloud pixels in the Jet Jacobian (default 256; all when fewer)");
-  cl.Repeatable("--cloud-hold", &c.clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");
-  cl.Integer("--cloud-stats-width", &c.cloud_stats.width, 16, 1024, "expected pixels in [16, 1024]", "PX",
-             "--clouds stats: width of the statistics' lat-long renders (default 128; the\n"
-             "frame's width must be a multiple)");
-  cl.Integer("--cloud-stats-maps", &c.cloud_stats.maps, 1, 16, "expected an integer in [1, 16]", "N",
-             "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
-  cl.Integer("--cloud-stats-iterations", &c.cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",
-             "--clouds stats: Ceres iterations at most (default 12)");
-  cl.Text("--cloud-stats-sun", &c.cloud_stats.sun, "photo|model",
-          "--clouds stats: the sun lighting the model's clouds: the photo's disc (lux in model\n"
-          "units, fit.json's sun_check; default photo) or the fitted preset's (model)");
-  cl.Text("--cloud-stats-probability", &c.cloud_stats.probability, "fitted|initial",
-          "--clouds stats: the cloud probability's clear-sky expectation: also the sky fit's own\n"
-          "render (cloud where both say so; default fitted) or --cloud-mask's alone (initial)");
-  cl.Text("--cloud-stats-sun-scale", &c.cloud_stats.sun_scale, "fit|off",
-          "--clouds stats: fit: albedo held at water's physical 0.9999, a scale on the sun (>= 1 where\n"
-          "the disc is saturated) fitted with the ambient (default); off: the sun as measured, albedo fitted");
+  RegisterFitCloudArgs(cl, &c);
   cl.Flag("--json", &json, "print fit.json on stdout");
   cl.Parse(argc, argv);
-  c.cloud_stats.renders = 2 * c.cloud_stats.maps;
-  if (c.clouds.mode != "auto" && c.clouds.mode != "on" && c.clouds.mode != "off" && c.clouds.mode != "stats") {
-    throw Error("--clouds: unknown mode '" + c.clouds.mode + "' (expected auto, on, off or stats)");
-  }
-  if (c.clouds.mode == "stats") {
-    if (!c.clouds.preset.empty()) throw Error("--clouds stats: the shapes are unknown: --cloud-preset does not apply");
-    c.cloud_stats.enabled = true;
-    c.clouds.mode = "off";  // no known-shapes term
-    o.cloud_mask = true;
-  }
-
+  ApplyFitCloudMode(&c);
   ApplyFitOptionArgs(fa, &f);
   if (sun_dir && (el || az)) throw Error("give either --sun-dir or --sun-elevation/--sun-azimuth, not both");
   if (el.has_value() != az.has_value()) throw Error("--sun-elevation and --sun-azimuth go together");
