@@ -281,6 +281,25 @@ for sig in INT TERM HUP; do
   done
 done
 
+# --- 7. compare (the game's image against the photo): every hostile and degenerate input on
+# either side, a mask of another size, bad option values (appended last, so that the cases
+# above keep their numbers and --quick its selection) --------------------------------------
+for in in $BAD_INPUTS $DEGENERATE; do
+  run "compare --photo $in" refuse "" compare --photo "$F/$in" --game "$F/sky.exr"
+done
+for in in $BAD_INPUTS; do
+  run "compare --game $in" refuse "" compare --photo "$F/sky.exr" --game "$F/$in"
+done
+for in in $DEGENERATE; do  # a game image of zeros or NaN is compared (floored), never a crash
+  run "compare --game $in" any "" compare --photo "$F/sky.exr" --game "$F/$in"
+done
+run "compare --mask w.exr (another size)" refuse "" compare --photo "$F/sky.exr" --game "$F/sky2.exr" --mask "$F/w.exr"
+run "compare ok" ok "" compare --photo "$F/sky.exr" --game "$F/sky2.exr" --json
+for v in "--exposure 0" "--exposure nan" "--exposure -1" "--band 0" "--band 91" "--min-elevation 90" "--band x"; do
+  # shellcheck disable=SC2086
+  run "compare $v" refuse "" compare --photo "$F/sky.exr" --game "$F/sky2.exr" $v
+done
+
 # --- the table ------------------------------------------------------------------------------
 RAN=0; for v in "${!VERB_CASES[@]}"; do RAN=$((RAN + VERB_CASES[$v])); done
 {
