@@ -79,10 +79,9 @@ CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
   if (o.game.empty()) throw Error("compare: --game G.exr is required");
   if (!(o.exposure > 0.0) || !std::isfinite(o.exposure))
     throw Error("--exposure " + FormatNumber(o.exposure) + ": expected a finite factor > 0");
-  if (o.options.band_deg <= 0.0 || o.options.band_deg > 90.0)
-    throw Error("--band " + FormatNumber(o.options.band_deg) + ": must be in (0, 90] degrees");
-  if (o.options.min_elevation_deg < -90.0 || o.options.min_elevation_deg >= 90.0)
-    throw Error("--min-elevation " + FormatNumber(o.options.min_elevation_deg) + ": must be in [-90, 90) degrees");
+  // The library names its Options fields; the user typed these flags.
+  static const FieldFlag kFlags[] = {{"Options::band_deg", "--band"}, {"Options::min_elevation_deg", "--min-elevation"}};
+  if (const std::string why = o.options.IsValid(); !why.empty()) throw Error(FieldsAsFlags(why, kFlags));
   return o;
 }
 
