@@ -1,0 +1,48 @@
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "skycal/controllers/calibrate.h"
+
+namespace skycal::controllers {
+namespace {
+
+bool Fail(std::string* why, const std::string& text) {
+  if (why) *why = text;
+  return false;
+}
+
+std::string Value(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+bool CalibrateOptions::IsValid(std::string* why) const {
+  if (photos.empty()) return Fail(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
+  std::set<std::string> seen;
+  for (const std::string& p : photos) {
+    if (p.empty()) return Fail(why, "CalibrateOptions::photos holds an empty path");
+    if (!seen.insert(p).second) return Fail(why, "CalibrateOptions::photos = '" + p + "' twice (expected each photo once)");
+  }
+  if (out_dir.empty()) return Fail(why, "CalibrateOptions::out_dir is empty (expected a directory)");
+  if (latitude_deg.has_value() != longitude_deg.has_value())
+    return Fail(why, "CalibrateOptions::latitude_deg and longitude_deg: one given without the other (expected both or neither)");
+  if (latitude_deg && !(std::abs(*latitude_deg) <= 90.0))
+    return Fail(why, "CalibrateOptions::latitude_deg = " + Value(*latitude_deg) + " (expected [-90, 90] degrees)");
+  if (longitude_deg && !(std::abs(*longitude_deg) <= 180.0))
+    return Fail(why, "CalibrateOptions::longitude_deg = " + Value(*longitude_deg) + " (expected [-180, 180] degrees)");
+  if (latitude_deg && !time_iso8601)
+    return Fail(why, "CalibrateOptions::latitude_deg given without time_iso8601 (expected the time as well: the sun needs both)");
+  if (sun_elevation_deg.has_value() != sun_azimuth_deg.has_value())
+    return Fail(why, "CalibrateOptions::sun_elevation_deg and sun_azimuth_deg: one given without the other (expected both or neither)");
+  if (sun_elevation_deg && !(std::abs(*sun_elevation_deg) <= 90.0))
+    return Fail(why, "CalibrateOptions::sun_elevation_deg = " + Value(*sun_elevation_deg) + " (expected [-90, 90] degrees)");
+  if (sun_azimuth_deg && !(std::abs(*sun_azimuth_deg) <= 360.0))
+    return Fail(why, "CalibrateOptions::sun_azimuth_deg = " + Value(*sun_azimuth_deg) + " (expected [-360, 360] degrees)");
+  return true;
+}
+
+}  // namespace skycal::controllers
