@@ -78,6 +78,7 @@ set(SKYCAL_SLOW_TESTS_BY_CONTENT
   Flow.CloudsMovedByAKnownShiftAreRecovered
   FlowWind.CloudsMovedByTheWindAreRecoveredOnCloudPixels
   SkySegmentation.PrecisionAndRecallAgainstTheHandMasks
+  SkyKind.EachBundledRealFrame
   StarRemoval.RealNightSkyThroughTheBinary
   ColorChart.CastInARealSkyFrameIsRecoveredByDetection
   ColorChart.ChartVerbAndCaptureThroughTheBinary
