@@ -108,6 +108,24 @@ FitResultFile FullFile() {
   f.clouds = {{"mode", "off"}, {"fitted", false}};
   f.cloud_stats = {{"parameters", {{"extinction", {{"value", 0.5}}}}}};
   f.time_of_day_h = 14.25;
+  fit::FitCalibration c;
+  c.photo = "photos/park.exr";
+  c.sky_kind = "partly cloudy";
+  c.sky_kind_reason = "cloud edges: texture 0.051 >= cloudy_texture 0.01";
+  c.sky_share = 0.9 / 7.0;
+  c.zenith_blue = 0.55;
+  c.texture = 0.051;
+  c.point_sources = 2.2e-4;
+  c.cloud_share = 0.29;
+  c.sun_source = "sky";
+  c.sun_uncertainty_deg = 3.49;
+  c.mask = "mask.exr";
+  c.render = "render.exr";
+  c.game_sky_pixels = 51234;
+  c.game_per_pixel_log_rmse = 0.6 / 7.0;
+  c.game_appearance_error = 0.1 / 3.0;
+  c.seconds = 4.25;
+  f.calibration = c;
   f.out = "/tmp/fitA";
   return f;
 }
@@ -132,6 +150,9 @@ TEST(FitResultFile, RoundTripIsExactMemberByMember) {
   EXPECT_EQ(read.probe->ground_albedo_reason, "no sun-facing samples");
   EXPECT_EQ(read.levels[0].cost_per_iteration[2], 1.0 / 3.0);
   EXPECT_EQ(read.time_of_day_h, 14.25);
+  ASSERT_TRUE(read.calibration.has_value());
+  EXPECT_EQ(read.calibration->game_per_pixel_log_rmse, 0.6 / 7.0);
+  EXPECT_EQ(read.calibration->sun_uncertainty_deg, 3.49);
   EXPECT_TRUE(read == written);  // every member, doubles compared exactly
   // Written again, the same text.
   EXPECT_EQ(fit::FitResultFileJson(read).dump(), fit::FitResultFileJson(written).dump());

@@ -169,6 +169,26 @@ FitResultFile FitResultFileFrom(const FitResult& result) {
   return f;
 }
 
+nlohmann::json ToJson(const FitCalibration& c) {
+  nlohmann::json j = {{"photo", c.photo},
+                      {"sky_kind", c.sky_kind},
+                      {"sky_kind_reason", c.sky_kind_reason},
+                      {"sky_share", c.sky_share},
+                      {"zenith_blue", c.zenith_blue},
+                      {"texture", c.texture},
+                      {"point_sources", c.point_sources},
+                      {"sun_source", c.sun_source},
+                      {"mask", c.mask},
+                      {"render", c.render},
+                      {"game_sky_pixels", c.game_sky_pixels},
+                      {"game_per_pixel_log_rmse", c.game_per_pixel_log_rmse},
+                      {"game_appearance_error", c.game_appearance_error},
+                      {"seconds", c.seconds}};
+  if (c.cloud_share) j["cloud_share"] = *c.cloud_share;
+  if (c.sun_uncertainty_deg) j["sun_uncertainty_deg"] = *c.sun_uncertainty_deg;
+  return j;
+}
+
 nlohmann::json FitResultFileJson(const FitResultFile& f) {
   nlohmann::json levels = nlohmann::json::array(), skipped = nlohmann::json::array(),
                  decisions = nlohmann::json::array(), unobserved = nlohmann::json::array(),
@@ -199,6 +219,7 @@ nlohmann::json FitResultFileJson(const FitResultFile& f) {
                       {"out", f.out}};
   if (!f.cloud_stats.is_null()) j["cloud_stats"] = f.cloud_stats;
   if (f.time_of_day_h) j["time_of_day_h"] = *f.time_of_day_h;
+  if (f.calibration) j["calibration"] = ToJson(*f.calibration);
   return j;
 }
 
@@ -305,6 +326,25 @@ void Read(const At& a, FitDecision* x) {
   Optional(a, "saved_ms_basis", &x->saved_ms_basis);
   Optional(a, "rel_rmse_change", &x->rel_rmse_change);
   Optional(a, "rel_rmse_change_basis", &x->rel_rmse_change_basis);
+}
+
+void Read(const At& a, FitCalibration* x) {
+  Required(a, "photo", &x->photo);
+  Required(a, "sky_kind", &x->sky_kind);
+  Optional(a, "sky_kind_reason", &x->sky_kind_reason);
+  Optional(a, "sky_share", &x->sky_share);
+  Optional(a, "zenith_blue", &x->zenith_blue);
+  Optional(a, "texture", &x->texture);
+  Optional(a, "point_sources", &x->point_sources);
+  Optional(a, "cloud_share", &x->cloud_share);
+  Required(a, "sun_source", &x->sun_source);
+  Optional(a, "sun_uncertainty_deg", &x->sun_uncertainty_deg);
+  Optional(a, "mask", &x->mask);
+  Optional(a, "render", &x->render);
+  Optional(a, "game_sky_pixels", &x->game_sky_pixels);
+  Required(a, "game_per_pixel_log_rmse", &x->game_per_pixel_log_rmse);
+  Required(a, "game_appearance_error", &x->game_appearance_error);
+  Optional(a, "seconds", &x->seconds);
 }
 
 void Read(const At& a, UnobservedRow* x) {
@@ -520,6 +560,7 @@ FitResultFile FitResultFileFromJson(const nlohmann::json& doc, const std::string
   Optional(a, "clouds", &f.clouds);
   Optional(a, "cloud_stats", &f.cloud_stats);
   Optional(a, "time_of_day_h", &f.time_of_day_h);
+  Optional(a, "calibration", &f.calibration);
   Optional(a, "out", &f.out);
   return f;
 }

@@ -72,6 +72,25 @@ struct FitReferenceEntry {
   bool operator==(const FitReferenceEntry&) const = default;
 };
 
+// `calibration`: what `skycal calibrate` found in the photo and what the game will show
+// (absent from a plain fit). The game's image is the calibrated preset rendered as the game
+// renders it at the photo's sun, size and exposure (render.exr), compared with the photo
+// over the sky pixels above the horizon (core/appearance.h).
+struct FitCalibration {
+  std::string photo;                       // the photograph as given
+  std::string sky_kind, sky_kind_reason;   // capture::SkyKind and the statistic that decided it
+  double sky_share = 0.0, zenith_blue = 0.0, texture = 0.0, point_sources = 0.0;
+  std::optional<double> cloud_share;       // absent when not measured
+  std::string sun_source;                  // "option", "attribute", "disc", "time and place", "sky"
+  std::optional<double> sun_uncertainty_deg;  // "sky" (and the azimuth of "time and place")
+  std::string mask, render;                // files in the fit directory
+  int game_sky_pixels = 0;
+  double game_per_pixel_log_rmse = 0.0;    // natural log
+  double game_appearance_error = 0.0;      // natural log, RMS over bands x statistics
+  double seconds = 0.0;                    // the whole calibration of this photo, wall clock
+  bool operator==(const FitCalibration&) const = default;
+};
+
 // Everything fit.json holds. Optional sections: probe (with probe samples), linear_start
 // (unless --no-linear-start), cloud_stats (--clouds stats), time_of_day_h.
 struct FitResultFile {
@@ -92,6 +111,7 @@ struct FitResultFile {
   nlohmann::json clouds;       // the cloud lighting fit's record (cli/fit_clouds.h); null when absent
   nlohmann::json cloud_stats;  // --clouds stats (cli/fit_cloud_stats.h); null when absent
   std::optional<double> time_of_day_h;
+  std::optional<FitCalibration> calibration;
   std::string out;  // the --out directory as given
   bool operator==(const FitResultFile&) const = default;
 };
