@@ -56,7 +56,8 @@ std::string WithFitControllerFlags(const std::string& message);
 // The cloud statistics' messages (PhotoCloudStatsOptions' fields) written with the flags.
 std::string WithCloudStatsFlags(const std::string& message);
 
-// The controller's cloud statistics stage, its errors naming the flags.
+// The controller's cloud statistics stage, its errors naming the flags; with the two below,
+// the names tests/fit_cloud_stats_test.cc calls the stage by.
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<cloudfit::CloudStatsPhoto>& photos,
                                      const fit::FitResult& sky, const std::filesystem::path& fit_dir,
                                      cloudfit::CloudStatsPresetUpdate* update = nullptr);
