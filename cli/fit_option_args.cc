@@ -4,17 +4,11 @@
 #include <cstdlib>
 
 #include "option_values.h"
+#include "skycal/controllers/fit_controller.h"
 #include "skycal/core/error.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
-namespace {
-
-const char* LossName(fit::RobustLoss l) {
-  return l == fit::RobustLoss::kCauchy ? "cauchy" : (l == fit::RobustLoss::kHuber ? "huber" : "none");
-}
-
-}  // namespace
 
 void RegisterFitOptionArgs(VerbCommandLine& cl, FitOptionArgs* a, fit::FitOptions* f, std::string* init_preset) {
   cl.Text("--model", &a->model, "NAME", "ffxv-iso (default: + isotropic LUT) or ffxv (the talk's two terms)");
@@ -89,19 +83,6 @@ void ApplyFitOptionArgs(const FitOptionArgs& a, fit::FitOptions* f) {
   f->verbose = !a.quiet;
 }
 
-nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) {
-  return {{"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
-          {"absolute", fo.absolute},               {"sun_cone_deg", fo.sun_cone_deg},
-          {"clip_fraction", fo.clip_fraction},     {"mask", fo.mask_path},
-          {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
-          {"pyramid_widths", fo.pyramid_widths},   {"max_iterations_per_level", fo.max_iterations_per_level},
-          {"smoothness", fo.smoothness},
-          {"linear_start", fo.linear_start},       {"linear_width", fo.linear_width},
-          {"polish", fo.polish},
-          {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
-          {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
-          {"fit_ground_albedo", fo.fit_ground_albedo},
-          {"numeric_derivatives", fo.numeric_derivatives}};
-}
+nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) { return controllers::ResolvedFitOptionsJson(fo); }
 
 }  // namespace skycal::cli

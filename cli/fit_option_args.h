@@ -31,7 +31,8 @@ void ApplyFitOptionArgs(const FitOptionArgs& args, fit::FitOptions* fit);
 // ("FitOptions::sun_cone_deg = 90 (...)" -> "--sun-cone 90 (...)"), for every verb that fits.
 std::string WithFitFlags(const std::string& message);
 
-// The options a fit ran with, as fit.json and the preset's provenance record them.
+// The options a fit ran with, as fit.json and the preset's provenance record them
+// (controllers::ResolvedFitOptionsJson; batch's identity records them too).
 nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo);
 
 }  // namespace skycal::cli

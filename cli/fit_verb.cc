@@ -1,387 +1,121 @@
 #include "fit_verb.h"
 
-#include <unistd.h>
-
-#include <cmath>
-#include <filesystem>
-#include <map>
 #include <optional>
-#include <set>
-#include <iostream>
-#include <sstream>
 
 #include "command_line.h"
 #include "fit_option_args.h"
 #include "option_values.h"
-#include "fit_cloud_mask.h"
-#include "finite_output.h"
-#include "fit_report.h"
-#include "report_verb.h"
-#include "skycal/core/staged_directory.h"
-#include "render_verb.h"
-#include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"
-#include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
-#include "skycal/core/luminance.h"
-#include "skycal/core/sha256.h"
-#include "skycal/core/version.h"
-#include "skycal/fit/fit_result_file.h"
-#include "skycal/fit/reference.h"
-#include "skycal/fit/sky_fit.h"
-#include "skycal/render/irradiance.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
-namespace fs = std::filesystem;
-namespace {
 
-// Probe samples per reference name: --probe STEM=FILE, else <reference stem>.probe.json beside it.
-std::vector<std::optional<fit::ProbeSamples>> ProbesFor(const FitProbeOptions& o, const std::vector<fit::Reference>& refs) {
-  std::map<std::string, std::string> given;
-  for (const std::string& spec : o.probes) {
-    const auto eq = spec.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
-      throw Error("--probe " + spec + ": expected REF_STEM=SAMPLES.json");
-    }
-    if (!given.emplace(spec.substr(0, eq), spec.substr(eq + 1)).second) {
-      throw Error("--probe: two sample files for '" + spec.substr(0, eq) + "'");
-    }
-  }
-  for (const auto& [stem, file] : given) {
-    bool found = false;
-    for (const auto& r : refs) found = found || r.name == stem;
-    if (!found) throw Error("--probe " + stem + "=" + file + ": no reference named '" + stem + "'");
-  }
-  std::vector<std::optional<fit::ProbeSamples>> out;
-  for (const auto& r : refs) {
-    std::string file;
-    if (auto it = given.find(r.name); it != given.end()) {
-      file = it->second;
-    } else {
-      fs::path p(r.path);
-      if (p.extension() == ".exr" || p.extension() == ".EXR") p.replace_extension("");
-      const std::string candidate = p.string() + ".probe.json";
-      if (fs::exists(candidate)) file = candidate;
-    }
-    if (file.empty()) {
-      if (o.require_probe) throw Error("--require-probe: no probe samples for reference " + r.path);
-      out.emplace_back();
-    } else {
-      out.emplace_back(fit::LoadProbeSamples(file));
-    }
-  }
-  return out;
+std::string WithFitControllerFlags(const std::string& message) {
+  // Whole messages first (the checks the verb once wrote itself), then each field.
+  static const FieldFlag kFlags[] = {
+      {"FitControllerOptions::references is empty (expected at least one lat-long EXR)",
+       "at least one --reference is required"},
+      {"FitControllerOptions::out_dir is empty (expected a directory)", "--out DIR is required"},
+      {"FitCloudStatsOptions::enabled = true", "--clouds stats"},
+      {"FitControllerOptions::cloud_mask = true", "--cloud-mask"},
+      {"FitControllerOptions::report = false", "--no-report"},
+      {"FitControllerOptions::references", "--reference"},
+      {"FitControllerOptions::out_dir", "--out"},
+      {"FitControllerOptions::init_preset", "--init"},
+      {"FitControllerOptions::probes", "--probe"},
+      {"FitControllerOptions::require_probe", "--require-probe"},
+      {"FitOptions::mask_path", "--mask"},
+      {"FitCloudOptions::mode", "--clouds"},
+      {"FitCloudOptions::preset", "--cloud-preset"},
+      {"FitCloudOptions::time_s", "--cloud-time"},
+      {"CloudLightingOptions::samples", "--cloud-samples"},
+      {"CloudLightingOptions::day_smoothness", "--cloud-day-smoothness"},
+      {"CloudLightingOptions::hold", "--cloud-hold"},
+      {"CloudMode on", "--clouds on"},
+      {"CloudMode off", "--clouds off"},
+      {"CloudMode auto", "--clouds auto"},
+      {"KnownCloudShapes", "--cloud-preset"}};
+  return WithCloudStatsFlags(FieldsAsFlags(message, kFlags));
 }
 
-}  // namespace
+std::string WithCloudStatsFlags(const std::string& message) {
+  static const FieldFlag kFlags[] = {{"FitPhotoCloudStats:", "--clouds stats:"},
+                                     {"PhotoCloudStatsOptions::width", "--cloud-stats-width"},
+                                     {"PhotoCloudStatsOptions::maps", "--cloud-stats-maps"},
+                                     {"PhotoCloudStatsOptions::renders", "cloud stats renders per evaluation"},
+                                     {"PhotoCloudStatsOptions::max_iterations", "--cloud-stats-iterations"},
+                                     {"PhotoCloudStatsOptions::sun", "--cloud-stats-sun"},
+                                     {"PhotoCloudStatsOptions::probability", "--cloud-stats-probability"},
+                                     {"PhotoCloudStatsOptions::sun_scale", "--cloud-stats-sun-scale"}};
+  return FieldsAsFlags(message, kFlags);
+}
 
-bool FitVerbOptions::IsValid(std::string* why) const {
-  if (references.empty()) {
-    *why = "at least one --reference is required";
-    return false;
-  }
-  if (out_dir.empty()) {
-    *why = "--out DIR is required";
-    return false;
-  }
-  if (fit.IsValid(why)) return true;
-  *why = WithFitFlags(*why);  // the library names FitOptions' fields; the user gave flags
+bool FitCloudStatsOptions::IsValid(std::string* why) const {
+  if (controllers::FitCloudStatsOptions::IsValid(why)) return true;
+  *why = WithCloudStatsFlags(*why);
   return false;
 }
 
-namespace {
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
-                                const FitCloudStatsOptions& cs = {});
-}  // namespace
-
-nlohmann::json RunFitImpl(const FitVerbOptions& o) { return RunFitWithProbes(o, FitProbeOptions{}, FitCloudOptions{}); }
-
-namespace {
-// Every file the fit reads, named by the option that gave it (StagedDirectory refuses an
-// --out that is one of them).
-std::vector<NamedPath> FitInputs(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
-                                 const std::string& init_path) {
-  std::vector<NamedPath> read = PresetInputs("--init", init_path);
-  for (const std::string& r : o.references) read.push_back({"--reference", r});
-  if (!o.fit.mask_path.empty()) read.push_back({"--mask", o.fit.mask_path});
-  for (const std::string& spec : po.probes) read.push_back({"--probe", spec.substr(spec.find('=') + 1)});
-  for (const std::string& r : o.references) {  // the probe samples found beside a reference
-    fs::path p(r);
-    p.replace_extension(".probe.json");
-    read.push_back({"--reference " + r + "'s probe samples", p.string()});
-  }
-  for (const NamedPath& p : FitCloudInputs(co)) read.push_back(p);
-  return read;
-}
-
-// The references, each checked and (with --cloud-mask) its cloudy pixels left out.
-struct LoadedReferences {
-  std::vector<fit::Reference> refs;
-  std::vector<fit::FitCloudMaskEntry> cloud_mask;
-  std::vector<std::vector<float>> cloud_probability;  // per reference, for --clouds stats
-};
-
-LoadedReferences LoadFitReferences(const FitVerbOptions& o, bool cloud_shapes) {
-  LoadedReferences l;
-  std::set<std::string> names;
-  for (const std::string& path : o.references) {
-    l.refs.push_back(fit::LoadReference(path, o.fit));
-    const fit::MaskCounts& n = l.refs.back().counts;  // the user's mask and the sun cone are choices, not damage
-    RequireValidShare(path, n.sky, n.sky + n.invalid + n.clipped, "fittable sky pixels of those above the horizon "
-                      "outside --mask and the sun cone");
-    if (!names.insert(l.refs.back().name).second) {
-      throw Error(path + ": two references share the name '" + l.refs.back().name + "' (fit/<name>.exr would collide)");
-    }
-    if (l.refs.back().row_mapping && (o.cloud_mask || cloud_shapes)) {
-      throw Error(path + ": has horizon-biased rows (skycal resample): " +
-                  std::string(o.cloud_mask ? "--cloud-mask" : "--cloud-preset (the cloud lighting fit)") +
-                  " needs uniform 2:1 rows; fit the frame before resampling");
-    }
-    if (o.cloud_mask) {
-      const CloudMaskApplied cm = ApplyCloudMask(&l.refs.back(), DefaultPresetPath());
-      l.cloud_mask.push_back(cm.Entry());
-      l.cloud_probability.push_back(cm.probability);
-      Log("fit", path + ": --cloud-mask: " + std::to_string(cm.cloudy_pixels) + " cloudy sky pixels left out (" +
-                     std::to_string(100.0 * cm.fraction) + "%, " + cm.source + ")");
-    }
-    const auto& r = l.refs.back();
-    Log("fit", r.path + ": " + std::to_string(r.radiance.width) + "x" + std::to_string(r.radiance.height) + ", sun from " +
-                   r.sun_source + " (elevation " + std::to_string(latlong::ElevationDeg(r.sun_dir)) + " deg), " +
-                   std::to_string(r.counts.sky) + " sky pixels fitted");
-    for (const auto& w : r.warnings) Log("fit", "warning: " + w);
-  }
-  return l;
-}
-
-fit::FitProbeSunEntry ProbeSunEntry(const fit::ProbeSun& s, const std::string& probe_path, bool absolute) {
-  fit::FitProbeSunEntry e;
-  e.observable = s.observable;
-  e.visible = s.visible;
-  e.illuminance_rgb = s.illuminance_ref;
-  e.illuminance_rgb_model = s.illuminance_model;
-  e.fitted_illuminance_rgb_model = s.fitted_model;
-  e.fraction = s.fraction;
-  e.residual = s.residual;
-  e.log_rmse = s.log_rmse;
-  e.samples = s.samples;
-  e.sun_facing_samples = s.sun_facing_samples;
-  e.ground_facing_samples = s.ground_facing_samples;
-  e.probe = probe_path;
-  e.note = s.note;
-  if (absolute) e.illuminance_lux = s.lux;
-  return e;
-}
-
-// The sun each reference's probe saw (fit.json's references[i].sun), logged; a probe that
-// cannot observe the sun warns, or fails with --require-probe.
-struct ProbeSuns {
-  std::vector<std::optional<fit::ProbeSun>> suns;
-  std::vector<std::optional<fit::FitProbeSunEntry>> entries;
-};
-
-ProbeSuns CollectProbeSuns(const std::vector<fit::Reference>& refs, const fit::FitResult& result,
-                           const std::vector<std::optional<fit::ProbeSamples>>& probes, const FitProbeOptions& po,
-                           bool absolute, std::vector<std::string>* warnings) {
-  ProbeSuns ps{std::vector<std::optional<fit::ProbeSun>>(refs.size()),
-               std::vector<std::optional<fit::FitProbeSunEntry>>(refs.size())};
-  for (size_t r = 0; r < refs.size(); ++r) {
-    if (!probes[r]) continue;
-    const fit::ProbeSun& s = *result.references[r].sun;
-    ps.suns[r] = s;
-    ps.entries[r] = ProbeSunEntry(s, probes[r]->path, absolute);
-    Log("fit", refs[r].name + ": probe sun " + (!s.observable ? "not observable (" + s.note + ")"
-                                                              : s.visible ? std::string("visible") : std::string("occluded")) +
-                   ", fraction " + std::to_string(s.fraction) + ", E_sun (model) " +
-                   std::to_string(s.illuminance_model[0]) + ", " + std::to_string(s.illuminance_model[1]) + ", " +
-                   std::to_string(s.illuminance_model[2]) + ", probe log RMSE " + std::to_string(s.log_rmse));
-    if (!s.observable) {
-      if (po.require_probe) throw Error(refs[r].name + ": --require-probe: the probe cannot observe the sun: " + s.note);
-      warnings->push_back(refs[r].name + ": sun from the probe: " + s.note);
-    }
-  }
-  return ps;
-}
-
-// One reference seeing the sun on its probe sets the preset's sun_tint_rgb; several leave it
-// as fitted and record each one's tint.
-void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, render::Preset* preset,
-                       std::vector<std::string>* warnings) {
-  std::vector<size_t> visible;
-  for (size_t r = 0; r < refs.size(); ++r) {
-    if (ps->suns[r] && ps->suns[r]->visible) visible.push_back(r);
-  }
-  if (visible.size() == 1) {
-    const size_t r = visible[0];
-    bool clamped = false;
-    preset->sun_tint_rgb = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, &clamped);
-    ps->entries[r]->sun_tint_rgb = preset->sun_tint_rgb;
-    if (clamped) {
-      const std::string w = refs[r].name + ": the probe's sun needs a sun_tint_rgb outside its bounds: clamped";
-      warnings->push_back(w);
-      Log("fit", "warning: " + w);
-    }
-  } else if (visible.size() > 1) {
-    for (size_t r : visible) {
-      ps->entries[r]->sun_tint_rgb = fit::SunTintFor(*preset, refs[r].sun_dir, ps->suns[r]->illuminance_model, nullptr);
-    }
-    const std::string w = std::to_string(visible.size()) +
-                          " references see the sun on the probe: the preset's sun_tint_rgb is left as fitted "
-                          "(per-reference tints in fit.json)";
-    warnings->push_back(w);
-    Log("fit", "warning: " + w);
-  }
-}
-
-// fit/<name>.exr per reference, and its entries of fit.json (references, warnings) and of
-// preset.json's provenance (inputs).
-void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Reference>& refs,
-                        const fit::FitResult& result, const ProbeSuns& ps, fit::FitResultFile* file,
-                        nlohmann::json* inputs) {
-  for (size_t r = 0; r < refs.size(); ++r) {
-    const auto& ref = refs[r];
-    const auto& rf = result.references[r];
-    capture::LatLongFrame frame;
-    frame.radiance = rf.rendered;
-    frame.sun_direction = ref.sun_dir;
-    frame.row_mapping = ref.row_mapping;  // the fit image has the reference's rows
-    frame.extra.strings["skycalReference"] = ref.path;
-    frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
-    capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);
-    fit::FitReferenceEntry e;
-    e.name = ref.name;
-    e.path = ref.path;
-    e.rel_rmse = rf.errors.rel_rmse;
-    e.log_rmse = rf.errors.log_rmse;
-    e.exposure = rf.exposure;
-    e.sun_direction = ref.sun_dir;
-    e.sun_elevation_deg = latlong::ElevationDeg(ref.sun_dir);
-    e.sun_source = ref.sun_source;
-    e.observed_lut_rows = rf.observed_rows;
-    e.clip_level = ref.clip_level;
-    e.pixels = ref.counts;
-    e.sun = ps.entries[r];
-    file->references.push_back(std::move(e));
-    inputs->push_back({{"path", ref.path}, {"sha256", ref.sha256}});
-    for (const auto& w : ref.warnings) file->warnings.push_back(w);
-  }
-}
-
-// --clouds stats: the cloud lighting by statistics of the cloud pixels, into fit.json's
-// cloud_stats and the preset's clouds section.
-void RunCloudStatsStage(const FitCloudStatsOptions& cs, const LoadedReferences& l, const nlohmann::json& sky_refit,
-                        const StagedDirectory& out, fit::FitResult* result, fit::FitResultFile* file) {
-  std::vector<cloudfit::CloudStatsPhoto> photos;
-  for (size_t r = 0; r < l.refs.size(); ++r) {
-    const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
-    photos.push_back({&l.refs[r], l.cloud_probability[r], rr.contains("cloud_pixels_by_sun_angle")});
-  }
-  file->clouds["mode"] = "stats";
-  file->clouds["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by "
-                             "statistics of the cloud pixels (fit.json's cloud_stats)";
-  cloudfit::CloudStatsPresetUpdate update;
-  file->cloud_stats = RunCloudStatsOnPhotos(cs, photos, *result, out.staging() / "fit", &update);
-  file->cloud_stats["preset"] = AttachCloudStats(update, out / "preset.json", &result->preset);
-  file->cloud_stats["sky_refit"] = sky_refit;
-}
-
-// The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
-// file) leaves them out, never the fit. Then what the report reads beside the errors: the
-// images, the fitted sun at the ground (model units: lux with --absolute), the cloud mask.
-void WritePreviewsAndReportFields(const StagedDirectory& out, const FitVerbOptions& o, const LoadedReferences& l,
-                                  const fit::FitResult& result, fit::FitResultFile* file) {
-  const std::vector<fit::Reference>& refs = l.refs;
-  bool previews = true;
+nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<cloudfit::CloudStatsPhoto>& photos,
+                                     const fit::FitResult& sky, const std::filesystem::path& fit_dir,
+                                     cloudfit::CloudStatsPresetUpdate* update) {
   try {
-    WriteFitReport(out / "report.png", refs, result);
-    WriteFitPanels(out / "fit", refs, result);
+    return controllers::RunCloudStatsOnPhotos(o, photos, sky, fit_dir, update);
   } catch (const Error& e) {
-    previews = false;
-    Log("fit", std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
-  }
-  for (size_t r = 0; r < refs.size(); ++r) {
-    fit::FitReferenceEntry& e = file->references[r];
-    if (previews) {
-      e.images = fit::FitReferenceImages{"fit/" + refs[r].name + ".reference.png", "fit/" + refs[r].name + ".fit.png",
-                                         "fit/" + refs[r].name + ".error.png"};
-    }
-    const render::Rgb sun = render::SunIlluminanceAtGround(result.preset, refs[r].sun_dir);
-    e.sun_illuminance_at_ground_lux = skycal::Rec709Luminance(sun);
-    if (o.cloud_mask) e.cloud_mask = l.cloud_mask[r];
+    throw Error(WithCloudStatsFlags(e.what()));
   }
 }
 
-void CheckFitOptions(const FitVerbOptions& o, const FitCloudOptions& co, const FitCloudStatsOptions& cs) {
-  std::string why;
-  if (!o.IsValid(&why)) throw Error(why);
-  if (!co.IsValid(&why)) throw Error(why);
-  if (cs.enabled && !cs.IsValid(&why)) throw Error(why);
-  if (cs.enabled && !o.cloud_mask) throw Error("--clouds stats fits the atmosphere to the clear pixels: it needs --cloud-mask");
+namespace {
+
+controllers::FitControllerOptions ControllerOptions(const FitVerbOptions& o) {
+  controllers::FitControllerOptions c;
+  c.references = o.references;
+  c.init_preset = o.init_preset;
+  c.out_dir = o.out_dir;
+  c.fit = o.fit;
+  c.cloud_mask = o.cloud_mask;
+  c.report = o.report;
+  return c;
 }
 
-// The fit's stages: inputs read and checked, the sky (+ clouds) fit, the probe's sun, the
-// fit images, the cloud statistics, preset.json, previews, fit.json, then the commit.
-nlohmann::json RunFitWithProbes(const FitVerbOptions& o, const FitProbeOptions& po, const FitCloudOptions& co,
-                                const FitCloudStatsOptions& cs) {
-  CheckFitOptions(o, co, cs);
-  const std::string init_path = o.init_preset.empty() ? DefaultPresetPath() : o.init_preset;
-  StagedDirectory out(o.out_dir, "--out", "fit", FitInputs(o, po, co, init_path));  // fails early on an unusable --out
-  std::filesystem::create_directories(out.staging() / "fit");
-  render::Preset init = render::LoadPreset(init_path);
-  const std::unique_ptr<LoadedCloudShapes> cloud_shapes = LoadFitCloudShapes(co);  // a bad section fails early
-  LoadedReferences l = LoadFitReferences(o, cloud_shapes != nullptr);
-  std::vector<fit::Reference>& refs = l.refs;
-  const auto probes = ProbesFor(po, refs);  // before the fit: a missing or bad file fails early
-  std::vector<const fit::ProbeSamples*> probe_ptrs;
-  for (const auto& p : probes) probe_ptrs.push_back(p ? &*p : nullptr);
-  fit::FitOptions fo = o.fit;
-  if (!fo.time_of_day_h && refs.size() == 1 && refs[0].time_of_day_h) fo.time_of_day_h = refs[0].time_of_day_h;
-  auto renderer = render::CreateRenderer(fo.backend);
-  Log("fit", "objective backend: " + renderer->Describe());
-  cloudfit::SkyCloudFit joint = RunSkyCloudFit(co, refs, init, fo, *renderer, probe_ptrs, cloud_shapes.get());
-  nlohmann::json sky_refit;
-  if (cs.enabled)  // the cloud mask against the sky fit's own render; the atmosphere refitted if it moved
-    sky_refit = RefineCloudMaskAndRefitSky(cs, !o.fit.mask_path.empty(), &refs, &l.cloud_probability, joint.sky, [&] {
-      const render::Preset first = joint.sky.preset;
-      joint = RunSkyCloudFit(co, refs, first, fo, *renderer, probe_ptrs, cloud_shapes.get());
-    });
-  fit::FitResult& result = joint.sky;
-  result.preset.name = fs::path(o.out_dir).filename().string();
-  if (fo.time_of_day_h) result.preset.time_of_day_h = *fo.time_of_day_h;
-
-  fit::FitResultFile file = fit::FitResultFileFrom(result);  // the fit's own part; the rest below
-  nlohmann::json inputs = nlohmann::json::array();
-  ProbeSuns ps = CollectProbeSuns(refs, result, probes, po, fo.absolute, &file.warnings);
-  ApplyProbeSunTint(refs, &ps, &result.preset, &file.warnings);
-  WriteReferenceFits(out, refs, result, ps, &file, &inputs);
-  for (const auto& w : result.warnings) file.warnings.push_back(w);
-  file.options = ResolvedFitOptionsJson(fo);
-  file.clouds = CloudReportJson(co, joint);
-  if (cs.enabled) RunCloudStatsStage(cs, l, sky_refit, out, &result, &file);
-  if (cloud_shapes) AttachFittedClouds(joint, *cloud_shapes, out / "preset.json", &result.preset);
-  nlohmann::json final_errors = nlohmann::json::array();  // the references' entries before the previews
-  for (const fit::FitReferenceEntry& e : file.references) final_errors.push_back(fit::FitReferenceEntryJson(e));
-  const nlohmann::json provenance = {{"provenance",
-                                      {{"tool", std::string("skycal ") + kSkycalVersion},
-                                       {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
-                                       {"inputs", inputs},
-                                       {"options", file.options},
-                                       {"final_errors", final_errors}}}};
-  render::SavePreset(result.preset, out / "preset.json", &provenance);
-  WritePreviewsAndReportFields(out, o, l, result, &file);
-  file.time_of_day_h = fo.time_of_day_h;
-  file.out = o.out_dir;
-  fit::WriteFitResultFile(out / "fit.json", file);
-  if (o.report) WriteVerbReport("fit", out.staging().string());
-  out.Commit();
-  for (const fit::FitReferenceEntry& e : file.references) {
-    Log("fit", e.name + ": rel RMSE " + std::to_string(100.0 * e.rel_rmse) + "%, log RMSE " + std::to_string(e.log_rmse));
-  }
-  Log("fit", "wrote " + o.out_dir + " in " + std::to_string(result.time_s) + " s (" +
-                 std::to_string(result.iterations) + " iterations)");
-  return fit::FitResultFileJson(file);
+// The controller's check with fields written as flags (FitOptions' too).
+bool ValidWithFlags(const controllers::FitControllerOptions& o, std::string* why) {
+  if (o.IsValid(why)) return true;
+  *why = WithFitFlags(WithFitControllerFlags(*why));
+  return false;
 }
+
 }  // namespace
+
+bool FitVerbOptions::IsValid(std::string* why) const { return ValidWithFlags(ControllerOptions(*this), why); }
+
+controllers::FitControllerOptions FitCommandLine::Controller() const {
+  controllers::FitControllerOptions c = ControllerOptions(options);
+  c.probes = probes.probes;
+  c.require_probe = probes.require_probe;
+  c.clouds = clouds;
+  c.cloud_stats = cloud_stats;
+  return c;
+}
+
+nlohmann::json RunFitImpl(const FitCommandLine& c) {
+  const controllers::FitControllerOptions o = c.Controller();
+  std::string why;
+  if (!ValidWithFlags(o, &why)) throw Error(why);
+  try {
+    return controllers::RunFitController(o);
+  } catch (const Error& e) {
+    throw Error(WithFitControllerFlags(e.what()));
+  }
+}
+
+nlohmann::json RunFitImpl(const FitVerbOptions& o) {
+  FitCommandLine c;
+  c.options = o;
+  return RunFitImpl(c);
+}
 
 namespace {
 
@@ -498,10 +232,7 @@ FitCommandLine ParseFitArgs(int argc, char** argv) {
 }
 
 int RunFit(int argc, char** argv) {
-  return RunVerb("fit", WantsJson(argc, argv), [&]() {
-    const FitCommandLine c = ParseFitArgs(argc, argv);
-    return RunFitWithProbes(c.options, c.probes, c.clouds, c.cloud_stats);
-  });
+  return RunVerb("fit", WantsJson(argc, argv), [&]() { return RunFitImpl(ParseFitArgs(argc, argv)); });
 }
 
 }  // namespace skycal::cli

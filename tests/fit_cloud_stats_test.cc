@@ -1,15 +1,14 @@
-// `skycal fit --clouds stats` (cli/fit_cloud_stats.h): the command line, bad input, and the
-// wiring at a small size — a synthetic "photo" (the default cloudy preset's clouds over its
-// sky, 64x32) through the coverage match, the statistics fit and the panels. The recovery
-// itself is measured in bench/results/cloud_stats_seed_pairs_ensemble.md, the real skies in
-// bench/results/cloud_photos.md.
+// `skycal fit --clouds stats` (controllers/fit_cloud_stats.h; flags: cli/fit_verb.h): the command
+// line, bad input, and the wiring at a small size — a synthetic "photo" (the default cloudy
+// preset's clouds over its sky, 64x32) through the coverage match, the statistics fit and the
+// panels. The recovery itself is measured in bench/results/cloud_stats_seed_pairs_ensemble.md,
+// the real skies in bench/results/cloud_photos.md.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 
-#include "fit_cloud_stats.h"
 #include "fit_verb.h"
 #include "skycal/bench/cloud_stats_scene.h"
 #include "skycal/cloudfit/cloud_sun_scale.h"

@@ -1,6 +1,6 @@
 // Suite `fit-clouds`: the cloud-lighting fit with known shapes (`skycal fit --clouds on
-// --cloud-preset datasets/presets/default_cloudy.json`: cli::RunSkyCloudFit, the verb's own
-// code, without its file writes) on a synthetic cloudy reference whose lighting is known.
+// --cloud-preset datasets/presets/default_cloudy.json`: controllers::RunSkyCloudFit, the fit
+// controller's own stage, without its file writes) on a synthetic cloudy reference whose lighting is known.
 // Truth: another atmosphere's bake (the standard variants' second) under the bundled cloudy
 // preset's shapes (weather map, noise seed 1, wind time 0) with six lighting parameters
 // moved off the preset's -- extinction 0.05 -> 0.056 /m, scattering_albedo 0.99 -> 0.97,
@@ -17,11 +17,11 @@
 #include <filesystem>
 #include <map>
 
-#include "fit_clouds.h"
 #include "render_verb.h"
 #include "skycal/bench/fit_suite_grids.h"
 #include "skycal/cloudfit/cloud_lighting_params.h"
 #include "skycal/clouds/cloud_params.h"
+#include "skycal/controllers/fit_clouds.h"
 #include "skycal/fit/reference.h"
 #include "skycal/refsky/reference_skies.h"
 #include "suite_util.h"
@@ -152,10 +152,10 @@ Suite FitCloudsSuite() {
       cli::RunRenderImpl(ro);
       refs[size] = ro.out_exr;
     }
-    cli::FitCloudOptions shapes_options;
+    controllers::FitCloudOptions shapes_options;
     shapes_options.mode = "on";
     shapes_options.preset = cli::DefaultCloudyPresetPath();
-    const std::unique_ptr<cli::LoadedCloudShapes> shapes = cli::LoadFitCloudShapes(shapes_options);
+    const std::unique_ptr<controllers::LoadedCloudShapes> shapes = controllers::LoadFitCloudShapes(shapes_options);
     const render::Preset bundled = render::LoadPreset(DefaultPresetPath());
     const render::Preset truth_sky = render::LoadPreset(truth_preset);
     auto renderers = SkyRenderersByBackend();
@@ -166,14 +166,14 @@ Suite FitCloudsSuite() {
       f.verbose = o.verb_logs;  // the fit's and its clouds' progress lines: --verb-logs only
       f.absolute = from_truth;  // the truth's sky is in the reference's units
       f.backend = render::ParseBackend(Get(c.settings, "backend"), "backend");
-      cli::FitCloudOptions co = shapes_options;
+      controllers::FitCloudOptions co = shapes_options;
       co.samples = std::stoi(Get(c.settings, "samples"));
       const std::vector<fit::Reference> ref = {fit::LoadReference(refs.at(Get(c.settings, "size")), f)};
       cloudfit::SkyCloudFit r;
       c.time = Measure(
           [&] {
-            r = cli::RunSkyCloudFit(co, ref, from_truth ? truth_sky : bundled, f, *renderers.at(Get(c.settings, "backend")),
-                                    {}, shapes.get());
+            r = controllers::RunSkyCloudFit(co, ref, from_truth ? truth_sky : bundled, f,
+                                            *renderers.at(Get(c.settings, "backend")), {}, shapes.get());
           },
           o.quick ? 0 : o.warmup, repeats);
       ScoreCloudLighting(c, r, truth);

@@ -1,5 +1,5 @@
 // The sun direction a preset was fitted at, read back from the provenance `skycal fit`
-// writes into the preset JSON (cli/fit_verb.cc). Its own file so the export verb and the
+// writes into the preset JSON (controllers/src/fit_controller.cc). Its own file so the export verb and the
 // fuzz harness (fuzz/json_file_fuzzer.cc) share the one reader.
 #pragma once
 #include <string>

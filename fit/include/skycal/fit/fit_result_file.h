@@ -108,8 +108,8 @@ struct FitResultFile {
   std::vector<FitReferenceEntry> references;
   std::vector<std::string> warnings;
   nlohmann::json options = nlohmann::json::object();  // the resolved fit options (cli: ResolvedFitOptionsJson)
-  nlohmann::json clouds;       // the cloud lighting fit's record (cli/fit_clouds.h); null when absent
-  nlohmann::json cloud_stats;  // --clouds stats (cli/fit_cloud_stats.h); null when absent
+  nlohmann::json clouds;       // the cloud lighting fit's record (skycal/controllers/fit_clouds.h); null when absent
+  nlohmann::json cloud_stats;  // --clouds stats (skycal/controllers/fit_cloud_stats.h); null when absent
   std::optional<double> time_of_day_h;
   std::optional<FitCalibration> calibration;
   std::string out;  // the --out directory as given

@@ -1,10 +1,9 @@
-#include "fit_clouds.h"
+#include "skycal/controllers/fit_clouds.h"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
-#include "render_clouds.h"
 #include "skycal/cloudfit/cloud_lighting_json.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/weather_map.h"
@@ -12,16 +11,33 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/format_number.h"
-#include "verb_common.h"
+#include "fit_internal.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 namespace fs = std::filesystem;
+namespace {
+
+// fit.json's decision record and the log quote the command line `skycal fit` takes (the
+// report shows them to the user as they are): the library's names of the mode and the shapes
+// written as the options that set them.
+std::string DecisionWording(std::string text) {
+  static const std::pair<const char*, const char*> kNames[] = {
+      {"CloudMode on", "--clouds on"}, {"CloudMode off", "--clouds off"}, {"CloudMode auto", "--clouds auto"},
+      {"KnownCloudShapes", "--cloud-preset"}};
+  for (const auto& [name, wording] : kNames) {
+    const std::string n = name, w = wording;
+    for (size_t at = text.find(n); at != std::string::npos; at = text.find(n, at + w.size())) text.replace(at, n.size(), w);
+  }
+  return text;
+}
+
+}  // namespace
 
 bool FitCloudOptions::IsValid(std::string* why) const {
   try {
-    const cloudfit::CloudMode m = cloudfit::ParseCloudMode(mode, "--clouds");
+    const cloudfit::CloudMode m = cloudfit::ParseCloudMode(mode, "FitCloudOptions::mode");
     if (m == cloudfit::CloudMode::kOff && !preset.empty()) {
-      *why = "--cloud-preset has no effect with --clouds off";
+      *why = "FitCloudOptions::preset has no effect with FitCloudOptions::mode = off";
       return false;
     }
   } catch (const Error& e) {
@@ -29,43 +45,35 @@ bool FitCloudOptions::IsValid(std::string* why) const {
     return false;
   }
   if (time_s && (!std::isfinite(*time_s) || std::abs(*time_s) > 1.0e7)) {
-    *why = "--cloud-time " + FormatNumber(*time_s) + " (expected seconds, finite, within 1e7)";
+    *why = "FitCloudOptions::time_s = " + FormatNumber(*time_s) + " (expected seconds, finite, within 1e7)";
     return false;
   }
   cloudfit::CloudLightingOptions co;
   co.samples = samples;
   co.day_smoothness = day_smoothness;
   co.hold = hold;
-  if (!co.IsValid(why)) {
-    // The library names its fields; the user set them with these flags.
-    static const FieldFlag kFlags[] = {{"CloudLightingOptions::samples", "--cloud-samples"},
-                                       {"CloudLightingOptions::day_smoothness", "--cloud-day-smoothness"},
-                                       {"CloudLightingOptions::hold", "--cloud-hold"}};
-    *why = FieldsAsFlags(*why, kFlags);
-    return false;
-  }
-  return true;
+  return co.IsValid(why);  // its messages name CloudLightingOptions' fields of the same names
 }
 
 std::vector<NamedPath> FitCloudInputs(const FitCloudOptions& o) {
   if (o.preset.empty()) return {};
-  return PresetInputs("--cloud-preset", o.preset);
+  return PresetInputs("FitCloudOptions::preset", o.preset);
 }
 
 std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) {
   if (o.preset.empty()) return nullptr;
   const render::Preset p = render::LoadPreset(o.preset);
-  if (p.clouds_json.empty()) throw Error(o.preset + ": --cloud-preset: the preset has no 'clouds' section");
-  CloudOptions co;
-  co.enabled = true;
-  co.time_s = o.time_s.value_or(0.0);
-  CloudInputsLoaded in = LoadCloudInputs(co, p, o.preset);  // names the file and field on a bad section
+  if (p.clouds_json.empty()) throw Error(o.preset + ": FitCloudOptions::preset: the preset has no 'clouds' section");
   auto out = std::make_unique<LoadedCloudShapes>();
-  out->origin = in.params_origin;
-  out->weather_origin = in.weather_origin;
-  out->noise = std::move(in.noise);
-  out->weather = std::move(in.weather);
-  out->shapes.params = in.params;
+  out->shapes.params = clouds::ParseCloudSectionText(p.clouds_json, o.preset);  // names the file and field
+  out->origin = o.preset;
+  if (out->shapes.params.weather_map.empty()) {
+    throw Error(o.preset + ": field 'clouds.weather_map' is missing and no --weather-map was given (expected an RGB EXR: "
+                "coverage, precipitation, type)");
+  }
+  out->weather_origin = (fs::path(o.preset).parent_path() / out->shapes.params.weather_map).string();
+  out->weather = clouds::LoadWeatherMap(out->weather_origin, out->shapes.params.weather_extent_m);
+  out->noise = clouds::LoadOrGenerateCloudNoise(kRenderCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   out->shapes.noise = &out->noise;
   out->shapes.weather = &out->weather;
   out->shapes.time_s = o.time_s.value_or(0.0);
@@ -75,7 +83,7 @@ std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) 
 cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector<fit::Reference>& refs,
                                      const render::Preset& init, const fit::FitOptions& fo, render::SkyRenderer& renderer,
                                      const std::vector<const fit::ProbeSamples*>& probes, const LoadedCloudShapes* shapes) {
-  const cloudfit::CloudMode mode = cloudfit::ParseCloudMode(o.mode, "--clouds");
+  const cloudfit::CloudMode mode = cloudfit::ParseCloudMode(o.mode, "FitCloudOptions::mode");
   cloudfit::CloudDecision d;
   if (mode == cloudfit::CloudMode::kAuto && !shapes) {
     // No shapes: nothing could be marched, so the mask is not even computed (a clear-sky
@@ -83,19 +91,10 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
     d.why = "--clouds auto: no cloud shapes given (--cloud-preset): clouds off without looking (the cloud mask "
             "was not computed); their pixels, if any, count in the sky terms";
   } else {
-    // The library names the mode and the shapes; the user gave them with --clouds and --cloud-preset.
-    static const FieldFlag kFlags[] = {{"CloudMode on", "--clouds on"},
-                                       {"CloudMode off", "--clouds off"},
-                                       {"CloudMode auto", "--clouds auto"},
-                                       {"KnownCloudShapes", "--cloud-preset"}};
-    try {
-      d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);
-    } catch (const Error& e) {
-      throw Error(FieldsAsFlags(e.what(), kFlags));
-    }
-    d.why = FieldsAsFlags(d.why, kFlags);
+    d = cloudfit::DecideClouds(mode, refs, init, shapes != nullptr);  // its errors name CloudMode and KnownCloudShapes
+    d.why = DecisionWording(d.why);
   }
-  if (fo.verbose) Log("fit", "clouds: " + d.why);  // fit --quiet and skycal bench: off
+  if (fo.verbose) FitLog("clouds: " + d.why);  // fit --quiet and skycal bench: off
   cloudfit::CloudLightingOptions co;
   co.samples = o.samples;
   co.hold = o.hold;
@@ -119,7 +118,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
     // path) by default, the double CPU model with --backend cpu.
     cloud_renderer = fo.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
                                                             : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
-    if (fo.verbose) Log("fit", "clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
+    if (fo.verbose) FitLog("clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
   }
   cloudfit::SkyCloudFit f =
       cloudfit::FitSkyAndClouds(refs, init, fo, renderer, probes, d, cloudfit::CloudTermKind::kKnownShapes,
@@ -152,4 +151,4 @@ void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes&
   }
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

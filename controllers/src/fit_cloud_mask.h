@@ -1,5 +1,6 @@
-// `fit --cloud-mask`: leave the cloudy pixels of each reference out of the sky fit (the clear
-// sky between the clouds is what the atmosphere model can match). The cloud probability is
+// The fit controller's cloud mask (FitControllerOptions::cloud_mask): leave the cloudy pixels
+// of each reference out of the sky fit (the clear sky between the clouds is what the
+// atmosphere model can match). The cloud probability is
 // the frame's `mask.cloud` channel (skycal capture writes it), else estimated here the same
 // way (capture/cloud_mask.h: colour against the clear sky of the bundled preset at the
 // frame's sun). Pixels with probability >= 0.5 become user-masked; fit.json reports the count.
@@ -10,7 +11,7 @@
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
 struct CloudMaskApplied {
   long long cloudy_pixels = 0;  // sky pixels taken out
@@ -24,4 +25,4 @@ struct CloudMaskApplied {
 // left (an overcast frame: the model has no clear sky to fit there).
 CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path);
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

@@ -1,9 +1,9 @@
-// `skycal fit --clouds stats`: the cloud lighting of photographs, whose cloud shapes no noise
-// reproduces (docs/cloud-fitting.md, regime 3). The verb's side of it: the --cloud-stats-* flags, their
-// check, the call of cloudfit::FitPhotoCloudStats (skycal/cloudfit/photo_cloud_stats.h: the
-// stages and what each means), fit.json's `cloud_stats` object (its fields:
-// skycal/cloudfit/photo_cloud_stats_json.h) and the panels fit/<ref>.clouds.{reference,fit,
-// error}.png. The library names its options' fields in its errors; this side names the flags.
+// The fit controller's cloud statistics stage (`skycal fit --clouds stats`): the cloud lighting
+// of photographs, whose cloud shapes no noise reproduces (docs/cloud-fitting.md, regime 3): the
+// options, their check, the call of cloudfit::FitPhotoCloudStats
+// (skycal/cloudfit/photo_cloud_stats.h: the stages and what each means), fit.json's
+// `cloud_stats` object (its fields: skycal/cloudfit/photo_cloud_stats_json.h) and the panels
+// fit/<ref>.clouds.{reference,fit,error}.png. Errors name PhotoCloudStatsOptions' fields.
 #pragma once
 #include <filesystem>
 #include <functional>
@@ -17,30 +17,29 @@
 #include "skycal/fit/sky_fit.h"
 #include "skycal/render/preset.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
-// The flags, as cloudfit::PhotoCloudStatsOptions's fields of the same names (which say why).
+// cloudfit::PhotoCloudStatsOptions's fields of the same names (which say why), and whether
+// the stage runs.
 struct FitCloudStatsOptions {
-  bool enabled = false;        // --clouds stats
-  int width = 128;             // --cloud-stats-width
-  int maps = 4;                // --cloud-stats-maps
-  int renders = 8;             // 2 x maps (no flag)
-  int max_iterations = 12;     // --cloud-stats-iterations
-  uint64_t weather_seed = 1;   // (no flag)
-  std::string sun = "photo";   // --cloud-stats-sun photo|model
-  std::string probability = "fitted";  // --cloud-stats-probability fitted|initial
-  std::string sun_scale = "fit";       // --cloud-stats-sun-scale fit|off
+  bool enabled = false;        // the stage runs (it needs FitControllerOptions::cloud_mask)
+  int width = 128;
+  int maps = 4;
+  int renders = 8;             // 2 x maps
+  int max_iterations = 12;
+  uint64_t weather_seed = 1;
+  std::string sun = "photo";           // photo|model
+  std::string probability = "fitted";  // fitted|initial
+  std::string sun_scale = "fit";       // fit|off
   std::vector<std::string> fitted = cloudfit::PhotoCloudStatsOptions{}.fitted;
-  // The library's check, its fields named as the flags.
+  // The library's check: false and PhotoCloudStatsOptions::<field>, its value and the
+  // expectation in *why.
   bool IsValid(std::string* why) const;
 };
 
 // The library's options for `o`: the start from the bundled default_cloudy preset, the noise
-// every render uses, progress on stderr.
+// every render uses, progress on stderr ([fit]).
 cloudfit::PhotoCloudStatsOptions PhotoCloudStatsOptionsFor(const FitCloudStatsOptions& o);
-
-// A message of the library with its options' fields named as the flags that set them.
-std::string WithCloudStatsFlags(const std::string& message);
 
 // cloudfit::RefineCloudMaskAndRefitSky as fit.json's `cloud_stats.sky_refit`.
 nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool user_mask, std::vector<fit::Reference>* refs,
@@ -50,8 +49,8 @@ nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool us
 // Runs the statistics fit over `photos` (one lighting for all of them) with the sky fit's
 // preset and exposures; writes the panels into `fit_dir`; returns fit.json's `cloud_stats`
 // and, when `update` is given, what the fitted preset takes from it. Throws skycal::Error
-// naming the reference when its size is not a multiple of --cloud-stats-width or it has no
-// cloud to fit.
+// naming the reference when its size is not a multiple of PhotoCloudStatsOptions::width or it
+// has no cloud to fit.
 nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::vector<cloudfit::CloudStatsPhoto>& photos,
                                      const fit::FitResult& sky, const std::filesystem::path& fit_dir,
                                      cloudfit::CloudStatsPresetUpdate* update = nullptr);
@@ -63,4 +62,4 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
 nlohmann::json AttachCloudStats(const cloudfit::CloudStatsPresetUpdate& update, const std::filesystem::path& preset_json,
                                 render::Preset* preset);
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

@@ -8,7 +8,7 @@
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
 fit::FitCloudMaskEntry CloudMaskApplied::Entry() const { return {cloudy_pixels, fraction, 0.5, source}; }
 
@@ -43,9 +43,9 @@ CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_pr
   out.fraction = sky_before > 0 ? static_cast<double>(out.cloudy_pixels) / static_cast<double>(sky_before) : 0.0;
   out.probability = std::move(probability);
   if (ref->counts.sky == 0) {
-    throw Error(ref->path + ": --cloud-mask: every sky pixel is cloud (probability >= 0.5): nothing clear to fit");
+    throw Error(ref->path + ": FitControllerOptions::cloud_mask = true: every sky pixel is cloud (probability >= 0.5): nothing clear to fit");
   }
   return out;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

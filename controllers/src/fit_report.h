@@ -8,7 +8,7 @@
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
 // Writes DIR/<ref>.reference.png, DIR/<ref>.fit.png and DIR/<ref>.error.png (at most 512
 // wide) for each reference, the images `skycal report` embeds; returns their paths.
@@ -20,4 +20,4 @@ std::vector<std::string> WriteFitPanels(const std::string& dir, const std::vecto
 void WriteFitReport(const std::string& png_path, const std::vector<fit::Reference>& refs, const fit::FitResult& result,
                     double error_range = 0.2);
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

@@ -13,7 +13,7 @@
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 namespace {
 
 constexpr int kPanelWidth = 512;  // pixels per panel (images are area-resampled to it)
@@ -162,4 +162,4 @@ std::vector<std::string> WriteFitPanels(const std::string& dir, const std::vecto
   return written;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

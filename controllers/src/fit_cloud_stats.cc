@@ -1,21 +1,20 @@
-#include "fit_cloud_stats.h"
+#include "skycal/controllers/fit_cloud_stats.h"
 
 #include <utility>
 
 #include "fit_report.h"
-#include "render_clouds.h"
 #include "skycal/cloudfit/photo_cloud_stats_json.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
-#include "verb_common.h"
+#include "fit_internal.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 namespace fs = std::filesystem;
 
 namespace {
 
-cloudfit::PhotoCloudStatsOptions FlagValues(const FitCloudStatsOptions& o) {
+cloudfit::PhotoCloudStatsOptions LibraryOptions(const FitCloudStatsOptions& o) {
   cloudfit::PhotoCloudStatsOptions p;
   p.width = o.width;
   p.maps = o.maps;
@@ -61,38 +60,22 @@ std::string SunWhy(const cloudfit::CloudStatsPresetUpdate& u) {
 
 }  // namespace
 
-std::string WithCloudStatsFlags(const std::string& message) {
-  static const FieldFlag kFlags[] = {{"FitPhotoCloudStats:", "--clouds stats:"},
-                                     {"PhotoCloudStatsOptions::width", "--cloud-stats-width"},
-                                     {"PhotoCloudStatsOptions::maps", "--cloud-stats-maps"},
-                                     {"PhotoCloudStatsOptions::renders", "cloud stats renders per evaluation"},
-                                     {"PhotoCloudStatsOptions::max_iterations", "--cloud-stats-iterations"},
-                                     {"PhotoCloudStatsOptions::sun", "--cloud-stats-sun"},
-                                     {"PhotoCloudStatsOptions::probability", "--cloud-stats-probability"},
-                                     {"PhotoCloudStatsOptions::sun_scale", "--cloud-stats-sun-scale"}};
-  return FieldsAsFlags(message, kFlags);
-}
-
-bool FitCloudStatsOptions::IsValid(std::string* why) const {
-  if (FlagValues(*this).IsValid(why)) return true;
-  *why = WithCloudStatsFlags(*why);
-  return false;
-}
+bool FitCloudStatsOptions::IsValid(std::string* why) const { return LibraryOptions(*this).IsValid(why); }
 
 cloudfit::PhotoCloudStatsOptions PhotoCloudStatsOptionsFor(const FitCloudStatsOptions& o) {
-  cloudfit::PhotoCloudStatsOptions p = FlagValues(o);
+  cloudfit::PhotoCloudStatsOptions p = LibraryOptions(o);
   const render::Preset cloudy = render::LoadPreset(DefaultCloudyPresetPath());
   p.initial = clouds::ParseCloudSectionText(cloudy.clouds_json, DefaultCloudyPresetPath());
-  p.noise_seed = kCloudNoiseSeed;
-  p.log = [](const std::string& m) { Log("fit", m); };
+  p.noise_seed = kRenderCloudNoiseSeed;
+  p.log = [](const std::string& m) { FitLog(m); };
   return p;
 }
 
 nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool user_mask, std::vector<fit::Reference>* refs,
                                           std::vector<std::vector<float>>* probability, const fit::FitResult& sky,
                                           const std::function<void()>& refit) {
-  cloudfit::PhotoCloudStatsOptions po = FlagValues(o);
-  po.log = [](const std::string& m) { Log("fit", m); };
+  cloudfit::PhotoCloudStatsOptions po = LibraryOptions(o);
+  po.log = [](const std::string& m) { FitLog(m); };
   const cloudfit::SkyRefit s = cloudfit::RefineCloudMaskAndRefitSky(po, user_mask, refs, probability, sky, refit);
   nlohmann::json j = {{"threshold_released_fraction", cloudfit::kSkyRefitReleasedFraction}, {"refitted", s.refitted}};
   using Skipped = cloudfit::SkyRefit::Skipped;
@@ -136,12 +119,7 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   const cloudfit::PhotoCloudStatsOptions po = PhotoCloudStatsOptionsFor(o);
-  cloudfit::PhotoCloudStatsResult result;
-  try {
-    result = cloudfit::FitPhotoCloudStats(po, photos, sky);
-  } catch (const Error& e) {
-    throw Error(WithCloudStatsFlags(e.what()));
-  }
+  const cloudfit::PhotoCloudStatsResult result = cloudfit::FitPhotoCloudStats(po, photos, sky);
   WriteCloudStatsPanels(fit_dir, photos, sky, result);
   if (update) *update = result.update;
   return cloudfit::PhotoCloudStatsJson(po, result);
@@ -173,4 +151,4 @@ nlohmann::json AttachCloudStats(const cloudfit::CloudStatsPresetUpdate& update, 
   return record;
 }
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers

@@ -1,7 +1,7 @@
-// The clouds part of `skycal fit` (docs/cloud-fitting.md): --clouds auto|on|off, the known shapes
-// (--cloud-preset, --cloud-time), the decision, the joint fit through
-// cloudfit::FitSkyAndClouds, and fit.json's `clouds` object. Kept apart from fit_verb.cc
-// so the sky-only verb reads as before.
+// The clouds stage of the fit controller (docs/cloud-fitting.md): the mode (auto|on|off), the
+// known shapes (a cloud preset, the wind time), the decision, the joint fit through
+// cloudfit::FitSkyAndClouds, and fit.json's `clouds` object. Kept apart from
+// fit_controller.cc so the sky-only pipeline reads as before. Errors name the fields.
 #pragma once
 #include <filesystem>
 #include <memory>
@@ -15,24 +15,26 @@
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/core/file_safety.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
 struct FitCloudOptions {
-  std::string mode = "auto";        // --clouds auto|on|off
-  std::string preset;               // --cloud-preset PRESET.json: a clouds section (shapes + start lighting)
-  // --cloud-time S: the wind time of every reference; unset: each reference's
-  // skycalCloudTimeS attribute (render --clouds --cloud-time writes it), else 0
+  std::string mode = "auto";        // auto|on|off (cloudfit::CloudMode)
+  std::string preset;               // PRESET.json: a clouds section (shapes + start lighting); empty: none
+  // The wind time of every reference, seconds; unset: each reference's skycalCloudTimeS
+  // attribute (render --clouds --cloud-time writes it), else 0.
   std::optional<double> time_s;
-  double day_smoothness = 0.02;     // --cloud-day-smoothness L: the day's prior over time of day
-  int samples = 256;                // --cloud-samples N: cloud pixels in the Jacobian
-  std::vector<std::string> hold;    // --cloud-hold NAME (repeatable)
+  double day_smoothness = 0.02;     // the day's prior over time of day (CloudLightingOptions)
+  int samples = 256;                // cloud pixels in the Jacobian (CloudLightingOptions)
+  std::vector<std::string> hold;    // cloud lighting parameters held at the preset's values
+  // False and the field (FitCloudOptions::, CloudLightingOptions::), its value and the
+  // expectation in *why.
   bool IsValid(std::string* why) const;
 };
 
 // Files the clouds part reads (the cloud preset and its weather map) for file_safety.h.
 std::vector<NamedPath> FitCloudInputs(const FitCloudOptions& o);
 
-// The known shapes of --cloud-preset, loaded (noise from its seed cache); null without one.
+// The known shapes of FitCloudOptions::preset, loaded (noise from its seed cache); null without one.
 struct LoadedCloudShapes {
   std::string origin, weather_origin;
   clouds::CloudNoise noise;
@@ -41,9 +43,9 @@ struct LoadedCloudShapes {
 };
 std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o);
 
-// Runs the fit with or without clouds (the decision first: a bad --clouds on fails before
-// any solve). Each reference's wind time: --cloud-time, else its skycalCloudTimeS
-// attribute, else 0. `verbose`: progress on stderr.
+// Runs the fit with or without clouds (the decision first: a bad mode "on" fails before
+// any solve). Each reference's wind time: FitCloudOptions::time_s, else its skycalCloudTimeS
+// attribute, else 0. fo.verbose: progress on stderr.
 cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector<fit::Reference>& refs,
                                      const render::Preset& init, const fit::FitOptions& fo, render::SkyRenderer& renderer,
                                      const std::vector<const fit::ProbeSamples*>& probes, const LoadedCloudShapes* shapes);
@@ -52,7 +54,6 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
 // cloudfit::CloudReportJson with these options.
 nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::SkyCloudFit& f);
 
-
 // With fitted clouds: the preset gains the clouds section (fitted lighting; a day: the
 // earliest reference's) naming a copy of the weather map written beside preset.json as
 // <stem>.weather.exr; a day of references also writes <stem>.cloud_keyframes.json
@@ -60,4 +61,4 @@ nlohmann::json CloudReportJson(const FitCloudOptions& o, const cloudfit::SkyClou
 void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes& shapes,
                         const std::filesystem::path& preset_json, render::Preset* preset);
 
-}  // namespace skycal::cli
+}  // namespace skycal::controllers
