@@ -8,21 +8,17 @@
 
 #include <nlohmann/json.hpp>
 
-#include "skycal/core/image.h"
+#include "skycal/capture/latlong_import.h"
 
 namespace skycal::cli {
 
-// How the source image maps directions to pixels.
-enum class SourceConvention {
-  // Blender's equirectangular environment (Poly Haven publishes for it): Z up, pixel
-  // centres at ((i + 0.5) / W, (j + 0.5) / H). See import_verb.cc for the exact mapping.
-  kBlender,
-  // Already the project's (OpenEXR envmap LatLong) convention: pixel centres on the
-  // nodes i / (W - 1), j / (H - 1), +Y up. Resampled only if the output size differs.
-  kExr,
-};
+// The conversion lives in capture (latlong_import.h).
+using capture::BlenderToProjectDirection;
+using capture::ResampleToProjectLatLong;
+using capture::SourceConvention;
+using capture::ToString;
+
 SourceConvention ParseSourceConvention(const std::string& text, const std::string& option);
-const char* ToString(SourceConvention c);
 
 struct ImportOptions {
   std::string in_path;                           // required, source EXR
@@ -44,14 +40,5 @@ nlohmann::json RunImportImpl(const ImportOptions& options);
 // --help, skycal::Error naming the option on a bad command line.
 ImportOptions ParseImportArgs(int argc, char** argv);
 int RunImport(int argc, char** argv);
-
-// Blender world direction (Z up) -> project direction (+Y up): (x, y, z) -> (y, z, x).
-std::array<double, 3> BlenderToProjectDirection(const std::array<double, 3>& blender_dir);
-
-// Resamples `src` (in `convention`) onto the project's node grid of out_width x out_height:
-// bilinear, wrapping in longitude, clamped in latitude; each pole row is the mean of its
-// finite samples (one direction, one radiance). NaN/negative source values are not
-// repaired: they propagate into the pixels whose bilinear footprint touches them.
-ImageRGB ResampleToProjectLatLong(const ImageRGB& src, SourceConvention convention, int out_width, int out_height);
 
 }  // namespace skycal::cli
