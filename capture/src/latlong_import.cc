@@ -50,6 +50,10 @@ double Snap(double t) {
 
 const char* ToString(SourceConvention c) { return c == SourceConvention::kBlender ? "blender" : "exr"; }
 
+SourceConvention ChooseConvention(const ExrAttributes& attributes) {
+  return attributes.envmap_latlong ? SourceConvention::kExr : SourceConvention::kBlender;
+}
+
 std::array<double, 3> BlenderToProjectDirection(const std::array<double, 3>& b) { return {b[1], b[2], b[0]}; }
 
 ImageRGB ResampleToProjectLatLong(const ImageRGB& src, SourceConvention convention, int out_w, int out_h) {

@@ -4,6 +4,7 @@
 #pragma once
 #include <array>
 
+#include "skycal/core/exr_io.h"
 #include "skycal/core/image.h"
 
 namespace skycal::capture {
@@ -18,6 +19,15 @@ enum class SourceConvention {
   kExr,
 };
 const char* ToString(SourceConvention c);
+
+// The convention of a source when none is given: a file carrying OpenEXR's standard `envmap`
+// attribute with the value LatLong (ENVMAP_LATLONG; the project writes it on every frame,
+// latlong_frame.h) is in the project's convention (kExr); anything else is read as the
+// equirectangular that Blender and Poly Haven publish (kBlender), which carries no envmap
+// attribute. A Blender-convention file that claims envmap=latlong is thus read as kExr:
+// OpenEXR's LatLong is the node-grid convention (ImfEnvmap.h: the data window's first pixel
+// at latitude +pi/2, longitude +pi, its last at -pi/2, -pi: both ends on pixel centres).
+SourceConvention ChooseConvention(const ExrAttributes& attributes);
 
 // Blender world direction (Z up) -> project direction (+Y up): (x, y, z) -> (y, z, x).
 std::array<double, 3> BlenderToProjectDirection(const std::array<double, 3>& blender_dir);
