@@ -9,6 +9,7 @@
 
 #include "import_verb.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/latlong_import.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
@@ -46,9 +47,9 @@ ImageRGB BlenderDirectionImage(int w, int h) {
 
 TEST(ImportMapping, BlenderAxesMapToProjectAxes) {
   // Blender +X (image centre) -> +Z (longitude 0), +Y -> +X (longitude 90), +Z (up) -> +Y.
-  EXPECT_EQ(cli::BlenderToProjectDirection({1, 0, 0}), (std::array<double, 3>{0, 0, 1}));
-  EXPECT_EQ(cli::BlenderToProjectDirection({0, 1, 0}), (std::array<double, 3>{1, 0, 0}));
-  EXPECT_EQ(cli::BlenderToProjectDirection({0, 0, 1}), (std::array<double, 3>{0, 1, 0}));
+  EXPECT_EQ(capture::BlenderToProjectDirection({1, 0, 0}), (std::array<double, 3>{0, 0, 1}));
+  EXPECT_EQ(capture::BlenderToProjectDirection({0, 1, 0}), (std::array<double, 3>{1, 0, 0}));
+  EXPECT_EQ(capture::BlenderToProjectDirection({0, 0, 1}), (std::array<double, 3>{0, 1, 0}));
 }
 
 TEST(ImportMapping, ResamplesBlenderPanoramaOntoProjectNodes) {
@@ -56,7 +57,7 @@ TEST(ImportMapping, ResamplesBlenderPanoramaOntoProjectNodes) {
   // channels = 2 + blender direction, node d must read 2 + (d.z, d.x, d.y). Any mirror,
   // half-turn or half-texel shift would show up as an error of order 0.1 or more.
   const int w = 128, h = 64;
-  const ImageRGB out = cli::ResampleToProjectLatLong(BlenderDirectionImage(w, h), cli::SourceConvention::kBlender, w, h);
+  const ImageRGB out = capture::ResampleToProjectLatLong(BlenderDirectionImage(w, h), capture::SourceConvention::kBlender, w, h);
   ASSERT_EQ(out.width, w);
   ASSERT_EQ(out.height, h);
   double worst = 0.0;
@@ -75,7 +76,7 @@ TEST(ImportMapping, ExrConventionSameSizeIsACopy) {
   ImageRGB src(64, 32);
   for (size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = static_cast<float>(0.5 + (i * 7919 % 1000) / 100.0);
   // Rows 0 and H-1 (poles) become their means; columns 0 and W-1 (seam) are the same direction.
-  const ImageRGB out = cli::ResampleToProjectLatLong(src, cli::SourceConvention::kExr, 64, 32);
+  const ImageRGB out = capture::ResampleToProjectLatLong(src, capture::SourceConvention::kExr, 64, 32);
   for (int y = 1; y < 31; ++y)
     for (int x = 0; x < 63; ++x)
       for (int c = 0; c < 3; ++c) ASSERT_EQ(out.at(x, y, c), src.at(x, y, c)) << x << "," << y << "," << c;
@@ -98,12 +99,12 @@ TEST(ImportVerb, DetectsTheSunInTheProjectFrameAndRecordsProvenance) {
   img.at(5, 100, 1) = -0.25f;  // DWAB-like ringing: kept and counted
   WriteExrRGB(dir / "src.exr", img, {}, ExrPixelType::kHalf);
 
-  cli::ImportOptions o;
+  controllers::ImportOptions o;
   o.in_path = dir / "src.exr";
   o.out_path = dir / "frame.exr";
   o.detect_sun = true;
   const nlohmann::json s = cli::RunImportImpl(o);
-  const auto want = cli::BlenderToProjectDirection(sun_b);
+  const auto want = capture::BlenderToProjectDirection(sun_b);
   const capture::LatLongFrame f = capture::ReadLatLongFrame(o.out_path);
   ASSERT_TRUE(f.sun_direction.has_value());
   const auto& got = *f.sun_direction;
@@ -121,7 +122,7 @@ TEST(ImportVerb, RefusesWhenNoDistinctSunAndWritesNothing) {
   ImageRGB img(64, 32);
   for (float& v : img.pixels) v = 3.0f;  // overcast: no sun
   WriteExrRGB(dir / "src.exr", img, {});
-  cli::ImportOptions o;
+  controllers::ImportOptions o;
   o.in_path = dir / "src.exr";
   o.out_path = dir / "frame.exr";
   o.detect_sun = true;
