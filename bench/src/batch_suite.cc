@@ -1,7 +1,7 @@
 // Suite `batch`: `skycal batch` on a synthetic time-lapse day -- what the retired
 // bench/batch_day.sh measured (bench/results/batch.md), now a suite of `skycal bench`. The
 // day: BatchGridPlan's frames, the sun of 70 deg N at the June solstice (midnight sun:
-// elevation 3.4 ... 43.4 deg), rendered (cpu, RunRenderImpl) from the default preset with
+// elevation 3.4 ... 43.4 deg), rendered (cpu, controllers::WriteGameRender) from the default preset with
 // haziness g 0.6 instead of 0.8 and 15% CIE overcast, fitted from the default preset. Each
 // case is one `skycal batch` process (--backend cpu --quiet --poll 0.2) into its own
 // directory. Time: the process's wall time (one run: a day takes tens of seconds); error:
@@ -15,10 +15,11 @@
 #include <fstream>
 #include <map>
 
-#include "render_verb.h"
 #include "skycal/bench/last_suite_grids.h"
+#include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
 #include "suite_util.h"
 #include "suites_internal.h"
 
@@ -57,24 +58,23 @@ void WriteDay(const std::filesystem::path& dir, const BatchPlan& plan, bool verb
   p.at("parameters").at("overcast_weight")["value"] = 0.15;
   std::ofstream(preset) << p.dump(1);
   for (int i = 0; i < plan.frames; ++i) {
-    cli::RenderOptions ro;
-    ro.preset_path = preset;
-    ro.backend = render::Backend::kCpu;
-    ro.width = plan.width;
-    ro.height = plan.width / 2;
+    controllers::GameRenderFileOptions ro;
+    ro.render.preset_path = preset;
+    ro.render.backend = render::Backend::kCpu;
+    ro.render.width = plan.width;
+    ro.render.height = plan.width / 2;
     const double h = 24.0 * i / plan.frames;
     double el = 0.0, az = 0.0;
     BatchDaySun(h, &el, &az);
     // Rounded to 1e-4 deg as bench/batch_day.sh's sun path file was: the same frames, so the
     // same fits (the Ceres path's iterations moved with the last digits).
-    ro.sun_elevation_deg = std::round(el * 1e4) / 1e4;
-    ro.sun_azimuth_deg = std::round(az * 1e4) / 1e4;
+    ro.render.sun_dir = latlong::DirectionFromElevationAzimuthDeg(std::round(el * 1e4) / 1e4, std::round(az * 1e4) / 1e4);
     ro.time_of_day_h = h;
     char name[32];
     std::snprintf(name, sizeof name, "frame%03d.exr", i);
     ro.out_exr = (dir / "day" / name).string();
-    ro.verbose = verbose;
-    cli::RunRenderImpl(ro);
+    ro.render.verbose = verbose;
+    controllers::WriteGameRender(ro);
   }
 }
 

@@ -11,10 +11,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "render_clouds.h"
-#include "render_verb.h"
 #include "skycal/bench/last_suite_grids.h"
+#include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
+#include "skycal/core/latlong.h"
 #include "skycal/fit/fit_result_file.h"
 #include "suite_util.h"
 #include "suites_internal.h"
@@ -64,21 +64,20 @@ Suite FitCloudsProcessSuite() {
   s.markdown = Markdown;
   s.run = [](const SuiteOptions& o) {
     const FitCloudsProcessPlan plan = FitCloudsProcessGridPlan(o.quick);
-    const std::string cloudy = cli::DefaultCloudyPresetPath();
+    const std::string cloudy = controllers::DefaultCloudyPresetPath();
     std::string reference;  // rendered by the first case (an error there is that case's clear error)
     return RunGrid("fit-clouds-process", plan.grid, o, [&](CaseResult& c) {
       const std::string exe = SelfExecutable("fit-clouds-process");
       if (reference.empty()) {
-        cli::RenderOptions ro;
-        ro.preset_path = cloudy;
-        ro.sun_elevation_deg = 30.0;
-        ro.sun_azimuth_deg = 40.0;
-        ro.width = plan.width;
-        ro.height = plan.width / 2;
-        ro.clouds.enabled = true;
+        controllers::GameRenderFileOptions ro;
+        ro.render.preset_path = cloudy;
+        ro.render.sun_dir = latlong::DirectionFromElevationAzimuthDeg(30.0, 40.0);
+        ro.render.width = plan.width;
+        ro.render.height = plan.width / 2;
+        ro.render.clouds.enabled = true;
         ro.out_exr = (o.scratch / "fit_clouds_process_cloudy.exr").string();
-        ro.verbose = o.verb_logs;
-        cli::RunRenderImpl(ro);
+        ro.render.verbose = o.verb_logs;
+        controllers::WriteGameRender(ro);
         reference = ro.out_exr;
       }
       const std::string start = Get(c.settings, "start");

@@ -5,7 +5,7 @@
 // preset's shapes (weather map, noise seed 1, wind time 0) with six lighting parameters
 // moved off the preset's -- extinction 0.05 -> 0.056 /m, scattering_albedo 0.99 -> 0.97,
 // phase_g2 0.9 -> 0.86, ms_a 0.5 -> 0.56, ms_b 0.5 -> 0.45, ms_c 0.5 -> 0.54 -- rendered by
-// `skycal render --clouds` (RunRenderImpl, Vulkan), sun 30 deg. The fit starts from the
+// `skycal render --clouds` (controllers::WriteGameRender, Vulkan), sun 30 deg. The fit starts from the
 // bundled cloudy preset's lighting (what a user passes). Grid: FitCloudsGrid
 // (fit_suite_grids.h) x backend (the cloud values: Vulkan, or the double CPU model, at the
 // defaults only). Time: the joint sky + cloud fit, median of repeats; error: RMS over the 14
@@ -17,11 +17,12 @@
 #include <filesystem>
 #include <map>
 
-#include "render_verb.h"
 #include "skycal/bench/fit_suite_grids.h"
 #include "skycal/cloudfit/cloud_lighting_params.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/controllers/fit_clouds.h"
+#include "skycal/controllers/game_render.h"
+#include "skycal/core/latlong.h"
 #include "skycal/fit/reference.h"
 #include "skycal/refsky/reference_skies.h"
 #include "suite_util.h"
@@ -43,7 +44,7 @@ const std::map<std::string, double>& TruthLighting() {
 // Writes the truth preset (another atmosphere + the moved lighting; its weather map copied
 // beside it) and returns its path and lighting.
 std::string WriteTruthPreset(const std::filesystem::path& dir, cloudfit::CloudLighting* lighting) {
-  const std::string cloudy = cli::DefaultCloudyPresetPath();
+  const std::string cloudy = controllers::DefaultCloudyPresetPath();
   const render::Preset bundled = render::LoadPreset(cloudy);
   clouds::CloudParams params = clouds::ParseCloudSectionText(bundled.clouds_json, cloudy);
   *lighting = cloudfit::GetCloudLighting(params);
@@ -140,21 +141,20 @@ Suite FitCloudsSuite() {
     const std::string truth_preset = WriteTruthPreset(o.scratch, &truth);
     std::map<std::string, std::string> refs;
     for (const std::string& size : grid.axes[2].values) {
-      cli::RenderOptions ro;
-      ro.preset_path = truth_preset;
-      ro.sun_elevation_deg = kSunElevation;
-      ro.sun_azimuth_deg = kSunAzimuth;
-      ro.width = std::stoi(size.substr(0, size.find('x')));
-      ro.height = ro.width / 2;
-      ro.clouds.enabled = true;
+      controllers::GameRenderFileOptions ro;
+      ro.render.preset_path = truth_preset;
+      ro.render.sun_dir = latlong::DirectionFromElevationAzimuthDeg(kSunElevation, kSunAzimuth);
+      ro.render.width = std::stoi(size.substr(0, size.find('x')));
+      ro.render.height = ro.render.width / 2;
+      ro.render.clouds.enabled = true;
       ro.out_exr = (o.scratch / ("fit_clouds_" + size + ".exr")).string();
-      ro.verbose = o.verb_logs;
-      cli::RunRenderImpl(ro);
+      ro.render.verbose = o.verb_logs;
+      controllers::WriteGameRender(ro);
       refs[size] = ro.out_exr;
     }
     controllers::FitCloudOptions shapes_options;
     shapes_options.mode = "on";
-    shapes_options.preset = cli::DefaultCloudyPresetPath();
+    shapes_options.preset = controllers::DefaultCloudyPresetPath();
     const std::unique_ptr<controllers::LoadedCloudShapes> shapes = controllers::LoadFitCloudShapes(shapes_options);
     const render::Preset bundled = render::LoadPreset(DefaultPresetPath());
     const render::Preset truth_sky = render::LoadPreset(truth_preset);

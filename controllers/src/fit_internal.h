@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "skycal/controllers/game_clouds.h"
 #include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 #include "skycal/core/file_safety.h"
@@ -18,12 +19,12 @@ namespace skycal::controllers {
 inline void FitLog(const std::string& message) { std::cerr << "[fit] " << message << std::endl; }
 
 // The bundled presets (core/data_dir.h): the clear sky the fit starts from and the cloud mask
-// compares against, and the cloudy one the cloud statistics start from.
+// compares against, and the cloudy one the cloud statistics start from (game_clouds.h's
+// DefaultCloudyPresetPath).
 inline std::string DefaultClearPresetPath() { return DataPath("datasets/presets/default_clear.json"); }
-inline std::string DefaultCloudyPresetPath() { return DataPath("datasets/presets/default_cloudy.json"); }
 
 // The cloud noise seed every render uses (`skycal render --clouds`; the noise is cached by it).
-inline constexpr uint64_t kRenderCloudNoiseSeed = 1;
+inline constexpr uint64_t kRenderCloudNoiseSeed = kCloudNoiseSeed;
 
 // A preset as inputs for file_safety.h: its JSON (role `field`) and every LUT EXR it names.
 inline std::vector<NamedPath> PresetInputs(const std::string& field, const std::string& preset_json) {

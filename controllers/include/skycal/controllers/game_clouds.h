@@ -1,10 +1,9 @@
-// The cloud part of `skycal render --clouds`: which cloud parameters, weather map and noise
-// a render uses, and the march options from the command line. The clouds come from the
-// preset's `clouds` section, or the bundled cloudy default's when the preset has none
-// (datasets/presets/default_cloudy.json); the weather map from --weather-map, else the one
-// the section names (next to its preset).
+// The clouds of a game render (game_render.h): which cloud parameters, weather map and noise
+// a render uses. The clouds come from the preset's `clouds` section, or the bundled cloudy
+// default's when the preset has none (datasets/presets/default_cloudy.json); the weather map
+// from GameCloudOptions::weather_map, else the one the section names (next to its preset).
 #pragma once
-#include <optional>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -13,30 +12,24 @@
 #include "skycal/core/file_safety.h"
 #include "skycal/render/preset.h"
 
-namespace skycal::cli {
+namespace skycal::controllers {
 
-struct CloudOptions {
-  bool enabled = false;                  // --clouds
-  std::string weather_map;               // --weather-map W.exr (overrides the section's)
-  double time_s = 0.0;                   // --cloud-time S: wind offset = speed x time
-  std::optional<std::string> steps;      // --cloud-steps ZENITH,HORIZON
-  std::optional<std::string> light_samples;  // --cloud-light-samples N
-  bool naive = false;                    // --cloud-naive: every march optimisation off
-  // --cloud-cheap-light-opacity O: opacity (1) past which light samples are base-shape only
-  // (HZD: 0.3, the default; 0.6 halves the added error at the same lavapipe time, docs/benchmarks.md).
-  std::optional<std::string> cheap_light_opacity;
+// Volumetric clouds as Horizon Zero Dawn draws them (Schneider, "The Real-Time Volumetric
+// Cloudscapes of Horizon: Zero Dawn", SIGGRAPH 2015), composited over the sky.
+struct GameCloudOptions {
+  bool enabled = false;         // false: the sky alone, and the fields below are not read
+  std::string weather_map;      // RGB EXR (coverage, precipitation, type) instead of the section's; empty: the section's
+  double time_s = 0.0;          // seconds in [-1e7, 1e7]: the wind moves the clouds by speed x time
+  clouds::MarchOptions march;   // samples and optimisations of the march (HZD's by default)
 };
 
 std::string DefaultCloudyPresetPath();  // datasets/presets/default_cloudy.json in the data directory (core/data_dir.h)
 inline constexpr uint64_t kCloudNoiseSeed = 1;  // the noise every render uses (cached)
 
-// The march options the command line asks for; throws skycal::Error naming the option
-// and the field ("--cloud-steps: steps_zenith = 0 (expected an integer in [1, 4096])").
-clouds::MarchOptions CloudMarchOptions(const CloudOptions& o);
-
-// Files a cloud render reads (for file_safety.h): --weather-map, and the bundled preset's
-// files when the preset has no section. Empty when clouds are off.
-std::vector<NamedPath> CloudInputs(const CloudOptions& o, const std::string& preset_path);
+// Files a cloud render reads besides the preset's own (for file_safety.h): the weather map
+// named by GameCloudOptions::weather_map, and the bundled preset's files. Empty when clouds
+// are off.
+std::vector<NamedPath> CloudInputs(const GameCloudOptions& o);
 
 struct CloudInputsLoaded {
   clouds::CloudParams params;
@@ -48,6 +41,10 @@ struct CloudInputsLoaded {
 // Parses the section and loads the weather map and the noise. Throws skycal::Error naming
 // the file and field: unknown or out-of-range cloud fields, a weather map of the wrong
 // size or channels, a NaN texel, no weather map at all.
-CloudInputsLoaded LoadCloudInputs(const CloudOptions& o, const render::Preset& preset, const std::string& preset_path);
+CloudInputsLoaded LoadCloudInputs(const GameCloudOptions& o, const render::Preset& preset, const std::string& preset_path);
 
-}  // namespace skycal::cli
+// A preset as inputs for file_safety.h: its JSON (role `role`) and every LUT EXR it names
+// (role "`role` PRESET's LUT").
+std::vector<NamedPath> PresetFileInputs(const std::string& role, const std::string& preset_json);
+
+}  // namespace skycal::controllers
