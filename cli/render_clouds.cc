@@ -4,7 +4,6 @@
 
 #include "option_values.h"
 #include "skycal/core/error.h"
-#include "verb_common.h"
 
 namespace skycal::cli {
 
@@ -39,15 +38,6 @@ controllers::GameCloudOptions ToGameClouds(const CloudOptions& o, const clouds::
   c.time_s = o.time_s;
   c.march = march;
   return c;
-}
-
-CloudInputsLoaded LoadCloudInputs(const CloudOptions& o, const render::Preset& preset, const std::string& preset_path) {
-  static const FieldFlag kFlags[] = {{"GameCloudOptions::weather_map", "--weather-map"}};
-  try {
-    return controllers::LoadCloudInputs(ToGameClouds(o, clouds::MarchOptions{}), preset, preset_path);
-  } catch (const Error& e) {
-    throw Error(FieldsAsFlags(e.what(), kFlags));
-  }
 }
 
 }  // namespace skycal::cli

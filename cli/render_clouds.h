@@ -1,14 +1,12 @@
 // The cloud flags of `skycal render --clouds` as given (the march ones as text, so that a bad
 // value names its flag), and their translation into the controllers library's options. What
-// a cloud render reads is the library's (controllers/game_clouds.h); the names are kept here
-// for the verbs that load cloud inputs through the CLI.
+// a cloud render reads is the library's (controllers/game_clouds.h).
 #pragma once
 #include <optional>
 #include <string>
 
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/controllers/game_clouds.h"
-#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 
@@ -24,18 +22,11 @@ struct CloudOptions {
   std::optional<std::string> cheap_light_opacity;
 };
 
-using controllers::CloudInputsLoaded;
-using controllers::DefaultCloudyPresetPath;
-using controllers::kCloudNoiseSeed;
-
 // The march options the command line asks for; throws skycal::Error naming the option
 // and the field ("--cloud-steps: steps_zenith = 0 (expected an integer in [1, 4096])").
 clouds::MarchOptions CloudMarchOptions(const CloudOptions& o);
 
 // The library's cloud options for these flags, with `march` (CloudMarchOptions's).
 controllers::GameCloudOptions ToGameClouds(const CloudOptions& o, const clouds::MarchOptions& march);
-
-// controllers::LoadCloudInputs with the fields its messages name written as the flags.
-CloudInputsLoaded LoadCloudInputs(const CloudOptions& o, const render::Preset& preset, const std::string& preset_path);
 
 }  // namespace skycal::cli

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "flow_verb.h"
-#include "render_clouds.h"
 #include "resolved_clouds.h"
 #include "run_binary.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/controllers/game_clouds.h"
 #include "skycal/core/latlong.h"
 #include "skycal/render/preset.h"
 #include "test_util.h"
@@ -156,7 +156,7 @@ FieldError Compare(const std::vector<float>& flow, const std::vector<TrueMotion>
 
 TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
   testing::ScratchDir dir("flow-wind");
-  const std::string preset_path = cli::DefaultCloudyPresetPath();
+  const std::string preset_path = controllers::DefaultCloudyPresetPath();
   auto render_at = [&](double time_s, const std::string& out) {
     char args[512];
     std::snprintf(args, sizeof args,
@@ -171,9 +171,9 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
 
   // The model the renders used, resolved as the renderer resolves it.
   const render::Preset preset = render::LoadPreset(preset_path);
-  cli::CloudOptions co;
+  controllers::GameCloudOptions co;
   co.enabled = true;
-  const cli::CloudInputsLoaded in = cli::LoadCloudInputs(co, preset, preset_path);
+  const controllers::CloudInputsLoaded in = controllers::LoadCloudInputs(co, preset, preset_path);
   clouds::CloudRenderRequest request;
   request.sun_dir = latlong::DirectionFromElevationAzimuthDeg(kSunElevationDeg, kSunAzimuthDeg);
   request.width = kW;
