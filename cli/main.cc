@@ -10,6 +10,7 @@
 #include "bench_verb.h"
 #include "capture_verb.h"
 #include "chart_verb.h"
+#include "calibrate_verb.h"
 #include "compare_verb.h"
 #include "ceiling_verb.h"
 #include "export_verb.h"
@@ -39,6 +40,7 @@ struct Verb {
 
 const std::vector<Verb>& Verbs() {
   static const std::vector<Verb> verbs = {
+      {"calibrate", "photographs in, calibrated presets out: sky found, sun placed, kind of sky decided, fitted, the game's image beside the photo", &skycal::cli::RunCalibrate},
       {"render", "render a sky preset to a lat-long EXR (+ PNG preview)", &skycal::cli::RunRender},
       {"bake", "bake a preset's LUTs from a single-scattering Earth atmosphere", &skycal::cli::RunBake},
       {"ceiling", "the model's best possible fit of a reference sky (rel RMSE), LUT and per image row", &skycal::cli::RunCeiling},

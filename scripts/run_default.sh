@@ -1,23 +1,19 @@
 #!/usr/bin/env bash
 # The main job on the bundled data, end to end: install (scripts/setup.sh: apt only when a
 # package is missing) and build, fetch the real skies (checksummed, datasets/fetch_real_skies.sh),
-# fit them, export the game tables and write the HTML report. Ends by printing where to look.
+# calibrate them (fit, the game's image beside the photo, game tables, HTML report). Ends by
+# printing where to look.
 #
-#   out/main_job/<frame>/     skycal fit outputs (preset, fit renders, fit.json, report.html)
-#   out/main_job/game/        skycal export: half-float LUTs, keyframes, SH-9, fog (+ report.html)
-#   out/main_job/report.html  the whole job on one page: every fit, the day's time-of-day plots,
-#                             the game tables
+#   out/main_job/<frame>/     skycal calibrate per photo (photo, mask, preset, fit.json, render.exr,
+#                             compare.png, report.html)
+#   out/main_job/game/        the game tables: half-float LUTs, keyframes, SH-9, fog
+#   out/main_job/report.html  the whole job on one page
 #
-# Which frame gets which fit (datasets/README.md describes the frames):
-#   sunrise, sunset  clear: the atmosphere, with the hand-drawn masks of trees and buildings
-#   sky, dawn, city  cloudy: fit --clouds stats — the atmosphere on the clear pixels, the cloud
-#                    lighting from the statistics of the cloud pixels (sun detected for dawn,
-#                    behind its ridge, and for city, through overcast)
-#   forest, night    canopy / night sky: no sky model applies; not fitted
-#   probe            no bundled frame shows a gray ball: no probe fit (docs/cli.md: "probe-extract")
-# The sources record no time of day; nominal times (dawn 06:00, sunrise 06:30, city 11:00,
-# sky 13:00, sunset 19:30)
-# order the keyframes along the sun's course and are labelled nominal in the log.
+# One `skycal calibrate` over every bundled frame, with no mask and no per-frame flag: the
+# tool segments each sky, places its sun, decides the kind of sky and what to fit
+# (docs/calibrate.md). It refuses forest (under a canopy) and night (a night sky) with the
+# classifier's reason, and exits 1 for them; the others are calibrated, exported to
+# out/main_job/game/ and reported.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -34,41 +30,33 @@ datasets/fetch_real_skies.sh --with-npm
 T_FETCH=$(now)
 
 OUT=out/main_job
-mkdir -p "$OUT"
+rm -rf "$OUT" "$OUT.calibrate.json"  # the job's own output of an earlier run (perhaps an older skycal's)
+mkdir -p "$(dirname "$OUT")"
 SKYCAL=build/skycal
 REAL=datasets/real
-MASKS=datasets/masks
 
-fit_clear() {  # NAME HOURS: the atmosphere on a clear sky, buildings and trees masked
-  log "fit $1 (clear; mask $MASKS/$1_mask.exr; nominal time $2 h)"
-  "$SKYCAL" fit --quiet --reference "$REAL/$1.exr" --mask "$MASKS/$1_mask.exr" --time "$2" --out "$OUT/$1"
-}
-fit_cloudy() {  # NAME HOURS: a cloudy sky: the atmosphere on its clear pixels, the clouds' lighting by statistics
-  log "fit $1 (cloudy: --clouds stats; nominal time $2 h)"
-  "$SKYCAL" fit --quiet --reference "$REAL/$1.exr" --clouds stats --time "$2" --out "$OUT/$1"
-}
-
-fit_cloudy dawn 6
-fit_clear sunrise 6.5
-fit_cloudy city 11
-fit_cloudy sky 13
-fit_clear sunset 19.5
-log "not fitted: forest (under a canopy), night (no sky model for a night sky)"
-log "probe: no bundled frame shows a gray ball (see the README's probe-extract and fit --probe)"
+PHOTOS=()
+for f in dawn sunrise city sky sunset forest night; do PHOTOS+=(--photo "$REAL/$f.exr"); done
+set +e
+"$SKYCAL" calibrate "${PHOTOS[@]}" --out "$OUT" --json >"$OUT.calibrate.json"
+RC=$?
+set -e
+# Exit 1 means some frames were refused (listed above, with the reason); anything else, or no
+# report, is a failure of the job.
+if [ "$RC" -gt 1 ] || [ ! -f "$OUT/report.html" ]; then
+  log "calibrate failed (exit $RC): see the messages above"
+  exit 1
+fi
 T_FIT=$(now)
 
-"$SKYCAL" export --preset "$OUT/dawn/preset.json" --preset "$OUT/sunrise/preset.json" --preset "$OUT/city/preset.json" \
-  --preset "$OUT/sky/preset.json" --preset "$OUT/sunset/preset.json" --out "$OUT/game"
-T_EXPORT=$(now)
-
-"$SKYCAL" report "$OUT" --out "$OUT/report.html" --title "skycal: the bundled real skies, fitted and exported"
 T_END=$(now)
 
 cat >&2 <<DONE
 [run_default] done in $(secs "$T0" "$T_END") s: install and build $(secs "$T0" "$T_SETUP") s, fetch $(secs "$T_SETUP" "$T_FETCH") s,
-[run_default]   fits $(secs "$T_FETCH" "$T_FIT") s, export $(secs "$T_FIT" "$T_EXPORT") s, report $(secs "$T_EXPORT" "$T_END") s
+[run_default]   calibrate (fits, game images, export, report) $(secs "$T_FETCH" "$T_FIT") s
 [run_default] where to look:
 [run_default]   $OUT/report.html          the whole job on one page (open it in a browser; it embeds everything)
 [run_default]   $OUT/game/                the game tables: manifest.json, keyframes.csv/.json, <preset>/*.exr
-[run_default]   $OUT/<frame>/preset.json  each calibrated preset; fit.json beside it has the numbers
+[run_default]   $OUT/<frame>/preset.json  each calibrated preset; fit.json beside it has the numbers,
+[run_default]   $OUT/<frame>/compare.png  the photo beside the game's image of its preset
 DONE

@@ -79,6 +79,8 @@ set(SKYCAL_SLOW_TESTS_BY_CONTENT
   FlowWind.CloudsMovedByTheWindAreRecoveredOnCloudPixels
   SkySegmentation.PrecisionAndRecallAgainstTheHandMasks
   SkyKind.EachBundledRealFrame
+  Calibrate.TheSunWithItsDiscCoveredIsFoundFromTheSky
+  Calibrate.AClearSkyThroughTheBinary
   StarRemoval.RealNightSkyThroughTheBinary
   ColorChart.CastInARealSkyFrameIsRecoveredByDetection
   ColorChart.ChartVerbAndCaptureThroughTheBinary

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <filesystem>
 #include <set>
 #include <sstream>
 
@@ -22,10 +23,14 @@ std::string Value(double v) {
 
 bool CalibrateOptions::IsValid(std::string* why) const {
   if (photos.empty()) return Fail(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
-  std::set<std::string> seen;
+  std::set<std::string> stems;
   for (const std::string& p : photos) {
     if (p.empty()) return Fail(why, "CalibrateOptions::photos holds an empty path");
-    if (!seen.insert(p).second) return Fail(why, "CalibrateOptions::photos = '" + p + "' twice (expected each photo once)");
+    const std::string stem = std::filesystem::path(p).stem().string();
+    if (stem.empty() || stem == "game" || stem[0] == '.')
+      return Fail(why, "CalibrateOptions::photos = '" + p + "' (expected a file name whose stem names its directory: not empty, not 'game', not hidden)");
+    if (!stems.insert(stem).second)
+      return Fail(why, "CalibrateOptions::photos: two photos named '" + stem + "' (each is written to DIR/<stem>: expected distinct file names)");
   }
   if (out_dir.empty()) return Fail(why, "CalibrateOptions::out_dir is empty (expected a directory)");
   if (latitude_deg.has_value() != longitude_deg.has_value())
@@ -36,6 +41,12 @@ bool CalibrateOptions::IsValid(std::string* why) const {
     return Fail(why, "CalibrateOptions::longitude_deg = " + Value(*longitude_deg) + " (expected [-180, 180] degrees)");
   if (latitude_deg && !time_iso8601)
     return Fail(why, "CalibrateOptions::latitude_deg given without time_iso8601 (expected the time as well: the sun needs both)");
+  if (time_iso8601 && !latitude_deg)
+    return Fail(why, "CalibrateOptions::time_iso8601 given without latitude_deg and longitude_deg (expected the place as well: the sun needs both)");
+  if (north_longitude_deg && !(std::abs(*north_longitude_deg) <= 360.0))
+    return Fail(why, "CalibrateOptions::north_longitude_deg = " + Value(*north_longitude_deg) + " (expected [-360, 360] degrees)");
+  if (north_longitude_deg && !latitude_deg)
+    return Fail(why, "CalibrateOptions::north_longitude_deg given without time_iso8601, latitude_deg and longitude_deg (it orients the sun of a time and place)");
   if (sun_elevation_deg.has_value() != sun_azimuth_deg.has_value())
     return Fail(why, "CalibrateOptions::sun_elevation_deg and sun_azimuth_deg: one given without the other (expected both or neither)");
   if (sun_elevation_deg && !(std::abs(*sun_elevation_deg) <= 90.0))

@@ -338,6 +338,25 @@ std::string DecisionsAndWarnings(const FitRecord& f) {
 
 }  // namespace
 
+// skycal calibrate's record: what the photo was taken for, and the game's image beside it.
+std::string CalibrationBlock(const FitRecord& f, PageCounts* counts) {
+  if (!f.calibration) return "";
+  const fit::FitCalibration& c = *f.calibration;
+  std::string h = "<h3>The game's image against the photo</h3>\n<table class=\"kv\">\n";
+  h += Row({"photo", E(c.photo)});
+  h += Row({"kind of sky", E(c.sky_kind) + " (" + E(c.sky_kind_reason) + ")"});
+  h += Row({"sun from", E(c.sun_source) + (c.sun_uncertainty_deg ? ", uncertainty " + FormatNumber(*c.sun_uncertainty_deg, 3) + " deg" : "")});
+  h += Row({"per-pixel log RMSE", FormatNumber(c.game_per_pixel_log_rmse, 3) + " (natural log, " +
+                                      std::to_string(c.game_sky_pixels) + " sky pixels above the horizon)"});
+  h += Row({"appearance error", FormatNumber(c.game_appearance_error, 3) + " (per 10 deg band: luminance quantiles, chromaticity)"});
+  h += Row({"calibration time", FormatNumber(c.seconds, 3) + " s"});
+  h += "</table>\n";
+  if (!f.compare_png.empty())
+    h += "<figure>" + EmbedPng(f.compare_png, "photo, game and error of " + f.label, "image", counts) +
+         "<figcaption>photo | the calibrated preset as the game renders it (render.exr) | ln(game/photo)</figcaption></figure>\n";
+  return h;
+}
+
 std::string FitSection(const FitRecord& f, const std::string& anchor, PageCounts* counts) {
   std::string h = "<section id=\"" + anchor + "\">\n<h2>Fit: " + E(f.label) + "</h2>\n";
   h += "<table class=\"kv\">\n";
@@ -350,6 +369,7 @@ std::string FitSection(const FitRecord& f, const std::string& anchor, PageCounts
             f.termination.empty() ? std::string("not run (the linear start's result stands; see the decisions)")
                                   : std::to_string(f.iterations) + " / " + E(f.termination)});
   h += "</table>\n";
+  h += CalibrationBlock(f, counts);
   for (const ReferenceRecord& r : f.references) h += ReferenceBlock(r, counts);
   if (f.references.front().image_reference.empty() && !f.sheet_png.empty()) {
     h += "<figure>" + EmbedPng(f.sheet_png, "report.png of " + f.label, "image", counts) +

@@ -264,6 +264,8 @@ FitRecord ReadFit(const fs::path& root, const fs::path& dir) {
   ReadCloudSections(doc, dir, f.json_path, &f);
   if (fs::is_regular_file(dir / "preset.json")) f.parameters = ReadParameters((dir / "preset.json").string());
   if (fs::is_regular_file(dir / "report.png")) f.sheet_png = (dir / "report.png").string();
+  f.calibration = doc.calibration;
+  if (f.calibration && fs::is_regular_file(dir / "compare.png")) f.compare_png = (dir / "compare.png").string();
   return f;
 }
 

@@ -1,6 +1,7 @@
 // What a report is made of: the fit, export and bench outputs found under a directory,
 // read into typed records (errors name the file and the field).
 #pragma once
+#include "skycal/fit/fit_result_file.h"
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -76,6 +77,9 @@ struct FitRecord {
     double atmosphere_rel_rmse = 0.0, atmosphere_log_rmse = 0.0, clouds_rel_rmse = 0.0, clouds_log_rmse = 0.0;
   };
   std::vector<CloudStatsPanel> cloud_stats_panels;
+  // fit.json's `calibration` (skycal calibrate) and its compare.png (photo | game | error).
+  std::optional<fit::FitCalibration> calibration;
+  std::string compare_png;
 };
 
 struct ExportRecord {

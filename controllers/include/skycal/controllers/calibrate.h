@@ -5,9 +5,13 @@
 // photo. Every choice is recorded in fit.json's `decisions` with its reason.
 #pragma once
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "skycal/fit/fit_report.h"
+#include "skycal/fit/fit_result_file.h"
 
 namespace skycal::controllers {
 
@@ -18,10 +22,51 @@ struct CalibrateOptions {
   // hidden: ISO 8601 local or UTC time ("2026-06-21T06:30:00+02:00"), degrees north, east.
   std::optional<std::string> time_iso8601;
   std::optional<double> latitude_deg, longitude_deg;
+  // The lat-long longitude (degrees) of geographic north: with the time and place, the
+  // sun's azimuth too; without it the time gives the elevation and the sky the azimuth.
+  std::optional<double> north_longitude_deg;
   // The sun given outright (degrees; the lat-long's azimuth convention, core/latlong.h).
   std::optional<double> sun_elevation_deg, sun_azimuth_deg;
+  bool export_tables = true;  // DIR/game: the game tables of every calibrated preset (exporter)
+  bool report = true;         // DIR/report.html over every photo (and DIR/<stem>/report.html)
+  bool verbose = true;        // progress lines through `log`
+  // Where progress lines go, one line each without a prefix; empty: stderr as "[calibrate] LINE".
+  std::function<void(const std::string&)> log;
   // False and the field, its value and the expectation in *why.
   bool IsValid(std::string* why) const;
 };
+
+// One photograph's calibration: DIR/<stem>/ holds photo.exr (the photo in the project's
+// lat-long convention, with its sun), mask.exr (the automatic sky mask), the fit's files
+// (preset.json and its tables, fit.json, fit/, report.png, report.html), render.exr (the
+// calibrated preset rendered as the game renders it, in the photo's units) and
+// compare.png (photo | game | error).
+struct PhotoCalibration {
+  std::string photo;                      // as given
+  std::string dir;                        // DIR/<stem>; empty when refused
+  std::string refusal;                    // why nothing was written (night, not a sky, no sun...)
+  std::optional<fit::FitCalibration> calibration;  // fit.json's `calibration`
+  std::vector<fit::FitDecision> decisions;          // what was fitted or skipped, and why
+  double seconds = 0.0;
+};
+
+struct CalibrateResult {
+  std::vector<PhotoCalibration> photos;   // in the order given
+  std::string game_dir, report_path;      // empty when not written
+  std::vector<std::string> warnings;
+  double seconds = 0.0;
+  int calibrated() const;
+};
+
+// Calibrates every photo (each into its own DIR/<stem>, committed whole or not at all), then
+// exports the game tables and writes the report over those that calibrated. A photo that
+// cannot be calibrated (night, not a sky, no sun to be found, unreadable) is listed with its
+// reason and leaves nothing behind; the others go on. Throws skycal::Error on invalid
+// options, or when DIR cannot be written.
+CalibrateResult RunCalibrate(const CalibrateOptions& options);
+
+// One photo (what RunCalibrate does per photo). Throws skycal::Error naming the file on a
+// refusal, leaving nothing behind.
+PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions& options);
 
 }  // namespace skycal::controllers

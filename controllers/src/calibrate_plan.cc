@@ -1,0 +1,86 @@
+#include "calibrate_plan.h"
+
+#include "skycal/capture/solar_position.h"
+#include "skycal/controllers/game_render.h"
+#include "skycal/core/error.h"
+#include "skycal/core/format_number.h"
+#include "skycal/render/preset.h"
+
+namespace skycal::controllers {
+namespace {
+
+// The share of an overcast sky the CIE standard overcast term carries (render/model: L =
+// mix(L_lut, L_z (1 + 2 sin el) / 3, w)); the LUT keeps the rest, the deck's colour and any
+// azimuthal structure the thin parts let through.
+constexpr double kOvercastWeight = 0.7;
+
+fit::FitDecision Decision(const std::string& what, const std::string& why) {
+  fit::FitDecision d;
+  d.what = what;
+  d.why = why;
+  d.saved_ms_basis = "not measured in this run";
+  return d;
+}
+
+std::string KindWhy(const PhotoAnalysis& a) {
+  return std::string(capture::ToString(a.kind.kind)) + ": " + a.kind.reason;
+}
+
+}  // namespace
+
+void RefuseWhatCannotBeCalibrated(const std::string& path, const PhotoAnalysis& a) {
+  if (a.kind.kind == capture::SkyKind::kNight)
+    throw Error(path + ": not calibrated: a night sky (" + a.kind.reason + "); the sky model has no night sky");
+  if (a.kind.kind == capture::SkyKind::kNotSky)
+    throw Error(path + ": not calibrated: not a sky (" + a.kind.reason + ")");
+  if (!a.sun.direction)
+    throw Error(path + ": not calibrated: the sun is not placed: " + a.sun.refusal +
+                " (give CalibrateOptions::time_iso8601 with latitude_deg and longitude_deg, or sun_elevation_deg and "
+                "sun_azimuth_deg)");
+}
+
+FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir, const CalibrateOptions& o) {
+  FitPlan p;
+  p.fit.references = {out / "photo.exr"};
+  p.fit.out_dir = final_dir;
+  p.fit.fit.mask_path = out / "mask.exr";
+  p.fit.fit.sun_dir = a.sun.direction;
+  p.fit.fit.verbose = false;
+  p.fit.report = false;  // written after the game's image, over everything
+  p.decisions.push_back(Decision("sky pixels: the automatic segmentation (mask.exr)",
+                                 "buildings, trees and terrain kept out of the sky terms; " +
+                                     FormatNumber(static_cast<double>(a.mask.non_sky_above_horizon)) +
+                                     " pixels above the horizon are not sky"));
+  p.decisions.push_back(Decision("sun from " + a.sun.source, a.sun.uncertainty_deg
+                                     ? "uncertainty " + FormatNumber(*a.sun.uncertainty_deg) + " deg"
+                                     : std::string("measured or given")));
+  const bool cloudy = a.kind.kind == capture::SkyKind::kPartlyCloudy ||
+                      (a.kind.kind == capture::SkyKind::kTwilight && a.features.texture >= capture::SkyKindOptions{}.cloudy_texture);
+  if (a.kind.kind == capture::SkyKind::kOvercast) {
+    render::Preset start = render::LoadPreset(DefaultPresetPath());
+    start.overcast_weight = kOvercastWeight;
+    render::SavePreset(start, out / "overcast_start.json");
+    p.fit.init_preset = out / "overcast_start.json";
+    p.fit.fit.hold_inseparable_overcast = false;
+    p.decisions.push_back(Decision("overcast: the CIE overcast term carries the sky (weight " + FormatNumber(kOvercastWeight) +
+                                       "), no cloud layer drawn",
+                                   KindWhy(a) + "; a uniform deck has no cloud shapes to place, so the cloud statistics were skipped"));
+  } else if (cloudy) {
+    p.fit.cloud_mask = true;
+    p.fit.cloud_stats.enabled = true;
+    p.fit.clouds.mode = "off";
+    p.draw_clouds = true;
+    p.decisions.push_back(Decision("clouds: clear pixels fit the atmosphere, cloud pixels the cloud lighting (statistics)",
+                                   KindWhy(a)));
+  } else {
+    p.fit.clouds.mode = "off";
+    p.decisions.push_back(Decision("no cloud layer: the atmosphere alone", KindWhy(a) + "; the cloud statistics were skipped"));
+  }
+  if (o.time_iso8601) {  // the preset's time of day orders the exported keyframes
+    const capture::SpaInput t = capture::ParseIso8601(*o.time_iso8601, "CalibrateOptions::time_iso8601");
+    p.fit.fit.time_of_day_h = t.hour + t.minute / 60.0 + t.second / 3600.0;
+  }
+  return p;
+}
+
+}  // namespace skycal::controllers

@@ -1,0 +1,47 @@
+// What calibrate learns of a photo before it writes anything (the frame, its sky mask, its
+// sun, the kind of sky), and what it then fits: the plan, every choice a fit.json decision.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "calibrate_sun.h"
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/sky_kind.h"
+#include "skycal/capture/sky_segmentation.h"
+#include "skycal/controllers/calibrate.h"
+#include "skycal/controllers/fit_controller.h"
+#include "skycal/core/staged_directory.h"
+
+namespace skycal::controllers {
+
+struct PhotoAnalysis {
+  capture::LatLongFrame frame;  // the project's lat-long convention
+  capture::SkyMask mask;        // automatic (capture::EstimateSkyMask)
+  PhotoSun sun;
+  std::vector<float> cloud_probability;  // empty without a sun
+  capture::SkyFeatures features;
+  capture::SkyKindDecision kind;
+  std::vector<std::string> warnings;
+};
+
+// Imports the photo (either lat-long convention), segments it, places the sun and decides
+// the kind of sky. Writes nothing. Throws skycal::Error naming the file when it does not read.
+PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o);
+
+// Throws skycal::Error naming `path` when the photo cannot be calibrated: a night sky, not a
+// sky, or a sun that nothing places.
+void RefuseWhatCannotBeCalibrated(const std::string& path, const PhotoAnalysis& a);
+
+struct FitPlan {
+  FitControllerOptions fit;
+  bool draw_clouds = false;  // the game's image draws the preset's clouds
+  std::vector<fit::FitDecision> decisions;
+};
+
+// The fit of one photo staged in `out` (photo.exr and mask.exr written there): what the
+// kind of sky asks for. An overcast sky writes its start preset (the CIE overcast term
+// carrying the sky) into `out` too.
+// `final_dir`: where `out` will be committed (the fitted preset takes its name).
+FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir, const CalibrateOptions& o);
+
+}  // namespace skycal::controllers

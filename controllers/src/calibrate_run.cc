@@ -1,0 +1,208 @@
+// calibrate's per-photo pipeline and the whole run (calibrate.h).
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+#include "calibrate_figure.h"
+#include "calibrate_plan.h"
+#include "skycal/controllers/calibrate.h"
+#include "skycal/controllers/game_render.h"
+#include "skycal/core/appearance.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/format_number.h"
+#include "skycal/core/latlong.h"
+#include "skycal/export/game_export.h"
+#include "skycal/fit/fit_result_file.h"
+#include "skycal/render/preset.h"
+#include "skycal/report/report.h"
+
+namespace skycal::controllers {
+namespace fs = std::filesystem;
+namespace {
+
+double Since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void Log(const CalibrateOptions& o, const std::string& line) {
+  if (!o.verbose) return;
+  if (o.log) o.log(line);
+  else std::cerr << "[calibrate] " << line << "\n";
+}
+
+std::string Round(double v, double unit = 0.001) { return FormatNumber(std::round(v / unit) * unit); }
+
+// photo.exr (the photo as the fit reads it, with its sun) and mask.exr (1 sky, 0 not, as a
+// user mask; its confidence beside).
+void WriteStagedInputs(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& photo) {
+  capture::LatLongFrame f = a.frame;
+  f.sun_direction = a.sun.direction;
+  f.extra.strings["skycalSunSource"] = a.sun.source;
+  f.extra.strings["skycalSource"] = photo;
+  capture::WriteLatLongFrame(out / "photo.exr", f);
+  ImageRGB rgb(a.mask.width, a.mask.height);
+  for (size_t i = 0; i < a.mask.sky.size(); ++i)
+    rgb.pixels[3 * i] = rgb.pixels[3 * i + 1] = rgb.pixels[3 * i + 2] = a.mask.sky[i];
+  ExrAttributes attributes;
+  attributes.strings["skycalMaskSource"] = "skycal calibrate (automatic sky segmentation) of " + photo;
+  WriteExrRGBWithPlanes(out / "mask.exr", rgb, {{"confidence", a.mask.confidence}}, attributes, ExrPixelType::kHalf);
+}
+
+// The calibrated preset rendered as the game renders it, at the photo's sun, size and
+// exposure: render.exr, compare.png, and the two numbers against the photo.
+appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const StagedDirectory& out, double exposure) {
+  GameRenderOptions r;
+  r.preset_path = out / "preset.json";
+  r.sun_dir = *a.sun.direction;
+  r.width = a.frame.radiance.width;
+  r.height = a.frame.radiance.height;
+  r.exposure = exposure;
+  r.verbose = false;
+  r.clouds.enabled = plan.draw_clouds && !render::LoadPreset(r.preset_path).clouds_json.empty();
+  const GameImage game = RenderGameImage(r);
+  capture::LatLongFrame f;
+  f.radiance = game.radiance;
+  f.sun_direction = game.sun_dir;
+  f.extra.strings["skycalRenderOf"] = "preset.json as the game renders it" + std::string(r.clouds.enabled ? ", clouds drawn" : "");
+  f.extra.floats["skycalExposure"] = static_cast<float>(exposure);
+  capture::WriteLatLongFrame(out / "render.exr", f);
+  WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, a.mask.sky);
+  return appearance::Compare(a.frame.radiance, game.radiance, a.mask.sky, {}, "photo.exr", "render.exr");
+}
+
+fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const appearance::Comparison& c) {
+  fit::FitCalibration r;
+  r.photo = photo;
+  r.sky_kind = capture::ToString(a.kind.kind);
+  r.sky_kind_reason = a.kind.reason;
+  r.sky_share = a.features.sky_share;
+  r.zenith_blue = a.features.zenith_blue;
+  r.texture = a.features.texture;
+  r.point_sources = a.features.point_sources;
+  if (std::isfinite(a.features.cloud_share)) r.cloud_share = a.features.cloud_share;
+  r.sun_source = a.sun.source;
+  r.sun_uncertainty_deg = a.sun.uncertainty_deg;
+  r.mask = "mask.exr";
+  r.render = "render.exr";
+  r.game_sky_pixels = c.sky_pixels;
+  r.game_per_pixel_log_rmse = c.per_pixel_log_rmse;
+  r.game_appearance_error = c.appearance_error;
+  return r;
+}
+
+}  // namespace
+
+PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Log(o, "reading " + photo);
+  const PhotoAnalysis a = AnalysePhoto(photo, o);
+  for (const std::string& w : a.warnings) Log(o, "warning: " + w);
+  Log(o, photo + ": " + capture::ToString(a.kind.kind) + " (" + a.kind.reason + "); sun " +
+             (a.sun.direction ? "from " + a.sun.source + ", elevation " + Round(latlong::ElevationDeg(*a.sun.direction), 0.01) +
+                                    " deg" + (a.sun.uncertainty_deg ? " +- " + Round(*a.sun.uncertainty_deg, 0.1) + " deg" : "")
+                              : std::string("not placed")));
+  RefuseWhatCannotBeCalibrated(photo, a);
+  const std::string final_dir = (fs::path(o.out_dir) / fs::path(photo).stem()).string();
+  fs::create_directories(o.out_dir);
+  StagedDirectory out(final_dir, "CalibrateOptions::out_dir", "calibrate", {{"CalibrateOptions::photos", photo}});
+  WriteStagedInputs(a, out, photo);
+  const FitPlan plan = PlanFit(a, out, final_dir, o);
+  for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
+  Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
+  RunFitInto(plan.fit, out);
+  fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
+  Log(o, "rendering the calibrated preset as the game renders it" + std::string(plan.draw_clouds ? " (sky + clouds)" : ""));
+  const appearance::Comparison c = RenderTheGame(a, plan, out, f.references.at(0).exposure);
+  PhotoCalibration r;
+  r.photo = photo;
+  r.dir = final_dir;
+  r.decisions = plan.decisions;
+  r.calibration = Record(photo, a, c);
+  r.seconds = Since(t0);
+  r.calibration->seconds = r.seconds;
+  f.decisions.insert(f.decisions.begin(), plan.decisions.begin(), plan.decisions.end());
+  f.calibration = r.calibration;
+  fit::WriteFitResultFile(out / "fit.json", f);
+  if (o.report) {
+    try {
+      report::ReportOptions ro;
+      ro.out_path = out / "report.html";
+      ro.title = "skycal calibrate: " + photo;
+      report::WriteReport(out.staging().string(), ro);
+    } catch (const std::exception& e) {  // the report is optional: the calibration stands
+      Log(o, "warning: " + final_dir + "/report.html not written: " + e.what());
+    }
+  }
+  out.Commit();
+  Log(o, "wrote " + final_dir + ": the game's image against the photo: per-pixel log RMSE " + Round(c.per_pixel_log_rmse) +
+             ", appearance error " + Round(c.appearance_error) + " (" + Round(r.seconds, 0.1) + " s)");
+  return r;
+}
+
+int CalibrateResult::calibrated() const {
+  int n = 0;
+  for (const PhotoCalibration& p : photos) n += p.dir.empty() ? 0 : 1;
+  return n;
+}
+
+namespace {
+
+// DIR/game: the game tables of every calibrated preset (the export controller). A failure
+// is reported, the calibrations stand.
+void ExportTables(const CalibrateOptions& o, CalibrateResult* r) {
+  exporter::ExportOptions e;
+  for (const PhotoCalibration& p : r->photos)
+    if (!p.dir.empty()) e.presets.push_back((fs::path(p.dir) / "preset.json").string());
+  e.out_dir = (fs::path(o.out_dir) / "game").string();
+  e.report = false;
+  e.verbose = false;
+  Log(o, "exporting the game tables of " + std::to_string(e.presets.size()) + " preset(s) to " + e.out_dir);
+  try {
+    exporter::ExportGameTables(e);
+    r->game_dir = e.out_dir;
+  } catch (const std::exception& ex) {
+    r->warnings.push_back(e.out_dir + " not written: " + ex.what());
+    Log(o, "warning: " + r->warnings.back());
+  }
+}
+
+void WriteRunReport(const CalibrateOptions& o, CalibrateResult* r) {
+  report::ReportOptions ro;
+  ro.out_path = (fs::path(o.out_dir) / "report.html").string();
+  ro.title = "skycal calibrate: " + std::to_string(r->calibrated()) + " photo(s)";
+  try {
+    r->report_path = report::WriteReport(o.out_dir, ro).path;
+  } catch (const std::exception& ex) {  // optional: the calibrations stand
+    r->warnings.push_back(ro.out_path + " not written: " + ex.what());
+    Log(o, "warning: " + r->warnings.back());
+  }
+}
+
+}  // namespace
+
+CalibrateResult RunCalibrate(const CalibrateOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error(why);
+  const auto t0 = std::chrono::steady_clock::now();
+  CalibrateResult r;
+  for (size_t i = 0; i < o.photos.size(); ++i) {
+    Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));
+    try {
+      r.photos.push_back(CalibratePhoto(o.photos[i], o));
+    } catch (const Error& e) {
+      PhotoCalibration p;
+      p.photo = o.photos[i];
+      p.refusal = e.what();
+      Log(o, p.refusal);
+      r.photos.push_back(p);
+    }
+  }
+  if (r.calibrated() > 0 && o.export_tables) ExportTables(o, &r);
+  if (r.calibrated() > 0 && o.report) WriteRunReport(o, &r);
+  r.seconds = Since(t0);
+  return r;
+}
+
+}  // namespace skycal::controllers

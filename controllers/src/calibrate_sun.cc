@@ -1,0 +1,82 @@
+#include "calibrate_sun.h"
+
+#include <cmath>
+
+#include "skycal/capture/solar_position.h"
+#include "skycal/capture/sun_detect.h"
+#include "skycal/core/format_number.h"
+#include "skycal/core/latlong.h"
+#include "skycal/skysun/sky_sun.h"
+
+namespace skycal::controllers {
+namespace {
+
+std::string Deg(double v) { return FormatNumber(std::round(v * 100.0) / 100.0) + " deg"; }
+
+// The time and place's sun: its elevation, and its azimuth from north when the frame's
+// north is known, else from the sky's estimate (its azimuth uncertainty carried).
+std::optional<PhotoSun> SunOfTimeAndPlace(const std::optional<skysun::SkySunEstimate>& sky_sun,
+                                          const CalibrateOptions& o, std::string* why) {
+  capture::SpaInput in = capture::ParseIso8601(*o.time_iso8601, "CalibrateOptions::time_iso8601");
+  in.latitude_deg = *o.latitude_deg;
+  in.longitude_deg = *o.longitude_deg;
+  const capture::SpaResult spa = capture::ComputeSolarPosition(in);
+  PhotoSun s;
+  if (o.north_longitude_deg) {
+    s.direction = capture::SunDirectionInFrame(spa, *o.north_longitude_deg);
+    s.source = "time and place";
+    return s;
+  }
+  if (!sky_sun) {
+    *why = "the time and place give the elevation " + Deg(spa.elevation_deg) +
+           " but not the azimuth (no north_longitude_deg, and the sky does not place it)";
+    return std::nullopt;
+  }
+  s.direction = latlong::DirectionFromElevationAzimuthDeg(spa.elevation_deg, sky_sun->azimuth_deg);
+  s.source = "time and place, azimuth from the sky";
+  s.uncertainty_deg = sky_sun->azimuth_uncertainty_deg;
+  return s;
+}
+
+}  // namespace
+
+PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
+                        const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o) {
+  PhotoSun s;
+  if (o.sun_elevation_deg) {
+    s.direction = latlong::DirectionFromElevationAzimuthDeg(*o.sun_elevation_deg, *o.sun_azimuth_deg);
+    s.source = "option";
+    return s;
+  }
+  if (file_sun) {
+    s.direction = *file_sun;
+    s.source = "attribute";
+    return s;
+  }
+  std::string no_disc, no_sky, no_time;
+  if (const auto disc = capture::DetectSun(frame, &no_disc, kCalibrateDiscContrast)) {
+    s.direction = disc->direction;
+    s.source = "disc";
+    return s;
+  }
+  std::optional<skysun::SkySunEstimate> sky_sun;
+  try {
+    sky_sun = skysun::EstimateSunFromSky(frame, sky, {}, &no_sky);
+  } catch (const std::exception& e) {  // too few sky cells: no estimate, the reason kept
+    no_sky = e.what();
+  }
+  if (o.time_iso8601) {
+    if (auto t = SunOfTimeAndPlace(sky_sun, o, &no_time)) return *t;
+  }
+  if (sky_sun) {
+    s.direction = sky_sun->direction;
+    s.source = "sky";
+    s.uncertainty_deg = sky_sun->uncertainty_deg;
+    return s;
+  }
+  s.refusal = "no sun disc (" + no_disc + "); the sky does not place the sun (" + no_sky + ")" +
+              (no_time.empty() ? std::string("") : "; " + no_time);
+  return s;
+}
+
+}  // namespace skycal::controllers

@@ -1,0 +1,33 @@
+// The sun of a photograph for calibrate, wherever it is, in this order: given outright;
+// the file's sunDirection attribute; the disc; the time and place (NREL SPA) with the
+// azimuth from north when given, else from the sky's pattern; the sky's pattern alone
+// (skysun: the circumsolar glow and the gradients, below the horizon at twilight too).
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skycal/controllers/calibrate.h"
+#include "skycal/core/image.h"
+
+namespace skycal::controllers {
+
+// A sun disc in an HDR photo is thousands of times the median sky; a twilight glow behind
+// a ridge or the moon reach tens to a hundred (capture::DetectSun's contrast).
+inline constexpr double kCalibrateDiscContrast = 300.0;
+
+struct PhotoSun {
+  std::optional<std::array<double, 3>> direction;  // unit, toward the sun (core/latlong.h)
+  std::string source;    // "option", "attribute", "disc", "time and place", "time and place, azimuth from the sky", "sky"
+  std::optional<double> uncertainty_deg;  // the sky's estimate (its azimuth's, with the time and place)
+  std::string refusal;   // no direction: why each way failed
+};
+
+// `sky`: the automatic sky mask (1 sky) for the sky-pattern estimate; `file_sun`: the
+// frame's sunDirection attribute. Throws skycal::Error naming the option field on a time
+// that does not parse.
+PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
+                        const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o);
+
+}  // namespace skycal::controllers

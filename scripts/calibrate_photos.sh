@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# `skycal calibrate` as a user runs it, with no flag, on photographs: the bundled frames (the
+# ones the method was developed on) and a held-out set nobody tuned anything on (the other
+# Poly Haven HDRIs of npm @pmndrs/assets: parks, streets, bridges, interiors), reported apart.
+# Per photo: what kind of sky it was called and why, where the sun came from, the game's
+# image against the photo (per-pixel log RMSE and appearance error, `fit.json`'s
+# `calibration`), and the seconds. For the two clear frames with hand masks, the game's image
+# is also compared over the hand mask, beside the main job's hand-masked fit
+# (bench/results/game_vs_photo.md), the 1.1x target.
+#
+#   scripts/calibrate_photos.sh [--build DIR] [--work DIR] [--results FILE]
+#
+# Needs datasets/real and the npm tarball in datasets/cache (datasets/fetch_real_skies.sh
+# --with-npm). Writes bench/results/calibrate.md (or --results); keeps every output in --work.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=build
+WORK=out/calibrate_photos
+RESULTS=bench/results/calibrate.md
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --build) BUILD=$2; shift ;;
+    --work) WORK=$2; shift ;;
+    --results) RESULTS=$2; shift ;;
+    *) echo "usage: $0 [--build DIR] [--work DIR] [--results FILE]" >&2; exit 2 ;;
+  esac
+  shift
+done
+SKYCAL=$BUILD/skycal
+REAL=datasets/real
+TGZ=datasets/cache/pmndrs-assets-1.7.0.tgz
+BUNDLED=(sunrise sunset dawn city sky forest night)
+[ -x "$SKYCAL" ] || { echo "no $SKYCAL: build first" >&2; exit 2; }
+for f in "${BUNDLED[@]}"; do
+  [ -f "$REAL/$f.exr" ] || { echo "no $REAL/$f.exr: run datasets/fetch_real_skies.sh --with-npm" >&2; exit 2; }
+done
+[ -f "$TGZ" ] || { echo "no $TGZ: run datasets/fetch_real_skies.sh --with-npm" >&2; exit 2; }
+log() { echo "[calibrate_photos] $*" >&2; }
+rm -rf "$WORK"
+mkdir -p "$WORK/heldout_photos"
+
+# The held-out photos: every HDRI of the package but the two bundled ones (sky, dawn), as
+# published (Blender's convention, no envmap attribute: calibrate converts them).
+HELDOUT=()
+for js in $(tar tzf "$TGZ" | grep -E '^package/hdri/[a-z]+\.exr\.js$'); do
+  name=$(basename "$js" .exr.js)
+  case "$name" in sky|dawn) continue ;; esac
+  tar -xzOf "$TGZ" "$js" | sed -e "s/^export default '[^,]*,//" -e "s/'[;[:space:]]*\$//" | base64 -d \
+    >"$WORK/heldout_photos/$name.exr"
+  HELDOUT+=("$name")
+done
+
+# run SET PHOTO...: one calibrate command over the photos; its JSON and wall time kept.
+run() {
+  local set=$1; shift
+  local args=() t0
+  for p in "$@"; do args+=(--photo "$p"); done
+  t0=$(date +%s.%N)
+  "$SKYCAL" calibrate "${args[@]}" --out "$WORK/$set" --json >"$WORK/$set.json" 2>"$WORK/$set.log" || true
+  awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }' >"$WORK/$set.seconds"
+  log "$set: $(cat "$WORK/$set.seconds") s for $# photos (log: $WORK/$set.log)"
+}
+bundled_paths=(); for f in "${BUNDLED[@]}"; do bundled_paths+=("$REAL/$f.exr"); done
+heldout_paths=(); for f in "${HELDOUT[@]}"; do heldout_paths+=("$WORK/heldout_photos/$f.exr"); done
+run bundled "${bundled_paths[@]}"
+run heldout "${heldout_paths[@]}"
+
+# The clear frames over their hand masks (the main job's pixels).
+for f in sunrise sunset; do
+  if [ -f "$WORK/bundled/$f/render.exr" ]; then
+    "$SKYCAL" compare --photo "$WORK/bundled/$f/photo.exr" --game "$WORK/bundled/$f/render.exr" \
+      --mask "datasets/masks/${f}_mask.exr" --json >"$WORK/$f.handmask.json" 2>/dev/null || true
+  fi
+done
+
+python3 scripts/calibrate_photos_table.py "$WORK" "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" >"$WORK/table.md"
+mkdir -p "$(dirname "$RESULTS")"
+cp "$WORK/table.md" "$RESULTS"
+log "wrote $RESULTS"

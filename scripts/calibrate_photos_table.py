@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""The table of scripts/calibrate_photos.sh: WORK COMMIT -> markdown on stdout."""
+import json
+import os
+import sys
+import datetime
+
+work, commit = sys.argv[1], sys.argv[2]
+# The main job's game-vs-photo numbers (bench/results/game_vs_photo.md, before calibrate).
+BEFORE = {"sunrise": (0.082, 0.014), "sunset": (0.041, 0.012), "dawn": (0.368, 0.203),
+          "city": (0.510, 0.404), "sky": (0.619, 0.437)}
+
+
+def load(name):
+    path = os.path.join(work, name)
+    return json.load(open(path)) if os.path.exists(path) and os.path.getsize(path) else None
+
+
+def rows(set_name, with_before):
+    doc = load(set_name + ".json")
+    seconds = open(os.path.join(work, set_name + ".seconds")).read().strip()
+    out = []
+    if doc is None:
+        return ["| (calibrate printed no JSON: see %s.log) |" % set_name], seconds, 0
+    for p in doc["photos"]:
+        stem = os.path.splitext(os.path.basename(p["photo"]))[0]
+        if not p["calibrated"]:
+            reason = p["reason"].split("not calibrated: ", 1)[-1].replace("|", "/")
+            out.append("| %s | refused: %s | | | | %s | %.1f |" % (stem, reason, "" if not with_before else "", p["seconds"]))
+            continue
+        fit = load(os.path.join(set_name, stem, "fit.json"))
+        cal = fit["calibration"]
+        sun = cal["sun_source"] + (" ±%.1f°" % cal["sun_uncertainty_deg"] if cal.get("sun_uncertainty_deg") else "")
+        el = fit["references"][0].get("sun_elevation_deg")
+        before = BEFORE.get(stem) if with_before else None
+        out.append("| %s | %s (%s) | %s, el %.1f° | %.3f | %.3f | %s | %.1f |" % (
+            stem, cal["sky_kind"], cal["sky_kind_reason"].replace("|", "/"), sun, el if el is not None else float("nan"),
+            cal["game_per_pixel_log_rmse"], cal["game_appearance_error"],
+            "%.3f / %.3f" % before if before else "", cal["seconds"]))
+    return out, seconds, len(doc["photos"])
+
+
+print("# `skycal calibrate` on photographs, with no flag\n")
+print("Written by `scripts/calibrate_photos.sh` (%s, %s). One `skycal calibrate` command per set."
+      % (commit, datetime.date.today().isoformat()))
+print("The game's image: the calibrated preset rendered as the game renders it at the photo's sun,")
+print("size and exposure (`render.exr`), against the photo over the automatic sky mask above the horizon.")
+print("Natural logarithms (0.1 is about 10%). \"before\": the main job's hand-chosen flags and masks")
+print("(`bench/results/game_vs_photo.md`), per-pixel / appearance.\n")
+header = "| photo | kind (why) | sun | per-pixel log RMSE | appearance error | before | s |\n|---|---|---|---|---|---|---|"
+for set_name, title, with_before in (("bundled", "Bundled frames (the method was developed on these)", True),
+                                     ("heldout", "Held out (never looked at while choosing any threshold)", False)):
+    r, seconds, n = rows(set_name, with_before)
+    print("## %s\n" % title)
+    print("Whole command: %s s for %d photos.\n" % (seconds, n))
+    print(header)
+    print("\n".join(r))
+    print()
+print("## The clear frames over their hand masks\n")
+print("| photo | calibrate, per-pixel log RMSE | main job (hand mask, hand flags) | ratio (target <= 1.1) |\n|---|---|---|---|")
+for stem in ("sunrise", "sunset"):
+    c = load(stem + ".handmask.json")
+    if c is None:
+        print("| %s | not calibrated | %.3f | |" % (stem, BEFORE[stem][0]))
+        continue
+    print("| %s | %.3f | %.3f | %.2f |" % (stem, c["per_pixel_log_rmse"], BEFORE[stem][0], c["per_pixel_log_rmse"] / BEFORE[stem][0]))

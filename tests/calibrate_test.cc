@@ -1,0 +1,236 @@
+// `skycal calibrate` (controllers/calibrate.h): its options, the sun wherever it is (the disc
+// covered, the time and place), and the whole command on photos whose answer is known:
+// files written, the game's image equal to `skycal render` of the calibrated preset, and
+// every bad photo refused by name with nothing left behind.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "calibrate_sun.h"
+#include "run_binary.h"
+#include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/sky_segmentation.h"
+#include "skycal/capture/solar_position.h"
+#include "skycal/controllers/calibrate.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
+#include "skycal/fit/fit_result_file.h"
+#include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
+#include "test_util.h"
+
+using skycal::testing::WriteText;
+
+namespace skycal {
+namespace {
+
+const std::string kRoot = SKYCAL_SOURCE_DIR;
+using controllers::CalibrateOptions;
+
+double AngleDeg(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  const double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  return std::acos(std::clamp(d, -1.0, 1.0)) * 180.0 / kPi;
+}
+
+ImageRGB ModelSky(const std::array<double, 3>& sun, int w, int h, bool disc) {
+  render::RenderRequest req;
+  req.sun_dir = sun;
+  req.width = w;
+  req.height = h;
+  req.sun_disc = disc;
+  return render::CreateRenderer(render::Backend::kCpu)
+      ->Render(render::LoadPreset(kRoot + "/datasets/presets/default_clear.json"), req);
+}
+
+TEST(Calibrate, OptionsNameTheFieldAndValue) {
+  CalibrateOptions o;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
+  o.photos = {"a/sky.exr", "b/sky.exr"};
+  o.out_dir = "out";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("two photos named 'sky'"), std::string::npos) << why;
+  o.photos = {"a/sky.exr"};
+  EXPECT_TRUE(o.IsValid(&why)) << why;
+  o.latitude_deg = 95.0;
+  o.longitude_deg = 10.0;
+  o.time_iso8601 = "2026-06-21T12:00Z";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "CalibrateOptions::latitude_deg = 95 (expected [-90, 90] degrees)");
+  o.latitude_deg = 45.0;
+  o.time_iso8601.reset();
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("latitude_deg given without time_iso8601"), std::string::npos) << why;
+  o = {};
+  o.photos = {"sky.exr"};
+  o.out_dir = "out";
+  o.sun_elevation_deg = 10.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("sun_elevation_deg and sun_azimuth_deg"), std::string::npos) << why;
+}
+
+// The sun of a real clear photo with its disc covered (every pixel within 5 deg of the
+// sun set to the median of the ring 5-8 deg): found from the sky's pattern, within its
+// stated uncertainty and a few degrees.
+TEST(Calibrate, TheSunWithItsDiscCoveredIsFoundFromTheSky) {
+  const std::string path = kRoot + "/datasets/real/sunrise.exr";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent: run datasets/fetch_real_skies.sh";
+  capture::LatLongFrame f = capture::ReadLatLongFrame(path);
+  ASSERT_TRUE(f.sun_direction.has_value());
+  const std::array<double, 3> truth = *f.sun_direction;
+  ImageRGB& img = f.radiance;
+  std::vector<float> ring[3];
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const double a = AngleDeg(latlong::PixelDirection(x, y, img.width, img.height), truth);
+      if (a >= 5.0 && a < 8.0)
+        for (int c = 0; c < 3; ++c) ring[c].push_back(img.at(x, y, c));
+    }
+  ASSERT_GT(ring[0].size(), 10u);
+  float median[3];
+  for (int c = 0; c < 3; ++c) {
+    std::nth_element(ring[c].begin(), ring[c].begin() + ring[c].size() / 2, ring[c].end());
+    median[c] = ring[c][ring[c].size() / 2];
+  }
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (AngleDeg(latlong::PixelDirection(x, y, img.width, img.height), truth) < 5.0)
+        for (int c = 0; c < 3; ++c) img.at(x, y, c) = median[c];
+  const capture::SkyMask mask = capture::EstimateSkyMask(img, std::nullopt, {});
+  CalibrateOptions o;
+  const controllers::PhotoSun s = controllers::ChoosePhotoSun(img, mask.sky, std::nullopt, o);
+  ASSERT_TRUE(s.direction.has_value()) << s.refusal;
+  EXPECT_EQ(s.source, "sky");
+  ASSERT_TRUE(s.uncertainty_deg.has_value());
+  const double error = AngleDeg(*s.direction, truth);
+  std::cout << "[calibrate] sunrise, disc covered: sun found " << error << " deg off, uncertainty " << *s.uncertainty_deg
+            << " deg\n";
+  EXPECT_LT(error, 5.0);
+  EXPECT_LE(error, *s.uncertainty_deg + 1.0);
+}
+
+// The time and place: with north known, the SPA's direction exactly; without it, the SPA's
+// elevation with the sky's azimuth.
+TEST(Calibrate, TheSunOfATimeAndPlace) {
+  capture::SpaInput in = capture::ParseIso8601("2026-06-21T17:30:00+02:00");
+  in.latitude_deg = 48.2;
+  in.longitude_deg = 16.4;
+  const capture::SpaResult spa = capture::ComputeSolarPosition(in);
+  const std::array<double, 3> truth = capture::SunDirectionInFrame(spa, 30.0);
+  const ImageRGB sky = ModelSky(truth, 256, 128, false);
+  const std::vector<float> all(static_cast<size_t>(256) * 128, 1.0f);
+  CalibrateOptions o;
+  o.time_iso8601 = "2026-06-21T17:30:00+02:00";
+  o.latitude_deg = 48.2;
+  o.longitude_deg = 16.4;
+  o.north_longitude_deg = 30.0;
+  controllers::PhotoSun s = controllers::ChoosePhotoSun(sky, all, std::nullopt, o);
+  ASSERT_TRUE(s.direction.has_value()) << s.refusal;
+  EXPECT_EQ(s.source, "time and place");
+  EXPECT_LT(AngleDeg(*s.direction, truth), 1e-9);
+  o.north_longitude_deg.reset();
+  s = controllers::ChoosePhotoSun(sky, all, std::nullopt, o);
+  ASSERT_TRUE(s.direction.has_value()) << s.refusal;
+  EXPECT_EQ(s.source, "time and place, azimuth from the sky");
+  EXPECT_NEAR(latlong::ElevationDeg(*s.direction), spa.elevation_deg, 1e-9);
+  EXPECT_LT(AngleDeg(*s.direction, truth), 3.0);
+  o.time_iso8601 = "2026-06-21 noon";
+  EXPECT_THROW(controllers::ChoosePhotoSun(sky, all, std::nullopt, o), Error);
+}
+
+#ifdef SKYCAL_BINARY
+testing::ProcessResult Skycal(const std::string& args) { return testing::RunSkycal(SKYCAL_BINARY, args); }
+
+// A photo in the project's convention (envmap=latlong), as a camera rig or `import` writes it.
+void WritePhoto(const std::string& path, const ImageRGB& img) {
+  capture::LatLongFrame f;
+  f.radiance = img;
+  capture::WriteLatLongFrame(path, f);
+}
+
+// A clear sky whose answer is known (the model's own, sun at 30 deg, disc drawn): calibrated
+// with no flag; every file there; the kind, the sun and a small error of the game's image;
+// render.exr equal to `skycal render` of the calibrated preset times the fit's exposure.
+TEST(Calibrate, AClearSkyThroughTheBinary) {
+  testing::ScratchDir s("calibrate-clear");
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 40.0);
+  ImageRGB img = ModelSky(sun, 256, 128, true);
+  for (float& v : img.pixels) v *= 0.01f;  // a camera's units, not the model's
+  WritePhoto(s / "park.exr", img);
+  const auto r = Skycal("calibrate --photo " + s / "park.exr" + " --out " + s / "out" + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["calibrated"], 1);
+  const std::string dir = s / "out/park";
+  for (const char* f : {"photo.exr", "mask.exr", "preset.json", "fit.json", "render.exr", "compare.png", "report.html"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/" + f)) << f;
+  EXPECT_TRUE(std::filesystem::exists(s / "out/game/manifest.json"));
+  EXPECT_TRUE(std::filesystem::exists(s / "out/report.html"));
+  const fit::FitResultFile f = fit::ReadFitResultFile(dir + "/fit.json");
+  ASSERT_TRUE(f.calibration.has_value());
+  EXPECT_EQ(f.calibration->sky_kind, "clear");
+  EXPECT_EQ(f.calibration->sun_source, "disc");
+  EXPECT_LT(f.calibration->game_per_pixel_log_rmse, 0.05);
+  EXPECT_LT(f.calibration->game_appearance_error, 0.03);
+  EXPECT_LT(AngleDeg(f.references.at(0).sun_direction, sun), 1.0);
+  // The game's image is `skycal render` of the preset at that sun and size, times the exposure.
+  const auto& d = f.references.at(0).sun_direction;
+  const auto rr = Skycal("render --preset " + dir + "/preset.json --sun-dir " + std::to_string(d[0]) + "," +
+                         std::to_string(d[1]) + "," + std::to_string(d[2]) + " --width 256 --height 128 --out " + s / "r.exr");
+  ASSERT_EQ(rr.rc, 0) << rr.err;
+  const ImageRGB game = ReadExrRGB(dir + "/render.exr").image;
+  const ImageRGB plain = ReadExrRGB(s / "r.exr").image;
+  ASSERT_EQ(game.pixels.size(), plain.pixels.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < game.pixels.size(); ++i) {
+    const double want = plain.pixels[i] * f.references[0].exposure;
+    worst = std::max(worst, std::abs(game.pixels[i] - want) / std::max(want, 1e-12));
+  }
+  EXPECT_LT(worst, 1e-4);  // the --sun-dir text rounds the direction to 6 digits
+}
+
+// Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).
+TEST(Calibrate, BadPhotosAreRefusedByNameLeavingNothing) {
+  testing::ScratchDir s("calibrate-bad");
+  ImageRGB black(128, 64);
+  WritePhoto(s / "black.exr", black);
+  ImageRGB nan(128, 64);
+  for (float& v : nan.pixels) v = std::numeric_limits<float>::quiet_NaN();
+  WritePhoto(s / "nan.exr", nan);
+  ImageRGB stars(128, 64);  // a dark, grey-orange sky with stars
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x) {
+      stars.at(x, y, 0) = 0.012f;
+      stars.at(x, y, 1) = 0.010f;
+      stars.at(x, y, 2) = 0.011f;
+    }
+  for (int y = 3; y < 24; y += 5)
+    for (int x = 2; x < 128; x += 7)
+      for (int c = 0; c < 3; ++c) stars.at(x, y, c) = 0.5f;
+  WritePhoto(s / "night.exr", stars);
+  WriteText(s / "text.exr", "not an EXR");
+  struct Case { const char* file; const char* expect; };
+  for (const Case c : {Case{"black.exr", "black.exr"}, Case{"nan.exr", "nan.exr"}, Case{"night.exr", "night sky"},
+                       Case{"text.exr", "text.exr"}, Case{"missing.exr", "missing.exr"}}) {
+    const auto r = Skycal("calibrate --photo " + s / c.file + " --out " + s / "out");
+    EXPECT_EQ(r.rc, 1) << c.file << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.file << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(s / "out")) << c.file;
+  }
+  const auto r = Skycal("calibrate --photo " + s / "black.exr" + " --out " + s / "out" + " --lat 45");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("--lat"), std::string::npos) << r.err;
+}
+#endif
+
+}  // namespace
+}  // namespace skycal
