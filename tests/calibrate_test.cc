@@ -163,7 +163,7 @@ void WritePhoto(const std::string& path, const ImageRGB& img) {
 TEST(Calibrate, AClearSkyThroughTheBinary) {
   testing::ScratchDir s("calibrate-clear");
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 40.0);
-  ImageRGB img = ModelSky(sun, 256, 128, true);
+  ImageRGB img = ModelSky(sun, 512, 256, true);  // at 256 x 128 the point-sampled disc (0.53 deg) falls between pixels
   for (float& v : img.pixels) v *= 0.01f;  // a camera's units, not the model's
   WritePhoto(s / "park.exr", img);
   const auto r = Skycal("calibrate --photo " + s / "park.exr" + " --out " + s / "out" + " --json");
@@ -185,7 +185,7 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
   // The game's image is `skycal render` of the preset at that sun and size, times the exposure.
   const auto& d = f.references.at(0).sun_direction;
   const auto rr = Skycal("render --preset " + dir + "/preset.json --sun-dir " + std::to_string(d[0]) + "," +
-                         std::to_string(d[1]) + "," + std::to_string(d[2]) + " --width 256 --height 128 --out " + s / "r.exr");
+                         std::to_string(d[1]) + "," + std::to_string(d[2]) + " --size 512x256 --out " + s / "r.exr");
   ASSERT_EQ(rr.rc, 0) << rr.err;
   const ImageRGB game = ReadExrRGB(dir + "/render.exr").image;
   const ImageRGB plain = ReadExrRGB(s / "r.exr").image;
