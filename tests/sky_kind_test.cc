@@ -45,6 +45,12 @@ TEST(SkyKind, EachRuleDecidesAtItsThreshold) {
   f.sky_share = 0.249;
   EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
   f = ClearDay();
+  f.zenith_blue = -0.21;  // redder than any sky overhead: a lamp-lit ceiling
+  EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
+  f.zenith_blue = -0.19;
+  f.point_sources = 5e-4;  // with stars: a night sky
+  EXPECT_EQ(kind(f), capture::SkyKind::kNight);
+  f = ClearDay();
   f.sun_elevation_deg = -18.0;
   EXPECT_EQ(kind(f), capture::SkyKind::kNight);
   f.sun_elevation_deg = -17.9;

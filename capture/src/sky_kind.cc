@@ -96,6 +96,7 @@ const char* ToString(SkyKind kind) {
 
 bool SkyKindOptions::IsValid(std::string* why) const {
   return Range(why, "min_sky_share", min_sky_share, 0.0, 1.0, true) &&
+         Range(why, "lamp_blue", lamp_blue, -3.0, 0.0) &&
          Range(why, "night_sun_deg", night_sun_deg, -30.0, 0.0) &&
          Range(why, "twilight_sun_deg", twilight_sun_deg, -10.0, 5.0) &&
          Range(why, "night_points", night_points, 0.0, 1.0, true) &&
@@ -162,6 +163,9 @@ SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
   if (!(s.sky_share >= o.min_sky_share))
     return {SkyKind::kNotSky, "sky share " + F(s.sky_share) + " of the upper hemisphere < min_sky_share " +
                                   F(o.min_sky_share) + " (a canopy, an interior, or a street)"};
+  if (std::isfinite(s.zenith_blue) && s.zenith_blue < o.lamp_blue)
+    return {SkyKind::kNotSky, "the 'sky' overhead is redder than any sky: zenith ln(B/R) " + F(s.zenith_blue) +
+                                  " < lamp_blue " + F(o.lamp_blue) + " (a ceiling under lamps: an interior)"};
   if (s.sun_elevation_deg && *s.sun_elevation_deg <= o.night_sun_deg)
     return {SkyKind::kNight, "sun elevation " + F(*s.sun_elevation_deg) + " deg <= night_sun_deg " + F(o.night_sun_deg)};
   if (s.point_sources >= o.night_points && std::isfinite(s.zenith_blue) && s.zenith_blue < o.night_blue)

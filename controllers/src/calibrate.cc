@@ -1,10 +1,7 @@
 #include "skycal/controllers/calibrate.h"
 
-#include <chrono>
 #include <filesystem>
-#include <iostream>
 
-#include "calibrate_figure.h"
 #include "calibrate_plan.h"
 #include "calibrate_sun.h"
 #include "skycal/capture/cloud_mask.h"
@@ -26,10 +23,6 @@
 namespace skycal::controllers {
 namespace fs = std::filesystem;
 namespace {
-
-double Since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The photo's cloud probability against the model's clear sky at its sun (cloud_mask.h).
 std::vector<float> CloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun) {
@@ -75,6 +68,12 @@ PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o) {
   }
   a.features = capture::MeasureSkyFeatures(a.frame.radiance, a.mask.sky, probability, elevation);
   a.kind = capture::ClassifySky(a.features, {});
+  if (!a.sun.direction && a.kind.kind == capture::SkyKind::kOvercast) {
+    if (auto nominal = NominalOvercastSun(a.frame.radiance, a.mask.sky)) {
+      nominal->refusal = a.sun.refusal;  // why no sun was seen, kept for the record
+      a.sun = *nominal;
+    }
+  }
   a.cloud_probability = std::move(probability);
   return a;
 }

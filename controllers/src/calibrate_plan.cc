@@ -33,7 +33,7 @@ void RefuseWhatCannotBeCalibrated(const std::string& path, const PhotoAnalysis& 
     throw Error(path + ": not calibrated: a night sky (" + a.kind.reason + "); the sky model has no night sky");
   if (a.kind.kind == capture::SkyKind::kNotSky)
     throw Error(path + ": not calibrated: not a sky (" + a.kind.reason + ")");
-  if (!a.sun.direction)
+  if (!a.sun.direction)  // an overcast sky gets a nominal sun (NominalOvercastSun); others need one
     throw Error(path + ": not calibrated: the sun is not placed: " + a.sun.refusal +
                 " (give CalibrateOptions::time_iso8601 with latitude_deg and longitude_deg, or sun_elevation_deg and "
                 "sun_azimuth_deg)");
@@ -62,6 +62,7 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     render::SavePreset(start, out / "overcast_start.json");
     p.fit.init_preset = out / "overcast_start.json";
     p.fit.fit.hold_inseparable_overcast = false;
+    p.draw_sun_disc = a.sun.uncertainty_deg.value_or(0.0) < 90.0;  // a nominal sun: no disc to draw
     p.decisions.push_back(Decision("overcast: the CIE overcast term carries the sky (weight " + FormatNumber(kOvercastWeight) +
                                        "), no cloud layer drawn",
                                    KindWhy(a) + "; a uniform deck has no cloud shapes to place, so the cloud statistics were skipped"));

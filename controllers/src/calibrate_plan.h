@@ -35,6 +35,7 @@ void RefuseWhatCannotBeCalibrated(const std::string& path, const PhotoAnalysis& 
 struct FitPlan {
   FitControllerOptions fit;
   bool draw_clouds = false;  // the game's image draws the preset's clouds
+  bool draw_sun_disc = true; // ... and the sun's disc (not where no sun was seen)
   std::vector<fit::FitDecision> decisions;
 };
 

@@ -13,6 +13,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/export/game_export.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
@@ -50,6 +51,23 @@ void WriteStagedInputs(const PhotoAnalysis& a, const StagedDirectory& out, const
   WriteExrRGBWithPlanes(out / "mask.exr", rgb, {{"confidence", a.mask.confidence}}, attributes, ExrPixelType::kHalf);
 }
 
+// The sky pixels the game's image is judged on: the sky mask less the fit's sun cone. A
+// photo's disc is clipped or lossily encoded (its radiance unmeasured), and its few pixels,
+// tens of thousands of times the sky, would outweigh the rest of the sky in a log RMSE.
+std::vector<float> ComparedPixels(const PhotoAnalysis& a, const FitPlan& plan) {
+  std::vector<float> sky = a.mask.sky;
+  if (!plan.draw_sun_disc) return sky;
+  const double cos_cone = std::cos(plan.fit.fit.sun_cone_deg * kPi / 180.0);
+  const auto& s = *a.sun.direction;
+  const int w = a.frame.radiance.width, h = a.frame.radiance.height;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto d = latlong::PixelDirection(x, y, w, h);
+      if (d[0] * s[0] + d[1] * s[1] + d[2] * s[2] >= cos_cone) sky[static_cast<size_t>(y) * w + x] = 0.0f;
+    }
+  return sky;
+}
+
 // The calibrated preset rendered as the game renders it, at the photo's sun, size and
 // exposure: render.exr, compare.png, and the two numbers against the photo.
 appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const StagedDirectory& out, double exposure) {
@@ -60,6 +78,7 @@ appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan
   r.height = a.frame.radiance.height;
   r.exposure = exposure;
   r.verbose = false;
+  r.sun_disc = plan.draw_sun_disc;
   r.clouds.enabled = plan.draw_clouds && !render::LoadPreset(r.preset_path).clouds_json.empty();
   const GameImage game = RenderGameImage(r);
   capture::LatLongFrame f;
@@ -68,8 +87,8 @@ appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan
   f.extra.strings["skycalRenderOf"] = "preset.json as the game renders it" + std::string(r.clouds.enabled ? ", clouds drawn" : "");
   f.extra.floats["skycalExposure"] = static_cast<float>(exposure);
   capture::WriteLatLongFrame(out / "render.exr", f);
-  WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, a.mask.sky);
-  return appearance::Compare(a.frame.radiance, game.radiance, a.mask.sky, {}, "photo.exr", "render.exr");
+  WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, ComparedPixels(a, plan));
+  return appearance::Compare(a.frame.radiance, game.radiance, ComparedPixels(a, plan), {}, "photo.exr", "render.exr");
 }
 
 fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const appearance::Comparison& c) {

@@ -79,4 +79,32 @@ PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
   return s;
 }
 
+std::optional<PhotoSun> NominalOvercastSun(const ImageRGB& frame, const std::vector<float>& sky) {
+  constexpr double kCellDeg = 10.0, kMinElevationDeg = 5.0;
+  const int rows = static_cast<int>(90.0 / kCellDeg), cols = static_cast<int>(360.0 / kCellDeg);
+  std::vector<double> sum(static_cast<size_t>(rows) * cols, 0.0), count(sum.size(), 0.0);
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, frame.width, frame.height);
+      const double el = latlong::ElevationDeg(d);
+      const size_t i = static_cast<size_t>(y) * frame.width + x;
+      const double Y = capture::Luminance(&frame.pixels[3 * i]);
+      if (el < kMinElevationDeg || !(sky[i] >= 0.5f) || !(Y > 0.0) || !std::isfinite(Y)) continue;
+      const int r = std::min(rows - 1, static_cast<int>(el / kCellDeg));
+      const int c = std::min(cols - 1, static_cast<int>((latlong::AzimuthDeg(d) + 180.0) / kCellDeg));
+      sum[static_cast<size_t>(r) * cols + c] += Y;
+      count[static_cast<size_t>(r) * cols + c] += 1.0;
+    }
+  int best = -1;
+  for (size_t i = 0; i < sum.size(); ++i)
+    if (count[i] >= 4.0 && (best < 0 || sum[i] / count[i] > sum[best] / count[best])) best = static_cast<int>(i);
+  if (best < 0) return std::nullopt;
+  PhotoSun s;
+  s.direction = latlong::DirectionFromElevationAzimuthDeg((best / cols + 0.5) * kCellDeg,
+                                                          (best % cols + 0.5) * kCellDeg - 180.0);
+  s.source = "overcast: nominal, where the deck is brightest";
+  s.uncertainty_deg = 90.0;
+  return s;
+}
+
 }  // namespace skycal::controllers

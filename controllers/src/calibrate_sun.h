@@ -30,4 +30,10 @@ struct PhotoSun {
 PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
                         const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o);
 
+// An overcast sky whose sun nothing places: the CIE overcast term that carries it does not
+// depend on the sun, so a nominal one is taken where the deck is brightest (the sky's mean
+// luminance over 10-degree cells of the sky pixels above 5 degrees), its uncertainty
+// unbounded (90 deg). Nothing when the mask has no such cell.
+std::optional<PhotoSun> NominalOvercastSun(const ImageRGB& frame, const std::vector<float>& sky);
+
 }  // namespace skycal::controllers

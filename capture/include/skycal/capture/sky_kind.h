@@ -9,7 +9,9 @@
 //    or indoors little of the upper hemisphere is sky.
 //  - zenith blueness, the median ln(B/R) of the sky above 45 degrees: Rayleigh scattering
 //    makes a clear day sky blue (ln B/R well above 0); cloud decks are grey (near 0); the
-//    light-polluted night sky is orange (below 0), lit by sodium lamps from below.
+//    light-polluted night sky is orange-grey, lit by sodium lamps from below; a ceiling lit
+//    by tungsten or warm LED lamps is redder still. A daylight zenith is never red: even
+//    at sunset it stays blue (Rayleigh scattering, and ozone's Chappuis band).
 //  - cloud share, the mean cloud probability (cloud_mask.h) over the sky pixels.
 //  - texture, the median local RMS of ln Y about its blur over the sky: cloud edges and
 //    stars carry it, a clear sky and a uniform deck do not.
@@ -41,6 +43,7 @@ struct SkyFeatures {
 
 struct SkyKindOptions {
   double min_sky_share = 0.25;       // below: not a sky, (0, 1)
+  double lamp_blue = -0.2;           // zenith ln(B/R) below: not a sky (a lamp-lit ceiling), [-3, 0]
   double night_sun_deg = -18.0;      // sun at or below: night (astronomical twilight's end), [-30, 0]
   double twilight_sun_deg = 0.0;     // sun below (and above night_sun_deg): twilight, [-10, 5]
   // Stars: a share of point sources at or above night_points with a zenith no bluer than
