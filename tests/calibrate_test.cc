@@ -196,6 +196,20 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
     worst = std::max(worst, std::abs(game.pixels[i] - want) / std::max(want, 1e-12));
   }
   EXPECT_LT(worst, 1e-4);  // the --sun-dir text rounds the direction to 6 digits
+
+  // A second photo into the same DIR: the first calibration stays, the game tables hold both;
+  // a photo that cannot be calibrated beside it loses nothing of either.
+  WritePhoto(s / "field.exr", img);
+  ImageRGB black(512, 256);
+  WritePhoto(s / "black.exr", black);
+  const auto again = Skycal("calibrate --photo " + s / "field.exr" + " --photo " + s / "black.exr" + " --out " +
+                            s / "out" + " --json --no-report");
+  EXPECT_EQ(again.rc, 1) << again.err;  // black.exr refused
+  EXPECT_TRUE(std::filesystem::exists(dir + "/render.exr"));
+  EXPECT_TRUE(std::filesystem::exists(s / "out/field/render.exr"));
+  EXPECT_FALSE(std::filesystem::exists(s / "out/black"));
+  const auto manifest = nlohmann::json::parse(testing::Slurp(s / "out/game/manifest.json"));
+  EXPECT_EQ(manifest["presets"].size(), 2u) << manifest.dump();
 }
 
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).
@@ -226,6 +240,13 @@ TEST(Calibrate, BadPhotosAreRefusedByNameLeavingNothing) {
     EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.file << ": " << r.err;
     EXPECT_FALSE(std::filesystem::exists(s / "out")) << c.file;
   }
+  ImageRGB square(64, 64);  // not a 2:1 lat-long
+  for (float& v : square.pixels) v = 1.0f;
+  WriteExrRGB(s / "square.exr", square, {}, ExrPixelType::kFloat);
+  const auto q = Skycal("calibrate --photo " + s / "square.exr" + " --out " + s / "out");
+  EXPECT_EQ(q.rc, 1);
+  EXPECT_NE(q.err.find("square.exr: image is 64x64, expected a 2:1"), std::string::npos) << q.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "out"));
   const auto r = Skycal("calibrate --photo " + s / "black.exr" + " --out " + s / "out" + " --lat 45");
   EXPECT_EQ(r.rc, 1);
   EXPECT_NE(r.err.find("--lat"), std::string::npos) << r.err;

@@ -1,4 +1,5 @@
 // calibrate's per-photo pipeline and the whole run (calibrate.h).
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -168,16 +169,32 @@ int CalibrateResult::calibrated() const {
 
 namespace {
 
-// DIR/game: the game tables of every calibrated preset (the export controller). A failure
-// is reported, the calibrations stand.
+// The calibrated presets in DIR, this run's and earlier runs' alike: DIR/<stem>/preset.json
+// beside a fit.json with a `calibration` section, in name order.
+std::vector<std::string> CalibratedPresets(const std::string& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const fs::path preset = e.path() / "preset.json", fit_json = e.path() / "fit.json";
+    if (!e.is_directory() || e.path().filename().string().starts_with(".") || !fs::is_regular_file(preset)) continue;
+    try {
+      if (fs::is_regular_file(fit_json) && fit::ReadFitResultFile(fit_json.string()).calibration) out.push_back(preset.string());
+    } catch (const Error&) {  // not a calibration of ours: not exported
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// DIR/game: the game tables of every calibrated preset in DIR (the export controller). A
+// failure is reported, the calibrations stand.
 void ExportTables(const CalibrateOptions& o, CalibrateResult* r) {
   exporter::ExportOptions e;
-  for (const PhotoCalibration& p : r->photos)
-    if (!p.dir.empty()) e.presets.push_back((fs::path(p.dir) / "preset.json").string());
+  e.presets = CalibratedPresets(o.out_dir);
   e.out_dir = (fs::path(o.out_dir) / "game").string();
   e.report = false;
   e.verbose = false;
-  Log(o, "exporting the game tables of " + std::to_string(e.presets.size()) + " preset(s) to " + e.out_dir);
+  Log(o, "exporting the game tables of " + std::to_string(e.presets.size()) + " calibrated preset(s) in " + o.out_dir +
+             " to " + e.out_dir);
   try {
     exporter::ExportGameTables(e);
     r->game_dir = e.out_dir;

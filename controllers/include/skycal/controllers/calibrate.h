@@ -27,7 +27,7 @@ struct CalibrateOptions {
   std::optional<double> north_longitude_deg;
   // The sun given outright (degrees; the lat-long's azimuth convention, core/latlong.h).
   std::optional<double> sun_elevation_deg, sun_azimuth_deg;
-  bool export_tables = true;  // DIR/game: the game tables of every calibrated preset (exporter)
+  bool export_tables = true;  // DIR/game: the game tables of every calibrated preset in DIR (exporter)
   bool report = true;         // DIR/report.html over every photo (and DIR/<stem>/report.html)
   bool verbose = true;        // progress lines through `log`
   // Where progress lines go, one line each without a prefix; empty: stderr as "[calibrate] LINE".
@@ -59,7 +59,8 @@ struct CalibrateResult {
 };
 
 // Calibrates every photo (each into its own DIR/<stem>, committed whole or not at all), then
-// exports the game tables and writes the report over those that calibrated. A photo that
+// exports the game tables of every calibrated preset in DIR (earlier runs' too) and writes
+// the report over DIR. A photo that
 // cannot be calibrated (night, not a sky, no sun to be found, unreadable) is listed with its
 // reason and leaves nothing behind; the others go on. Throws skycal::Error on invalid
 // options, or when DIR cannot be written.
