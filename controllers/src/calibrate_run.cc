@@ -7,6 +7,7 @@
 
 #include "calibrate_figure.h"
 #include "calibrate_plan.h"
+#include "calibrate_weather.h"
 #include "skycal/controllers/calibrate.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/appearance.h"
@@ -128,11 +129,17 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   fs::create_directories(o.out_dir);
   StagedDirectory out(final_dir, "CalibrateOptions::out_dir", "calibrate", {{"CalibrateOptions::photos", photo}});
   WriteStagedInputs(a, out, photo);
-  const FitPlan plan = PlanFit(a, out, final_dir, o);
+  FitPlan plan = PlanFit(a, out, final_dir, o);
   for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
   Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
   RunFitInto(plan.fit, out);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
+  if (plan.draw_clouds) {
+    Log(o, "inverting the weather map: the clouds where the photo has them");
+    const WeatherInversionRecord w = InvertPhotoWeather(a, out, f.references.at(0).exposure);
+    plan.decisions.push_back(w.Decision());
+    Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
+  }
   Log(o, "rendering the calibrated preset as the game renders it" + std::string(plan.draw_clouds ? " (sky + clouds)" : ""));
   const appearance::Comparison c = RenderTheGame(a, plan, out, f.references.at(0).exposure);
   PhotoCalibration r;

@@ -1,0 +1,29 @@
+// Partly cloudy photos: the clouds of the calibrated preset put where the photo has them
+// (cloudfit/weather_inversion.h), by inverting its weather map through the game's march.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "calibrate_plan.h"
+#include "skycal/core/staged_directory.h"
+#include "skycal/fit/fit_report.h"
+
+namespace skycal::controllers {
+
+struct WeatherInversionRecord {
+  bool done = false;
+  std::string why_not;          // !done: why the statistical map stayed
+  int texels = 0, constrained = 0;
+  int render_width = 0;         // the refinement renders' lat-long width (pixels)
+  std::vector<double> rms;      // per refinement render: RMS of rendered - photo opacity
+  double seconds = 0.0;
+  fit::FitDecision Decision() const;
+};
+
+// Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
+// clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud
+// probability covers. `exposure`: the fit's (the renders' transmittance does not depend on it).
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure);
+
+}  // namespace skycal::controllers
