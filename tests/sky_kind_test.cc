@@ -48,7 +48,8 @@ TEST(SkyKind, EachRuleDecidesAtItsThreshold) {
   f.zenith_blue = -0.21;  // redder than any sky overhead: a lamp-lit ceiling
   EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
   f.zenith_blue = -0.19;
-  f.point_sources = 5e-4;  // with stars: a night sky
+  f.point_sources = 5e-4;  // with stars, no sun known: a night sky
+  f.sun_elevation_deg.reset();
   EXPECT_EQ(kind(f), capture::SkyKind::kNight);
   f = ClearDay();
   f.sun_elevation_deg = -18.0;
@@ -60,11 +61,15 @@ TEST(SkyKind, EachRuleDecidesAtItsThreshold) {
   f = ClearDay();
   f.point_sources = 5e-4;  // stars, but a blue zenith: a day sky (noise, not stars)
   EXPECT_EQ(kind(f), capture::SkyKind::kClear);
-  f.zenith_blue = 0.2;  // stars under a grey-orange zenith, the disc a lamp: night
+  f.zenith_blue = 0.2;  // stars under a grey-orange zenith, the sun known up (given): not night
+  EXPECT_NE(kind(f), capture::SkyKind::kNight);
+  f.sun_from_disc = true;  // ... the "sun" a disc the detector found (a lamp): night
   EXPECT_EQ(kind(f), capture::SkyKind::kNight);
   f = ClearDay();
   f.cloud_share = 0.7;
   EXPECT_EQ(kind(f), capture::SkyKind::kOvercast);
+  f.texture = 0.02;  // mostly cloud, but broken: clouds to place, not one deck
+  EXPECT_EQ(kind(f), capture::SkyKind::kPartlyCloudy);
   f = ClearDay();
   f.zenith_blue = 0.3;  // grey and smooth: a deck
   EXPECT_EQ(kind(f), capture::SkyKind::kOvercast);
@@ -164,7 +169,8 @@ TEST(SkyKind, EachBundledRealFrame) {
     }
     std::optional<double> el;
     if (sun_dir) el = latlong::ElevationDeg(*sun_dir);
-    const auto f = capture::MeasureSkyFeatures(frame.radiance, m.sky, prob, el);
+    auto f = capture::MeasureSkyFeatures(frame.radiance, m.sky, prob, el);
+    f.sun_from_disc = sun && sun->source == "disc";
     const auto d = capture::ClassifySky(f, {});
     std::cout << "[sky kind] " << c.frame << ": sky share " << f.sky_share << ", zenith ln(B/R) " << f.zenith_blue
               << ", cloud share " << f.cloud_share << ", texture " << f.texture << ", point sources " << f.point_sources

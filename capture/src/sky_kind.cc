@@ -168,15 +168,17 @@ SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
                                   " < lamp_blue " + F(o.lamp_blue) + " (a ceiling under lamps: an interior)"};
   if (s.sun_elevation_deg && *s.sun_elevation_deg <= o.night_sun_deg)
     return {SkyKind::kNight, "sun elevation " + F(*s.sun_elevation_deg) + " deg <= night_sun_deg " + F(o.night_sun_deg)};
-  if (s.point_sources >= o.night_points && std::isfinite(s.zenith_blue) && s.zenith_blue < o.night_blue)
+  const bool sun_known_up = s.sun_elevation_deg && *s.sun_elevation_deg > o.twilight_sun_deg && !s.sun_from_disc;
+  if (!sun_known_up && s.point_sources >= o.night_points && std::isfinite(s.zenith_blue) && s.zenith_blue < o.night_blue)
     return {SkyKind::kNight, "stars: point-source share " + F(s.point_sources * 1e4) + "e-4 >= night_points " +
                                  F(o.night_points * 1e4) + "e-4 under a zenith of ln(B/R) " + F(s.zenith_blue) +
                                  " < night_blue " + F(o.night_blue)};
   if (s.sun_elevation_deg && *s.sun_elevation_deg < o.twilight_sun_deg)
     return {SkyKind::kTwilight, "sun elevation " + F(*s.sun_elevation_deg) + " deg < twilight_sun_deg " +
                                     F(o.twilight_sun_deg) + " (and above night_sun_deg " + F(o.night_sun_deg) + ")"};
-  if (std::isfinite(s.cloud_share) && s.cloud_share >= o.overcast_cloud_share)
-    return {SkyKind::kOvercast, "cloud share " + F(s.cloud_share) + " >= overcast_cloud_share " + F(o.overcast_cloud_share)};
+  if (std::isfinite(s.cloud_share) && s.cloud_share >= o.overcast_cloud_share && s.texture < o.cloudy_texture)
+    return {SkyKind::kOvercast, "cloud share " + F(s.cloud_share) + " >= overcast_cloud_share " + F(o.overcast_cloud_share) +
+                                    ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) + " (one deck)"};
   if (grey && s.texture < o.cloudy_texture)
     return {SkyKind::kOvercast, "a grey, uniform sky: zenith ln(B/R) " + F(s.zenith_blue) + " < overcast_blue " +
                                     F(o.overcast_blue) + ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture)};

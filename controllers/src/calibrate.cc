@@ -67,6 +67,7 @@ PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o) {
     probability = CloudProbability(a.frame.radiance, *a.sun.direction);
   }
   a.features = capture::MeasureSkyFeatures(a.frame.radiance, a.mask.sky, probability, elevation);
+  a.features.sun_from_disc = a.sun.source == "disc";
   a.kind = capture::ClassifySky(a.features, {});
   if (!a.sun.direction && a.kind.kind == capture::SkyKind::kOvercast) {
     if (auto nominal = NominalOvercastSun(a.frame.radiance, a.mask.sky)) {

@@ -39,6 +39,9 @@ struct SkyFeatures {
   double sky_luminance = 0.0;      // median Rec.709 luminance of the sky pixels (the file's units)
   double point_sources = 0.0;      // share of sky pixels above 20 degrees brighter than all 8 neighbours by kPointContrast (stars)
   std::optional<double> sun_elevation_deg;  // when the sun is known
+  // The sun above came from a disc detector, which a street lamp or the moon can fool; a sun
+  // given, recorded or computed from the time and place overrides the stars rule.
+  bool sun_from_disc = false;
 };
 
 struct SkyKindOptions {
@@ -47,10 +50,11 @@ struct SkyKindOptions {
   double night_sun_deg = -18.0;      // sun at or below: night (astronomical twilight's end), [-30, 0]
   double twilight_sun_deg = 0.0;     // sun below (and above night_sun_deg): twilight, [-10, 5]
   // Stars: a share of point sources at or above night_points with a zenith no bluer than
-  // night_blue is a night sky whatever the sun detector found (a lamp passes for a disc).
+  // night_blue is a night sky, unless a sun not from the disc detector is up (a lamp passes
+  // for a disc; the detail of broken cloud under a known sun passes for stars).
   double night_points = 4e-4;        // (0, 1)
   double night_blue = 0.4;           // [-2, 2]
-  double overcast_cloud_share = 0.7; // cloud share at or above: overcast, (0, 1]
+  double overcast_cloud_share = 0.7; // cloud share at or above, without cloud texture: overcast, (0, 1]
   double overcast_blue = 0.35;       // ... or a zenith ln(B/R) below this (a grey deck) without cloud texture, [-1, 2]
   // Cloud edges: a texture at or above this is a sky with clouds in it (partly cloudy);
   // below it and grey, one uniform deck.
