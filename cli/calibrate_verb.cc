@@ -16,6 +16,7 @@ const FieldFlag kFlags[] = {{"CalibrateOptions::photos", "--photo"},
                             {"CalibrateOptions::north_longitude_deg", "--north"},
                             {"CalibrateOptions::sun_elevation_deg", "--sun-elevation"},
                             {"CalibrateOptions::sun_azimuth_deg", "--sun-azimuth"},
+                            {"CalibrateOptions::invert_weather is off", "--no-weather-inversion was given"},
                             {"time_iso8601", "--time"},
                             {"latitude_deg", "--lat"},
                             {"longitude_deg", "--lon"},
@@ -67,7 +68,8 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   VerbCommandLine cl("calibrate",
                      "skycal calibrate: photographs of the sky in, calibrated presets, game tables and a report out",
                      "  skycal calibrate --photo P.exr [--photo ...] --out DIR [--time ISO8601 --lat DEG --lon DEG [--north DEG]]\n"
-                     "                   [--sun-elevation DEG --sun-azimuth DEG] [--no-export] [--no-report] [--quiet] [--json]",
+                     "                   [--sun-elevation DEG --sun-azimuth DEG] [--no-weather-inversion] [--no-export] [--no-report]\n"
+                     "                   [--quiet] [--json]",
                      "Per photo, into DIR/<stem>/: the sky found (mask.exr), the sun placed (disc, time and place, or\n"
                      "the sky's own pattern), the kind of sky decided (clear, partly cloudy, overcast, twilight; night\n"
                      "and not-a-sky are refused), the fit (preset.json, fit.json), the game's image of the calibrated\n"
@@ -83,13 +85,16 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   cl.Number("--north", &o.north_longitude_deg, "DEG", "lat-long longitude of geographic north (default: the sky gives the azimuth)");
   cl.Number("--sun-elevation", &o.sun_elevation_deg, "DEG", "the sun given outright: elevation");
   cl.Number("--sun-azimuth", &o.sun_azimuth_deg, "DEG", "the sun given outright: lat-long azimuth (longitude)");
-  bool no_export = false, no_report = false, quiet = false, json = false;
+  bool no_export = false, no_report = false, quiet = false, json = false, no_inversion = false;
+  cl.Flag("--no-weather-inversion", &no_inversion,
+          "partly cloudy: keep the cloud statistics fit's weather map (clouds where its noise puts them)");
   cl.Flag("--no-export", &no_export, "do not write DIR/game (the game tables)");
   cl.Flag("--no-report", &no_report, "do not write the HTML reports");
   cl.Flag("--quiet", &quiet, "no progress lines");
   cl.Flag("--json", &json, "print the summary as JSON on stdout");
   cl.Parse(argc, argv);
   o.export_tables = !no_export;
+  o.invert_weather = !no_inversion;
   o.report = !no_report;
   o.verbose = !quiet;
   o.log = [](const std::string& line) { Log("calibrate", FieldsAsFlags(line, kFlags)); };

@@ -134,7 +134,13 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
   RunFitInto(plan.fit, out);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
-  if (plan.draw_clouds) {
+  if (plan.draw_clouds && !o.invert_weather) {
+    fit::FitDecision d;
+    d.what = "weather map: the statistics fit's (clouds where its noise puts them)";
+    d.why = "CalibrateOptions::invert_weather is off";
+    d.saved_ms_basis = "not measured in this run";
+    plan.decisions.push_back(d);
+  } else if (plan.draw_clouds) {
     Log(o, "inverting the weather map: the clouds where the photo has them");
     const WeatherInversionRecord w = InvertPhotoWeather(a, out, f.references.at(0).exposure);
     plan.decisions.push_back(w.Decision());

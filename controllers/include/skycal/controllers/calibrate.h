@@ -27,6 +27,9 @@ struct CalibrateOptions {
   std::optional<double> north_longitude_deg;
   // The sun given outright (degrees; the lat-long's azimuth convention, core/latlong.h).
   std::optional<double> sun_elevation_deg, sun_azimuth_deg;
+  // Partly cloudy photos: invert the weather map from the photo so that the clouds sit where
+  // the photo has them (off: the cloud statistics fit's map, clouds where its noise puts them).
+  bool invert_weather = true;
   bool export_tables = true;  // DIR/game: the game tables of every calibrated preset in DIR (exporter)
   bool report = true;         // DIR/report.html over every photo (and DIR/<stem>/report.html)
   bool verbose = true;        // progress lines through `log`
