@@ -1,30 +1,16 @@
-// No non-finite value is ever written into an image a verb outputs. Invalid input pixels
-// (NaN, inf) carried through a verb are set to 0 and counted; with half output, finite
-// values beyond FP16's largest (65504, e.g. the sun's disc) are counted, and the EXR writer
-// clamps them to 65504 rather than writing inf. Both counts are logged with the file name.
+// No non-finite value is ever written into an image a verb outputs: core's MaskNonFinite
+// (finite_pixels.h) sets invalid input pixels (NaN, inf) to 0 and counts them and, with half
+// output, the finite values the EXR writer clamps to 65504; the verb logs both counts with
+// the file name. The floor under which an input frame is refused is core's
+// RequireValidShare (finite_pixels.h).
 #pragma once
 #include <string>
 
+#include "skycal/core/finite_pixels.h"
 #include "skycal/core/image.h"
 
 namespace skycal::cli {
 
-struct FiniteOutputCounts {
-  long long non_finite = 0;    // values set to 0
-  long long half_clamped = 0;  // finite values beyond +-65504 (half output only)
-};
-
 FiniteOutputCounts PrepareImageForWrite(const std::string& verb, const std::string& path, ImageRGB* image, bool half);
-
-// The floor under which an input frame is degenerate and refused: at least 1% of its
-// pixels valid (`valid` of `total`). A sky frame offers its whole upper hemisphere (half a
-// lat-long), and lossy-compression ringing, clipping or a partial capture leave far more
-// than 1% valid; below it the result rests on a handful of pixels (a fit "succeeded" on 4
-// of 16,384) or on none (a mask of an all-NaN frame reported "0% not sky"). Throws
-// skycal::Error naming the file, the counts and `what` a valid pixel is.
-inline constexpr double kMinValidShare = 0.01;
-void RequireValidShare(const std::string& path, long long valid, long long total, const std::string& what);
-// The same over an image's pixels: valid = every channel finite and the luminance > 0.
-void RequireValidShare(const std::string& path, const ImageRGB& image);
 
 }  // namespace skycal::cli

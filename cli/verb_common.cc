@@ -7,7 +7,6 @@
 
 #include "command_line.h"
 #include "skycal/core/error.h"
-#include "skycal/render/preset.h"
 
 namespace skycal::cli {
 
@@ -65,15 +64,6 @@ int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::js
               << std::endl;
   }
   return 1;
-}
-
-std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json) {
-  std::vector<NamedPath> inputs;
-  const auto files = render::PresetFiles(preset_json);
-  for (size_t i = 0; i < files.size(); ++i) {
-    inputs.push_back({i == 0 ? option : option + " " + preset_json + "'s LUT", files[i]});
-  }
-  return inputs;
 }
 
 bool WantsJson(int argc, char** argv) {

@@ -23,9 +23,6 @@ void Log(const std::string& verb, const std::string& message);
 // `bench --compare` finding a regression) is printed with "ok": false and exits 1.
 int RunVerb(const std::string& verb, bool json, const std::function<nlohmann::json()>& body);
 
-// A preset as inputs for file_safety.h: its JSON (role `option`) and every LUT EXR it names.
-std::vector<NamedPath> PresetInputs(const std::string& option, const std::string& preset_json);
-
 // A library option's field as its error messages name it ("FitOptions::sun_cone_deg") and the
 // flag that sets it ("--sun-cone"). The libraries name fields, never flags; each verb keeps the
 // table of the fields it sets next to where it registers the flags.

@@ -24,7 +24,7 @@
 #include "skycal/core/json_file.h"
 #include "test_util.h"
 #include "export_verb.h"
-#include "probe_extract_verb.h"
+#include "skycal/controllers/probe_extract.h"
 #include "skycal/core/exr_io.h"
 #include "cloud_scene.h"
 #include "image_compare.h"
@@ -229,7 +229,7 @@ TEST(BenchVerbLogs, ProbeExtractIsQuietWithVerboseOff) {
       const double dx = (x - 32) / 20.0, dy = (y - 32) / 20.0;
       for (int c = 0; c < 3; ++c) im.at(x, y, c) = dx * dx + dy * dy < 1.0 ? static_cast<float>(0.2 + 0.8 * std::max(0.0, -dy)) : 0.05f;
     }
-  cli::ProbeExtractOptions po;
+  controllers::ProbeExtractOptions po;
   po.image = dir / "ball.exr";
   WriteExrRGB(po.image, im, {});
   po.circle = capture::BallCircle{32, 32, 20};
@@ -237,7 +237,7 @@ TEST(BenchVerbLogs, ProbeExtractIsQuietWithVerboseOff) {
       [&](bool verbose) {
         po.verbose = verbose;
         po.out = dir / (verbose ? "loud.json" : "quiet.json");
-        cli::RunProbeExtractImpl(po);
+        controllers::ExtractProbe(po);
       },
       "[probe-extract]");
 }

@@ -18,6 +18,7 @@
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/probe.h"
 #include "skycal/capture/rig.h"
+#include "skycal/controllers/probe_extract.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
@@ -290,6 +291,34 @@ void WriteBallImage(const std::string& path, const capture::BallCircle& c, const
     }
   }
   WriteExrRGB(path, img, {});
+}
+
+// The controller's options name their fields (and the value where one is set); the verb
+// writes them as the flags the user typed, as it always worded them.
+TEST(ProbeExtract, OptionsNameTheirFieldsAndTheVerbItsFlags) {
+  controllers::ProbeExtractOptions o;
+  std::string why;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "ProbeExtractOptions::image is empty (expected a linear EXR)");
+  o.image = "ball.exr";
+  o.out = "s.json";
+  EXPECT_TRUE(o.IsValid(&why)) << why;  // the control: the defaults are valid
+  o.albedo = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "ProbeExtractOptions::albedo = 1.5: expected a value in (0, 1]");
+  o.albedo = 0.18;
+  o.camera_ypr_deg = {400.0, 0.0, 0.0};
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "ProbeExtractOptions::camera_ypr_deg: expected degrees in [-360, 360]");
+
+  testing::ScratchDir dir("probe-extract-flags");
+  const Result albedo = Skycal("probe-extract --image " + dir / "ball.exr" + " --albedo 1.5 --out " + dir / "s.json");
+  EXPECT_EQ(albedo.rc, 1);
+  EXPECT_NE(albedo.err.find("--albedo 1.5: expected a value in (0, 1]"), std::string::npos) << albedo.err;
+  const Result image = Skycal("probe-extract --out " + dir / "s.json");
+  EXPECT_EQ(image.rc, 1);
+  EXPECT_NE(image.err.find("--image IMG.exr is required"), std::string::npos) << image.err;
+  EXPECT_EQ(dir.CountEntries(), 0);
 }
 
 TEST(ProbeExtract, SamplesAGivenBallAndRefusesBadInput) {

@@ -26,8 +26,8 @@
 #include "skycal/export/game_export.h"
 #include "fisheye_brackets.h"
 #include "image_compare.h"
-#include "probe_extract_verb.h"
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/controllers/probe_extract.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/error.h"
@@ -393,13 +393,13 @@ void ProbeArea(Runner& run, const SuiteOptions& o) {
     run("probe", in.name, [&](CaseResult& c) {
       const std::string path = (o.scratch / ("stress_ball_" + std::to_string(n) + ".exr")).string();
       WriteExrRGB(path, ball_image(in.cx, in.cy, in.r, in.centre), {});
-      cli::ProbeExtractOptions po;
+      controllers::ProbeExtractOptions po;
       po.image = path;
       po.circle = capture::BallCircle{in.cx, in.cy, in.r};
       po.clip_level = in.clip;
       po.verbose = o.verb_logs;
       po.out = (o.scratch / ("stress_ball_" + std::to_string(n++) + ".json")).string();
-      const nlohmann::json summary = cli::RunProbeExtractImpl(po);
+      const nlohmann::json summary = controllers::ExtractProbe(po);
       if (!JsonFinite(summary)) NonFinite(c, "non-finite number in the samples");
       if (summary.contains("samples") && summary["samples"].is_array()) c.extra = {{"samples", summary["samples"].size()}};
     });

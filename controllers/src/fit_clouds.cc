@@ -57,7 +57,7 @@ bool FitCloudOptions::IsValid(std::string* why) const {
 
 std::vector<NamedPath> FitCloudInputs(const FitCloudOptions& o) {
   if (o.preset.empty()) return {};
-  return PresetInputs("FitCloudOptions::preset", o.preset);
+  return PresetFileInputs("FitCloudOptions::preset", o.preset);
 }
 
 std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) {

@@ -118,7 +118,7 @@ nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) {
 // Every file the fit reads, named by the field that gave it (StagedDirectory refuses an
 // out_dir that is one of them or holds one).
 std::vector<NamedPath> FitControllerInputs(const FitControllerOptions& o) {
-  std::vector<NamedPath> read = PresetInputs("FitControllerOptions::init_preset", InitPresetPath(o));
+  std::vector<NamedPath> read = PresetFileInputs("FitControllerOptions::init_preset", InitPresetPath(o));
   for (const std::string& r : o.references) read.push_back({"FitControllerOptions::references", r});
   if (!o.fit.mask_path.empty()) read.push_back({"FitOptions::mask_path", o.fit.mask_path});
   for (const std::string& spec : o.probes) read.push_back({"FitControllerOptions::probes", spec.substr(spec.find('=') + 1)});

@@ -15,6 +15,7 @@
 #include "skycal/core/atomic_output_group.h"
 #include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
+#include "skycal/core/finite_pixels.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/output_kind.h"
@@ -224,16 +225,7 @@ void CheckOutputs(const GameRenderFileOptions& f, const std::string& preset_path
 // No non-finite value is written (set to 0 and counted); with half output, finite values
 // beyond FP16's largest (65504, e.g. the sun's disc) are counted: the EXR writer clamps them.
 void MaskForWrite(const GameRenderFileOptions& f, ImageRGB* image) {
-  constexpr float kHalfMax = 65504.0f;  // IEEE 754 binary16's largest finite value
-  long long non_finite = 0, half_clamped = 0;
-  for (float& v : image->pixels) {
-    if (!std::isfinite(v)) {
-      v = 0.0f;
-      ++non_finite;
-    } else if (f.half && std::abs(v) > kHalfMax) {
-      ++half_clamped;
-    }
-  }
+  const auto [non_finite, half_clamped] = MaskNonFinite(image, f.half);
   if (non_finite > 0)
     Say(f.render, f.out_exr + ": " + std::to_string(non_finite) +
                       " non-finite values (NaN or inf: invalid input pixels) masked, written as 0");

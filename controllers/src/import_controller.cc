@@ -8,9 +8,9 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
+#include "skycal/core/finite_pixels.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
-#include "skycal/core/luminance.h"
 #include "skycal/core/sha256.h"
 #include "skycal/skysun/find_sun.h"
 
@@ -59,24 +59,6 @@ PixelCensus Census(const ImageRGB& img) {
   return c;
 }
 
-// A degenerate source is refused: at least 1% of its pixels must have every channel finite
-// and a luminance > 0, or whatever follows rests on a handful of pixels or on none. The
-// same floor and message as the verbs' RequireValidShare (cli/finite_output.h).
-void RequireValidShare(const std::string& path, const ImageRGB& image) {
-  constexpr double kMinValidShare = 0.01;
-  long long valid = 0;
-  const long long n = static_cast<long long>(image.width) * image.height;
-  for (long long i = 0; i < n; ++i) {
-    const float* p = &image.pixels[3 * i];
-    const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-    valid += finite && Rec709Luminance<double>(p[0], p[1], p[2]) > 0.0 ? 1 : 0;
-  }
-  if (n > 0 && static_cast<double>(valid) >= kMinValidShare * static_cast<double>(n)) return;
-  throw Error(path + ": only " + std::to_string(valid) + " of " + std::to_string(n) +
-              " pixels are valid (every channel finite, luminance > 0); at least " + FormatNumber(100.0 * kMinValidShare) +
-              "% are needed: an all-NaN, all-zero or negative frame is not a usable sky");
-}
-
 // The disc, else the sky's luminance pattern (skysun::FindSun), on the converted frame.
 void DetectSun(const ImportOptions& o, ImportedPhoto* p) {
   ImportedSun& s = p->sun;
@@ -123,17 +105,6 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
     }
   }
   p->frame.sun_direction = p->sun.direction;
-}
-
-long long ZeroNonFinite(ImageRGB* image) {
-  long long n = 0;
-  for (float& v : image->pixels) {
-    if (!std::isfinite(v)) {
-      v = 0.0f;
-      ++n;
-    }
-  }
-  return n;
 }
 
 }  // namespace
@@ -202,7 +173,7 @@ ImportedPhoto ImportPhoto(const ImportOptions& o) {
   p.frame.extra.strings["skycalSourceConvention"] = capture::ToString(p.convention);
   p.frame.extra.strings["skycalSunSource"] = RecordedName(p.sun.source);
   p.frame.extra.strings["skycalUnits"] = "relative scene-linear Rec.709 (source not calibrated: exposure unknown)";
-  p.zeroed = ZeroNonFinite(&p.frame.radiance);
+  p.zeroed = MaskNonFinite(&p.frame.radiance, false).non_finite;
   return p;
 }
 
@@ -215,10 +186,8 @@ ImportedFile ImportToFile(const ImportOptions& o) {
   ImportedFile f{ImportPhoto(o), 0};
   if (o.detect_sun && !f.photo.sun.direction)
     throw Error(o.in_path + ": ImportOptions::detect_sun: " + f.photo.sun.refusal + "; nothing written");
-  constexpr float kHalfMax = 65504.0f;  // IEEE 754 binary16's largest finite value
-  if (o.half) {
-    for (float v : f.photo.frame.radiance.pixels) f.half_clamped += std::abs(v) > kHalfMax ? 1 : 0;
-  }
+  // ImportPhoto already set the non-finite values to 0: this only counts what half clamps.
+  if (o.half) f.half_clamped = MaskNonFinite(&f.photo.frame.radiance, true).half_clamped;
   capture::WriteLatLongFrame(o.out_path, f.photo.frame, o.half);
   return f;
 }
