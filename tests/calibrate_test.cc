@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -210,6 +211,43 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
   EXPECT_FALSE(std::filesystem::exists(s / "out/black"));
   const auto manifest = nlohmann::json::parse(testing::Slurp(s / "out/game/manifest.json"));
   EXPECT_EQ(manifest["presets"].size(), 2u) << manifest.dump();
+}
+
+// A partly cloudy sky whose clouds are known (the game's own march over a procedural weather
+// map): with the weather map inverted from the photo, the game's image is nearer the photo
+// than with the statistics fit's map (the same fit otherwise), and each refinement render
+// brings the rendered cloud opacity nearer the photo's.
+TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
+  testing::ScratchDir s("calibrate-cloudy");
+  ASSERT_EQ(Skycal("weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 "
+                   "--mean-precipitation 0 --out " + s / "w.exr").rc, 0);
+  const auto rr = Skycal("render --preset " + kRoot + "/datasets/presets/default_cloudy.json --clouds --weather-map " +
+                         s / "w.exr" + " --sun-elevation 40 --sun-azimuth 60 --size 512x256 --out " + s / "scattered.exr");
+  ASSERT_EQ(rr.rc, 0) << rr.err;
+  const auto a = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "inverted --no-report --no-export");
+  ASSERT_EQ(a.rc, 0) << a.err;
+  const auto b = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "statistical --no-report --no-export" +
+                        " --no-weather-inversion");
+  ASSERT_EQ(b.rc, 0) << b.err;
+  const fit::FitResultFile inv = fit::ReadFitResultFile(s / "inverted/scattered/fit.json");
+  const fit::FitResultFile stat = fit::ReadFitResultFile(s / "statistical/scattered/fit.json");
+  ASSERT_TRUE(inv.calibration && stat.calibration);
+  EXPECT_EQ(inv.calibration->sky_kind, "partly cloudy");
+  std::cout << "[calibrate] scattered cumulus: per-pixel " << stat.calibration->game_per_pixel_log_rmse << " -> "
+            << inv.calibration->game_per_pixel_log_rmse << ", appearance " << stat.calibration->game_appearance_error
+            << " -> " << inv.calibration->game_appearance_error << "\n";
+  EXPECT_LT(inv.calibration->game_appearance_error, 0.8 * stat.calibration->game_appearance_error);
+  EXPECT_LT(inv.calibration->game_per_pixel_log_rmse, 0.8 * stat.calibration->game_per_pixel_log_rmse);
+  // The decision's opacity RMS per render falls.
+  std::vector<double> rms;
+  for (const fit::FitDecision& d : inv.decisions)
+    if (d.what.starts_with("weather map inverted")) {
+      std::istringstream in(d.why.substr(d.why.find("opacity RMS") + 11));
+      double v;
+      while (in >> v) rms.push_back(v);
+    }
+  ASSERT_GE(rms.size(), 2u);
+  for (size_t i = 1; i < rms.size(); ++i) EXPECT_LT(rms[i], rms[i - 1]) << i;
 }
 
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).

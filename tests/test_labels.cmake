@@ -81,6 +81,7 @@ set(SKYCAL_SLOW_TESTS_BY_CONTENT
   SkyKind.EachBundledRealFrame
   Calibrate.TheSunWithItsDiscCoveredIsFoundFromTheSky
   Calibrate.AClearSkyThroughTheBinary
+  Calibrate.APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem
   StarRemoval.RealNightSkyThroughTheBinary
   ColorChart.CastInARealSkyFrameIsRecoveredByDetection
   ColorChart.ChartVerbAndCaptureThroughTheBinary
