@@ -58,7 +58,7 @@ nlohmann::json RunCalibrateImpl(const controllers::CalibrateOptions& o) {
                        o.out_dir + (r.game_dir.empty() ? "" : "; game tables in " + r.game_dir) +
                        (r.report_path.empty() ? "" : "; open " + r.report_path));
   for (const controllers::PhotoCalibration& p : r.photos)
-    if (p.dir.empty()) Log("calibrate", "not calibrated: " + FieldsAsFlags(p.refusal, kFlags));
+    if (p.dir.empty()) Log("calibrate", FieldsAsFlags(p.refusal, kFlags));
   return {{"out", o.out_dir},     {"photos", photos},         {"calibrated", r.calibrated()},
           {"refused", refused},    {"game", r.game_dir},       {"report", r.report_path},
           {"warnings", r.warnings}, {"seconds", r.seconds},    {"verb_failed", refused > 0}};

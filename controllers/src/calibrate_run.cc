@@ -3,7 +3,6 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
-#include <set>
 
 #include "calibrate_figure.h"
 #include "calibrate_plan.h"
@@ -235,6 +234,7 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   const auto t0 = std::chrono::steady_clock::now();
+  const bool dir_existed = fs::exists(o.out_dir);
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));
@@ -248,6 +248,8 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
       r.photos.push_back(p);
     }
   }
+  std::error_code ec;  // nothing calibrated: a DIR this run created goes again (remove only takes it empty)
+  if (r.calibrated() == 0 && !dir_existed) fs::remove(o.out_dir, ec);
   if (r.calibrated() > 0 && o.export_tables) ExportTables(o, &r);
   if (r.calibrated() > 0 && o.report) WriteRunReport(o, &r);
   r.seconds = Since(t0);
