@@ -214,9 +214,9 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
 }
 
 // A partly cloudy sky whose clouds are known (the game's own march over a procedural weather
-// map): with the weather map inverted from the photo, the game's image is nearer the photo
-// than with the statistics fit's map (the same fit otherwise), and each refinement render
-// brings the rendered cloud opacity nearer the photo's.
+// map): with the weather map inverted from the photo and the lighting refitted on it, the
+// game's image is nearer the photo than with the statistics fit's map and lighting, and each
+// refinement render brings the rendered cloud opacity nearer the photo's.
 TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   testing::ScratchDir s("calibrate-cloudy");
   ASSERT_EQ(Skycal("weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 "
@@ -248,6 +248,13 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
     }
   ASSERT_GE(rms.size(), 2u);
   for (size_t i = 1; i < rms.size(); ++i) EXPECT_LT(rms[i], rms[i - 1]) << i;
+  // Then the lighting refitted on those shapes: its decision, and the statistics fit's record kept.
+  bool refitted = false;
+  for (const fit::FitDecision& d : inv.decisions) refitted |= d.what.starts_with("cloud lighting refitted");
+  EXPECT_TRUE(refitted);
+  EXPECT_TRUE(std::filesystem::exists(s / "inverted/scattered/fit.statistics.json"));
+  EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/refit"));
+  EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/inverted_shapes"));
 }
 
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).

@@ -112,6 +112,30 @@ fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, con
   return r;
 }
 
+// Partly cloudy: the weather map inverted from the photo, then the cloud lighting refitted
+// on those shapes (calibrate_weather.h); each step a decision. Nothing without clouds.
+void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir,
+                    const CalibrateOptions& o, FitPlan* plan) {
+  if (!plan->draw_clouds) return;
+  if (!o.invert_weather) {
+    fit::FitDecision d;
+    d.what = "weather map: the statistics fit's (clouds where its noise puts them)";
+    d.why = "CalibrateOptions::invert_weather is off";
+    d.saved_ms_basis = "not measured in this run";
+    plan->decisions.push_back(d);
+    return;
+  }
+  Log(o, "inverting the weather map: the clouds where the photo has them");
+  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
+  const WeatherInversionRecord w = InvertPhotoWeather(a, out, exposure);
+  plan->decisions.push_back(w.Decision());
+  Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
+  if (!w.done) return;
+  Log(o, "refitting the cloud lighting on the recovered shapes");
+  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir));
+  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+}
+
 }  // namespace
 
 PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions& o) {
@@ -132,19 +156,8 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
   Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
   RunFitInto(plan.fit, out);
+  PlaceTheClouds(a, out, final_dir, o, &plan);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
-  if (plan.draw_clouds && !o.invert_weather) {
-    fit::FitDecision d;
-    d.what = "weather map: the statistics fit's (clouds where its noise puts them)";
-    d.why = "CalibrateOptions::invert_weather is off";
-    d.saved_ms_basis = "not measured in this run";
-    plan.decisions.push_back(d);
-  } else if (plan.draw_clouds) {
-    Log(o, "inverting the weather map: the clouds where the photo has them");
-    const WeatherInversionRecord w = InvertPhotoWeather(a, out, f.references.at(0).exposure);
-    plan.decisions.push_back(w.Decision());
-    Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
-  }
   Log(o, "rendering the calibrated preset as the game renders it" + std::string(plan.draw_clouds ? " (sky + clouds)" : ""));
   const appearance::Comparison c = RenderTheGame(a, plan, out, f.references.at(0).exposure);
   PhotoCalibration r;

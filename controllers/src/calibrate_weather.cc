@@ -6,6 +6,7 @@
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/weather_map.h"
+#include "skycal/controllers/fit_controller.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
@@ -102,6 +103,69 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   r.render_width = rw;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Copies the preset's files (preset.json and every preset.* beside it) into `to`.
+void CopyPresetFiles(const fs::path& from, const fs::path& to) {
+  fs::create_directories(to);
+  for (const auto& e : fs::directory_iterator(from))
+    if (e.is_regular_file() && e.path().filename().string().starts_with("preset"))
+      fs::copy_file(e.path(), to / e.path().filename(), fs::copy_options::overwrite_existing);
+}
+
+// Moves every visible entry of `from` over its namesake in `to`.
+void MoveUp(const fs::path& from, const fs::path& to) {
+  for (const auto& e : fs::directory_iterator(from)) {
+    if (e.path().filename().string().starts_with(".")) continue;
+    fs::remove_all(to / e.path().filename());
+    fs::rename(e.path(), to / e.path().filename());
+  }
+}
+
+std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
+  const auto c = clouds.is_object() ? clouds.find("cloud_pixels") : clouds.end();
+  if (c == clouds.end() || !c->contains(when) || !(*c)[when].contains("log_rmse")) return "?";
+  return FormatNumber(std::round((*c)[when]["log_rmse"].get<double>() * 1000.0) / 1000.0);
+}
+
+}  // namespace
+
+fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir) {
+  const fs::path shapes = out.staging() / "inverted_shapes", refit_dir = out.staging() / "refit";
+  fit::FitDecision d;
+  d.saved_ms_basis = "not measured in this run";
+  try {
+    CopyPresetFiles(out.staging(), shapes);
+    FitControllerOptions k = plan.fit;
+    k.init_preset = (shapes / "preset.json").string();
+    k.out_dir = final_dir;
+    k.cloud_stats.enabled = false;
+    k.cloud_mask = false;
+    k.clouds.mode = "on";
+    k.clouds.preset = (shapes / "preset.json").string();
+    {
+      StagedDirectory refit(refit_dir.string(), "CalibrateOptions::out_dir", "calibrate", {});
+      RunFitInto(k, refit);
+      refit.Commit();
+    }
+    fs::rename(out / "fit.json", out / "fit.statistics.json");
+    MoveUp(refit_dir, out.staging());
+    const nlohmann::json clouds = fit::ReadFitResultFile(out / "fit.json").clouds;
+    d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
+    d.why = "cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
+            "; the statistics fit's record: fit.statistics.json";
+  } catch (const std::exception& e) {  // the statistics fit's lighting stands
+    d.what = "cloud lighting: the statistics fit's kept";
+    d.why = std::string("the known-shapes refit failed: ") + e.what();
+  }
+  std::error_code ec;
+  fs::remove_all(shapes, ec);
+  fs::remove_all(refit_dir, ec);
+  return d;
 }
 
 }  // namespace skycal::controllers

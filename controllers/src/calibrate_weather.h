@@ -26,4 +26,10 @@ struct WeatherInversionRecord {
 // probability covers. `exposure`: the fit's (the renders' transmittance does not depend on it).
 WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure);
 
+// The cloud lighting refitted pixel by pixel on the recovered shapes: the known-shapes fit
+// (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
+// a staged subdirectory and moved over the statistics fit's files only when it succeeds
+// (the statistics fit's fit.json kept as fit.statistics.json). `final_dir` names the preset.
+fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir);
+
 }  // namespace skycal::controllers
