@@ -300,6 +300,21 @@ for v in "--exposure 0" "--exposure nan" "--exposure -1" "--band 0" "--band 91" 
   run "compare $v" refuse "" compare --photo "$F/sky.exr" --game "$F/sky2.exr" $v
 done
 
+# --- 8. calibrate (photos in, presets out): every hostile and degenerate photo refused by name,
+# outputs over a file or a FIFO, bad option values, and one photo that calibrates (appended
+# last, as compare's) ---------------------------------------------------------------------------
+for in in $BAD_INPUTS $DEGENERATE; do
+  run "calibrate --photo $in" refuse "" calibrate --photo "$F/$in" --out "$O/cal"
+done
+run "calibrate --out notes.csv (a file)" refuse "" calibrate --photo "$F/sky.exr" --out "$F/notes.csv"
+run "calibrate --out fifo.json" refuse "" calibrate --photo "$F/sky.exr" --out "$F/fifo.json"
+run "calibrate ok" ok "" calibrate --photo "$F/sky.exr" --out "$O/cal" --json
+for v in "--lat 95 --lon 0 --time 2026-06-21T12:00Z" "--lat 45" "--sun-elevation 10" "--time noon --lat 1 --lon 1" \
+         "--north 10" "--photo $F/sky.exr"; do
+  # shellcheck disable=SC2086
+  run "calibrate $v" refuse "" calibrate --photo "$F/sky.exr" --out "$O/cal" $v
+done
+
 # --- the table ------------------------------------------------------------------------------
 RAN=0; for v in "${!VERB_CASES[@]}"; do RAN=$((RAN + VERB_CASES[$v])); done
 {

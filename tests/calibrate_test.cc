@@ -71,6 +71,10 @@ TEST(Calibrate, OptionsNameTheFieldAndValue) {
   o.time_iso8601.reset();
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("latitude_deg given without time_iso8601"), std::string::npos) << why;
+  o.latitude_deg = 45.0;
+  o.time_iso8601 = "2026-06-21 noon";  // refused up front, not when a sun is first asked of the time
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("CalibrateOptions::time_iso8601"), std::string::npos) << why;
   o = {};
   o.photos = {"sky.exr"};
   o.out_dir = "out";

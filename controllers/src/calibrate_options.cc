@@ -3,6 +3,7 @@
 #include <set>
 #include <sstream>
 
+#include "skycal/capture/solar_position.h"
 #include "skycal/controllers/calibrate.h"
 
 namespace skycal::controllers {
@@ -41,6 +42,13 @@ bool CalibrateOptions::IsValid(std::string* why) const {
     return Fail(why, "CalibrateOptions::longitude_deg = " + Value(*longitude_deg) + " (expected [-180, 180] degrees)");
   if (latitude_deg && !time_iso8601)
     return Fail(why, "CalibrateOptions::latitude_deg given without time_iso8601 (expected the time as well: the sun needs both)");
+  if (time_iso8601) {  // parsed now, not when the sun is first needed (a photo with a disc never asks)
+    try {
+      capture::ParseIso8601(*time_iso8601, "CalibrateOptions::time_iso8601");
+    } catch (const std::exception& e) {
+      return Fail(why, e.what());
+    }
+  }
   if (time_iso8601 && !latitude_deg)
     return Fail(why, "CalibrateOptions::time_iso8601 given without latitude_deg and longitude_deg (expected the place as well: the sun needs both)");
   if (north_longitude_deg && !(std::abs(*north_longitude_deg) <= 360.0))

@@ -22,6 +22,14 @@ fit::FitDecision Decision(const std::string& what, const std::string& why) {
   return d;
 }
 
+// The cloud statistics' render width (pixels): the default 128, halved down to 32 until it
+// divides the photo's width (the statistics average whole blocks of photo pixels); 0: none does.
+int StatsWidth(int photo_width) {
+  for (int w = FitCloudStatsOptions{}.width; w >= 32; w /= 2)
+    if (photo_width % w == 0) return w;
+  return 0;
+}
+
 std::string KindWhy(const PhotoAnalysis& a) {
   return std::string(capture::ToString(a.kind.kind)) + ": " + a.kind.reason;
 }
@@ -66,9 +74,15 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     p.decisions.push_back(Decision("overcast: the CIE overcast term carries the sky (weight " + FormatNumber(kOvercastWeight) +
                                        "), no cloud layer drawn",
                                    KindWhy(a) + "; a uniform deck has no cloud shapes to place, so the cloud statistics were skipped"));
+  } else if (cloudy && StatsWidth(a.frame.radiance.width) == 0) {
+    p.fit.clouds.mode = "off";
+    p.decisions.push_back(Decision("no cloud layer: the photo is too small for the cloud statistics",
+                                   KindWhy(a) + "; its width " + std::to_string(a.frame.radiance.width) +
+                                       " px has no divisor among 128, 64, 32 (PhotoCloudStatsOptions::width)"));
   } else if (cloudy) {
     p.fit.cloud_mask = true;
     p.fit.cloud_stats.enabled = true;
+    p.fit.cloud_stats.width = StatsWidth(a.frame.radiance.width);
     p.fit.clouds.mode = "off";
     p.draw_clouds = true;
     p.decisions.push_back(Decision("clouds: clear pixels fit the atmosphere, cloud pixels the cloud lighting (statistics)",

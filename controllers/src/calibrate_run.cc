@@ -112,6 +112,26 @@ fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, con
   return r;
 }
 
+// The fit of the plan; when the cloud statistics find nothing to fit (a sky called partly
+// cloudy whose "clouds" are not), the atmosphere alone, and a decision saying so.
+void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* plan) {
+  try {
+    RunFitInto(plan->fit, out);
+  } catch (const Error& e) {
+    if (!plan->fit.cloud_stats.enabled) throw;
+    Log(o, std::string("the cloud statistics failed (") + e.what() + "): fitting the atmosphere alone");
+    plan->fit.cloud_stats.enabled = false;
+    plan->fit.cloud_mask = false;
+    plan->draw_clouds = false;
+    fit::FitDecision d;
+    d.what = "no cloud layer: the cloud statistics found nothing to fit";
+    d.why = e.what();
+    d.saved_ms_basis = "not measured in this run";
+    plan->decisions.push_back(d);
+    RunFitInto(plan->fit, out);
+  }
+}
+
 // Partly cloudy: the weather map inverted from the photo, then the cloud lighting refitted
 // on those shapes (calibrate_weather.h); each step a decision. Nothing without clouds.
 void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir,
@@ -155,7 +175,7 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   FitPlan plan = PlanFit(a, out, final_dir, o);
   for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
   Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
-  RunFitInto(plan.fit, out);
+  RunThePlan(out, o, &plan);
   PlaceTheClouds(a, out, final_dir, o, &plan);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
   Log(o, "rendering the calibrated preset as the game renders it" + std::string(plan.draw_clouds ? " (sky + clouds)" : ""));
@@ -247,7 +267,12 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
   const auto t0 = std::chrono::steady_clock::now();
-  const bool dir_existed = fs::exists(o.out_dir);
+  std::error_code kind_ec;
+  const fs::file_status st = fs::symlink_status(o.out_dir, kind_ec);
+  if (fs::exists(st) && !fs::is_directory(fs::status(o.out_dir, kind_ec)))
+    throw Error("CalibrateOptions::out_dir = '" + o.out_dir +
+                "': exists and is not a directory (expected a directory, or a path to create)");
+  const bool dir_existed = fs::exists(st);
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));
