@@ -1,52 +1,17 @@
+// calibrate's analysis of a photo (calibrate_plan.h): import, sky mask, sun, kind of sky.
 #include "skycal/controllers/calibrate.h"
-
-#include <filesystem>
 
 #include "calibrate_plan.h"
 #include "calibrate_sun.h"
-#include "skycal/capture/cloud_mask.h"
+#include "fit_cloud_mask.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sky_kind.h"
 #include "skycal/capture/sky_segmentation.h"
-#include "skycal/capture/sun_detect.h"
-#include "skycal/controllers/fit_controller.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/controllers/import_controller.h"
-#include "skycal/core/appearance.h"
-#include "skycal/core/error.h"
-#include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
-#include "skycal/core/staged_directory.h"
-#include "skycal/render/preset.h"
-#include "skycal/render/renderer.h"
 
 namespace skycal::controllers {
-namespace fs = std::filesystem;
-namespace {
-
-// The photo's cloud probability against the model's clear sky at its sun (cloud_mask.h).
-std::vector<float> CloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun) {
-  render::RenderRequest req;
-  req.sun_dir = sun;
-  req.width = frame.width;
-  req.height = frame.height;
-  req.sun_disc = false;
-  const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(DefaultPresetPath()), req);
-  return capture::EstimateCloudProbability(frame, clear, sun, {}).probability;
-}
-
-// The sun when it is plain (given, recorded, or a disc): the segmentation keeps its glare
-// out of the non-sky candidates.
-std::optional<std::array<double, 3>> PlainSun(const capture::LatLongFrame& f, const ImportedSun& file_sun,
-                                              const CalibrateOptions& o) {
-  if (o.sun_elevation_deg) return latlong::DirectionFromElevationAzimuthDeg(*o.sun_elevation_deg, *o.sun_azimuth_deg);
-  if (file_sun.source == SunSource::kAttribute) return file_sun.direction;
-  std::string why;
-  if (const auto d = capture::DetectSun(f.radiance, &why, kCalibrateDiscContrast)) return d->direction;
-  return std::nullopt;
-}
-
-}  // namespace
 
 PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o) {
   ImportOptions io;
@@ -56,15 +21,18 @@ PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o) {
   PhotoAnalysis a;
   a.warnings = im.warnings;
   a.frame = std::move(im.frame);
-  a.mask = capture::EstimateSkyMask(a.frame.radiance, PlainSun(a.frame, im.sun, o), {});
   std::optional<std::array<double, 3>> file_sun;
   if (im.sun.source == SunSource::kAttribute) file_sun = im.sun.direction;
-  a.sun = ChoosePhotoSun(a.frame.radiance, a.mask.sky, file_sun, o);
+  // The plain sun first: the segmentation keeps its glare out of the non-sky candidates; a
+  // hidden one is then looked for over the sky the segmentation found.
+  const PhotoSun plain = PlainPhotoSun(a.frame.radiance, file_sun, o);
+  a.mask = capture::EstimateSkyMask(a.frame.radiance, plain.direction, {});
+  a.sun = plain.direction ? plain : HiddenPhotoSun(a.frame.radiance, a.mask.sky, o, plain.refusal);
   std::optional<double> elevation;
   std::vector<float> probability;
   if (a.sun.direction) {
     elevation = latlong::ElevationDeg(*a.sun.direction);
-    probability = CloudProbability(a.frame.radiance, *a.sun.direction);
+    probability = EstimatedCloudProbability(a.frame.radiance, *a.sun.direction, DefaultPresetPath());  // as the fit's cloud mask
   }
   a.features = capture::MeasureSkyFeatures(a.frame.radiance, a.mask.sky, probability, elevation);
   a.features.sun_from_disc = a.sun.source == "disc";

@@ -88,8 +88,9 @@ appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan
   f.extra.strings["skycalRenderOf"] = "preset.json as the game renders it" + std::string(r.clouds.enabled ? ", clouds drawn" : "");
   f.extra.floats["skycalExposure"] = static_cast<float>(exposure);
   capture::WriteLatLongFrame(out / "render.exr", f);
-  WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, ComparedPixels(a, plan));
-  return appearance::Compare(a.frame.radiance, game.radiance, ComparedPixels(a, plan), {}, "photo.exr", "render.exr");
+  const std::vector<float> compared = ComparedPixels(a, plan);
+  WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, compared);
+  return appearance::Compare(a.frame.radiance, game.radiance, compared, {}, "photo.exr", "render.exr");
 }
 
 fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const appearance::Comparison& c) {

@@ -40,25 +40,27 @@ std::optional<PhotoSun> SunOfTimeAndPlace(const std::optional<skysun::SkySunEsti
 
 }  // namespace
 
-PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
-                        const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o) {
+PhotoSun PlainPhotoSun(const ImageRGB& frame, const std::optional<std::array<double, 3>>& file_sun,
+                       const CalibrateOptions& o) {
   PhotoSun s;
   if (o.sun_elevation_deg) {
     s.direction = latlong::DirectionFromElevationAzimuthDeg(*o.sun_elevation_deg, *o.sun_azimuth_deg);
     s.source = "option";
-    return s;
-  }
-  if (file_sun) {
+  } else if (file_sun) {
     s.direction = *file_sun;
     s.source = "attribute";
-    return s;
-  }
-  std::string no_disc, no_sky, no_time;
-  if (const auto disc = capture::DetectSun(frame, &no_disc, kCalibrateDiscContrast)) {
+  } else if (const auto disc = capture::DetectSun(frame, &s.refusal, kCalibrateDiscContrast)) {
     s.direction = disc->direction;
     s.source = "disc";
-    return s;
+  } else {
+    s.refusal = "no sun disc (" + s.refusal + ")";
   }
+  return s;
+}
+
+PhotoSun HiddenPhotoSun(const ImageRGB& frame, const std::vector<float>& sky, const CalibrateOptions& o,
+                        const std::string& no_disc) {
+  std::string no_sky, no_time;
   std::optional<skysun::SkySunEstimate> sky_sun;
   try {
     sky_sun = skysun::EstimateSunFromSky(frame, sky, {}, &no_sky);
@@ -68,15 +70,21 @@ PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
   if (o.time_iso8601) {
     if (auto t = SunOfTimeAndPlace(sky_sun, o, &no_time)) return *t;
   }
+  PhotoSun s;
   if (sky_sun) {
     s.direction = sky_sun->direction;
     s.source = "sky";
     s.uncertainty_deg = sky_sun->uncertainty_deg;
     return s;
   }
-  s.refusal = "no sun disc (" + no_disc + "); the sky does not place the sun (" + no_sky + ")" +
-              (no_time.empty() ? std::string("") : "; " + no_time);
+  s.refusal = no_disc + "; the sky does not place the sun (" + no_sky + ")" + (no_time.empty() ? std::string("") : "; " + no_time);
   return s;
+}
+
+PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
+                        const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o) {
+  const PhotoSun plain = PlainPhotoSun(frame, file_sun, o);
+  return plain.direction ? plain : HiddenPhotoSun(frame, sky, o, plain.refusal);
 }
 
 std::optional<PhotoSun> NominalOvercastSun(const ImageRGB& frame, const std::vector<float>& sky) {

@@ -24,9 +24,15 @@ struct PhotoSun {
   std::string refusal;   // no direction: why each way failed
 };
 
-// `sky`: the automatic sky mask (1 sky) for the sky-pattern estimate; `file_sun`: the
-// frame's sunDirection attribute. Throws skycal::Error naming the option field on a time
-// that does not parse.
+// The sun that needs no sky mask: given, the frame's sunDirection attribute (`file_sun`), or
+// the disc; else no direction and the disc's refusal.
+PhotoSun PlainPhotoSun(const ImageRGB& frame, const std::optional<std::array<double, 3>>& file_sun,
+                       const CalibrateOptions& o);
+// The hidden sun: the time and place, else the sky's pattern over `sky` (the automatic sky
+// mask, 1 sky); `no_disc` is PlainPhotoSun's refusal, carried into this one's.
+PhotoSun HiddenPhotoSun(const ImageRGB& frame, const std::vector<float>& sky, const CalibrateOptions& o,
+                        const std::string& no_disc);
+// Both in order. Throws skycal::Error naming the option field on a time that does not parse.
 PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
                         const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o);
 

@@ -12,6 +12,17 @@ namespace skycal::controllers {
 
 fit::FitCloudMaskEntry CloudMaskApplied::Entry() const { return {cloudy_pixels, fraction, 0.5, source}; }
 
+std::vector<float> EstimatedCloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun,
+                                             const std::string& clear_preset_path) {
+  render::RenderRequest req;
+  req.sun_dir = sun;
+  req.width = frame.width;
+  req.height = frame.height;
+  req.sun_disc = false;
+  const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(clear_preset_path), req);
+  return capture::EstimateCloudProbability(frame, clear, sun, {}).probability;
+}
+
 CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path) {
   const int w = ref->radiance.width, h = ref->radiance.height;
   CloudMaskApplied out;
@@ -23,13 +34,7 @@ CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_pr
     if (cw != w || ch != h) throw Error(ref->path + ": channel 'mask.cloud' is not the frame's size");
     out.source = "mask.cloud channel";
   } else {
-    render::RenderRequest req;
-    req.sun_dir = ref->sun_dir;
-    req.width = w;
-    req.height = h;
-    req.sun_disc = false;
-    const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(clear_preset_path), req);
-    probability = capture::EstimateCloudProbability(ref->radiance, clear, ref->sun_dir, {}).probability;
+    probability = EstimatedCloudProbability(ref->radiance, ref->sun_dir, clear_preset_path);
     out.source = "estimated: colour against the clear sky of " + clear_preset_path;
   }
   const long long sky_before = ref->counts.sky;

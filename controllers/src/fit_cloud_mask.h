@@ -5,6 +5,7 @@
 // way (capture/cloud_mask.h: colour against the clear sky of the bundled preset at the
 // frame's sun). Pixels with probability >= 0.5 become user-masked; fit.json reports the count.
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,11 @@ struct CloudMaskApplied {
   std::vector<float> probability;  // per pixel of the frame (fit --clouds stats reads it; not in fit.json)
   fit::FitCloudMaskEntry Entry() const;  // fit.json's references[i].cloud_mask
 };
+
+// The cloud probability of a lat-long frame estimated against the clear sky of the preset
+// at `clear_preset_path` rendered at the frame's sun (CPU, no disc; capture/cloud_mask.h).
+std::vector<float> EstimatedCloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun,
+                                             const std::string& clear_preset_path);
 
 // Reclassifies `ref` in place. Throws skycal::Error naming the reference when no sky pixel is
 // left (an overcast frame: the model has no clear sky to fit there).
