@@ -6,7 +6,7 @@
 # image against the photo (per-pixel log RMSE and appearance error, `fit.json`'s
 # `calibration`), and the seconds. For the two clear frames with hand masks, the game's image
 # is also compared over the hand mask, beside the main job's hand-masked fit
-# (bench/results/game_vs_photo.md), the 1.1x target.
+# (bench/results/game_vs_photo.md), the 1.1x target; and each fit beside the model's ceiling.
 #
 #   scripts/calibrate_photos.sh [--build DIR] [--work DIR] [--results FILE]
 #
@@ -71,6 +71,16 @@ for f in sunrise sunset; do
     "$SKYCAL" compare --photo "$WORK/bundled/$f/photo.exr" --game "$WORK/bundled/$f/render.exr" \
       --mask "datasets/masks/${f}_mask.exr" --json >"$WORK/$f.handmask.json" 2>/dev/null || true
   fi
+done
+
+# The model's own ceiling on the same sky pixels (skycal ceiling: the best any LUT reaches),
+# beside the fit's rel RMSE, for every calibrated bundled photo.
+for d in "$WORK"/bundled/*/; do
+  [ -f "$d/fit.json" ] || continue
+  init=()
+  [ -f "$d/overcast_start.json" ] && init=(--init "$d/overcast_start.json")
+  "$SKYCAL" ceiling --reference "$d/photo.exr" --mask "$d/mask.exr" "${init[@]}" --json \
+    >"$WORK/$(basename "$d").ceiling.json" 2>/dev/null || true
 done
 
 python3 scripts/calibrate_photos_table.py "$WORK" "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" >"$WORK/table.md"

@@ -66,3 +66,17 @@ for stem in ("sunrise", "sunset"):
         print("| %s | not calibrated | %.3f | |" % (stem, BEFORE[stem][0]))
         continue
     print("| %s | %.3f | %.3f | %.2f |" % (stem, c["per_pixel_log_rmse"], BEFORE[stem][0], c["per_pixel_log_rmse"] / BEFORE[stem][0]))
+
+print()
+print("## The fit against the model's ceiling\n")
+print("`skycal ceiling` on the same photo and sky mask (the best any LUT of the model reaches, from the same start")
+print("preset; rel RMSE over the sky pixels the fit kept). The clouds' pixels count in both for a partly cloudy sky.\n")
+print("| photo | fit's rel RMSE | LUT ceiling | ratio |\n|---|---|---|---|")
+for stem in ("sunrise", "sunset", "dawn", "city", "sky"):
+    c = load(stem + ".ceiling.json")
+    f = load(os.path.join("bundled", stem, "fit.json"))
+    if c is None or f is None:
+        continue
+    fit_rel = f["references"][0]["rel_rmse"]
+    ceil = c["lut_ceiling"]["rel_rmse"]
+    print("| %s | %.4f | %.4f | %.2f |" % (stem, fit_rel, ceil, fit_rel / ceil))
