@@ -27,6 +27,7 @@ th { background: #f2f2f2; text-align: left; } table.kv td:first-child { color: #
 .triptych { display: flex; gap: 10px; max-width: 1560px; } .triptych figure { flex: 1 1 0; min-width: 0; }
 figure { margin: 0; } figcaption { font-size: 12px; color: #555; max-width: 512px; }
 img.image { display: block; width: 100%; max-width: 512px; height: auto; border: 1px solid #999; }
+img.wide { display: block; width: 100%; max-width: 1560px; height: auto; border: 1px solid #999; }
 img.plot { display: block; width: 660px; max-width: 100%; height: auto; border: 1px solid #ddd; }
 .plots { display: flex; flex-wrap: wrap; gap: 12px; }
 .bar { display: inline-block; width: 90px; height: 10px; vertical-align: middle;
@@ -52,6 +53,7 @@ std::vector<NamedPath> InputsOf(const Sources& s) {
     in.push_back({"fit.json", f.json_path});
     in.push_back({"preset.json", (fs::path(f.dir) / "preset.json").string()});
     if (!f.sheet_png.empty()) in.push_back({"report.png", f.sheet_png});
+    if (!f.compare_png.empty()) in.push_back({"compare.png", f.compare_png});
     for (const ReferenceRecord& r : f.references) {
       for (const std::string* p : {&r.image_reference, &r.image_fit, &r.image_error}) {
         if (!p->empty()) in.push_back({"fit image", *p});

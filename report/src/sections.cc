@@ -352,7 +352,7 @@ std::string CalibrationBlock(const FitRecord& f, PageCounts* counts) {
   h += Row({"calibration time", FormatNumber(c.seconds, 3) + " s"});
   h += "</table>\n";
   if (!f.compare_png.empty())
-    h += "<figure>" + EmbedPng(f.compare_png, "photo, game and error of " + f.label, "image", counts) +
+    h += "<figure>" + EmbedPng(f.compare_png, "photo, game and error of " + f.label, "wide", counts) +
          "<figcaption>photo | the calibrated preset as the game renders it (render.exr) | ln(game/photo)</figcaption></figure>\n";
   return h;
 }
