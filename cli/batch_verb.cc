@@ -9,6 +9,7 @@
 #include "fit_verb.h"
 #include "fit_option_args.h"
 #include "render_verb.h"
+#include "skycal/controllers/calibrate.h"
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/sha256.h"
@@ -17,6 +18,26 @@
 namespace skycal::cli {
 namespace fs = std::filesystem;
 
+namespace {
+
+// Calibrated frames choose their own fit (segmentation, start preset, clouds): a fit option
+// other than the backend and --quiet given with them is refused by name.
+void RefuseFitOptionsForCalibrate(const fit::FitOptions& given, const std::string& init_preset) {
+  fit::FitOptions plain;
+  plain.backend = given.backend;
+  plain.verbose = given.verbose;
+  const nlohmann::json a = ResolvedFitOptionsJson(given), b = ResolvedFitOptionsJson(plain);
+  std::string set;
+  for (const auto& [k, v] : a.items())
+    if (!b.contains(k) || b[k] != v) set += (set.empty() ? "" : ", ") + k;
+  if (!init_preset.empty()) set += (set.empty() ? "" : ", ") + std::string("init");
+  if (!set.empty())
+    throw Error("fit options (" + set + ") given with --frame-job calibrate (the default), which chooses the fit per "
+                "frame; pass --frame-job fit to fit every frame with them");
+}
+
+}  // namespace
+
 BatchOptions ParseBatchArgs(int argc, char** argv) {
   VerbCommandLine cl("batch", "skycal batch: fit a time-lapse day frame by frame (warm starts), then the day's tables",
                      "  skycal batch --references 'DIR/*.exr' --out DIR [--frames-per-job N] [--engine local|slurm]\n"
@@ -24,7 +45,7 @@ BatchOptions ParseBatchArgs(int argc, char** argv) {
                      "Each frame needs the EXR attributes sunDirection and skycalTimeOfDay (capture --time,\n"
                      "render --time-of-day). Layout of DIR and the resume rules: docs/batch.md.");
   BatchOptions o;
-  std::optional<std::string> engine;
+  std::optional<std::string> engine, frame_job;
   FitOptionArgs fa;
   bool json = false;
   cl.Text("--references", &o.references_glob, "'GLOB'", "the day's frames, a glob expanded by skycal (quote it)");
@@ -32,6 +53,9 @@ BatchOptions ParseBatchArgs(int argc, char** argv) {
   cl.Integer("--frames-per-job", &o.frames_per_job, -1e9, 1e9, "expected an integer", "N",
              "frames per chunk: one process (local) or array task (slurm), fitted in time order\n"
              "with warm starts (default 8)");
+  cl.Text("--frame-job", &frame_job, "JOB",
+          "calibrate (default: skycal calibrate per frame: segmentation, the kind of sky, clouds,\n"
+          "the game's image) or fit (the fit options below, as given, for frames prepared by hand)");
   cl.Text("--engine", &engine, "NAME", "local (default: a process pool over the cores) or slurm (sbatch --array + afterok reduce)");
   cl.Integer("--jobs", &o.jobs, -1e9, 1e9, "expected an integer", "N", "local: chunks fitted at once (default 0: the machine's cores)");
   cl.Flag("--resume", &o.resume, "complete the batch in --out: fit only its missing or failed frames, then reduce");
@@ -51,7 +75,13 @@ BatchOptions ParseBatchArgs(int argc, char** argv) {
     else if (*engine == "slurm") o.engine = BatchEngine::kSlurm;
     else throw Error("--engine: unknown engine '" + *engine + "' (expected local or slurm)");
   }
+  if (frame_job) {
+    if (*frame_job == "calibrate") o.frame_job = batch::FrameJob::kCalibrate;
+    else if (*frame_job == "fit") o.frame_job = batch::FrameJob::kFit;
+    else throw Error("--frame-job: unknown job '" + *frame_job + "' (expected calibrate or fit)");
+  }
   ApplyFitOptionArgs(fa, &o.fit);
+  if (o.frame_job == batch::FrameJob::kCalibrate) RefuseFitOptionsForCalibrate(o.fit, o.init_preset);
   for (int i = 0; i < argc; ++i) o.argv.emplace_back(argv[i]);
   return o;
 }
@@ -74,6 +104,7 @@ nlohmann::json Identity(const BatchOptions& o, const std::vector<batch::BatchFra
           {"fit_options", ResolvedFitOptionsJson(o.fit)},
           {"init_preset", {{"path", fs::absolute(init).lexically_normal().string()}, {"sha256", Sha256OfFile(init)}}},
           {"frames_per_job", o.frames_per_job},
+          {"frame_job", o.frame_job == batch::FrameJob::kCalibrate ? "calibrate" : "fit"},
           {"warm_start", !o.cold_start},
           {"day_frames", o.day_frames}};
 }
@@ -92,6 +123,21 @@ batch::BatchHooks CliBatchHooks() {
     fo.fit = r.fit;
     return RunFitImpl(fo);
   };
+  hooks.calibrate = [](const batch::CalibrateRequest& r) {
+    controllers::CalibrateOptions c;
+    c.photos = {r.photo};
+    c.out_dir = r.frames_dir;
+    c.init_preset = r.init_preset;
+    c.time_of_day_h = r.time_of_day_h;
+    c.backend = r.backend;
+    c.export_tables = false;  // the reduce's keyframe tables cover every frame
+    c.report = false;         // the batch's report covers every frame
+    c.verbose = r.verbose;
+    std::string why;
+    if (!c.IsValid(&why)) throw Error(why);
+    const controllers::PhotoCalibration p = controllers::CalibratePhoto(r.photo, c);
+    return ReadJsonFile(p.dir + "/fit.json");
+  };
   hooks.identity = Identity;
   return hooks;
 }
@@ -106,6 +152,7 @@ std::string WithBatchFlags(const std::string& message) {
   static const FieldFlag kFlags[] = {{"BatchOptions::references_glob", "--references"},
                                      {"BatchOptions::out_dir", "--out"},
                                      {"BatchOptions::frames_per_job", "--frames-per-job"},
+                                     {"BatchOptions::frame_job", "--frame-job"},
                                      {"BatchOptions::engine", "--engine"},
                                      {"BatchOptions::jobs", "--jobs"},
                                      {"BatchOptions::resume", "--resume"},

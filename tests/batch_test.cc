@@ -67,6 +67,10 @@ TEST(Batch, LocalDayWarmStartsReduceAndResume) {
     EXPECT_EQ(f["chunk"], i / 2);
     // The preset's own render: the fit reproduces it (the linear solve's floor, measured ~7e-5).
     EXPECT_LT(f["rel_rmse"].get<double>(), 1e-3) << f;
+    // Calibrated (the default frame job): a clear sky, its mask, the game's image against it.
+    EXPECT_EQ(f["sky_kind"], "clear") << f;
+    EXPECT_LT(f["game_per_pixel_log_rmse"].get<double>(), 0.05) << f;
+    EXPECT_TRUE(fs::exists(dir / ("out/frames/" + f["frame"].get<std::string>() + "/render.exr"))) << f;
     if (i % 2 == 0) EXPECT_TRUE(f["warm_start_from"].is_null()) << f;
     else EXPECT_EQ(f["warm_start_from"], names[i - 1]);
   }
@@ -76,6 +80,8 @@ TEST(Batch, LocalDayWarmStartsReduceAndResume) {
   // The reduce: a day fit over every frame, keyframes ordered by time, batch.json on disk.
   EXPECT_EQ(b["day"]["frames"], 4);
   EXPECT_TRUE(fs::exists(dir / "out/day/preset.json"));
+  // The day fit read the calibrated photos, each with its own mask.
+  EXPECT_EQ(ReadJsonFile(dir / "out/day/fit.json")["options"]["masks"].size(), 4u);
   const nlohmann::json keys = ReadJsonFile(dir / "out/tables/keyframes.json");
   ASSERT_TRUE(keys.contains("keys")) << keys.dump();
   ASSERT_EQ(keys["keys"].size(), 4u);
@@ -107,8 +113,13 @@ TEST(Batch, LocalDayWarmStartsReduceAndResume) {
               std::string::npos) << busy.err;
   }
 
-  // Another batch's state: other options, or other frames.
-  const auto foreign = Skycal(BatchArgs(dir, "out") + " --frames-per-job 2 --loss-scale 0.1 --resume");
+  // Another batch's state: other options, or other frames. Calibrated frames take no fit
+  // option but the backend and --quiet.
+  const auto calibrate_with_fit_option = Skycal(BatchArgs(dir, "out") + " --frames-per-job 2 --loss-scale 0.1 --resume");
+  EXPECT_EQ(calibrate_with_fit_option.rc, 1);
+  EXPECT_NE(calibrate_with_fit_option.err.find("fit options (loss_scale) given with --frame-job calibrate"), std::string::npos)
+      << calibrate_with_fit_option.err;
+  const auto foreign = Skycal(BatchArgs(dir, "out") + " --frames-per-job 2 --frame-job fit --loss-scale 0.1 --resume");
   EXPECT_EQ(foreign.rc, 1);
   EXPECT_NE(foreign.err.find("holds another batch's state"), std::string::npos) << foreign.err;
   EXPECT_NE(foreign.err.find("fit_options"), std::string::npos) << foreign.err;

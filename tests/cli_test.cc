@@ -174,7 +174,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                   "--no-sun-disc", "--half", "--out", "--png", "--exposure", "--vulkan-validation", "--json"}},
       {"bake", {"--out", "--name", "--haziness", "--model", "--n-theta", "--n-gamma", "--mie-scattering",
                 "--rayleigh-scale-height", "--mie-scale-height", "--observer-altitude", "--json"}},
-      {"batch", {"--references", "--out", "--frames-per-job", "--engine", "--jobs", "--resume", "--cold-start",
+      {"batch", {"--references", "--out", "--frames-per-job", "--frame-job", "--engine", "--jobs", "--resume", "--cold-start",
                  "--day-frames", "--poll", "--slurm-option", "--model", "--backend", "--mask", "--init", "--absolute",
                  "--sun-cone", "--clip-fraction", "--loss", "--loss-scale", "--no-linear-start", "--linear-width",
                  "--polish", "--pyramid", "--max-iterations", "--smoothness", "--prior-weight", "--no-haziness",

@@ -117,6 +117,15 @@ TEST(SkyKind, StatisticsOfConstructedFrames) {
   EXPECT_TRUE(std::isnan(f.cloud_share));
   EXPECT_EQ(capture::ClassifySky(f, {}).kind, capture::SkyKind::kClear);
 
+  // The texture is measured at one angular scale: the same clear sky as a thumbnail (a
+  // smooth gradient is 4x steeper per pixel at a quarter of the width) is still clear.
+  req.width = 64;
+  req.height = 32;
+  const ImageRGB thumb = render::CreateRenderer(render::Backend::kCpu)->Render(clear, req);
+  const auto t = capture::MeasureSkyFeatures(thumb, std::vector<float>(64 * 32, 1.0f), {}, 30.0);
+  EXPECT_LT(t.texture, 0.005);
+  EXPECT_EQ(capture::ClassifySky(t, {}).kind, capture::SkyKind::kClear);
+
   ImageRGB grey(256, 128);
   for (float& v : grey.pixels) v = 2.0f;
   const auto g = capture::MeasureSkyFeatures(grey, all, {}, std::nullopt);

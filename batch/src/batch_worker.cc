@@ -56,6 +56,58 @@ void WriteBatchReport(const std::string& out_dir) {
            std::to_string(s.bytes / 1024) + " KiB");
 }
 
+// One frame's job (BatchOptions::frame_job) from `start` (a preset; empty: the bundled
+// default) into fit_dir; its fit.json.
+fit::FitResultFile RunFrameJob(const BatchOptions& o, const BatchFrame& f, const std::string& fit_dir,
+                               const std::string& start, const BatchHooks& hooks) {
+  if (o.frame_job == FrameJob::kCalibrate) {
+    CalibrateRequest c;
+    c.photo = f.path;
+    c.frames_dir = fs::path(fit_dir).parent_path().string();
+    c.init_preset = start;
+    c.time_of_day_h = f.time_of_day_h;
+    c.backend = o.fit.backend;
+    c.verbose = o.fit.verbose;
+    return fit::FitResultFileFromJson(hooks.calibrate(c), fit_dir + "/fit.json");
+  }
+  FitRequest fo;
+  fo.report = false;  // the batch's report covers every frame (a page per frame would cost ~0.1 s each)
+  fo.references = {f.path};
+  fo.init_preset = start;
+  fo.out_dir = fit_dir;
+  fo.fit = o.fit;
+  return fit::FitResultFileFromJson(hooks.fit(fo), fit_dir + "/fit.json");
+}
+
+// The reduce's day fit: the frames themselves, or (calibrated frames) the photos as the
+// calibration read them (frames/<name>/photo.exr, linked as day_inputs/<name>.exr: a
+// reference is named by its file), each with its own sky mask.
+FitRequest DayFitRequest(const BatchOptions& o, const BatchPlan& plan, const std::string& out_dir,
+                         const std::vector<int>& day_idx) {
+  FitRequest day;
+  for (int i : day_idx) {
+    const BatchFrame& f = plan.frames[i];
+    if (o.frame_job == FrameJob::kFit) {
+      day.references.push_back(f.path);
+      continue;
+    }
+    const fs::path dir = FrameFitDir(out_dir, f.name), link = fs::path(out_dir) / "day_inputs" / (f.name + ".exr");
+    fs::create_directories(link.parent_path());
+    std::error_code ec;
+    fs::remove(link, ec);
+    fs::create_symlink(fs::path("..") / fs::relative(dir, out_dir) / "photo.exr", link);
+    day.references.push_back(link.string());
+    day.fit.mask_paths.push_back((dir / "mask.exr").string());
+  }
+  const std::vector<std::string> masks = day.fit.mask_paths;
+  day.fit = o.fit;
+  day.fit.mask_paths = masks;
+  day.init_preset = o.init_preset;
+  day.out_dir = (fs::path(out_dir) / "day").string();
+  day.report = false;  // part of the batch's report
+  return day;
+}
+
 }  // namespace
 
 nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchHooks& hooks) {
@@ -81,13 +133,7 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchH
     }
     std::error_code ec;
     fs::remove(FrameStatePath(out_dir, f.name), ec);  // a failed attempt's state: this one replaces it
-    FitRequest fo;
-    fo.report = false;  // the batch's report covers every frame (a page per frame would cost ~0.1 s each)
-    fo.references = {f.path};
     const bool use_warm = !o.cold_start && !warm.empty();
-    fo.init_preset = use_warm ? warm : o.init_preset;
-    fo.out_dir = fit_dir;
-    fo.fit = o.fit;
     nlohmann::json state = {{"frame", f.name},
                             {"path", f.path},
                             {"chunk", chunk},
@@ -102,9 +148,14 @@ nlohmann::json RunBatchChunk(const std::string& out_dir, int chunk, const BatchH
                      ")");
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      const fit::FitResultFile s = fit::FitResultFileFromJson(hooks.fit(fo), fit_dir + "/fit.json");
+      const fit::FitResultFile s = RunFrameJob(o, f, fit_dir, use_warm ? warm : o.init_preset, hooks);
       const fit::FitReferenceEntry& r = s.references.at(0);
       state["status"] = "ok";
+      if (s.calibration) {
+        state["sky_kind"] = s.calibration->sky_kind;
+        state["game_per_pixel_log_rmse"] = s.calibration->game_per_pixel_log_rmse;
+        state["game_appearance_error"] = s.calibration->game_appearance_error;
+      }
       state["rel_rmse"] = r.rel_rmse;
       state["log_rmse"] = r.log_rmse;
       state["exposure"] = r.exposure;
@@ -164,12 +215,7 @@ nlohmann::json RunBatchReduce(const std::string& out_dir, const BatchHooks& hook
   // The day: one multi-reference fit over evenly spaced frames (every LUT row between the
   // lowest and highest sun, with the smoothness prior along sun zenith).
   const std::vector<int> day_idx = DaySubsample(static_cast<int>(plan.frames.size()), o.day_frames);
-  FitRequest day;
-  for (int i : day_idx) day.references.push_back(plan.frames[i].path);
-  day.init_preset = o.init_preset;
-  day.out_dir = (fs::path(out_dir) / "day").string();
-  day.fit = o.fit;
-  day.report = false;  // part of the batch's report
+  const FitRequest day = DayFitRequest(o, plan, out_dir, day_idx);
   BatchLog("reduce: the day fit over " + std::to_string(day_idx.size()) + " of " + std::to_string(plan.frames.size()) +
                    " frames -> " + day.out_dir);
   const fit::FitResultFile day_summary = fit::FitResultFileFromJson(hooks.fit(day), day.out_dir + "/fit.json");

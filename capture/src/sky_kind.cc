@@ -16,7 +16,8 @@ namespace skycal::capture {
 namespace {
 
 constexpr double kZenithCapDeg = 45.0;  // "zenith" statistics: the sky above this elevation
-constexpr double kTextureSigmaPx = 1.5; // Gaussian of the texture residual (the segmentation's scale)
+constexpr double kTextureSigmaPx = 1.5; // Gaussian of the texture residual (the segmentation's scale), at:
+constexpr int kTextureWidth = 512;      // the lat-long width (pixels) the texture is measured at
 constexpr double kPointMinDeg = 20.0;   // stars counted above this elevation (away from lamps and haze)
 constexpr float kPointContrast = 0.1f;  // ln Y above every neighbour: a point source (a star), not a cloud edge
 constexpr float kTiny = 1e-12f;         // below: not a valid radiance (a black or clipped-to-zero pixel)
@@ -57,6 +58,25 @@ cv::Mat UpperLogLuminance(const ImageRGB& f, int rows, cv::Mat* valid) {
       if (!valid->at<uint8_t>(y, x)) ln.at<float>(y, x) = static_cast<float>(sum / n);
   }
   return ln;
+}
+
+// The local variance of ln Y about its Gaussian blur, measured at kTextureWidth (a fixed
+// angular scale: a smooth sky's residual grows with the square of the pixel's angle, so a
+// thumbnail of a clear sky would otherwise read as textured), returned at ln's size.
+cv::Mat TextureVariance(const cv::Mat& ln) {
+  cv::Mat at_scale = ln;
+  if (ln.cols != kTextureWidth) {
+    const int rows = std::max(1, static_cast<int>(std::lround(static_cast<double>(ln.rows) * kTextureWidth / ln.cols)));
+    cv::resize(ln, at_scale, cv::Size(kTextureWidth, rows), 0, 0, ln.cols > kTextureWidth ? cv::INTER_AREA : cv::INTER_LINEAR);
+  }
+  cv::Mat blur, residual2, rms;
+  cv::GaussianBlur(at_scale, blur, cv::Size(0, 0), kTextureSigmaPx, kTextureSigmaPx, cv::BORDER_REFLECT);
+  cv::multiply(at_scale - blur, at_scale - blur, residual2);
+  cv::GaussianBlur(residual2, rms, cv::Size(0, 0), kTextureSigmaPx, kTextureSigmaPx, cv::BORDER_REFLECT);
+  if (ln.cols == kTextureWidth) return rms;
+  cv::Mat back;
+  cv::resize(rms, back, ln.size(), 0, 0, cv::INTER_LINEAR);
+  return back;
 }
 
 // Share of the valid sky pixels above kPointMinDeg that are strict local maxima of ln Y,
@@ -119,10 +139,7 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
   while (rows < f.height && latlong::Latitude(rows, f.height) > 0.0) ++rows;
   cv::Mat valid;
   const cv::Mat ln = UpperLogLuminance(f, rows, &valid);
-  cv::Mat blur, residual2, rms;
-  cv::GaussianBlur(ln, blur, cv::Size(0, 0), kTextureSigmaPx, kTextureSigmaPx, cv::BORDER_REFLECT);
-  cv::multiply(ln - blur, ln - blur, residual2);
-  cv::GaussianBlur(residual2, rms, cv::Size(0, 0), kTextureSigmaPx, kTextureSigmaPx, cv::BORDER_REFLECT);
+  const cv::Mat rms = TextureVariance(ln);
   double sky_w = 0.0, all_w = 0.0, cloud = 0.0, cloud_w = 0.0;
   std::vector<double> blue, texture, lum;
   for (int y = 0; y < rows; ++y) {

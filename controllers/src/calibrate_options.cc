@@ -61,6 +61,10 @@ bool CalibrateOptions::IsValid(std::string* why) const {
     return Fail(why, "CalibrateOptions::sun_elevation_deg = " + Value(*sun_elevation_deg) + " (expected [-90, 90] degrees)");
   if (sun_azimuth_deg && !(std::abs(*sun_azimuth_deg) <= 360.0))
     return Fail(why, "CalibrateOptions::sun_azimuth_deg = " + Value(*sun_azimuth_deg) + " (expected [-360, 360] degrees)");
+  if (time_of_day_h && !(*time_of_day_h >= 0.0 && *time_of_day_h < 24.0))
+    return Fail(why, "CalibrateOptions::time_of_day_h = " + Value(*time_of_day_h) + " (expected hours in [0, 24))");
+  if (time_of_day_h && time_iso8601)
+    return Fail(why, "CalibrateOptions::time_of_day_h and time_iso8601 both given (expected one: the time gives the hour)");
   return true;
 }
 

@@ -54,6 +54,8 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
   p.fit.fit.mask_path = out / "mask.exr";
   p.fit.fit.sun_dir = a.sun.direction;
   p.fit.fit.verbose = false;
+  p.fit.fit.backend = o.backend;
+  p.fit.init_preset = o.init_preset;
   p.fit.report = false;  // written after the game's image, over everything
   p.decisions.push_back(Decision("sky pixels: the automatic segmentation (mask.exr)",
                                  "buildings, trees and terrain kept out of the sky terms; " +
@@ -62,6 +64,15 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
   p.decisions.push_back(Decision("sun from " + a.sun.source, a.sun.uncertainty_deg
                                      ? "uncertainty " + FormatNumber(*a.sun.uncertainty_deg) + " deg"
                                      : std::string("measured or given")));
+  if (!o.init_preset.empty() && a.kind.kind != capture::SkyKind::kOvercast) {
+    const double w = render::LoadPreset(o.init_preset).overcast_weight;
+    if (w > 0.0) {  // an overcast frame's preset: its CIE term would carry part of a clear sky
+      p.fit.init_preset.clear();
+      p.decisions.push_back(Decision("start: the bundled default preset, not " + o.init_preset,
+                                     "it carries the overcast term (weight " + FormatNumber(w) + ") and this photo is " +
+                                         capture::ToString(a.kind.kind)));
+    }
+  }
   const bool cloudy = a.kind.kind == capture::SkyKind::kPartlyCloudy ||
                       (a.kind.kind == capture::SkyKind::kTwilight && a.features.texture >= capture::SkyKindOptions{}.cloudy_texture);
   if (a.kind.kind == capture::SkyKind::kOvercast) {
@@ -94,6 +105,8 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
   if (o.time_iso8601) {  // the preset's time of day orders the exported keyframes
     const capture::SpaInput t = capture::ParseIso8601(*o.time_iso8601, "CalibrateOptions::time_iso8601");
     p.fit.fit.time_of_day_h = t.hour + t.minute / 60.0 + t.second / 3600.0;
+  } else if (o.time_of_day_h) {
+    p.fit.fit.time_of_day_h = o.time_of_day_h;
   }
   return p;
 }

@@ -80,6 +80,7 @@ appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan
   r.exposure = exposure;
   r.verbose = false;
   r.sun_disc = plan.draw_sun_disc;
+  r.backend = plan.fit.fit.backend;
   r.clouds.enabled = plan.draw_clouds && !render::LoadPreset(r.preset_path).clouds_json.empty();
   const GameImage game = RenderGameImage(r);
   capture::LatLongFrame f;
@@ -148,7 +149,7 @@ void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const st
   }
   Log(o, "inverting the weather map: the clouds where the photo has them");
   const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
-  const WeatherInversionRecord w = InvertPhotoWeather(a, out, exposure);
+  const WeatherInversionRecord w = InvertPhotoWeather(a, out, exposure, plan->fit.fit.backend);
   plan->decisions.push_back(w.Decision());
   Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
   if (!w.done) return;

@@ -58,7 +58,8 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
   return d;
 }
 
-WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure) {
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure,
+                                          render::Backend backend) {
   const auto t0 = std::chrono::steady_clock::now();
   WeatherInversionRecord r;
   const render::Preset preset = render::LoadPreset(out / "preset.json");
@@ -88,6 +89,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   ro.width = rw;
   ro.height = rh;
   ro.sun_disc = false;
+  ro.backend = backend;
   ro.exposure = exposure;
   ro.verbose = false;
   ro.clouds.enabled = true;

@@ -90,6 +90,9 @@ bool FitControllerOptions::IsValid(std::string* why) const {
     return false;
   };
   if (references.empty()) return fail("FitControllerOptions::references is empty (expected at least one lat-long EXR)");
+  if (!fit.mask_paths.empty() && fit.mask_paths.size() != references.size())
+    return fail("FitOptions::mask_paths holds " + std::to_string(fit.mask_paths.size()) + " masks for " +
+                std::to_string(references.size()) + " references (expected one per reference, in order)");
   if (out_dir.empty()) return fail("FitControllerOptions::out_dir is empty (expected a directory)");
   std::string w;
   if (!fit.IsValid(&w) || !clouds.IsValid(&w) || (cloud_stats.enabled && !cloud_stats.IsValid(&w))) return fail(w);
@@ -101,7 +104,7 @@ bool FitControllerOptions::IsValid(std::string* why) const {
 }
 
 nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) {
-  return {{"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
+  nlohmann::json j = {{"model", render::ToString(fo.variant)}, {"backend", render::ToString(fo.backend)},
           {"absolute", fo.absolute},               {"sun_cone_deg", fo.sun_cone_deg},
           {"clip_fraction", fo.clip_fraction},     {"mask", fo.mask_path},
           {"loss", LossName(fo.loss)},             {"loss_scale", fo.loss_scale},
@@ -113,6 +116,8 @@ nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) {
           {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
           {"fit_ground_albedo", fo.fit_ground_albedo},
           {"numeric_derivatives", fo.numeric_derivatives}};
+  if (!fo.mask_paths.empty()) j["masks"] = fo.mask_paths;
+  return j;
 }
 
 // Every file the fit reads, named by the field that gave it (StagedDirectory refuses an
@@ -121,6 +126,7 @@ std::vector<NamedPath> FitControllerInputs(const FitControllerOptions& o) {
   std::vector<NamedPath> read = PresetFileInputs("FitControllerOptions::init_preset", InitPresetPath(o));
   for (const std::string& r : o.references) read.push_back({"FitControllerOptions::references", r});
   if (!o.fit.mask_path.empty()) read.push_back({"FitOptions::mask_path", o.fit.mask_path});
+  for (const std::string& m : o.fit.mask_paths) read.push_back({"FitOptions::mask_paths", m});
   for (const std::string& spec : o.probes) read.push_back({"FitControllerOptions::probes", spec.substr(spec.find('=') + 1)});
   for (const std::string& r : o.references) {  // the probe samples found beside a reference
     fs::path p(r);
@@ -142,8 +148,12 @@ struct LoadedReferences {
 LoadedReferences LoadFitReferences(const FitControllerOptions& o, bool cloud_shapes) {
   LoadedReferences l;
   std::set<std::string> names;
-  for (const std::string& path : o.references) {
-    l.refs.push_back(fit::LoadReference(path, o.fit));
+  for (size_t i = 0; i < o.references.size(); ++i) {
+    const std::string& path = o.references[i];
+    fit::FitOptions fo = o.fit;  // the reference's own mask, as mask_path
+    if (!o.fit.mask_paths.empty()) fo.mask_path = o.fit.mask_paths.at(i);
+    fo.mask_paths.clear();
+    l.refs.push_back(fit::LoadReference(path, fo));
     const fit::MaskCounts& n = l.refs.back().counts;  // the user's mask and the sun cone are choices, not damage
     RequireValidShare(path, n.sky, n.sky + n.invalid + n.clipped, "fittable sky pixels of those above the horizon "
                       "outside FitOptions::mask_path and the sun cone");

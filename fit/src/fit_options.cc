@@ -41,6 +41,10 @@ bool FitOptions::IsValid(std::string* why) const {
                "a lat-long width in [16, 2048] pixels, a multiple of 4");
   if (!(sun_visible_threshold >= 0.0 && sun_visible_threshold <= 1.0))
     return bad("sun_visible_threshold", num(sun_visible_threshold), "a fraction in [0, 1]");
+  if (!mask_paths.empty() && !mask_path.empty())
+    return bad("mask_paths", std::to_string(mask_paths.size()) + " masks", "none when mask_path = '" + mask_path + "' is set (one or the other)");
+  for (const std::string& m : mask_paths)
+    if (m.empty()) return bad("mask_paths", "an empty path", "one mask EXR per reference");
   if (time_of_day_h && !(*time_of_day_h >= 0.0 && *time_of_day_h < 24.0))
     return bad("time_of_day_h", num(*time_of_day_h), "hours in [0, 24)");
   return true;

@@ -24,6 +24,11 @@ namespace skycal::batch {
 
 enum class BatchEngine { kLocal, kSlurm };
 
+// What a frame gets: `skycal calibrate`'s pipeline (sky segmentation, the kind of sky, clouds
+// where there are clouds, the game's image against the frame; the default), or the plain fit
+// with the fit options as given (for frames prepared by hand: masks, cloud flags).
+enum class FrameJob { kCalibrate, kFit };
+
 struct BatchOptions {
   std::string references_glob;      // 'DIR/*.exr' (expanded by skycal, not the shell)
   std::string out_dir;              // the batch directory (batch_plan.h)
@@ -36,7 +41,10 @@ struct BatchOptions {
   double poll_s = 2.0;              // slurm: seconds between squeue polls
   std::vector<std::string> slurm_options;  // slurm: extra sbatch arguments (--partition=x, --time=10)
   std::string init_preset;          // cold start preset (empty: the bundled default)
-  fit::FitOptions fit;              // forwarded to every frame's fit and the day fit
+  FrameJob frame_job = FrameJob::kCalibrate;
+  // Forwarded to every frame's fit (frame_job kFit; kCalibrate takes only the backend and
+  // verbose) and to the day fit.
+  fit::FitOptions fit;
   // Internal modes (the engines start skycal itself with these): fit chunk K of out_dir's
   // plan; run the reduce of out_dir's plan.
   int worker_chunk = -1;
@@ -54,12 +62,25 @@ struct FitRequest {
   bool report = false;      // the batch's own report covers every fit
 };
 
+// One frame calibrated (FrameJob::kCalibrate): into frames_dir/<the photo's stem>.
+struct CalibrateRequest {
+  std::string photo;
+  std::string frames_dir;
+  std::string init_preset;  // the previous frame's preset (a warm start); empty: the bundled default
+  double time_of_day_h = 0.0;
+  render::Backend backend = render::Backend::kVulkan;
+  bool verbose = true;
+};
+
 struct BatchHooks {
   // A plan's recorded arguments (BatchPlan::argv) back to options: the verb's own parser.
   std::function<BatchOptions(const std::vector<std::string>& args)> parse_options;
   // Runs one fit; returns its summary (fit.json: references[].rel_rmse, log_rmse, exposure,
   // name; haziness_g, time_s, iterations). Throws on failure.
   std::function<nlohmann::json(const FitRequest& request)> fit;
+  // Calibrates one frame (the calibrate controller); returns its fit.json. Throws on failure
+  // or refusal (a night frame, no sky), leaving nothing behind.
+  std::function<nlohmann::json(const CalibrateRequest& request)> calibrate;
   // What makes two runs the same batch (BatchPlan::identity): the frames, the resolved fit
   // options and init preset, the chunking and warm starts.
   std::function<nlohmann::json(const BatchOptions& options, const std::vector<BatchFrame>& frames)> identity;

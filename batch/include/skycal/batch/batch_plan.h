@@ -5,9 +5,11 @@
 //                       with another identity is refused, the same one resumes.
 //   state/<frame>.json  one per fitted frame, written atomically after its fit directory:
 //                       {"status": "ok"|"failed", "message", errors, times, warm start}.
-//   frames/<frame>/     the frame's `skycal fit` output (atomic, core/staged_directory.h).
+//   frames/<frame>/     the frame's `skycal calibrate` output (or `skycal fit`'s, with the
+//                       fit frame job; atomic, core/staged_directory.h).
 //   logs/               each chunk's (and the Slurm reduce's) log.
-//   day/, tables/, batch.json   the reduce step's outputs.
+//   day/, tables/, batch.json   the reduce step's outputs (day_inputs/: the calibrated
+//                       frames' photos linked by frame name for the day fit).
 // A frame is done when its state says ok and its fit directory holds preset.json; --resume
 // fits every other frame again.
 #pragma once

@@ -12,6 +12,7 @@
 
 #include "skycal/fit/fit_report.h"
 #include "skycal/fit/fit_result_file.h"
+#include "skycal/render/renderer.h"
 
 namespace skycal::controllers {
 
@@ -30,6 +31,14 @@ struct CalibrateOptions {
   // Partly cloudy photos: invert the weather map from the photo so that the clouds sit where
   // the photo has them (off: the cloud statistics fit's map, clouds where its noise puts them).
   bool invert_weather = true;
+  // The start of a clear or partly cloudy photo's fit (a time-lapse's previous frame: a warm
+  // start); empty: the bundled default. An overcast photo starts from the default with the
+  // overcast term whatever this says.
+  std::string init_preset;
+  // The photo's time of day (hours, local; the exported keyframe's key) when no time_iso8601
+  // gives it (a batch's frames carry it as skycalTimeOfDay).
+  std::optional<double> time_of_day_h;
+  render::Backend backend = render::Backend::kVulkan;  // the fit's objective and every render
   bool export_tables = true;  // DIR/game: the game tables of every calibrated preset in DIR (exporter)
   bool report = true;         // DIR/report.html over every photo (and DIR/<stem>/report.html)
   bool verbose = true;        // progress lines through `log`

@@ -21,6 +21,9 @@ struct FitOptions {
   double sun_cone_deg = 3.0;        // pixels within this angle of the sun are masked, degrees
   double clip_fraction = 0.98;      // with a clipping plateau, pixels >= this x the clip level are masked
   std::string mask_path;            // optional user mask EXR (R < 0.5 excludes the pixel)
+  // One user mask per reference, in the references' order (a day of calibrated photos, each
+  // with its own sky segmentation); instead of mask_path.
+  std::vector<std::string> mask_paths;
   bool absolute = false;            // references are calibrated: the exposure is fixed at 1
   RobustLoss loss = RobustLoss::kCauchy;
   // Floor of the robust loss's scale, natural-log units (~5%). With the linear start the
