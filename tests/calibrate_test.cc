@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "calibrate_plan.h"
 #include "calibrate_sun.h"
 #include "run_binary.h"
 #include "skycal/capture/latlong_frame.h"
@@ -150,6 +151,38 @@ TEST(Calibrate, TheSunOfATimeAndPlace) {
   EXPECT_LT(AngleDeg(*s.direction, truth), 3.0);
   o.time_iso8601 = "2026-06-21 noon";
   EXPECT_THROW(controllers::ChoosePhotoSun(sky, all, std::nullopt, o), Error);
+}
+
+// A photo that says when and where it was taken (OpenEXR's standard capDate, utcOffset,
+// latitude, longitude, as `capture` writes them from the brackets' EXIF): its hidden sun's
+// elevation is the time and place's; without the attributes the sky alone places it.
+TEST(Calibrate, TheSunOfTheFilesOwnTimeAndPlace) {
+  capture::SpaInput in = capture::ParseIso8601("2026-06-21T17:30:00+02:00");
+  in.latitude_deg = 48.25;
+  in.longitude_deg = 16.5;
+  const capture::SpaResult spa = capture::ComputeSolarPosition(in);
+  const std::array<double, 3> truth = capture::SunDirectionInFrame(spa, 30.0);
+  testing::ScratchDir dir("calibrate-file-time");
+  capture::LatLongFrame f;
+  f.radiance = ModelSky(truth, 256, 128, false);
+  f.extra.strings["capDate"] = "2026:06:21 17:30:00";
+  f.extra.floats["utcOffset"] = -7200.0f;  // UTC = local + utcOffset
+  f.extra.floats["latitude"] = 48.25f;
+  f.extra.floats["longitude"] = 16.5f;
+  capture::WriteLatLongFrame(dir / "timed.exr", f);
+  const controllers::PhotoAnalysis a = controllers::AnalysePhoto(dir / "timed.exr", CalibrateOptions{});
+  ASSERT_TRUE(a.sun.direction.has_value()) << a.sun.refusal;
+  EXPECT_EQ(a.sun.source, "time and place, azimuth from the sky (the file's EXR capDate + utcOffset)");
+  EXPECT_NEAR(latlong::ElevationDeg(*a.sun.direction), spa.elevation_deg, 1e-6);
+  EXPECT_LT(AngleDeg(*a.sun.direction, truth), 3.0);
+  ASSERT_TRUE(a.time_iso8601.has_value());
+  EXPECT_EQ(*a.time_iso8601, "2026-06-21T17:30:00+02:00");
+  // Control: the same pixels without the attributes.
+  f.extra = {};
+  capture::WriteLatLongFrame(dir / "untimed.exr", f);
+  const controllers::PhotoAnalysis u = controllers::AnalysePhoto(dir / "untimed.exr", CalibrateOptions{});
+  EXPECT_EQ(u.sun.source, "sky");
+  EXPECT_FALSE(u.time_iso8601.has_value());
 }
 
 #ifdef SKYCAL_BINARY

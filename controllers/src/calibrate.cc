@@ -21,13 +21,26 @@ PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o) {
   PhotoAnalysis a;
   a.warnings = im.warnings;
   a.frame = std::move(im.frame);
+  // The time and place: the options', else the file's (a frame `capture` made from tagged
+  // brackets carries them).
+  CalibrateOptions timed = o;
+  if (o.time_iso8601) {
+    a.time_iso8601 = o.time_iso8601;
+    a.time_source = "options";
+  } else if (im.time_place.complete()) {
+    timed.time_iso8601 = a.time_iso8601 = im.time_place.time_iso8601;
+    timed.latitude_deg = im.time_place.latitude_deg;
+    timed.longitude_deg = im.time_place.longitude_deg;
+    a.time_source = "the file's " + im.time_place.source;
+  }
   std::optional<std::array<double, 3>> file_sun;
   if (im.sun.source == SunSource::kAttribute) file_sun = im.sun.direction;
   // The plain sun first: the segmentation keeps its glare out of the non-sky candidates; a
   // hidden one is then looked for over the sky the segmentation found.
   const PhotoSun plain = PlainPhotoSun(a.frame.radiance, file_sun, o);
   a.mask = capture::EstimateSkyMask(a.frame.radiance, plain.direction, {});
-  a.sun = plain.direction ? plain : HiddenPhotoSun(a.frame.radiance, a.mask.sky, o, plain.refusal);
+  a.sun = plain.direction ? plain : HiddenPhotoSun(a.frame.radiance, a.mask.sky, timed, plain.refusal);
+  if (a.time_source.starts_with("the file")) a.sun.source += " (" + a.time_source + ")";
   std::optional<double> elevation;
   std::vector<float> probability;
   if (a.sun.direction) {

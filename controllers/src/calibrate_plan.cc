@@ -102,11 +102,11 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     p.fit.clouds.mode = "off";
     p.decisions.push_back(Decision("no cloud layer: the atmosphere alone", KindWhy(a) + "; the cloud statistics were skipped"));
   }
-  if (o.time_iso8601) {  // the preset's time of day orders the exported keyframes
-    const capture::SpaInput t = capture::ParseIso8601(*o.time_iso8601, "CalibrateOptions::time_iso8601");
-    p.fit.fit.time_of_day_h = t.hour + t.minute / 60.0 + t.second / 3600.0;
-  } else if (o.time_of_day_h) {
+  if (o.time_of_day_h) {  // the preset's time of day orders the exported keyframes
     p.fit.fit.time_of_day_h = o.time_of_day_h;
+  } else if (a.time_iso8601) {
+    const capture::SpaInput t = capture::ParseIso8601(*a.time_iso8601, "the photo's time (" + a.time_source + ")");
+    p.fit.fit.time_of_day_h = t.hour + t.minute / 60.0 + t.second / 3600.0;
   }
   return p;
 }

@@ -21,6 +21,10 @@ struct PhotoAnalysis {
   std::vector<float> cloud_probability;  // empty without a sun
   capture::SkyFeatures features;
   capture::SkyKindDecision kind;
+  // The time and place the sun was sought with: CalibrateOptions' or, without them, the
+  // file's own (capture/time_place.h: the EXR's capDate, utcOffset, latitude, longitude).
+  std::optional<std::string> time_iso8601;
+  std::string time_source;  // "options", the file's, or empty
   std::vector<std::string> warnings;
 };
 

@@ -169,6 +169,8 @@ ImportedPhoto ImportPhoto(const ImportOptions& o) {
                          " Inf pixels (lossy-compression ringing?): non-finite ones written as 0, which the fit masks like negative ones");
   }
   ImportSun(o, src.attributes, &p);
+  p.time_place = capture::TimePlaceFromExrAttributes(src.attributes, o.in_path);
+  capture::AddTimePlaceAttributes(p.time_place, &p.frame.extra);
   p.frame.extra.strings["skycalSource"] = p.source_file + " sha256:" + p.source_sha256;
   p.frame.extra.strings["skycalSourceConvention"] = capture::ToString(p.convention);
   p.frame.extra.strings["skycalSunSource"] = RecordedName(p.sun.source);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/capture/time_place.h"
 #include "skycal/capture/latlong_import.h"
 
 namespace skycal::controllers {
@@ -70,6 +71,9 @@ struct ImportedPhoto {
   capture::LatLongFrame frame;
   capture::SourceConvention convention = capture::SourceConvention::kBlender;  // the one used
   ImportedSun sun;
+  // When and where, from the source's standard EXR attributes (capDate, utcOffset, latitude,
+  // longitude, altitude; capture/time_place.h), carried into the frame's attributes.
+  capture::TimePlace time_place;
   // What the caller should be told; they name ImportOptions fields, not flags.
   std::vector<std::string> warnings;
   // Provenance: the source's file name, SHA-256, channel names and envmap=latlong attribute.
