@@ -386,13 +386,44 @@ TEST(RawCapture, FiveDngBracketsOfASkyThroughTheBinary) {
   EXPECT_LT(median, 5e-4);
   EXPECT_LT(p90, 2e-3);
 
-  // A truncated bracket: refused, naming it; nothing written.
-  std::filesystem::resize_file(paths[2], std::filesystem::file_size(paths[2]) / 2);
+  // Options RAW makes contradictory: refused (exit 1), nothing written.
   const int before = dir.CountEntries();
-  const auto bad = testing::RunSkycal(SKYCAL_BINARY, args + " --out " + (dir / "bad.exr"));
-  EXPECT_EQ(bad.rc, 1);
-  EXPECT_NE(bad.err.find(paths[2] + ": truncated or corrupt"), std::string::npos) << bad.err;
+  for (const auto& [extra, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"--response debevec", "are camera RAW, linear by construction"},
+           {"--input-colorspace acescg", "acescg: the brackets are camera RAW"}}) {
+    const auto bad = testing::RunSkycal(SKYCAL_BINARY, args + " " + extra + " --out " + (dir / "bad.exr"));
+    EXPECT_EQ(bad.rc, 1) << extra;
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << bad.err;
+  }
   EXPECT_EQ(dir.CountEntries(), before);
+}
+
+// Each bad RAW file as the third of five brackets: exit 1, the file named, nothing written.
+TEST(RawCapture, BadBracketsAreRefusedByTheBinaryWithNothingWritten) {
+  testing::ScratchDir dir("raw-capture-bad");
+  const BadFiles b = MakeBadFiles(dir);
+  ImageRGB img(64, 32);
+  std::vector<std::string> good;
+  for (int i = 0; i < 5; ++i) {
+    std::fill(img.pixels.begin(), img.pixels.end(), static_cast<float>(0.01 * std::pow(4.0, i)));
+    testing::DngSpec spec;
+    spec.exposure_time_s = 0.001 * std::pow(4.0, i);
+    good.push_back(Write(dir, "b" + std::to_string(i) + ".dng", spec, img));
+  }
+  const int before = dir.CountEntries();
+  for (const std::string& bad : {b.truncated, b.short_data, b.corrupt, b.garbage, b.unsupported, b.empty, b.missing}) {
+    std::string args = "capture --lens latlong --size 64x32 --out " + (dir / "frame.exr") + " --brackets";
+    for (int i = 0; i < 5; ++i) args += " " + (i == 2 ? bad : good[i]);
+    const auto r = testing::RunSkycal(SKYCAL_BINARY, args);
+    EXPECT_EQ(r.rc, 1) << bad;
+    EXPECT_NE(r.err.find(bad + ": "), std::string::npos) << r.err;
+    EXPECT_EQ(dir.CountEntries(), before) << bad;
+  }
+  // Control: the good set is accepted.
+  std::string args = "capture --lens latlong --size 64x32 --out " + (dir / "frame.exr") + " --brackets";
+  for (const auto& g : good) args += " " + g;
+  EXPECT_EQ(testing::RunSkycal(SKYCAL_BINARY, args).rc, 0);
+  EXPECT_EQ(dir.CountEntries(), before + 1);
 }
 
 }  // namespace

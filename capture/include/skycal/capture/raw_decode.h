@@ -41,7 +41,7 @@ struct RawMetadata {
 struct RawImage {
   // 16-bit linear camera RGB (bits = 16, linear = true), rotated to the file's orientation;
   // `saturated` marks every pixel that a photosite at or above the white level fed (for a
-  // mosaic, any photosite within the demosaic's 5x5 footprint): the merge gives it weight 0.
+  // mosaic, any photosite within the demosaic's 7x7 footprint): the merge gives it weight 0.
   BracketImage image;
   RawMetadata metadata;
   // Camera RGB (as in `image`, code / 65535) -> linear Rec.709 primaries, D65 white, 3x3
