@@ -19,7 +19,9 @@
 #include "skycal/capture/raw_decode.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
+#include "skycal/capture/color_chart.h"
 #include "skycal/testing/synthetic_brackets.h"
+#include "skycal/testing/synthetic_chart.h"
 #include "test_util.h"
 
 namespace skycal {
@@ -424,6 +426,53 @@ TEST(RawCapture, BadBracketsAreRefusedByTheBinaryWithNothingWritten) {
   for (const auto& g : good) args += " " + g;
   EXPECT_EQ(testing::RunSkycal(SKYCAL_BINARY, args).rc, 0);
   EXPECT_EQ(dir.CountEntries(), before + 1);
+}
+
+// A ColorChecker photographed in RAW (a camera whose RGB mixes Rec.709, camera = A rec709):
+// read linear (the merge's curve is not applied to a RAW chart), the correction fitted from
+// it takes the camera's RGB back to Rec.709; a patch past the white level is refused as clipped.
+TEST(RawChart, AColorCheckerInRawIsReadLinearAndCorrects) {
+  testing::ScratchDir dir("raw-chart");
+  Eigen::Matrix3d a;
+  a << 0.70, 0.25, 0.05, 0.10, 0.85, 0.05, 0.02, 0.18, 0.80;
+  ImageRGB rec(200, 140);
+  testing::ChartPlacement place;
+  place.x0 = 10;
+  place.y0 = 10;
+  place.unit = 10;
+  place.illuminance = 0.8;
+  const std::array<double, 8> corners = testing::RenderChart(&rec, place);
+  ImageRGB cam = rec;
+  for (size_t p = 0; p < rec.pixels.size(); p += 3) {
+    const Eigen::Vector3d v = a * Eigen::Vector3d(rec.pixels[p], rec.pixels[p + 1], rec.pixels[p + 2]);
+    for (int c = 0; c < 3; ++c) cam.pixels[p + c] = static_cast<float>(v[c]);
+  }
+  testing::DngSpec spec;
+  spec.black = 512;
+  spec.white = 16383;
+  const std::string path = Write(dir, "chart.dng", spec, cam);
+  std::vector<float> srgb_curve(256 * 3);  // a bracket set's curve: must not touch the RAW chart
+  for (int z = 0; z < 256; ++z)
+    for (int c = 0; c < 3; ++c) srgb_curve[3 * z + c] = static_cast<float>(std::pow(z / 255.0, 2.2));
+  capture::ChartOptions options;
+  options.corners = corners;
+  const capture::ColorCorrection cc = capture::CorrectionFromChartImage(path, srgb_curve, options, "raw");
+  // The fitted matrix is A^-1 up to one scale (the correction keeps the white patch's level).
+  const Eigen::Matrix3d inv = a.inverse();
+  const double s = cc.matrix[4] / inv(1, 1);
+  double worst = 0.0;
+  for (int i = 0; i < 9; ++i) worst = std::max(worst, std::fabs(cc.matrix[i] - s * inv(i / 3, i % 3)));
+  std::printf("[measured] RAW chart: correction within %.3g of A^-1 (scale %.4f)\n", worst, s);
+  EXPECT_LT(worst, 0.01);
+  // Overexposed: the white patch past the white level is clipped, and refused as such.
+  for (float& v : cam.pixels) v *= 1.5f;
+  const std::string hot = Write(dir, "hot.dng", spec, cam);
+  try {
+    capture::CorrectionFromChartImage(hot, {}, options, "raw");
+    ADD_FAILURE() << "a clipped chart was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("clipped"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
