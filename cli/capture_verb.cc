@@ -121,7 +121,9 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   LensArgs la;
   bool json = false;
   cl.List("--brackets", &o.brackets, "IMG",
-          "8/16-bit images of one camera, one per exposure (repeat the flag or list them)");
+          "8/16-bit images of one camera, one per exposure (repeat the flag or list them);\n"
+          "or camera RAW files (.dng .cr2 .nef .arw ...: decoded linear by LibRaw, no response\n"
+          "recovery, exposure from the file; docs/capture.md)");
   cl.Text("--exposure-times", &exposure_times, "T,...",
           "seconds, one per bracket (default: EXIF ExposureTime; FNumber and ISO from\n"
           "EXIF put frames of a time-lapse on one scale)");

@@ -13,6 +13,8 @@ PACKAGES=(
   libexiv2-dev
   # capture's colour-chart correction: OpenCV contrib's mcc module (ColorChecker detection, ccm).
   libopencv-contrib-dev
+  # capture's camera RAW brackets: LibRaw (libraw_r); libtiff writes the tests' DNGs.
+  libraw-dev libtiff-dev
   # skycal batch --engine slurm and its test (tests/batch_slurm_test.sh): a single-node Slurm
   # cluster and its authentication; python3 for its free ports and JSON checks.
   slurm-wlm munge python3

@@ -41,6 +41,8 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   Cli.FitBadInputLeavesNothing                                                  # 38695
   Cli.FitWritesItsOutputsAndExportMakesGameTables                               # 20394
   SkySun.SyntheticCieSkiesRecoverTheSun                                         # 12100 (ctest -j2, load 10)
+  RawCapture.FiveDngBracketsOfASkyThroughTheBinary                              # 8490 (ctest -j2, load ~12)
+  RawCapture.BadBracketsAreRefusedByTheBinaryWithNothingWritten                 # 11000 (ctest -j2, load ~12)
 )
 
 # Not timed: sorted by what they do (see above).

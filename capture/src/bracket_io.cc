@@ -1,6 +1,8 @@
-// Reading bracket images (OpenCV) and their exposure settings (explicit or EXIF).
+// Reading bracket images (OpenCV; camera RAW through LibRaw, raw_decode.h) and their
+// exposure settings (explicit, EXIF, or the RAW file's own metadata).
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/core.hpp>
@@ -9,6 +11,7 @@
 #include "parallel_rows.h"
 #include "skycal/capture/exif_exposure.h"
 #include "skycal/capture/hdr_merge.h"
+#include "skycal/capture/raw_decode.h"
 #include "skycal/core/error.h"
 
 namespace skycal::capture {
@@ -28,6 +31,17 @@ void CopyBgrToRgb(const cv::Mat& m, BracketImage* out) {
       dst[3 * x + 2] = row[3 * x + 0];
     }
   }
+}
+
+// The exposure a RAW file's metadata gives, in the EXIF reader's form.
+ExifExposure RawExposure(const RawMetadata& m) {
+  ExifExposure e;
+  e.exposure_time_s = m.exposure_time_s;
+  e.f_number = m.f_number;
+  e.iso = m.iso;
+  e.has_exif = true;
+  if (std::isnan(m.exposure_time_s)) e.error = "camera RAW metadata without an exposure time (LibRaw)";
+  return e;
 }
 
 }  // namespace
@@ -67,19 +81,28 @@ std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const s
                 std::to_string(paths.size()) + " images (one per image, in the same order, or none to use EXIF)");
   const auto t0 = Clock::now();
   std::vector<Bracket> brackets(paths.size());
-  // Decoding dominates loading (PNG/JPEG inflate); one image per worker at a time.
+  // RAW files carry their exposure in LibRaw's metadata (read while decoding).
+  std::vector<std::optional<RawMetadata>> raw(paths.size());
+  // Decoding dominates loading (PNG/JPEG inflate, RAW demosaic); one image per worker at a time.
   const int workers = detail::ResolveThreads(threads);
   detail::ParallelChunks(static_cast<int>(paths.size()), workers, [&](int b, int e, int) {
     for (int i = b; i < e; ++i) {
       brackets[i].path = paths[i];
-      brackets[i].image = ReadBracketImage(paths[i]);
+      if (IsRawPath(paths[i])) {
+        RawImage r = ReadRawImage(paths[i]);
+        brackets[i].image = std::move(r.image);
+        if (r.has_matrix) brackets[i].camera_to_rec709.assign(r.camera_to_rec709.begin(), r.camera_to_rec709.end());
+        raw[i] = std::move(r.metadata);
+      } else {
+        brackets[i].image = ReadBracketImage(paths[i]);
+      }
     }
   });
   const auto t1 = Clock::now();
   nlohmann::json files = nlohmann::json::array();
   for (size_t i = 0; i < paths.size(); ++i) {
     Bracket& b = brackets[i];
-    const ExifExposure exif = ReadExifExposure(paths[i]);
+    const ExifExposure exif = raw[i] ? RawExposure(*raw[i]) : ReadExifExposure(paths[i]);
     std::string time_source;
     if (!exposure_times_s.empty()) {
       b.exposure_time_s = exposure_times_s[i];
@@ -91,7 +114,7 @@ std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const s
       }
     } else if (std::isfinite(exif.exposure_time_s)) {
       b.exposure_time_s = exif.exposure_time_s;
-      time_source = "exif";
+      time_source = raw[i] ? "raw" : "exif";
     } else {
       throw Error(paths[i] + ": no exposure time: none given explicitly and the file has no EXIF ExposureTime (" +
                   (exif.error.empty() ? std::string("EXIF present without it") : exif.error) +
@@ -110,6 +133,7 @@ std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const s
                      {"f_number", opt(b.f_number)},
                      {"iso", opt(b.iso)},
                      {"exif_error", exif.error}});
+    if (raw[i]) files.back()["raw"] = RawMetadataToJson(*raw[i]);
   }
   const auto t2 = Clock::now();
   if (report) {

@@ -226,6 +226,10 @@ struct CameraImages {
   nlohmann::json merge_report;
   std::vector<float> response_curve;  // the merge's, for a chart image of the same camera
   nlohmann::json sources = nlohmann::json::array();
+  // Camera RAW brackets: their camera RGB -> linear Rec.709 (raw_decode.h), applied by the
+  // colour stage; empty for other brackets. raw: the brackets are RAW (with or without one).
+  std::vector<double> raw_camera_to_rec709;
+  bool raw = false;
 };
 
 // The single camera of --brackets: its lens completed from the merged image's size.
@@ -254,12 +258,28 @@ RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
   return cam;
 }
 
+// The RAW brackets' one camera matrix (each file carries its own: they must agree, i.e.
+// come from one camera), or empty (not RAW, or LibRaw knows no matrix for the camera).
+std::vector<double> RawCameraMatrix(const std::vector<Bracket>& brackets) {
+  const std::vector<double>& m = brackets[0].camera_to_rec709;
+  for (const Bracket& b : brackets) {
+    bool same = b.camera_to_rec709.size() == m.size();
+    for (size_t i = 0; same && i < m.size(); ++i) same = std::abs(b.camera_to_rec709[i] - m[i]) <= 1e-6 * (1.0 + std::abs(m[i]));
+    if (!same)
+      throw Error(b.path + ": camera RAW colour matrix differs from " + brackets[0].path +
+                  "'s; the brackets of one merge come from one camera");
+  }
+  return m;
+}
+
 // Stage 1, one camera: the brackets merged to radiance.
 CameraImages MergeStage(const CaptureOptions& o) {
   CameraImages r;
   nlohmann::json load_report;
   const auto brackets = LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
   MergeResult merged = MergeBrackets(brackets, o.merge);
+  r.raw = brackets[0].image.linear;
+  r.raw_camera_to_rec709 = RawCameraMatrix(brackets);
   r.exposure_scale = merged.exposure_scale;
   r.merge_report = merged.report;
   r.response_curve = merged.response_curve;
@@ -294,11 +314,25 @@ struct ColourResult {
   nlohmann::json summary;
 };
 
-ColourResult ColourStage(const CaptureOptions& o, const std::vector<float>& response_curve,
-                         std::vector<ImageRGB>* images, nlohmann::json* skipped) {
+ColourResult ColourStage(const CaptureOptions& o, const CameraImages& cams, std::vector<ImageRGB>* images,
+                         nlohmann::json* skipped) {
   ColourResult r;
-  r.chart = CaptureColorCorrection(o, response_curve);
-  if (r.chart) {
+  r.chart = CaptureColorCorrection(o, cams.response_curve);
+  if (cams.raw && !r.chart) {
+    // Camera RAW: camera RGB -> lin_rec709 by the file's own matrix (raw_decode.h).
+    if (o.input_colorspace != "lin_rec709")
+      throw Error("CaptureOptions::input_colorspace = " + o.input_colorspace +
+                  ": the brackets are camera RAW, converted to lin_rec709 by their camera matrix; drop it");
+    if (cams.raw_camera_to_rec709.size() != 9)
+      throw Error("CaptureOptions::brackets: camera RAW '" + o.brackets[0] +
+                  "' has no colour matrix (LibRaw knows none for the camera); give CaptureOptions::chart_path or "
+                  "CaptureOptions::color_correction_path");
+    Matrix3 m;
+    std::copy(cams.raw_camera_to_rec709.begin(), cams.raw_camera_to_rec709.end(), m.begin());
+    for (ImageRGB& img : *images) ApplyColorCorrection(m, &img);
+    r.summary = {{"source", "camera RAW matrix (LibRaw rgb_cam x daylight pre_mul)"}, {"matrix", m}};
+  } else if (r.chart) {
+    if (cams.raw) skipped->push_back({{"stage", "raw camera matrix"}, {"reason", "replaced by the colour chart correction"}});
     for (ImageRGB& img : *images) ApplyColorCorrection(r.chart->matrix, &img);
     r.summary = ChartSummary(*r.chart);
     Log("colour chart correction (" + (o.chart_path.empty() ? o.color_correction_path : o.chart_path) +
@@ -462,7 +496,7 @@ nlohmann::json RunCapturePipeline(const CaptureOptions& o) {
   CameraImages cams = o.brackets.empty() ? LoadRigStage(plan.rig_cameras, &skipped) : MergeStage(o);
   const auto t1 = Clock::now();
   stages["merge_ms"] = Ms(t0, t1);
-  const ColourResult colour = ColourStage(o, cams.response_curve, &cams.images, &skipped);
+  const ColourResult colour = ColourStage(o, cams, &cams.images, &skipped);
   const auto t2 = Clock::now();
   stages["colour_ms"] = Ms(t1, t2);
   const UnwrapResult unwrapped = UnwrapStage(o, cams);

@@ -8,6 +8,7 @@
 
 #include "skycal/capture/color_chart.h"
 #include "skycal/capture/hdr_merge.h"
+#include "skycal/capture/raw_decode.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/luminance.h"
@@ -56,10 +57,13 @@ ChartImage LoadExrChart(const std::string& path) {
 
 ChartImage LoadChartImage(const std::string& path, const std::vector<float>& response_curve) {
   if (EndsWith(path, ".exr")) return LoadExrChart(path);
-  const BracketImage img = ReadBracketImage(path);
+  // A camera RAW chart is linear by construction (raw_decode.h): no curve, its saturation
+  // mask marks the clipped pixels.
+  const bool raw = IsRawPath(path);
+  const BracketImage img = raw ? ReadRawImage(path).image : ReadBracketImage(path);
   const int top = img.max_code();
-  const int levels = response_curve.empty() ? 0 : static_cast<int>(response_curve.size() / 3);
-  if (!response_curve.empty() && (response_curve.size() % 3 != 0 || levels < 2)) {
+  const int levels = response_curve.empty() || raw ? 0 : static_cast<int>(response_curve.size() / 3);
+  if (!raw && !response_curve.empty() && (response_curve.size() % 3 != 0 || levels < 2)) {
     throw Error(path + ": response curve of " + std::to_string(response_curve.size()) + " values; expected levels x 3");
   }
   ChartImage out{path, ImageRGB(img.width, img.height), std::vector<uint8_t>(static_cast<size_t>(img.width) * img.height, 0)};
@@ -74,7 +78,7 @@ ChartImage LoadChartImage(const std::string& path, const std::vector<float>& res
         v = (1.0 - f) * response_curve[3 * k + c] + f * response_curve[3 * (k + 1) + c];
       }
       out.linear.pixels[3 * i + c] = static_cast<float>(v);
-      if (code >= top) out.clipped[i] = 1;
+      if (code >= top || (!img.saturated.empty() && img.saturated[i])) out.clipped[i] = 1;
     }
   }
   return out;

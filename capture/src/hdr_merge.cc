@@ -128,6 +128,12 @@ void ValidateImages(const std::vector<Bracket>& brackets) {
     if (im.bits != first.bits)
       throw Error(name + ": " + std::to_string(im.bits) + "-bit, but " + Label(brackets[0], 0) + " is " +
                   std::to_string(first.bits) + "-bit; brackets must share a bit depth");
+    if (!im.saturated.empty() && im.saturated.size() != static_cast<size_t>(im.width) * im.height)
+      throw Error(name + ": saturation mask holds " + std::to_string(im.saturated.size()) +
+                  " values, expected width*height (or none)");
+    if (im.linear != first.linear)
+      throw Error(name + (im.linear ? " is" : " is not") + " camera RAW (linear) but " + Label(brackets[0], 0) +
+                  (first.linear ? " is" : " is not") + "; one set of brackets is all RAW or none");
   }
 }
 
@@ -227,6 +233,20 @@ std::string ChooseResponse(const std::vector<Bracket>& brackets, const std::vect
                            const MergeOptions& options, MergeResult& r, nlohmann::json* response_report) {
   const BracketImage& first = brackets[0].image;
   const int levels = first.max_code() + 1;
+  if (first.linear) {
+    // Camera RAW: codes are proportional to light by construction (raw_decode.h), so the
+    // response is the identity and nothing is recovered; a model or curve asked for explicitly
+    // is refused rather than ignored.
+    if (!options.response_curve.empty() || (options.response != ResponseModel::kAuto && options.response != ResponseModel::kLinear))
+      throw Error(std::string("merge options: response = ") +
+                  (options.response_curve.empty() ? ResponseModelName(options.response) : "fixed_curve") + ": " +
+                  Label(brackets[0], 0) + " and the other brackets are camera RAW, linear by construction " +
+                  "(identity response); use auto or linear");
+    r.response_curve = detail::AnalyticResponse(ResponseModel::kLinear, levels);
+    r.response_levels = levels;
+    (*response_report)["method"] = "identity: camera RAW input is linear (black subtracted, white level = top code); no response recovery";
+    return "raw_linear";
+  }
   if (!options.response_curve.empty()) {
     r.response_curve = options.response_curve;
     const int given = static_cast<int>(r.response_curve.size() / 3);
@@ -257,6 +277,7 @@ struct MergeTables {
   int low_code = 0, high_code = 0, max_code = 0;
   std::vector<float> inv_k, k_weight;
   std::vector<const uint16_t*> planes;
+  std::vector<const uint8_t*> saturated;  // per bracket: the RAW saturation mask, or nullptr
 };
 
 MergeTables MakeTables(const MergeResult& r, const std::vector<size_t>& order, const std::vector<double>& relative,
@@ -269,11 +290,12 @@ MergeTables MakeTables(const MergeResult& r, const std::vector<size_t>& order, c
   detail::WeightTable weights = detail::MakeWeights(options, max_code);
   tb.weight = std::move(weights.w);
   tb.low_code = weights.low_code, tb.high_code = weights.high_code;
-  tb.inv_k.resize(n), tb.k_weight.resize(n), tb.planes.resize(n);
+  tb.inv_k.resize(n), tb.k_weight.resize(n), tb.planes.resize(n), tb.saturated.resize(n);
   for (size_t s = 0; s < n; ++s) {
     tb.inv_k[s] = static_cast<float>(1.0 / r.exposure_factors[order[s]]);
     tb.k_weight[s] = options.exposure_weighting ? static_cast<float>(relative[s]) : 1.0f;
     tb.planes[s] = sorted_images[s]->rgb.data();
+    tb.saturated[s] = sorted_images[s]->saturated.empty() ? nullptr : sorted_images[s]->saturated.data();
   }
   return tb;
 }
@@ -287,16 +309,18 @@ float MergeSample(const MergeTables& tb, size_t n, size_t i, int c, Tally& t, ui
   const std::vector<float>& k_weight = tb.k_weight;
   const std::vector<const uint16_t*>& planes = tb.planes;
   const int max_code = tb.max_code, low_code = tb.low_code, high_code = tb.high_code;
+  // A sample of a saturated RAW pixel counts as clipped whatever its code (weight 0).
+  auto clipped = [&](size_t s, int z) { return z >= high_code || (tb.saturated[s] && tb.saturated[s][i / 3]); };
   float sum = 0.0f, sum_w = 0.0f;
   for (size_t s = 0; s < n; ++s) {
     const int z = std::min<int>(planes[s][i], max_code);
-    const float wz = weight[z];
+    const float wz = tb.saturated[s] && tb.saturated[s][i / 3] ? 0.0f : weight[z];
     if (wz > 0.0f) {
       const float ws = wz * k_weight[s];
       sum += ws * lut[static_cast<size_t>(z) * 3 + c] * inv_k[s];
       sum_w += ws;
       ++t.good_samples[s];
-    } else if (z >= high_code) {
+    } else if (clipped(s, z)) {
       ++t.clipped_samples[s];
     }
   }
@@ -305,7 +329,7 @@ float MergeSample(const MergeTables& tb, size_t n, size_t i, int c, Tally& t, ui
     e = sum / sum_w;
   } else {
     const int z_short = std::min<int>(planes[0][i], max_code), z_long = std::min<int>(planes[n - 1][i], max_code);
-    if (z_short >= high_code) {  // clipped even in the shortest: its value is a lower bound
+    if (clipped(0, z_short)) {  // clipped even in the shortest: its value is a lower bound
       e = lut[static_cast<size_t>(z_short) * 3 + c] * inv_k[0];
       flags |= kPixelOverExposed;
     } else if (z_long <= low_code) {  // black even in the longest: its value is an upper bound
@@ -318,7 +342,7 @@ float MergeSample(const MergeTables& tb, size_t n, size_t i, int c, Tally& t, ui
       for (size_t s = 0; s < n; ++s)
         if (std::min<int>(planes[s][i], max_code) <= low_code) dark = s;
       for (size_t s = n; s-- > 0;)
-        if (std::min<int>(planes[s][i], max_code) >= high_code) bright = s;
+        if (clipped(s, std::min<int>(planes[s][i], max_code))) bright = s;
       const int zd = std::min<int>(planes[dark][i], max_code), zb = std::min<int>(planes[bright][i], max_code);
       e = 0.5f * (lut[static_cast<size_t>(zd) * 3 + c] * inv_k[dark] + lut[static_cast<size_t>(zb) * 3 + c] * inv_k[bright]);
       flags |= kPixelGap;
@@ -387,6 +411,7 @@ nlohmann::json BracketsReport(const std::vector<Bracket>& brackets, const std::v
     auto opt = [](double v) { return std::isnan(v) ? nlohmann::json() : nlohmann::json(v); };
     const double ev100 = std::log2((use_n ? b.f_number * b.f_number : 1.0) / b.exposure_time_s) -
                          (use_iso ? std::log2(b.iso / 100.0) : 0.0);
+    const long long saturated = std::count(b.image.saturated.begin(), b.image.saturated.end(), uint8_t{1});
     bj.push_back({{"path", b.path},
                   {"exposure_time_s", b.exposure_time_s},
                   {"f_number", opt(b.f_number)},
@@ -394,7 +419,8 @@ nlohmann::json BracketsReport(const std::vector<Bracket>& brackets, const std::v
                   {"exposure_factor", r.exposure_factors[i]},
                   {"ev100", ev100},
                   {"well_exposed_fraction", double(good[rank[i]]) / (3.0 * total)},
-                  {"clipped_fraction", double(clipped[rank[i]]) / (3.0 * total)}});
+                  {"clipped_fraction", double(clipped[rank[i]]) / (3.0 * total)},
+                  {"raw_saturated_fraction", b.image.saturated.empty() ? nlohmann::json() : nlohmann::json(double(saturated) / total)}});
   }
   return bj;
 }

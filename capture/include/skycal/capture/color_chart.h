@@ -44,7 +44,9 @@ struct ChartImage {
 // EXR (linear; pixels not finite, a `mask.valid` plane < 0.5, or on a plateau of the
 // image's maximum are clipped) or an 8/16-bit image (PNG, TIFF, JPEG) linearised through
 // `response_curve` (levels * 3 values per code, R G B interleaved, as MergeResult::
-// response_curve; empty: the codes are linear); a channel at the top code is clipped.
+// response_curve; empty: the codes are linear); a channel at the top code is clipped. A
+// camera RAW file (IsRawPath) is decoded linear by LibRaw (raw_decode.h; the curve is not
+// applied), its saturated pixels clipped.
 // Throws skycal::Error naming the file.
 ChartImage LoadChartImage(const std::string& path, const std::vector<float>& response_curve);
 

@@ -55,6 +55,12 @@ struct BracketImage {
   int height = 0;
   int bits = 8;                 // 8 or 16
   std::vector<uint16_t> rgb;    // width * height * 3 code values in [0, max_code()]
+  // Camera RAW (raw_decode.h): codes proportional to light, black 0, white level = max code.
+  // Brackets that are all linear skip response recovery (the response is the identity).
+  bool linear = false;
+  // Per pixel, empty or width * height: 1 = a photosite at or above the white level fed this
+  // pixel (RAW); its samples in this bracket get weight 0 in the merge, like a clipped code.
+  std::vector<uint8_t> saturated;
 
   int max_code() const { return bits == 16 ? 65535 : 255; }
   bool empty() const { return width <= 0 || height <= 0; }
@@ -67,6 +73,9 @@ struct Bracket {
   double exposure_time_s = NAN;
   double f_number = NAN;     // NAN: unknown
   double iso = NAN;          // ISO speed (ISO 12232 / EXIF ISOSpeedRatings); NAN: unknown
+  // Camera RAW: camera RGB (image's codes / max code) -> linear Rec.709, 3x3 row-major
+  // (RawImage::camera_to_rec709), applied after the merge; empty for other images.
+  std::vector<double> camera_to_rec709;
 };
 
 struct MergeOptions {
@@ -179,7 +188,9 @@ BracketImage ReadBracketImage(const std::string& path);
 
 // Reads the brackets and their exposures. `exposure_times_s` empty: every time comes from
 // the file's EXIF ExposureTime; otherwise one time per path (it wins over EXIF). FNumber and
-// ISOSpeedRatings come from EXIF when present. Throws skycal::Error naming the file: when
+// ISOSpeedRatings come from EXIF when present. Camera RAW files (IsRawPath, raw_decode.h)
+// are decoded by LibRaw to linear camera RGB with a saturation mask and their matrix to
+// Rec.709 (Bracket::camera_to_rec709), their exposure read from the RAW metadata. Throws skycal::Error naming the file: when
 // unreadable, or with no explicit time and no EXIF ExposureTime; naming the option when the
 // counts differ. `report` (optional) receives per-file sources and timings_ms.
 std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const std::vector<double>& exposure_times_s,
