@@ -6,8 +6,11 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "skycal/capture/capture_pipeline.h"
+#include "skycal/capture/exif_exposure.h"
 #include "skycal/capture/time_place.h"
 #include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
 #include "test_util.h"
 
 namespace skycal {
@@ -91,6 +94,42 @@ TEST(TimePlace, ExrStandardAttributesBothWays) {
   a.strings.erase("capDate");
   a.floats["latitude"] = 123.0f;
   EXPECT_THROW(capture::TimePlaceFromExrAttributes(a, "x.exr"), Error);
+}
+
+// `capture` of brackets whose EXIF says when and where: the frame carries it as OpenEXR's
+// standard attributes (what `calibrate` reads), and its summary says where it came from.
+TEST(TimePlace, CaptureCarriesTheBracketsExifIntoTheFrame) {
+  testing::ScratchDir dir("time-place-capture");
+  capture::CaptureOptions o;
+  for (int i = 0; i < 2; ++i) {
+    cv::Mat img(32, 64, CV_8UC3);
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x) img.at<cv::Vec3b>(y, x) = cv::Vec3b(60 + x + 60 * i, 80 + y + 60 * i, 100 + 60 * i);
+    o.brackets.push_back(dir / ("b" + std::to_string(i) + ".jpg"));
+    ASSERT_TRUE(cv::imwrite(o.brackets.back(), img));
+    capture::ExifExposure e;
+    e.exposure_time_s = i == 0 ? 1.0 / 250 : 1.0 / 60;
+    capture::WriteExifExposure(o.brackets.back(), e);
+  }
+  capture::TimePlace t;
+  t.time_iso8601 = "2026-06-21T06:30:00+02:00";
+  t.latitude_deg = 47.5;
+  t.longitude_deg = 8.25;
+  capture::WriteExifTimePlace(o.brackets.front(), t);
+  o.merge.response = capture::ResponseModel::kSrgb;
+  o.lens.model = capture::LensModel::kLatLong;
+  o.width = 64;
+  o.height = 32;
+  o.out = dir / "frame.exr";
+  o.verbose = false;
+  const nlohmann::json summary = capture::RunCapturePipeline(o);
+  EXPECT_EQ(summary["time_place"]["source"], "EXIF DateTimeOriginal + OffsetTimeOriginal") << summary["time_place"];
+  const ExrRGB frame = ReadExrRGB(o.out);
+  const capture::TimePlace back = capture::TimePlaceFromExrAttributes(frame.attributes, o.out);
+  ASSERT_TRUE(back.complete()) << back.why_no_time;
+  EXPECT_EQ(back.time_iso8601, t.time_iso8601);
+  EXPECT_NEAR(*back.latitude_deg, 47.5, 1e-5);
+  EXPECT_NEAR(*back.longitude_deg, 8.25, 1e-5);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "skycal/capture/capture_pipeline.h"
+#include "skycal/capture/time_place.h"
 
 #include <chrono>
 #include <cmath>
@@ -190,6 +191,10 @@ struct CapturePlan {
   std::vector<RigCamera> rig_cameras;
   std::optional<SpaResult> spa;
   SpaInput spa_input;
+  // When and where (the frame's capDate, utcOffset, latitude, longitude for `calibrate`): the
+  // options', else the first bracket's EXIF. Recorded only: without the frame's north the
+  // EXIF's time does not place the sun here (calibrate takes the azimuth from the sky).
+  TimePlace time_place;
 };
 
 CapturePlan PlanCapture(const CaptureOptions& o) {
@@ -214,6 +219,13 @@ CapturePlan PlanCapture(const CaptureOptions& o) {
     plan.spa_input.latitude_deg = *o.latitude_deg;
     plan.spa_input.longitude_deg = *o.longitude_deg;
     plan.spa = ComputeSolarPosition(plan.spa_input);
+    plan.time_place = TimePlaceOf(plan.spa_input, "CaptureOptions::time_iso, latitude_deg, longitude_deg");
+  } else if (!o.brackets.empty()) {
+    try {
+      plan.time_place = ReadExifTimePlace(o.brackets.front());
+    } catch (const Error& e) {  // the merge reads the file and names what is wrong with it
+      plan.time_place.why_no_time = e.what();
+    }
   }
   return plan;
 }
@@ -474,6 +486,7 @@ ExrAttributes FrameAttributes(const CaptureOptions& o, const CapturePlan& plan, 
     const SpaInput& t = plan.spa_input;
     attrs.floats["skycalTimeOfDay"] = static_cast<float>(t.hour + t.minute / 60.0 + t.second / 3600.0);
   }
+  AddTimePlaceAttributes(plan.time_place, &attrs);
   attrs.floats["skycalExposureScale"] = static_cast<float>(cams.exposure_scale);
   attrs.strings["skycalSources"] = cams.sources.dump();
   attrs.strings["skycalLens"] = o.rig_path.empty() ? std::string(LensModelName(o.lens.model)) : "rig " + o.rig_path;
@@ -520,6 +533,11 @@ nlohmann::json RunCapturePipeline(const CaptureOptions& o) {
           {"valid_pixels", masks.valid_count},
           {"exposure_scale", cams.exposure_scale},
           {"sun", sun.summary},
+          {"time_place", {{"time", plan.time_place.time_iso8601.empty() ? nlohmann::json() : nlohmann::json(plan.time_place.time_iso8601)},
+                          {"latitude_deg", plan.time_place.latitude_deg ? nlohmann::json(*plan.time_place.latitude_deg) : nlohmann::json()},
+                          {"longitude_deg", plan.time_place.longitude_deg ? nlohmann::json(*plan.time_place.longitude_deg) : nlohmann::json()},
+                          {"source", plan.time_place.source},
+                          {"why_no_time", plan.time_place.why_no_time}}},
           {"merge", cams.merge_report},
           {"color_correction", colour.summary},
           {"stars", unwrapped.stars ? unwrapped.stars->ToJson() : nlohmann::json()},

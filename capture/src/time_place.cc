@@ -237,6 +237,18 @@ TimePlace TimePlaceFromExrAttributes(const ExrAttributes& a, const std::string& 
   return t;
 }
 
+TimePlace TimePlaceOf(const SpaInput& in, const std::string& source) {
+  DateTime d;
+  d.year = in.year, d.month = in.month, d.day = in.day, d.hour = in.hour, d.minute = in.minute, d.second = in.second;
+  TimePlace t;
+  t.time_iso8601 = Iso8601(d, static_cast<int>(std::lround(in.timezone_h * 60.0)));
+  t.latitude_deg = in.latitude_deg;
+  t.longitude_deg = in.longitude_deg;
+  t.altitude_m = in.elevation_m;
+  t.source = source;
+  return t;
+}
+
 void AddTimePlaceAttributes(const TimePlace& t, ExrAttributes* a) {
   std::optional<int> offset;
   if (const auto d = ParseIsoBack(t.time_iso8601, &offset); d && offset) {

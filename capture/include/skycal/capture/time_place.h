@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "skycal/capture/solar_position.h"
 #include "skycal/core/exr_io.h"
 
 namespace skycal::capture {
@@ -41,6 +42,10 @@ void WriteExifTimePlace(const std::string& path, const TimePlace& t);
 // altitude); empty when absent. Throws skycal::Error naming `path` and the attribute when
 // one is malformed (a capDate that is not "YYYY:MM:DD HH:MM:SS", a latitude beyond 90).
 TimePlace TimePlaceFromExrAttributes(const ExrAttributes& a, const std::string& path);
+
+// The time and place of an SPA input (its local time and UTC offset, latitude, longitude,
+// elevation), as a TimePlace.
+TimePlace TimePlaceOf(const SpaInput& in, const std::string& source);
 
 // Sets those attributes from `t` (capDate and utcOffset only with a time; each coordinate only
 // when known).
