@@ -54,6 +54,7 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
   p.fit.fit.mask_path = out / "mask.exr";
   p.fit.fit.sun_dir = a.sun.direction;
   p.fit.fit.verbose = false;
+  p.fit.log = [o](const std::string& line) { CalibrateLog(o, "  fit: " + line); };  // quiet with calibrate
   p.fit.fit.backend = o.backend;
   p.fit.init_preset = o.init_preset;
   p.fit.report = false;  // written after the game's image, over everything

@@ -28,6 +28,9 @@ struct PhotoAnalysis {
   std::vector<std::string> warnings;
 };
 
+// A progress line of calibrate's (CalibrateOptions::verbose, log; else stderr).
+void CalibrateLog(const CalibrateOptions& o, const std::string& line);
+
 // Imports the photo (either lat-long convention), segments it, places the sun and decides
 // the kind of sky. Writes nothing. Throws skycal::Error naming the file when it does not read.
 PhotoAnalysis AnalysePhoto(const std::string& path, const CalibrateOptions& o);

@@ -22,17 +22,20 @@
 
 namespace skycal::controllers {
 namespace fs = std::filesystem;
+
+void CalibrateLog(const CalibrateOptions& o, const std::string& line) {
+  if (!o.verbose) return;
+  if (o.log) o.log(line);
+  else std::cerr << "[calibrate] " << line << "\n";
+}
+
 namespace {
 
 double Since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void Log(const CalibrateOptions& o, const std::string& line) {
-  if (!o.verbose) return;
-  if (o.log) o.log(line);
-  else std::cerr << "[calibrate] " << line << "\n";
-}
+void Log(const CalibrateOptions& o, const std::string& line) { CalibrateLog(o, line); }
 
 std::string Round(double v, double unit = 0.001) { return FormatNumber(std::round(v / unit) * unit); }
 

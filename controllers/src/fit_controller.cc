@@ -434,6 +434,7 @@ fit::FitResultFile WriteFitOutputs(const FitControllerOptions& o, const StagedDi
 // The fit's stages: inputs read and checked, the sky (+ clouds) fit, the probe's sun, the
 // fit images, the cloud statistics, preset.json, previews, fit.json.
 nlohmann::json RunFitInto(const FitControllerOptions& o, const StagedDirectory& out) {
+  const ScopedFitLog log(o.log);
   CheckOptions(o);
   const std::string init_path = InitPresetPath(o);
   fs::create_directories(out.staging() / "fit");
@@ -452,6 +453,7 @@ nlohmann::json RunFitInto(const FitControllerOptions& o, const StagedDirectory& 
 }
 
 nlohmann::json RunFitController(const FitControllerOptions& o) {
+  const ScopedFitLog log(o.log);
   CheckOptions(o);
   StagedDirectory out(o.out_dir, "FitControllerOptions::out_dir", "fit", FitControllerInputs(o));  // fails early
   const nlohmann::json j = RunFitInto(o, out);

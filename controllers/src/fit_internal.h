@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <iostream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,8 +18,30 @@
 
 namespace skycal::controllers {
 
-// Progress on stderr, one line each, prefixed as `skycal fit` always printed it.
-inline void FitLog(const std::string& message) { std::cerr << "[fit] " << message << std::endl; }
+// Where this thread's fit progress goes while a fit with FitControllerOptions::log runs
+// (installed by ScopedFitLog); null: stderr.
+inline thread_local const std::function<void(const std::string&)>* fit_log_sink = nullptr;
+
+// Progress, one line each: the caller's FitControllerOptions::log, else stderr prefixed as
+// `skycal fit` always printed it.
+inline void FitLog(const std::string& message) {
+  if (fit_log_sink && *fit_log_sink) (*fit_log_sink)(message);
+  else std::cerr << "[fit] " << message << std::endl;
+}
+
+// Installs FitControllerOptions::log for one fit (restoring the previous sink after).
+class ScopedFitLog {
+ public:
+  explicit ScopedFitLog(const std::function<void(const std::string&)>& log) : previous_(fit_log_sink) {
+    if (log) fit_log_sink = &log;
+  }
+  ~ScopedFitLog() { fit_log_sink = previous_; }
+  ScopedFitLog(const ScopedFitLog&) = delete;
+  ScopedFitLog& operator=(const ScopedFitLog&) = delete;
+
+ private:
+  const std::function<void(const std::string&)>* previous_;
+};
 
 // The bundled presets (core/data_dir.h): the clear sky the fit starts from and the cloud mask
 // compares against, and the cloudy one the cloud statistics start from (game_clouds.h's

@@ -4,6 +4,7 @@
 // map), fit/<ref>.exr and previews, report.png, fit.json and report.html. Progress goes to
 // stderr ([fit]); errors name the options' fields and values, never a command line's flags.
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct FitControllerOptions {
   fit::FitOptions fit;
   bool cloud_mask = false;  // leave pixels of cloud probability >= 0.5 out (fit_cloud_mask.h)
   bool report = true;       // write report.html (skycal_report) over the output directory
+  // Where the fit's progress lines go, one line each without a prefix (a controller that runs
+  // the fit as one of its steps: calibrate); empty: stderr as "[fit] LINE", as `skycal fit`.
+  std::function<void(const std::string&)> log;
   // Probe samples (skycal probe-extract) per reference, "REF_STEM=SAMPLES.json"; a reference
   // named in none takes <reference without .exr>.probe.json when that file exists.
   std::vector<std::string> probes;
