@@ -129,6 +129,21 @@ TEST(LensProfile, ALensWithoutTcaOrAnFNumberSaysWhatIsMissing) {
   EXPECT_NE(r.profile->missing[1].find("no f-number"), std::string::npos) << r.profile->missing[1];
 }
 
+// The EXIF spelling of a camera and a maker-style lens name (as an Olympus body writes them).
+TEST(LensProfile, LookupByCameraSpellingPrefersTheExactModel) {
+  LensQuery q;
+  q.camera_maker = "OLYMPUS CORPORATION";
+  q.camera_model = "E-M1";
+  q.lens_model = "OLYMPUS M.8mm F1.8";
+  q.focal_mm = 8.0;
+  const LensLookup r = FindLensProfile(q);
+  ASSERT_TRUE(r.profile) << r.message;
+  EXPECT_EQ(r.profile->camera_model, "E-M1");  // not E-M1MarkII / E-M1MarkIII
+  EXPECT_EQ(r.profile->lens_model, "Olympus M.Zuiko Digital ED 8mm f/1.8 Fisheye Pro");
+  EXPECT_EQ(r.profile->lens_type, "equisolid");
+  EXPECT_DOUBLE_EQ(r.profile->crop_factor, 2.0);
+}
+
 TEST(LensProfile, NoMatchNamesWhatWasSearchedAndTheClosestLenses) {
   LensQuery q;
   q.camera_maker = "Acme";

@@ -13,8 +13,6 @@
 #include <sstream>
 
 #include <lensfun.h>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "parallel_rows.h"
 #include "skycal/core/error.h"
@@ -107,7 +105,13 @@ const lfCamera* FindCamera(const lfDatabase& db, const LensQuery& q) {
   const char* model = q.camera_model.empty() ? nullptr : q.camera_model.c_str();
   const lfCamera** cams = db.FindCameras(maker, model);
   if (!cams) cams = db.FindCamerasExt(maker, model, LF_SEARCH_LOOSE);
+  // The loose search ranks "E-M1MarkIII" with "E-M1": the model spelt as asked wins.
   const lfCamera* cam = cams ? cams[0] : nullptr;
+  for (const lfCamera** c = cams; c && *c; ++c)
+    if (Words(Str((*c)->Model)) == Words(q.camera_model)) {
+      cam = *c;
+      break;
+    }
   lf_free(cams);
   return cam;
 }
@@ -410,38 +414,36 @@ void Devignette(const lfModifier& mod, ImageRGB* img, int threads) {
 
 // Each channel resampled where lensfun says the corrected pixel's light fell: one
 // ApplySubpixelGeometryDistortion per chunk (x, y of red, green, blue per pixel), then a
-// bilinear cv::remap per channel, a band of rows at a time (the maps of a whole 24 MP
-// frame would take 0.6 GB).
+// bilinear sample of that channel of the observed image (positions clamped to the image:
+// its edge pixels replicated). One copy of the image is the only large allocation.
 void RemapChannels(const lfModifier& mod, ImageRGB* img, int threads) {
   const int w = img->width, h = img->height;
-  cv::Mat src(h, w, CV_32FC3, img->pixels.data());
-  std::vector<cv::Mat> planes(3), out(3);
-  cv::split(src, planes);
-  for (auto& o : out) o.create(h, w, CV_32F);
-  constexpr int kBand = 32;
-  detail::ParallelChunks((h + kBand - 1) / kBand, detail::ResolveThreads(threads), [&](int b0, int b1, int) {
+  if (w < 2 || h < 2) return;
+  const std::vector<float> src = img->pixels;  // the observed image; img receives the corrected one
+  const size_t stride = static_cast<size_t>(w) * 3;
+  auto sample = [&](float fx, float fy, int c) {
+    fx = std::clamp(fx, 0.0f, static_cast<float>(w - 1));
+    fy = std::clamp(fy, 0.0f, static_cast<float>(h - 1));
+    const int x0 = std::min(static_cast<int>(fx), w - 2), y0 = std::min(static_cast<int>(fy), h - 2);
+    const float ax = fx - static_cast<float>(x0), ay = fy - static_cast<float>(y0);
+    const float* p = &src[static_cast<size_t>(y0) * stride + static_cast<size_t>(x0) * 3 + c];
+    const float top = p[0] + ax * (p[3] - p[0]), bottom = p[stride] + ax * (p[stride + 3] - p[stride]);
+    return top + ay * (bottom - top);
+  };
+  detail::ParallelChunks(h, detail::ResolveThreads(threads), [&](int y0, int y1, int) {
     std::vector<float> coords(static_cast<size_t>(kChunk) * 6);
-    cv::Mat mx[3], my[3];
-    for (int b = b0; b < b1; ++b) {
-      const int y0 = b * kBand, rows = std::min(kBand, h - y0);
-      for (int c = 0; c < 3; ++c) mx[c].create(rows, w, CV_32F), my[c].create(rows, w, CV_32F);
-      for (int y = y0; y < y0 + rows; ++y)
-        for (int x = 0; x < w; x += kChunk) {
-          const int n = std::min(kChunk, w - x);
-          mod.ApplySubpixelGeometryDistortion(static_cast<float>(x), static_cast<float>(y), n, 1, coords.data());
-          for (int i = 0; i < n; ++i)
-            for (int c = 0; c < 3; ++c) {
-              mx[c].at<float>(y - y0, x + i) = coords[6 * i + 2 * c];
-              my[c].at<float>(y - y0, x + i) = coords[6 * i + 2 * c + 1];
-            }
-        }
-      for (int c = 0; c < 3; ++c) {
-        cv::Mat dst = out[c].rowRange(y0, y0 + rows);
-        cv::remap(planes[c], dst, mx[c], my[c], cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < w; x += kChunk) {
+        const int n = std::min(kChunk, w - x);
+        mod.ApplySubpixelGeometryDistortion(static_cast<float>(x), static_cast<float>(y), n, 1, coords.data());
+        for (int i = 0; i < n; ++i)
+          for (int c = 0; c < 3; ++c) {
+            float fx = coords[6 * i + 2 * c], fy = coords[6 * i + 2 * c + 1];
+            if (!std::isfinite(fx) || !std::isfinite(fy)) fx = static_cast<float>(x + i), fy = static_cast<float>(y);
+            img->pixels[img->index(x + i, y) + c] = sample(fx, fy, c);
+          }
       }
-    }
   });
-  cv::merge(out, src);  // src wraps img->pixels: written in place
 }
 
 }  // namespace

@@ -108,8 +108,8 @@ struct LensCorrections {
 };
 
 // Applies the profile's vignetting, TCA and distortion to a linear image in place (through
-// lensfun's lfModifier; TCA and distortion resample each channel bilinearly with
-// cv::remap, edge pixels replicated). Returns what was applied: {"vignetting": bool,
+// lensfun's lfModifier; TCA and distortion resample each channel bilinearly, positions
+// outside the image clamped to its edge). Returns what was applied: {"vignetting": bool,
 // "tca": bool, "distortion": bool, "ms": ...}. `threads` as in hdr_merge (0: all cores).
 nlohmann::json ApplyLensProfile(const LensProfile& profile, const LensCorrections& which, ImageRGB* linear,
                                 int threads = 0);
