@@ -333,6 +333,28 @@ TEST(LensProfile, TheImageCircleFromTheFocalLength) {
   LensParams lens2;
   LensFromProfile(*r.profile, w, h, true, false, false, true, true, &lens2, &corrected);
   EXPECT_NEAR(corrected["focal_px"].get<double>(), f_px / (1.0 - 0.02036 + 0.08028 - 0.01446), 1e-2);
+  // A model given by hand that is not the lens's projection keeps its own circle.
+  LensParams given;
+  given.radius_px = 1234.0;
+  nlohmann::json kept;
+  LensFromProfile(*r.profile, w, h, false, true, false, false, false, &given, &kept);
+  EXPECT_EQ(given.model, LensModel::kEquisolid);
+  EXPECT_DOUBLE_EQ(given.radius_px, 1234.0);
+  EXPECT_DOUBLE_EQ(given.fov_deg, 180.0);
+  // A rectilinear lens has no lens.h model: the model and circle stay, and the report says so.
+  LensQuery rect;
+  rect.lens_maker = "Samyang";
+  rect.lens_model = "Samyang 50mm f/1.4 AS UMC";
+  const LensLookup rr = FindLensProfile(rect);
+  ASSERT_TRUE(rr.profile) << rr.message;
+  EXPECT_EQ(rr.profile->lens_type, "rectilinear");
+  LensParams plain;
+  plain.radius_px = 1234.0;
+  nlohmann::json said;
+  LensFromProfile(*rr.profile, w, h, true, false, false, false, false, &plain, &said);
+  EXPECT_EQ(plain.model, LensModel::kEquisolid);
+  EXPECT_DOUBLE_EQ(plain.radius_px, 1234.0);
+  EXPECT_NE(said["projection"].get<std::string>().find("'rectilinear' has no lens model"), std::string::npos) << said;
 }
 
 // --- Through the capture pipeline ---------------------------------------------------------------

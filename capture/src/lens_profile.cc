@@ -490,8 +490,8 @@ void LensFromProfile(const LensProfile& p, int width, int height, bool distortio
     lens->center_y = 0.5 * eh + p.center_offset_y * 0.5 * size;
     r["center_px"] = {lens->center_x, lens->center_y};
   }
-  if (lens->model == LensModel::kLatLong || lens->model == LensModel::kKannalaBrandt || !std::isfinite(p.real_focal_mm))
-    return;
+  // The focal length fixes the image circle only through the lens's own projection.
+  if (!p.projection || lens->model != *p.projection || !std::isfinite(p.real_focal_mm)) return;
   const double f_mm = p.real_focal_mm / (distortion_corrected ? HuginFocalCorrection(p) : 1.0);
   const double f_px = f_mm * p.crop_factor * 0.5 * std::hypot(ew, eh) / kHalfDiagonal35mm;
   r["focal_px"] = f_px;

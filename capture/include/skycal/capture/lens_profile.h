@@ -115,7 +115,8 @@ nlohmann::json ApplyLensProfile(const LensProfile& profile, const LensCorrection
                                 int threads = 0);
 
 // The image circle from the profile for a width x height image: the projection (unless
-// keep_model), centre (unless keep_center) and radius (unless keep_radius: f_px at fov/2;
+// keep_model), centre (unless keep_center) and, where the model in use is the profile's
+// projection, the radius (unless keep_radius: f_px at fov/2;
 // when that circle reaches beyond the image's farthest corner and !keep_fov, the fov is
 // narrowed to what the corner sees). distortion_corrected: the image is the ideal
 // projection (its focal length is lensfun's Hugin-corrected one). Appends what was taken
