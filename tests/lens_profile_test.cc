@@ -222,8 +222,21 @@ TEST(LensProfile, VignettingRoundTripAgainstTheDatabaseCoefficients) {
   std::cout << "vignetting round trip: max relative error " << before << " before, " << after << " after\n";
 }
 
+// lensfun's unit of radius for TCA and distortion, pixels (modifier.cpp, lfModifier::lfModifier:
+// NormScale = 2 / min(W-1, H-1) * coordinate_correction): the half-diagonal between the
+// outer pixel centres over sqrt(1 + aspect^2), aspect the calibration's (3:2 where the XML
+// gives none: database.cpp's default), scaled by the crop factors. Half the shorter side
+// only when the image has the calibration's aspect ratio exactly (a 900x600 image's 899:599
+// is 0.04% off, which moves a 28 px distortion by 0.03 px at the corners).
+double LensfunUnit(int w, int h, const LensProfile& p) {
+  const double aspect = p.calibration_aspect_ratio;
+  EXPECT_DOUBLE_EQ(aspect, 1.5);
+  return 0.5 * std::hypot(w - 1.0, h - 1.0) / std::sqrt(1.0 + aspect * aspect) * p.crop_factor /
+         p.calibration_crop_factor;
+}
+
 // TCA (lensfun poly3): the corrected radius r_u of red / blue was observed at r_d = r_u (b
-// r_u^2 + c r_u + v), r = 1 at half the shorter side (between outer pixel centres).
+// r_u^2 + c r_u + v), r in LensfunUnit.
 double TcaScale(double b, double c, double v, double ru) { return b * ru * ru + c * ru + v; }
 
 // A soft-edged checkerboard (edges about 2.5 px wide), continuous in x, y.
@@ -232,12 +245,13 @@ double Pattern(double x, double y) {
   return 0.5 + 0.4 * std::tanh(3.0 * std::sin(k * x)) * std::tanh(3.0 * std::sin(k * y));
 }
 
-// The radial displacement (pixels, + outward) of channel c against green in the outer ring
-// of the image (r > 0.8 of the half-diagonal, the corners), by least squares on the green
-// gradient: X(p) = G(p - d r_hat)  =>  X - G = -d dG/dr. *known (may be null) receives the
-// same weighted mean of known_px(r), the displacement put in at radius r (pixels).
+// The radial displacement (pixels, + outward) of channel c of img against channel rc of ref
+// in the outer ring of the image (r > 0.8 of the half-diagonal, the corners), by least
+// squares on ref's gradient: X(p) = R(p - d r_hat)  =>  X - R = -d dR/dr. *known (may be
+// null) receives the same weighted mean of known_px(r), the displacement put in at radius r
+// (pixels).
 template <class Known>
-double RadialShift(const ImageRGB& img, int c, Known known_px, double* known) {
+double RadialShift(const ImageRGB& img, int c, const ImageRGB& ref, int rc, Known known_px, double* known) {
   const int w = img.width, h = img.height;
   const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1), hd = std::hypot(cx, cy);
   double num = 0.0, den = 0.0, kn = 0.0;
@@ -245,10 +259,10 @@ double RadialShift(const ImageRGB& img, int c, Known known_px, double* known) {
     for (int x = 4; x < w - 4; ++x) {
       const double dx = x - cx, dy = y - cy, rr = std::hypot(dx, dy);
       if (rr < 0.8 * hd) continue;
-      const double gx = 0.5 * (img.at(x + 1, y, 1) - img.at(x - 1, y, 1));
-      const double gy = 0.5 * (img.at(x, y + 1, 1) - img.at(x, y - 1, 1));
+      const double gx = 0.5 * (ref.at(x + 1, y, rc) - ref.at(x - 1, y, rc));
+      const double gy = 0.5 * (ref.at(x, y + 1, rc) - ref.at(x, y - 1, rc));
       const double gr = (gx * dx + gy * dy) / rr;
-      num += (img.at(x, y, c) - img.at(x, y, 1)) * gr;
+      num += (img.at(x, y, c) - ref.at(x, y, rc)) * gr;
       den += gr * gr;
       kn += known_px(rr) * gr * gr;
     }
@@ -268,7 +282,7 @@ TEST(LensProfile, TcaCorrectionAlignsTheChannelsToSubPixel) {
   const double br = XmlAttr("slr-sigma.xml", lens, {"<tca"}, "br"), vr = XmlAttr("slr-sigma.xml", lens, {"<tca"}, "vr");
   const double bb = XmlAttr("slr-sigma.xml", lens, {"<tca"}, "bb"), vb = XmlAttr("slr-sigma.xml", lens, {"<tca"}, "vb");
   const int w = 1200, h = 800;
-  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1), unit = 0.5 * (h - 1);
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1), unit = LensfunUnit(w, h, *r.profile);
   ImageRGB img(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -292,13 +306,13 @@ TEST(LensProfile, TcaCorrectionAlignsTheChannelsToSubPixel) {
     };
   };
   double red_known = 0.0, blue_known = 0.0;
-  const double red_before = RadialShift(img, 0, known(br, vr), &red_known);
-  const double blue_before = RadialShift(img, 2, known(bb, vb), &blue_known);
+  const double red_before = RadialShift(img, 0, img, 1, known(br, vr), &red_known);
+  const double blue_before = RadialShift(img, 2, img, 1, known(bb, vb), &blue_known);
   const nlohmann::json applied = ApplyLensProfile(*r.profile, {false, true, false}, &img);
   EXPECT_TRUE(applied["tca"].get<bool>());
   EXPECT_FALSE(applied["distortion"].get<bool>());
   auto none = [](double) { return 0.0; };
-  const double red_after = RadialShift(img, 0, none, nullptr), blue_after = RadialShift(img, 2, none, nullptr);
+  const double red_after = RadialShift(img, 0, img, 1, none, nullptr), blue_after = RadialShift(img, 2, img, 1, none, nullptr);
   std::cout << "TCA radial shift against green (px, corners r > 0.8 half-diagonal): red " << red_before << " (put in "
             << red_known << ") -> " << red_after << ", blue " << blue_before << " (put in " << blue_known << ") -> "
             << blue_after << "\n";
@@ -309,6 +323,60 @@ TEST(LensProfile, TcaCorrectionAlignsTheChannelsToSubPixel) {
   // ...and the correction takes it out to 0.02 px.
   EXPECT_LT(std::abs(red_after), 0.02);
   EXPECT_LT(std::abs(blue_after), 0.02);
+}
+
+// Distortion (lensfun ptlens, mil-samyang.xml:50, read here): the observed radius r_d = r_u (a
+// r_u^3 + b r_u^2 + c r_u + 1 - a - b - c), r in LensfunUnit. A checkerboard put through it
+// (about 28 px inward at the corners) and corrected by the module sits where the undistorted
+// one does, to 0.02 px.
+TEST(LensProfile, DistortionCorrectionRestoresTheIdealProjection) {
+  const LensLookup r = FindLensProfile(SamyangOnNex7(4.0));
+  ASSERT_TRUE(r.profile) << r.message;
+  const std::string lens = "Samyang 8mm f/2.8 UMC Fish-eye";
+  const double a = XmlAttr("mil-samyang.xml", lens, {"<distortion"}, "a");
+  const double b = XmlAttr("mil-samyang.xml", lens, {"<distortion"}, "b");
+  const double c = XmlAttr("mil-samyang.xml", lens, {"<distortion"}, "c");
+  const double d = 1.0 - a - b - c;
+  const int w = 900, h = 600;
+  const double cx = 0.5 * (w - 1), cy = 0.5 * (h - 1), unit = LensfunUnit(w, h, *r.profile);
+  auto distort = [&](double ru) { return ru * (((a * ru + b) * ru + c) * ru + d); };
+  ImageRGB observed(w, h), truth(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double rd = std::hypot(x - cx, y - cy) / unit;
+      double ru = rd;  // the ideal radius seen at rd (Newton on distort(ru) = rd)
+      for (int i = 0; i < 30 && rd > 0; ++i) {
+        const double e = 1e-6, f = distort(ru) - rd, df = (distort(ru + e) - distort(ru - e)) / (2 * e);
+        ru -= f / df;
+      }
+      const double s = rd > 0 ? ru / rd : 1.0;
+      for (int ch = 0; ch < 3; ++ch) {
+        observed.at(x, y, ch) = static_cast<float>(Pattern(cx + (x - cx) * s, cy + (y - cy) * s));
+        truth.at(x, y, ch) = static_cast<float>(Pattern(x, y));
+      }
+    }
+  auto known = [&](double rd_px) {
+    const double rd = rd_px / unit;
+    double ru = rd;
+    for (int i = 0; i < 30; ++i) {
+      const double e = 1e-6, f = distort(ru) - rd, df = (distort(ru + e) - distort(ru - e)) / (2 * e);
+      ru -= f / df;
+    }
+    return (rd - ru) * unit;
+  };
+  double put_in = 0.0;
+  auto none = [](double) { return 0.0; };
+  const double before = RadialShift(observed, 1, truth, 1, known, &put_in);
+  ImageRGB img = observed;
+  const nlohmann::json applied = ApplyLensProfile(*r.profile, {false, false, true}, &img);
+  EXPECT_TRUE(applied["distortion"].get<bool>());
+  EXPECT_FALSE(applied["tca"].get<bool>());
+  double after = 0.0;
+  for (int ch = 0; ch < 3; ++ch) after = std::max(after, std::abs(RadialShift(img, ch, truth, ch, none, nullptr)));
+  std::cout << "distortion radial shift against the ideal projection (px, corners): " << before << " (put in "
+            << put_in << ") -> " << after << "\n";
+  EXPECT_LT(put_in, -20.0);  // barrel: the corners are observed inward
+  EXPECT_LT(after, 0.02);  // with r = 1 at half the shorter side instead of LensfunUnit: 0.033
 }
 
 TEST(LensProfile, TheImageCircleFromTheFocalLength) {

@@ -11,11 +11,16 @@
 //               observed one, poly3 r_d = r_u (1 - k1 + k1 r_u^2), poly5 r_d = r_u (1 + k1
 //               r_u^2 + k2 r_u^4), ptlens r_d = r_u (a r_u^3 + b r_u^2 + c r_u + 1 - a - b - c).
 // Normalisation (lensfun 0.3.3 libs/lensfun/modifier.cpp, "About coordinate systems in
-// Lensfun", and mod-color.cpp's AddColorCallbackVignetting): distances are measured from
-// the image centre between the centres of the outer pixels ((W-1)/2, (H-1)/2); for TCA and
-// distortion r = 1 is half the SHORTER side (min(W-1, H-1)/2); for vignetting r = 1 is the
-// half-DIAGONAL (the image corner). Both are the calibration sensor's: a photo from a sensor
-// of another crop factor or aspect ratio is scaled into it (lensfun's coordinate_correction).
+// Lensfun" and lfModifier::lfModifier; mod-color.cpp, AddColorCallbackVignetting): r is
+// measured from the image centre, the image spanning the outer pixel centres (W-1 by H-1,
+// centre ((W-1)/2, (H-1)/2)). With D = that half-diagonal in pixels, A the calibration's
+// aspect ratio (3:2 unless the XML says otherwise) and k = camera crop / calibration crop:
+//   vignetting       r = 1 at D / k: the image corner (the half-diagonal) for the calibration's sensor;
+//   TCA, distortion  r = 1 at D k^-1 / sqrt(1 + A^2): half the shorter side when the image has
+//                    the calibration's aspect ratio (lensfun's "r = 1 at the middle of the
+//                    long edge"), otherwise the calibration sensor's fitted through the diagonal.
+// Crop factors are defined by the diagonal, so that is what carries a calibration between
+// sensors (lensfun's coordinate_correction).
 // The corrections themselves run through lensfun's lfModifier, so they are lensfun's own.
 //
 // The lens's projection maps onto lens.h's models where one exists: lensfun "fisheye"
