@@ -496,6 +496,8 @@ TEST(LensProfileCapture, TheExifProfileFlattensAVignettedFlatField) {
   EXPECT_EQ(lp["lens"], "Samyang:" + lens);
   EXPECT_EQ(lp["camera"], "Sony:NEX-7");
   for (const char* k : {"vignetting", "tca", "distortion"}) EXPECT_TRUE(lp["applied"][k].get<bool>()) << k;
+  EXPECT_EQ(lp["unwrap"]["projection"], "stereographic");
+  EXPECT_GT(j["valid_pixels"].get<long long>(), 2000);  // the measured plane follows the corrected geometry
   CaptureOptions without = FlatCapture(brackets, dir / "without.exr");
   without.lens_profile = "none";
   const nlohmann::json n = RunCapturePipeline(without);

@@ -323,16 +323,19 @@ CameraImages MergeStage(const CaptureOptions& o, const CapturePlan& plan, nlohma
   r.exposure_scale = merged.exposure_scale;
   r.merge_report = merged.report;
   r.response_curve = merged.response_curve;
+  Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
+                  " pixels no exposure measured well)");
   r.lens_profile = plan.lens_profile_report;
   if (plan.lens_profile) CorrectWithProfile(o, *plan.lens_profile, &merged.radiance, &r.lens_profile, skipped);
   const RigCamera cam =
       BracketCamera(o, merged.radiance.width, merged.radiance.height, plan.lens_profile, &r.lens_profile);
-  r.measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
+  ImageRGB measured = PlaneAsImage(merged.well_measured, cam.width, cam.height);
+  if (plan.lens_profile && r.lens_profile["applied"].value("distortion", false))  // the image's geometry
+    ApplyLensProfile(*plan.lens_profile, {false, false, true}, &measured, o.merge.threads);
+  r.measured.push_back(std::move(measured));
   r.images.push_back(std::move(merged.radiance));
   r.cameras.push_back(cam);
   for (const auto& p : o.brackets) r.sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
-  Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
-                  " pixels no exposure measured well)");
   return r;
 }
 
