@@ -10,7 +10,6 @@
 #include <map>
 #include <mutex>
 #include <set>
-#include <sstream>
 
 #include <lensfun.h>
 
@@ -286,8 +285,8 @@ LensQuery ReadLensQuery(const std::string& path) {
     q.f_number = NumberDatum(exif, "Exif.Photo.FNumber");
     const double d = NumberDatum(exif, "Exif.Photo.SubjectDistance");
     if (std::isfinite(d) && d < 1000.0) q.distance_m = d;
-  } catch (const Exiv2::AnyError&) {
-    // Unreadable EXIF: no names; the caller says nothing matched.
+  } catch (const std::exception&) {
+    // Unreadable EXIF (exiv2's errors derive from std::exception): no names; the caller says so.
   }
   return q;
 }
