@@ -537,5 +537,34 @@ TEST(LensProfileCapture, AnExplicitProfileThatMatchesNothingIsAnErrorNamingTheCl
   EXPECT_LT(FrameVariation(dir / "named.exr"), 0.005);
 }
 
+TEST(LensProfileCapture, HandGivenValuesOverrideAndMissingDataIsListedAsSkipped) {
+  testing::ScratchDir dir("lens-profile-override");
+  const auto brackets = VignettedFlatBrackets(dir, true);
+  CaptureOptions o = FlatCapture(brackets, dir / "frame.exr");
+  o.vignetting_given = true;  // zeros: no vignetting, by hand
+  o.lens_model_given = true;  // equisolid, by hand
+  const nlohmann::json j = RunCapturePipeline(o);
+  const nlohmann::json& lp = j["lens_profile"];
+  EXPECT_FALSE(lp["applied"]["vignetting"].get<bool>());
+  EXPECT_TRUE(lp["applied"]["tca"].get<bool>());
+  EXPECT_EQ(lp["overridden"][0], "vignetting: CaptureOptions::lens.vignetting given");
+  EXPECT_EQ(lp["unwrap"]["projection"], "kept CaptureOptions::lens.model = equisolid (given)");
+  EXPECT_FALSE(lp["unwrap"].contains("radius_px"));  // equisolid is not this lens's projection
+  EXPECT_GT(FrameVariation(dir / "frame.exr"), 0.05);  // the vignetting stays in
+  // A lens whose profile has no TCA: said in lens_profile.missing and under skipped.
+  CaptureOptions no_tca = FlatCapture(brackets, dir / "no_tca.exr");
+  no_tca.lens_profile = "Samyang:Samyang 12mm f/2.8 Fish-Eye ED AS NCS";
+  const nlohmann::json k = RunCapturePipeline(no_tca);
+  EXPECT_FALSE(k["lens_profile"]["applied"]["tca"].get<bool>());
+  EXPECT_TRUE(k["lens_profile"]["applied"]["vignetting"].get<bool>());
+  EXPECT_EQ(k["lens_profile"]["focal_mm"], 12.0);  // the prime's, not the EXIF's 8 mm (said in notes)
+  EXPECT_EQ(k["lens_profile"]["notes"][0], "focal length: EXIF says 8 mm, this lens is a 12 mm prime; used 12 mm");
+  bool listed = false;
+  for (const auto& s : k["skipped"])
+    listed = listed || (s["stage"] == "lens profile tca" &&
+                        s["reason"] == "tca: the profile has no TCA data for this lens");
+  EXPECT_TRUE(listed) << k["skipped"].dump();
+}
+
 }  // namespace
 }  // namespace skycal::capture

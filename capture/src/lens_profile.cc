@@ -188,7 +188,8 @@ void InterpolateCalibration(const lfLens& lens, LensProfile* p) {
              v.Model == LF_VIGNETTING_MODEL_PA) {
     p->vignetting_k = std::array<double, 3>{v.Terms[0], v.Terms[1], v.Terms[2]};
   } else {
-    p->missing.push_back("vignetting: the profile has no vignetting data for this lens");
+    p->missing.push_back("vignetting: the profile has no vignetting data for this lens at " + FormatNumber(p->focal_mm) +
+                         " mm, f/" + FormatNumber(p->f_number));
   }
   lfLensCalibRealFocal rf;
   p->real_focal_mm = lens.InterpolateRealFocal(focal, rf) ? rf.RealFocal : p->focal_mm * HuginFocalCorrection(*p);
@@ -212,7 +213,12 @@ LensProfile MakeProfile(std::shared_ptr<const lfDatabase> db, const lfCamera* ca
   p.f_number = q.f_number;
   p.distance_m = q.distance_m;
   p.focal_mm = q.focal_mm;
-  if (!std::isfinite(p.focal_mm) && lens->MinFocal > 0 && lens->MinFocal == lens->MaxFocal) p.focal_mm = lens->MinFocal;
+  if (lens->MinFocal > 0 && lens->MinFocal == lens->MaxFocal) {  // a prime: its own focal length
+    if (std::isfinite(q.focal_mm) && std::abs(q.focal_mm / lens->MinFocal - 1.0) > 0.02)
+      p.notes.push_back("focal length: EXIF says " + FormatNumber(q.focal_mm) + " mm, this lens is a " +
+                        FormatNumber(lens->MinFocal) + " mm prime; used " + FormatNumber(lens->MinFocal) + " mm");
+    p.focal_mm = lens->MinFocal;
+  }
   if (!std::isfinite(p.focal_mm)) {
     p.missing.push_back("all: no focal length (EXIF FocalLength) for this zoom lens (" + FormatNumber(lens->MinFocal) +
                         "-" + FormatNumber(lens->MaxFocal) + " mm)");
@@ -369,6 +375,7 @@ nlohmann::json LensProfile::ToJson() const {
                       {"f_number", std::isfinite(f_number) ? nlohmann::json(f_number) : nlohmann::json()},
                       {"distance_m", distance_m},
                       {"missing", missing}};
+  if (!notes.empty()) j["notes"] = notes;
   j["camera"] = camera_model.empty() ? nlohmann::json() : nlohmann::json(camera_maker + ":" + camera_model);
   if (vignetting_k) j["vignetting_pa_k"] = *vignetting_k;
   if (tca_model) j["tca"] = {{"model", *tca_model}, {"terms", tca_terms}};

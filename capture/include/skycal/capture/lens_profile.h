@@ -90,6 +90,7 @@ struct LensProfile {
   std::array<double, 3> distortion_terms{};
   std::vector<std::string> missing;                      // e.g. "tca: the profile has no TCA data for this lens"
   std::vector<std::string> other_matches;                // further lenses that matched the names as well
+  std::vector<std::string> notes;                        // e.g. an EXIF focal length a prime lens overrides
   std::shared_ptr<const LensfunHandle> handle;
   nlohmann::json ToJson() const;
 };
@@ -101,8 +102,9 @@ struct LensLookup {
 };
 
 // Finds the camera and lens (lensfun's FindCameras / FindLenses, its fuzzy word match) and
-// interpolates the calibration at the query's focal length, f-number and distance. A fixed
-// focal lens needs no focal length; vignetting needs the f-number. database_dir: lensfun's
+// interpolates the calibration at the query's focal length, f-number and distance. A prime
+// lens uses its own focal length (notes says so where the query's differs); vignetting
+// needs the f-number. database_dir: lensfun's
 // XML folder; empty: the system's (lfDatabase::Load: the user's updates, then
 // /usr/share/lensfun/version_1). Throws skycal::Error when no database can be loaded.
 LensLookup FindLensProfile(const LensQuery& query, const std::string& database_dir = "");
