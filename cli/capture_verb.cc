@@ -27,6 +27,7 @@ std::string WithCaptureFlags(const std::string& message) {
       {"CaptureOptions::lens_radius_given", "--lens-radius"},
       {"CaptureOptions::kb_given", "--kb-k"},
       {"CaptureOptions::vignetting_given", "--vignetting"},
+      {"CaptureOptions::lens_profile", "--lens-profile"},
       {"CaptureOptions::camera_ypr_deg", "--camera-rotation"},
       {"CaptureOptions::input_colorspace", "--input-colorspace"},
       {"CaptureOptions::color_correction_path", "--color-correction"},
@@ -110,7 +111,8 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
       "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response auto|debevec|weighted|robertson|linear|srgb]\n"
       "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
       "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
-      "                 [--camera-rotation YAW,PITCH,ROLL] | --rig RIG.json\n"
+      "                 [--camera-rotation YAW,PITCH,ROLL] [--lens-profile none|LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL]]\n"
+      "                 | --rig RIG.json\n"
       "                 [--input-colorspace NAME | --color-correction CORRECTION.json | --chart IMG [--chart-corners ...]]\n"
       "                 [--remove-stars [--star-window PX] [--star-sigma K] [--star-contrast C] [--star-max-pixels N]]\n"
       "                 [--time ISO8601 --lat DEG --lon DEG [--north-longitude DEG]]\n"
@@ -138,6 +140,13 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Number("--lens-radius", &la.radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
   cl.Text("--kb-k", &la.kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
   cl.Text("--vignetting", &la.vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
+  cl.Text("--lens-profile", &o.lens_profile, "SPEC",
+          "lensfun lens profile (docs/capture.md): default, looked up from the first bracket's\n"
+          "EXIF (Make, Model, LensModel, FocalLength, FNumber; no match: said, and on without);\n"
+          "none: off; LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL] as lensfun names them\n"
+          "(no match: an error naming the closest). Corrects vignetting, TCA and distortion and\n"
+          "gives the projection and image circle; --lens, --lens-center, --lens-radius,\n"
+          "--lens-fov-deg, --kb-k and --vignetting override it");
   cl.Text("--camera-rotation", &la.rotation, "Y,P,R",
           "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
           "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"

@@ -11,6 +11,8 @@ PACKAGES=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslc glslang-tools spirv-tools
   nlohmann-json3-dev libgtest-dev libcli11-dev nettle-dev
   libexiv2-dev
+  # capture's lens profiles: lensfun and its lens database (capture/lens_profile.h).
+  liblensfun-dev liblensfun-data-v1
   # capture's colour-chart correction: OpenCV contrib's mcc module (ColorChecker detection, ccm).
   libopencv-contrib-dev
   # capture's camera RAW brackets: LibRaw (libraw_r); libtiff writes the tests' DNGs.

@@ -182,7 +182,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
                  "--worker-chunk", "--reduce", "--json"}},
       {"ceiling", {"--reference", "--init", "--model", "--sun-cone", "--mask", "--json"}},
       {"compare", {"--photo", "--game", "--mask", "--exposure", "--band", "--min-elevation", "--json"}},
-      {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-fov-deg", "--lens-center",
+      {"capture", {"--brackets", "--exposure-times", "--response", "--lens", "--lens-profile", "--lens-fov-deg", "--lens-center",
                    "--lens-radius", "--kb-k", "--vignetting", "--camera-rotation", "--rig", "--input-colorspace",
                    "--color-correction", "--chart", "--chart-corners", "--chart-label", "--remove-stars", "--star-window",
                    "--star-sigma", "--star-contrast", "--star-max-pixels",

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "skycal/capture/cloud_mask.h"
+#include "skycal/capture/lens_profile.h"
 #include "skycal/capture/rig.h"
 #include "skycal/capture/solar_position.h"
 #include "skycal/capture/sun_detect.h"
@@ -59,6 +60,7 @@ bool LensFlagsFitTheInput(const CaptureOptions& o, std::string* why) {
   if (o.lens_radius_given) given.push_back("CaptureOptions::lens_radius_given");
   if (o.kb_given) given.push_back("CaptureOptions::kb_given");
   if (o.vignetting_given) given.push_back("CaptureOptions::vignetting_given");
+  if (!o.lens_profile.empty() && o.lens_profile != "none") given.push_back("CaptureOptions::lens_profile");
   auto joined = [](const std::vector<std::string>& v) {
     std::string s;
     for (const auto& f : v) s += (s.empty() ? "" : ", ") + f;
@@ -195,7 +197,34 @@ struct CapturePlan {
   // options', else the first bracket's EXIF. Recorded only: without the frame's north the
   // EXIF's time does not place the sun here (calibrate takes the azimuth from the sky).
   TimePlace time_place;
+  std::optional<LensProfile> lens_profile;
+  nlohmann::json lens_profile_report;  // what was searched and found (null: not looked up)
 };
+
+// The lens profile: explicit (CaptureOptions::lens_profile; no match is an error naming the
+// closest lenses) or from the first bracket's EXIF (no match: said, and on without one).
+// Not for a rig or a lat-long input (no lens of theirs to correct).
+void PlanLensProfile(const CaptureOptions& o, CapturePlan* plan) {
+  if (o.brackets.empty() || o.lens_profile == "none" || o.lens.model == LensModel::kLatLong) return;
+  const bool explicit_spec = !o.lens_profile.empty();
+  LensQuery q = ReadLensQuery(o.brackets[0]);
+  std::string why;
+  if (explicit_spec && !ParseLensProfileSpec(o.lens_profile, &q, &why)) throw Error(why);
+  if (!explicit_spec && q.camera_model.empty() && q.lens_model.empty()) {
+    plan->lens_profile_report = {{"used", false}, {"reason", "no camera or lens names in the EXIF of " + o.brackets[0]}};
+    return;
+  }
+  LensLookup found = FindLensProfile(q);
+  if (!found.profile) {
+    if (explicit_spec) throw Error("CaptureOptions::lens_profile = " + o.lens_profile + ": " + found.message);
+    Progress(o, found.message + "; continuing without a lens profile");
+    plan->lens_profile_report = {{"used", false}, {"reason", found.message}, {"candidates", found.candidates}};
+    return;
+  }
+  plan->lens_profile_report = found.profile->ToJson();
+  plan->lens_profile_report["used"] = true;
+  plan->lens_profile = std::move(found.profile);
+}
 
 CapturePlan PlanCapture(const CaptureOptions& o) {
   std::string why;
@@ -227,6 +256,7 @@ CapturePlan PlanCapture(const CaptureOptions& o) {
       plan.time_place.why_no_time = e.what();
     }
   }
+  PlanLensProfile(o, &plan);
   return plan;
 }
 
@@ -242,10 +272,13 @@ struct CameraImages {
   // colour stage; empty for other brackets. raw: the brackets are RAW (with or without one).
   std::vector<double> raw_camera_to_rec709;
   bool raw = false;
+  nlohmann::json lens_profile;  // the lens profile's lookup and what it corrected (null: none looked up)
 };
 
-// The single camera of --brackets: its lens completed from the merged image's size.
-RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
+// The single camera of --brackets: its lens completed from the merged image's size, and
+// from the lens profile where one was found (the fields given by hand stay).
+RigCamera BracketCamera(const CaptureOptions& o, int width, int height, const std::optional<LensProfile>& profile,
+                        nlohmann::json* profile_report) {
   std::string why;
   RigCamera cam;
   cam.lens = o.lens;
@@ -257,9 +290,15 @@ RigCamera BracketCamera(const CaptureOptions& o, int width, int height) {
   }
   if (!o.lens_radius_given) cam.lens.radius_px = 0.5 * std::min(cam.width, cam.height);
   if (cam.lens.model == LensModel::kLatLong) cam.lens = LatLongLens(cam.width, cam.height);
+  if (profile) {
+    const bool distortion_corrected = (*profile_report)["applied"].value("distortion", false);
+    LensFromProfile(*profile, cam.width, cam.height, distortion_corrected, o.lens_model_given, o.lens_center_given,
+                    o.lens_radius_given, o.lens_fov_given, &cam.lens, &(*profile_report)["unwrap"]);
+  }
   if (!cam.lens.IsValid(&why, cam.width, cam.height)) {
     throw Error("lens for the " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image merged from " +
                 (o.brackets.empty() ? std::string("the brackets") : "'" + o.brackets[0] + "' and the other brackets") +
+                (profile ? " with the lens profile " + profile->lens_maker + ":" + profile->lens_model : std::string()) +
                 ": " + why);
   }
   const std::array<double, 3> ypr = o.CameraRotationDeg();
@@ -284,8 +323,29 @@ std::vector<double> RawCameraMatrix(const std::vector<Bracket>& brackets) {
   return m;
 }
 
+// Stage 1b: the lens profile's vignetting, TCA and distortion on the merged radiance, each
+// unless given by hand (CaptureOptions::lens.vignetting, lens.kb_k). After the merge because
+// the merge is per pixel, a weighted mean of each exposure's linear estimate: vignetting
+// scales every exposure of a pixel alike, so dividing the mean divides each of them (once
+// instead of per bracket); the resampling of TCA and distortion moves linear values that
+// agree across the exposures wherever a pixel is measured well.
+void CorrectWithProfile(const CaptureOptions& o, const LensProfile& p, ImageRGB* radiance, nlohmann::json* report,
+                        nlohmann::json* skipped) {
+  const LensCorrections which{!o.vignetting_given, true, !o.kb_given};
+  (*report)["applied"] = ApplyLensProfile(p, which, radiance, o.merge.threads);
+  if (o.vignetting_given) (*report)["overridden"].push_back("vignetting: CaptureOptions::lens.vignetting given");
+  if (o.kb_given) (*report)["overridden"].push_back("distortion: CaptureOptions::lens.kb_k given");
+  for (const auto& m : p.missing) skipped->push_back({{"stage", "lens profile " + m.substr(0, m.find(':'))}, {"reason", m}});
+  std::string applied;
+  for (const char* k : {"vignetting", "tca", "distortion"})
+    if ((*report)["applied"].value(k, false)) applied += std::string(applied.empty() ? "" : ", ") + k;
+  Progress(o, "lens profile " + p.lens_maker + ":" + p.lens_model +
+                  (p.camera_model.empty() ? std::string() : " on " + p.camera_maker + ":" + p.camera_model) + ": " +
+                  (applied.empty() ? std::string("nothing applied") : applied + " corrected"));
+}
+
 // Stage 1, one camera: the brackets merged to radiance.
-CameraImages MergeStage(const CaptureOptions& o) {
+CameraImages MergeStage(const CaptureOptions& o, const CapturePlan& plan, nlohmann::json* skipped) {
   CameraImages r;
   nlohmann::json load_report;
   const auto brackets = LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
@@ -295,13 +355,19 @@ CameraImages MergeStage(const CaptureOptions& o) {
   r.exposure_scale = merged.exposure_scale;
   r.merge_report = merged.report;
   r.response_curve = merged.response_curve;
-  const RigCamera cam = BracketCamera(o, merged.radiance.width, merged.radiance.height);
-  r.measured.push_back(PlaneAsImage(merged.well_measured, cam.width, cam.height));
+  Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
+                  " pixels no exposure measured well)");
+  r.lens_profile = plan.lens_profile_report;
+  if (plan.lens_profile) CorrectWithProfile(o, *plan.lens_profile, &merged.radiance, &r.lens_profile, skipped);
+  const RigCamera cam =
+      BracketCamera(o, merged.radiance.width, merged.radiance.height, plan.lens_profile, &r.lens_profile);
+  ImageRGB measured = PlaneAsImage(merged.well_measured, cam.width, cam.height);
+  if (plan.lens_profile && r.lens_profile["applied"].value("distortion", false))  // the image's geometry
+    ApplyLensProfile(*plan.lens_profile, {false, false, true}, &measured, o.merge.threads);
+  r.measured.push_back(std::move(measured));
   r.images.push_back(std::move(merged.radiance));
   r.cameras.push_back(cam);
   for (const auto& p : o.brackets) r.sources.push_back({{"path", p}, {"sha256", Sha256OfFile(p)}});
-  Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
-                  " pixels no exposure measured well)");
   return r;
 }
 
@@ -495,6 +561,7 @@ ExrAttributes FrameAttributes(const CaptureOptions& o, const CapturePlan& plan, 
     attrs.v3fs["skycalCameraRotationDeg"] = {static_cast<float>(ypr[0]), static_cast<float>(ypr[1]), static_cast<float>(ypr[2])};
   }
   if (colour.chart) attrs.strings["skycalColorCorrection"] = ColorCorrectionToJson(*colour.chart).dump();
+  if (cams.lens_profile.is_object() && cams.lens_profile.value("used", false)) attrs.strings["skycalLensProfile"] = cams.lens_profile.dump();
   attrs.strings["skycalUnits"] = "relative radiance: linear / (t ISO/100 / N^2), scene-linear Rec.709";
   attrs.strings["skycalVersion"] = kSkycalVersion;
   return attrs;
@@ -506,9 +573,10 @@ nlohmann::json RunCapturePipeline(const CaptureOptions& o) {
   const CapturePlan plan = PlanCapture(o);
   nlohmann::json stages = nlohmann::json::object(), skipped = nlohmann::json::array();
   const auto t0 = Clock::now();
-  CameraImages cams = o.brackets.empty() ? LoadRigStage(plan.rig_cameras, &skipped) : MergeStage(o);
+  CameraImages cams = o.brackets.empty() ? LoadRigStage(plan.rig_cameras, &skipped) : MergeStage(o, plan, &skipped);
   const auto t1 = Clock::now();
   stages["merge_ms"] = Ms(t0, t1);
+  if (cams.lens_profile.contains("applied")) stages["lens_profile_ms"] = cams.lens_profile["applied"]["ms"];
   const ColourResult colour = ColourStage(o, cams, &cams.images, &skipped);
   const auto t2 = Clock::now();
   stages["colour_ms"] = Ms(t1, t2);
@@ -540,6 +608,7 @@ nlohmann::json RunCapturePipeline(const CaptureOptions& o) {
                           {"why_no_time", plan.time_place.why_no_time}}},
           {"merge", cams.merge_report},
           {"color_correction", colour.summary},
+          {"lens_profile", cams.lens_profile},
           {"stars", unwrapped.stars ? unwrapped.stars->ToJson() : nlohmann::json()},
           {"stages", stages},
           {"skipped", skipped},

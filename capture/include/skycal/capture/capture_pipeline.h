@@ -30,6 +30,12 @@ struct CaptureOptions {
   // lens flag with --rig) is refused as contradictory rather than silently ignored.
   bool lens_model_given = false, lens_center_given = false, lens_radius_given = false;
   bool lens_fov_given = false, kb_given = false, vignetting_given = false;
+  // The lensfun profile (lens_profile.h) of the single camera's lens: "" looks it up from the
+  // first bracket's EXIF (no match: a message, and on without); "none" turns it off; else
+  // "LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL]" (no match: an error). Its vignetting
+  // and TCA correct the merged (linear) image, its distortion, projection and focal length
+  // the unwrap; the hand-given lens fields above override it field by field.
+  std::string lens_profile;
   // yaw, pitch, roll in degrees; unset: the identity for --lens latlong (the panorama is
   // already in the world's lat-long), 0,90,0 (looking straight up) for the fisheyes.
   std::optional<std::array<double, 3>> camera_ypr_deg;
