@@ -43,6 +43,9 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   SkySun.SyntheticCieSkiesRecoverTheSun                                         # 12100 (ctest -j2, load 10)
 )
 
+# Measured fast (2026-11-28, load average 9, ms): ResponseRecovery.SharedShoulderCurveOneCurveForTheThreeChannels
+# 1409, ResponseRecovery.BracketsThatCannotDetermineTheCurveSaySo 2340: labelled fast by the loop below.
+
 # Not timed: sorted by what they do (see above).
 set(SKYCAL_SLOW_TESTS_BY_CONTENT
   CloudStats.KnownShapesControlRecoversTheTruth

@@ -260,6 +260,7 @@ CameraImages MergeStage(const CaptureOptions& o) {
   nlohmann::json load_report;
   const auto brackets = LoadBrackets(o.brackets, o.exposure_times_s, 0, &load_report);
   MergeResult merged = MergeBrackets(brackets, o.merge);
+  for (const auto& w : merged.report["warnings"]) Log("merge warning: " + w.get<std::string>());
   r.exposure_scale = merged.exposure_scale;
   r.merge_report = merged.report;
   r.response_curve = merged.response_curve;

@@ -163,7 +163,8 @@ struct MergeResult {
   // synthetic sets: within 10% of the true curve's, channels within 6% of each other).
   std::vector<float> response_curve;
   int response_levels = 0;
-  nlohmann::json report;             // brackets, counts, response, options, timings_ms
+  nlohmann::json report;             // brackets, counts, response, options, timings_ms, warnings (strings: e.g. a
+                                     // recovered curve these brackets do not determine, response.determinacy)
 };
 
 // Merges brackets of one scene (same size and bit depth, distinct exposures, >= 2). Throws
