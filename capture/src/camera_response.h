@@ -58,8 +58,9 @@ std::vector<double> RecoverWeightedLogResponse(const std::vector<const BracketIm
 
 // Whether the brackets determine a recovered curve (response_determinacy.cc): per channel,
 // the share of pixels well exposed (MergeOptions thresholds) in >= 2 brackets and the codes
-// that no such pixel shows. Appends a warning (the channel, the codes, the reason) when the
-// share is under 1% or >= max(5, 2% of the fit codes) codes are unlinked.
+// that pixels show but hardly any such pixel does (unlinked). Appends a warning (the channel,
+// the codes, the reason) when the share is under 1% or >= max(5, 2% of the fit codes) codes
+// are unlinked.
 nlohmann::json ResponseDeterminacy(const std::vector<const BracketImage*>& images, const MergeOptions& options,
                                    std::vector<std::string>* warnings);
 

@@ -46,26 +46,27 @@ nlohmann::json ResponseDeterminacy(const std::vector<const BracketImage*>& image
   nlohmann::json channels = nlohmann::json::array();
   const char* names[3] = {"R", "G", "B"};
   for (int c = 0; c < 3; ++c) {
-    std::vector<long long> seen(256, 0);
+    std::vector<long long> seen(256, 0), shown(256, 0);  // by linked pixels; by any pixel
     long long grid = 0, linked = 0;
     for (int y = stride / 2; y < first.height; y += stride)
       for (int x = stride / 2; x < first.width; x += stride, ++grid) {
         const size_t idx = first.index(x, y) + c;
         int good = 0;
         for (const BracketImage* img : images) good += wt.w[Code8(*img, idx)] > 0.0f;
-        if (good < 2) continue;
-        ++linked;
         for (const BracketImage* img : images) {
           const int z = Code8(*img, idx);
-          if (wt.w[z] > 0.0f) ++seen[z];
+          if (wt.w[z] > 0.0f) ++shown[z], seen[z] += good >= 2;
         }
+        linked += good >= 2;
       }
-    // A code counts as measured when it is seen at >= 2% of the average code's count (each
-    // linked pixel shows >= 2 codes), and at least once.
+    // A code is unlinked when pixels show it (well exposed, >= 2% of the average code's count
+    // of linked readings, each linked pixel giving >= 2) but fewer than that many of them are
+    // linked: the merge reads the curve there, the brackets do not measure it. Codes the scene
+    // does not show (e.g. the darkest ones, when its darkest point is brighter) do not count.
     const double floor_count = std::max(1.0, 0.02 * 2.0 * double(linked) / fit_codes);
     std::vector<bool> unlinked(256, false);
     int unlinked_count = 0;
-    for (int z = lo; z <= hi; ++z) unlinked_count += (unlinked[z] = seen[z] < floor_count);
+    for (int z = lo; z <= hi; ++z) unlinked_count += (unlinked[z] = shown[z] >= floor_count && seen[z] < floor_count);
     const auto run = LongestRun(unlinked);
     const double linked_fraction = grid > 0 ? double(linked) / double(grid) : 0.0;
     channels.push_back({{"channel", names[c]}, {"linked_pixel_fraction", linked_fraction},
@@ -78,9 +79,9 @@ nlohmann::json ResponseDeterminacy(const std::vector<const BracketImage*>& image
         << "to overlap; the recovered curve is not determined by these brackets (give a known response)";
     } else if (unlinked_count >= std::max(5, fit_codes / 50)) {
       w << "channel " << names[c] << ": " << unlinked_count << " of the codes " << lo << ".." << hi
-        << " (longest run " << run.first << ".." << run.second << ") are well exposed in no pixel that is also well "
-        << "exposed in a second bracket, so the curve there is interpolated, not measured: the brackets are too far "
-        << "apart for this curve's slope (add brackets in between, or give a known response)";
+        << " (longest run " << run.first << ".." << run.second << ") are shown by pixels that are well exposed in no "
+        << "second bracket, so the curve there is interpolated, not measured: the brackets are too far apart for "
+        << "this curve's slope (add brackets in between, or give a known response)";
     }
     if (!w.str().empty() && warnings) warnings->push_back(w.str());
   }
