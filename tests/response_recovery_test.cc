@@ -2,7 +2,7 @@
 // the 1.5x target of docs/capture.md): brackets of a real sky through each curve, with photon, read and
 // 0.6 DN code noise and clipping; the merge through the recovered curve (`weighted`) is
 // compared with the merge through the true curve, median and p90 relative error after one
-// global scale. The full table (5 shapes x 12 bracket sets) is bench/results/capture-response/capture-response.md.
+// global scale. The full table (6 shapes x 12 bracket sets, and the held-out EMoR family) is bench/results/capture-response/capture-response.md.
 #include <gtest/gtest.h>
 
 #include <algorithm>
