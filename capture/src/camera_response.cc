@@ -297,13 +297,13 @@ std::vector<float> RecoverWeighted(const std::vector<const BracketImage*>& image
     const double difference = ChannelShapeDifference(g, o.weighted_low_code, o.weighted_high_code);
     nlohmann::json choice = {{"channel_shape_difference", difference}, {"tolerance", o.auto_shape_tolerance}};
     if (difference <= o.auto_shape_tolerance) {
-      // One shape in every channel: Debevec's solve (bench/results/capture-response/capture-response.md:
-      // within 1.5x of the known-response merge on every shared curve once the chart
-      // balances the channels; the noise-weighted one is not, on 3-EV sets).
+      // One shape in every channel: Debevec's solve, one curve for the three channels
+      // (CalibrateSharedDebevec: the per-channel solves' own extrapolations of the top codes
+      // unbalance the channels), bench/results/capture-response/capture-response.md.
       MergeOptions debevec = o;
       debevec.response = ResponseModel::kDebevec;
       nlohmann::json sub;
-      std::vector<float> d = RecoverResponse(images, relative_exposure, debevec, &sub);
+      std::vector<float> d = RecoverResponse(images, relative_exposure, debevec, &sub, /*shared_curve=*/true);
       nlohmann::json out = sub["calibration"];
       choice["chose"] = "debevec";
       choice["reason"] = "the channels' recovered curves have one shape";
@@ -370,17 +370,54 @@ std::vector<float> CalibrateWithOpenCv(const std::vector<const BracketImage*>& i
   return FromMat(out);
 }
 
-// skycal's Debevec or Robertson solve over the picked pixels' well-exposed samples;
-// Robertson's iteration counts go into cal.
+// One Debevec curve for the three channels: every picked pixel's three channels enter one
+// solve as three samples (3x the equations), and the curve is copied to each channel.
+//
+// Why, for a curve the channels share (kAuto's one-shape case): Debevec's solve per channel
+// leaves each channel's scale to its own extrapolation of ln f past the well-exposed codes
+// (the top code is full scale, the gauge), and that extrapolation differs between channels
+// by the noise and by how each channel's samples fall on the curve's toe and shoulder: a
+// colour imbalance that no global scale removes, largest where the shoulder is strong (the
+// top codes then span a stop or more, so the extrapolation is long). Constant-ratio
+// brackets leave a component of ln f periodic in ln x (period: the ratio) undetermined
+// (Grossberg & Nayar, "What can be known about the radiometric response from images?",
+// ECCV 2002); the smoothness prior picks it, and the only equations that pin it on a steep
+// S-curve 2 EV apart tie a mid-tone code to a toe or shoulder code of the next bracket,
+// which the hat weight (squared) gives ~1% of a mid-tone equation's say. Three channels in
+// one solve give the prior three times those equations and one extrapolation, not three.
+// lambda is scaled by sqrt(3) so that the smoothness keeps the say relative to the data
+// that MergeOptions::lambda was chosen for on one channel's samples.
+std::vector<float> CalibrateSharedDebevec(const std::vector<const BracketImage*>& images,
+                                          const std::vector<size_t>& pixel_index, const std::vector<double>& ln_k,
+                                          const WeightTable& data_w, const WeightTable& smooth_w, double lambda) {
+  std::vector<uint8_t> codes;
+  for (int c = 0; c < 3; ++c) {
+    const std::vector<uint8_t> channel = ChannelCodes(images, pixel_index, c);
+    codes.insert(codes.end(), channel.begin(), channel.end());
+  }
+  const std::vector<double> g = SolveDebevec(codes, images.size(), ln_k, data_w, smooth_w, lambda * std::sqrt(3.0));
+  std::vector<float> curve(256 * 3);
+  for (int z = 0; z < 256; ++z)
+    for (int c = 0; c < 3; ++c) curve[z * 3 + c] = static_cast<float>(std::exp(g[z]));
+  return curve;
+}
+
+// skycal's Debevec or Robertson solve over the picked pixels' well-exposed samples (Debevec
+// with `shared`: one curve for the three channels, CalibrateSharedDebevec); Robertson's
+// iteration counts go into cal.
 std::vector<float> CalibrateWellExposed(const std::vector<const BracketImage*>& images,
                                         const std::vector<size_t>& pixel_index,
                                         const std::vector<double>& relative_exposure, const MergeOptions& o,
-                                        nlohmann::json* cal) {
+                                        bool shared, nlohmann::json* cal) {
   const size_t n = images.size();
   std::vector<float> curve;
   const WeightTable data_w = MakeWeights(o, 255, true), smooth_w = MakeWeights(o, 255, false);
   std::vector<double> ln_k(n);
   for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
+  if (shared && o.response == ResponseModel::kDebevec) {
+    (*cal)["channels"] = "one curve for the three channels";
+    return CalibrateSharedDebevec(images, pixel_index, ln_k, data_w, smooth_w, o.lambda);
+  }
   curve.assign(256 * 3, 0.0f);
   std::vector<int> iterations(3, 0);
   // One channel per worker (the three solves are independent).
@@ -406,7 +443,7 @@ std::vector<float> CalibrateWellExposed(const std::vector<const BracketImage*>& 
 
 std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
                                    const std::vector<double>& relative_exposure, const MergeOptions& o,
-                                   nlohmann::json* report) {
+                                   nlohmann::json* report, bool shared_curve) {
   const auto t0 = std::chrono::steady_clock::now();
   if (o.response == ResponseModel::kWeighted || o.response == ResponseModel::kAuto)
     return RecoverWeighted(images, relative_exposure, o, report, t0);
@@ -415,7 +452,7 @@ std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& image
   cal["solver"] = o.opencv_calibration ? "opencv" : "skycal (well-exposed samples only)";
   std::vector<float> curve = o.opencv_calibration
                                  ? CalibrateWithOpenCv(images, pixel_index, relative_exposure, o)
-                                 : CalibrateWellExposed(images, pixel_index, relative_exposure, o, &cal);
+                                 : CalibrateWellExposed(images, pixel_index, relative_exposure, o, shared_curve, &cal);
   int non_finite = 0;
   for (float v : curve) non_finite += !std::isfinite(v);
   cal["non_finite_codes_filled"] = non_finite;  // OpenCV's Robertson divides by a zero count for unseen codes

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -36,9 +37,11 @@ std::vector<float> AnalyticResponse(ResponseModel model, int levels);
 // options.opencv_calibration, only well-exposed samples enter the fit and the curve beyond
 // the well-exposed codes is extrapolated (log-linear), so the top code's value, which fixes
 // the normalisation, is an extrapolation rather than an average over clipped samples.
+// shared_curve (kDebevec, skycal's solver): one curve fitted to the three channels' samples
+// together and used for all three (kAuto when the channels' curves have one shape).
 std::vector<float> RecoverResponse(const std::vector<const BracketImage*>& images,
                                    const std::vector<double>& relative_exposure, const MergeOptions& options,
-                                   nlohmann::json* report);
+                                   nlohmann::json* report, bool shared_curve = false);
 
 // Adds samples' equations a(z) [g(z_pj) - ln E_p - ln k_j]^2 (codes[p * n + j], weight a per
 // code, 0 = unused) to the normal equations of the 256 g's, each ln E_p eliminated in closed
@@ -52,6 +55,14 @@ void AddSamplesEliminatingLnE(const std::vector<uint8_t>& codes, size_t n, const
 std::vector<double> RecoverWeightedLogResponse(const std::vector<const BracketImage*>& images,
                                                const std::vector<double>& ln_k, int c, const MergeOptions& options,
                                                nlohmann::json* report);
+
+// Whether the brackets determine a recovered curve (response_determinacy.cc): per channel,
+// the share of pixels well exposed (MergeOptions thresholds) in >= 2 brackets and the codes
+// that pixels show but hardly any such pixel does (unlinked). Appends a warning (the channel,
+// the codes, the reason) when the share is under 1% or >= max(5, 2% of the fit codes) codes
+// are unlinked.
+nlohmann::json ResponseDeterminacy(const std::vector<const BracketImage*>& images, const MergeOptions& options,
+                                   std::vector<std::string>* warnings);
 
 // kAuto's test of "one shape": the largest RMS over codes lo..hi, between two channels, of
 // the difference of their ln f (g per channel, 256 codes) less its mean (the per-channel

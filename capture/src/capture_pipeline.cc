@@ -352,6 +352,7 @@ CameraImages MergeStage(const CaptureOptions& o, const CapturePlan& plan, nlohma
   MergeResult merged = MergeBrackets(brackets, o.merge);
   r.raw = brackets[0].image.linear;
   r.raw_camera_to_rec709 = RawCameraMatrix(brackets);
+  for (const auto& w : merged.report["warnings"]) Log("merge warning: " + w.get<std::string>());
   r.exposure_scale = merged.exposure_scale;
   r.merge_report = merged.report;
   r.response_curve = merged.response_curve;

@@ -452,6 +452,10 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
   }
   const int levels = first.max_code() + 1;
   const std::string source = ChooseResponse(brackets, order, sorted_images, relative, options, r, &response_report);
+  // A recovered curve: whether these brackets determine it (a warning, not a quiet error).
+  std::vector<std::string> warnings;
+  if (response_report.contains("calibration"))
+    response_report["determinacy"] = detail::ResponseDeterminacy(sorted_images, options, &warnings);
   const auto t_response = Clock::now();
 
   MergeTables tb = MakeTables(r, order, relative, sorted_images, options, levels, first.max_code());
@@ -498,6 +502,7 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
         {"tables", Ms(t_response, t_tables)},
         {"merge", Ms(t_tables, t_merged)},
         {"total", Ms(t_start, Clock::now())}}}};
+  r.report["warnings"] = warnings;
   return r;
 }
 

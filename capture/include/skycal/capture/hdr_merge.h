@@ -30,7 +30,8 @@ namespace skycal::capture {
 // How code values map to linear sensor values.
 enum class ResponseModel {
   kAuto,       // recovered: `weighted` per channel first; when the channels' recovered curves have one
-               // shape (MergeOptions::auto_shape_tolerance), `debevec` instead (capture/src/camera_response.cc)
+               // shape (MergeOptions::auto_shape_tolerance), one `debevec` curve fitted to the three
+               // channels together instead (capture/src/camera_response.cc)
   kWeighted,   // recovered from the brackets: Debevec & Malik's log least squares over thousands of
                // samples with inverse-noise-variance weights (capture/src/weighted_response.cc)
   kDebevec,    // recovered from the brackets: Debevec & Malik 1997 least squares on sampled pixels
@@ -80,9 +81,10 @@ struct Bracket {
 
 struct MergeOptions {
   // auto: within 1.5x of the known-response merge (median and p90, once a colour chart
-  // balances the channels) on all 60 bracket sets of `skycal bench --suite capture-response`
-  // (5 unseen curves x 3..9 brackets x 1..3 EV), where debevec meets it on 56 and weighted on
-  // 49; it costs a weighted recovery plus, for one shape, a Debevec one (~0.1-0.3 s at 1024x512,
+  // balances the channels) on all 60 bracket sets of the project's five original curves in
+  // `skycal bench --suite capture-response` (3..9 brackets x 1..3 EV), where debevec meets it
+  // on 56 and weighted on 49; on 14 of 24 sets of the held-out EMoR family (docs/capture.md);
+  // it costs a weighted recovery plus, for one shape, a Debevec one (~0.1-0.3 s at 1024x512,
   // once per calibration frame when a time-lapse reuses the curve).
   ResponseModel response = ResponseModel::kAuto;
   // A fixed response (e.g. MergeResult::response_curve of an earlier merge), which skips
@@ -172,7 +174,8 @@ struct MergeResult {
   // synthetic sets: within 10% of the true curve's, channels within 6% of each other).
   std::vector<float> response_curve;
   int response_levels = 0;
-  nlohmann::json report;             // brackets, counts, response, options, timings_ms
+  nlohmann::json report;             // brackets, counts, response, options, timings_ms, warnings (strings: e.g. a
+                                     // recovered curve these brackets do not determine, response.determinacy)
 };
 
 // Merges brackets of one scene (same size and bit depth, distinct exposures, >= 2). Throws

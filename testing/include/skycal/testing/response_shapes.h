@@ -10,8 +10,12 @@
 #pragma once
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <functional>
+#include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -76,6 +80,91 @@ inline std::vector<ResponseShape> UnseenResponseShapes() {
 // that error is one global scale and divides out (bench/results/capture-response/capture-response.md).
 inline ResponseShape FlatShoulderShape() {
   return {"flat shoulder (gamma 2.6 + contrast S)", {GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5)}};
+}
+
+// The held-out family: curves of Grossberg & Nayar's Empirical Model of Response ("Modeling
+// the space of camera response functions", IEEE PAMI 26(10), 2004), a PCA of the 201
+// measured curves of their DoRF database: f = f0 + sum_i c_i h_i over irradiance E in
+// [0, 1], 1024 samples (E = i / 1023); f(0) = 0 and f(1) = 1 for every c (each h_i is 0 at
+// both ends). datasets/response/emor_basis.csv holds f0 and h1..h6 (datasets/README.md).
+// The merge code was not designed on these curves: they measure it on a family it has not
+// seen (bench/results/capture-response/capture-response.md, its own section).
+struct EmorBasis {
+  std::vector<double> f0;
+  std::array<std::vector<double>, 6> h;
+};
+
+inline EmorBasis LoadEmorBasis(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error("EMoR basis: cannot read " + path);
+  EmorBasis b;
+  std::string line;
+  std::getline(in, line);  // header: E,f0,h1..h6
+  while (std::getline(in, line)) {
+    std::stringstream row(line);
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
+    if (v.size() != 8) throw Error("EMoR basis: " + path + ": a row without 8 columns");
+    b.f0.push_back(v[1]);
+    for (int i = 0; i < 6; ++i) b.h[i].push_back(v[2 + i]);
+  }
+  if (b.f0.size() != 1024) throw Error("EMoR basis: " + path + ": expected 1024 rows");
+  return b;
+}
+
+// f0 + sum c_i h_i at the 1024 samples.
+inline std::vector<double> EmorSamples(const EmorBasis& b, const std::array<double, 6>& c) {
+  std::vector<double> f = b.f0;
+  for (size_t k = 0; k < f.size(); ++k)
+    for (int i = 0; i < 6; ++i) f[k] += c[i] * b.h[i][k];
+  return f;
+}
+
+// The curve through the samples, linear between them.
+inline ToneCurve SampledCurve(std::vector<double> samples) {
+  auto f = std::make_shared<const std::vector<double>>(std::move(samples));
+  return [f](double x) {
+    const double u = std::clamp(x, 0.0, 1.0) * double(f->size() - 1);
+    const size_t i = std::min(f->size() - 2, static_cast<size_t>(u));
+    return (*f)[i] + ((*f)[i + 1] - (*f)[i]) * (u - double(i));
+  };
+}
+
+// `count` curves of the family, one per bracket set, the same in the three channels (a
+// camera's tone curve applied after white balance). Coefficients: c1 ~ U(-4, 5), c2..c6
+// ~ N(0, {1.0, 0.4, 0.25, 0.12, 0.08}). No per-coefficient spread of the DoRF curves is
+// published in the sources at hand; these ranges are the ones the basis gives standard curves
+// (c1: linear +6.5, gamma 1/1.8 +1.5, sRGB -0.1, gamma 1/3 -2.2, a logistic in stops with
+// a long shoulder -5.3; |c2| <= 3.3, |c3| <= 0.9, |c4| <= 0.6, |c5|, |c6| <= 0.2).
+// A draw whose curve is not strictly increasing over the 1024 samples is drawn again
+// (`rejected` counts them). `coefficients` (optional) receives each curve's c.
+inline std::vector<ResponseShape> EmorHeldOutShapes(const EmorBasis& b, int count, unsigned seed,
+                                                    std::vector<std::array<double, 6>>* coefficients = nullptr,
+                                                    int* rejected = nullptr) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> c1(-4.0, 5.0);
+  const double sigma[5] = {1.0, 0.4, 0.25, 0.12, 0.08};
+  std::vector<ResponseShape> out;
+  if (rejected) *rejected = 0;
+  while (static_cast<int>(out.size()) < count) {
+    std::array<double, 6> c{};
+    c[0] = c1(rng);
+    for (int i = 1; i < 6; ++i) c[i] = std::normal_distribution<double>(0.0, sigma[i - 1])(rng);
+    const std::vector<double> f = EmorSamples(b, c);
+    bool increasing = true;
+    for (size_t k = 1; k < f.size() && increasing; ++k) increasing = f[k] > f[k - 1] && f[k] <= 1.0;
+    if (!increasing) {
+      if (rejected) ++*rejected;
+      continue;
+    }
+    char name[96];
+    std::snprintf(name, sizeof name, "EMoR %d (c1 %+.2f, c2 %+.2f, c3 %+.2f)", static_cast<int>(out.size()) + 1, c[0], c[1], c[2]);
+    const ToneCurve t = SampledCurve(f);
+    out.push_back({name, {t, t, t}});
+    if (coefficients) coefficients->push_back(c);
+  }
+  return out;
 }
 
 struct ShapeBracketSpec {
