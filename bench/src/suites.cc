@@ -33,6 +33,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(CloudsErrorSuite());
   r.Add(CloudsDivergenceSuite());
   r.Add(CloudsSuite());
+  r.Add(GpuSuite());
   return r;
 }
 

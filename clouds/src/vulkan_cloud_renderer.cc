@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "resolved_clouds.h"
+#include "skycal/clouds/cloud_renderer_stats.h"
 #include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
@@ -100,6 +101,16 @@ class VulkanCloudRenderer final : public CloudRenderer {
   }
 
   std::string Describe() const override { return "vulkan clouds (" + ctx_->device_name() + ")"; }
+  DeviceStats Stats() const {
+    DeviceStats s;
+    s.gpu_ms = pipeline_.last_gpu_ms();
+    for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig, kBasePairs}) {
+      s.resource_uploads += pipeline_.uploads(b);
+      s.resource_upload_bytes += pipeline_.upload_bytes(b);
+    }
+    s.staged = pipeline_.staged();
+    return s;
+  }
 
  private:
   void Upload(uint32_t binding, const std::vector<float>& v) {
@@ -146,6 +157,11 @@ class VulkanCloudRenderer final : public CloudRenderer {
 };
 
 }  // namespace
+
+DeviceStats RendererDeviceStats(const CloudRenderer& renderer) {
+  const auto* vulkan = dynamic_cast<const VulkanCloudRenderer*>(&renderer);
+  return vulkan ? vulkan->Stats() : DeviceStats{};
+}
 
 std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation) {
   return std::make_unique<VulkanCloudRenderer>(validation);
