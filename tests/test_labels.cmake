@@ -41,6 +41,11 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   Cli.FitBadInputLeavesNothing                                                  # 38695
   Cli.FitWritesItsOutputsAndExportMakesGameTables                               # 20394
   SkySun.SyntheticCieSkiesRecoverTheSun                                         # 12100 (ctest -j2, load 10)
+  VulkanRenderers.DeviceTimeWithinWallTime                                      # 4171 (load 9)
+  VulkanRenderers.StagedAndDirectAreBitIdentical                                # 6100 (load 9)
+  VulkanRenderers.UnchangedContentIsNotUploadedAgain                            # 5762 (load 9)
+  VulkanRenderers.ManyCloudRendersKeepMemoryFlat                                # 17373 (load 9)
+  VulkanRenderers.RenderersMadeAndDroppedReturnTheirMemory                      # 17347 (load 9)
 )
 
 # Not timed: sorted by what they do (see above).
