@@ -184,6 +184,8 @@ void VulkanContext::ReadTimestampSupport() {
   timestamp_valid_bits_ = queue_family_ < nq ? qf[queue_family_].timestampValidBits : 0;
   timestamp_period_ns_ = props.limits.timestampPeriod;
   if (!(timestamp_period_ns_ > 0.0)) timestamp_valid_bits_ = 0;
+  const char* off = std::getenv("SKYCAL_VULKAN_TIMESTAMPS");  // 0: no queries (device times null)
+  if (off && std::string(off) == "0") timestamp_valid_bits_ = 0;
 }
 
 void VulkanContext::OpenPipelineCache() {
