@@ -80,6 +80,8 @@ FitResultFile FullFile() {
   f.probe = fit::ProbeReport{2, 0.25, 16, 4096, 3, 0.125, false, 0.18, 0.2, "no sun-facing samples"};
   f.linear_start.single = SingleStart(0.3);
   f.levels = {{128, 64, 8192, 37, 5, 10.5, 1.0 / 3.0, {10.5, 2.0, 1.0 / 3.0}, "CONVERGENCE", 6, 2, 0.75}};
+  f.levels[0].render_wall_ms = 12.5;
+  f.levels[0].render_gpu_ms = 1.0 / 3.0;
   f.skipped = {{"ground_albedo", "no probe"}};
   f.decisions = {{"below horizon", "not sky", 12.5, "measured: 2 runs", std::nullopt, ""},
                  {"ring 3", "saturated", 0.0, "none: x", -0.0012345678901234567, "a/b runs"}};
@@ -149,6 +151,7 @@ TEST(FitResultFile, RoundTripIsExactMemberByMember) {
   EXPECT_FALSE(read.decisions[0].rel_rmse_change.has_value());
   EXPECT_EQ(read.probe->ground_albedo_reason, "no sun-facing samples");
   EXPECT_EQ(read.levels[0].cost_per_iteration[2], 1.0 / 3.0);
+  EXPECT_EQ(read.levels[0].render_gpu_ms, 1.0 / 3.0);
   EXPECT_EQ(read.time_of_day_h, 14.25);
   ASSERT_TRUE(read.calibration.has_value());
   EXPECT_EQ(read.calibration->game_per_pixel_log_rmse, 0.6 / 7.0);

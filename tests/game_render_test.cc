@@ -79,6 +79,29 @@ TEST(GameRender, TheFileHoldsTheInMemoryImage) {
   EXPECT_EQ(dir.CountEntries(), 1);  // the EXR alone: no temporaries left
 }
 
+// time_ms.gpu: each Vulkan pass's device time by timestamps (lavapipe writes them), > 0 and
+// within the pass's wall time; null for the CPU backend and for a pass not drawn.
+TEST(GameRender, DeviceTimePerPassBesideTheWallTime) {
+  controllers::GameRenderOptions o = Small();
+  o.width = 256;
+  o.height = 128;
+  o.backend = render::Backend::kVulkan;
+  o.clouds.enabled = true;
+  o.clouds.march.steps_zenith = 8;
+  o.clouds.march.steps_horizon = 16;
+  const nlohmann::json t = controllers::RenderGameImage(o).summary.at("time_ms");
+  for (const char* pass : {"sky", "clouds"}) {
+    ASSERT_TRUE(t.at("gpu").at(pass).is_number()) << pass << ": " << t.dump();
+    EXPECT_GT(t["gpu"][pass].get<double>(), 0.0) << pass;
+    EXPECT_LE(t["gpu"][pass].get<double>(), t.at(pass).get<double>()) << pass;
+  }
+  o.clouds.enabled = false;
+  EXPECT_TRUE(controllers::RenderGameImage(o).summary["time_ms"]["gpu"]["clouds"].is_null());
+  const nlohmann::json cpu = controllers::RenderGameImage(Small()).summary["time_ms"]["gpu"];
+  EXPECT_TRUE(cpu["sky"].is_null());
+  EXPECT_TRUE(cpu["clouds"].is_null());
+}
+
 TEST(GameRender, ABadOptionNamesItsFieldAndValue) {
   controllers::GameRenderOptions o = Small();
   std::string why;

@@ -43,6 +43,11 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   SkySun.SyntheticCieSkiesRecoverTheSun                                         # 12100 (ctest -j2, load 10)
   RawCapture.FiveDngBracketsOfASkyThroughTheBinary                              # 8490 (ctest -j2, load ~12)
   RawCapture.BadBracketsAreRefusedByTheBinaryWithNothingWritten                 # 11000 (ctest -j2, load ~12)
+  VulkanRenderers.DeviceTimeWithinWallTime                                      # 4171 (load 9)
+  VulkanRenderers.StagedAndDirectAreBitIdentical                                # 6100 (load 9)
+  VulkanRenderers.UnchangedContentIsNotUploadedAgain                            # 5762 (load 9)
+  VulkanRenderers.ManyCloudRendersKeepMemoryFlat                                # 17373 (load 9)
+  VulkanRenderers.RenderersMadeAndDroppedReturnTheirMemory                      # 17347 (load 9)
 )
 
 # Measured fast (2026-11-28, load average 9, ms): ResponseRecovery.SharedShoulderCurveOneCurveForTheThreeChannels

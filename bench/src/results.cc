@@ -112,6 +112,7 @@ CaseResult CaseFromJson(const nlohmann::json& j) {
     c.time.min_ms = t.at("min_ms").get<double>();
     c.time.max_ms = t.at("max_ms").get<double>();
     c.time.runs = t.at("runs").get<int>();
+    if (t.contains("gpu_median_ms") && t["gpu_median_ms"].is_number()) c.time.gpu_median_ms = t["gpu_median_ms"].get<double>();
     c.timed = j.value("timed", true);
     c.error = NumberOr(j.at("error"), std::nan(""));
     c.outcome = ParseOutcome(j.at("outcome").get<std::string>());
@@ -143,7 +144,7 @@ nlohmann::json ToJson(const Results& r) {
 const std::vector<std::string>& CsvColumns() {
   static const std::vector<std::string> columns = {
       "suite", "case", "default", "median_ms", "min_ms", "max_ms", "runs", "error", "error_metric",
-      "outcome", "converged", "on_pareto_front", "message"};
+      "outcome", "converged", "on_pareto_front", "message", "gpu_median_ms"};
   return columns;
 }
 
@@ -163,7 +164,7 @@ std::string ToCsv(const Results& r) {
         << CsvNumber(c.time.median_ms) << "," << CsvNumber(c.time.min_ms) << "," << CsvNumber(c.time.max_ms) << ","
         << c.time.runs << "," << CsvNumber(c.error) << "," << CsvField(metric) << "," << ToString(c.outcome) << ","
         << (c.converged ? (*c.converged ? "1" : "0") : "") << "," << (on_front ? 1 : 0) << "," << CsvField(c.message)
-        << "\n";
+        << "," << (c.time.gpu_median_ms ? CsvNumber(*c.time.gpu_median_ms) : "") << "\n";
   }
   return csv.str();
 }

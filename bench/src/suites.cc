@@ -30,6 +30,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(CaptureResponseSuite());
   r.Add(ExportSuite());
   r.Add(StressSuite());
+  r.Add(GpuSuite());  // before the clouds suites: `clouds` stays last in --suite's list
   r.Add(CloudsErrorSuite());
   r.Add(CloudsDivergenceSuite());
   r.Add(CloudsSuite());

@@ -31,6 +31,7 @@ Suite StressSuite();   // stress_suite.cc
 Suite CloudsErrorSuite();  // clouds_error_suite.cc
 Suite CloudsDivergenceSuite();  // clouds_divergence_suite.cc
 Suite CloudsSuite();   // clouds_suite.cc
+Suite GpuSuite();      // gpu_suite.cc
 
 // datasets/presets/default_clear.json of this checkout.
 std::string DefaultPresetPath();

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "resolved_clouds.h"
+#include "skycal/clouds/cloud_renderer_stats.h"
 #include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
@@ -100,10 +101,30 @@ class VulkanCloudRenderer final : public CloudRenderer {
   }
 
   std::string Describe() const override { return "vulkan clouds (" + ctx_->device_name() + ")"; }
+  DeviceStats Stats() const {
+    DeviceStats s;
+    s.gpu_ms = pipeline_.last_gpu_ms();
+    for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig, kBasePairs}) {
+      s.resource_uploads += pipeline_.uploads(b);
+      s.resource_upload_bytes += pipeline_.upload_bytes(b);
+    }
+    s.staged = pipeline_.staged();
+    return s;
+  }
 
  private:
   void Upload(uint32_t binding, const std::vector<float>& v) {
     std::memcpy(pipeline_.Map(binding, v.size() * sizeof(float)), v.data(), v.size() * sizeof(float));
+    pipeline_.Flush(binding);
+  }
+  // A packed view of the noise (cloud_noise_packing.h) for an n^3 volume, written texel by
+  // texel straight into the mapped (or staging) memory: a new process touches 33 MB of
+  // memory once for the base pairs, not twice (PackBasePairs' vector, then the copy).
+  template <typename PackTexel>
+  void UploadPacked(uint32_t binding, int n, PackTexel pack) {
+    const int texels = n * n * n;
+    float* dst = static_cast<float*>(pipeline_.Map(binding, static_cast<size_t>(texels) * 4 * sizeof(float)));
+    for (int i = 0; i < texels; ++i) pack(i, dst + 4 * static_cast<size_t>(i));
     pipeline_.Flush(binding);
   }
   // An RGB texture as one vec4 per texel (alpha 0): the shader loads 16 bytes per texel.
@@ -123,8 +144,8 @@ class VulkanCloudRenderer final : public CloudRenderer {
                                                     : Fnv(std::vector<float>{}, std::hash<std::string>{}(noise.sha256));
     if (noise_key != noise_key_ || !noise_uploaded_) {
       Upload(kBase, noise.base);
-      Upload(kBasePairs, PackBasePairs(noise));
-      Upload(kDetailQuads, PackDetailQuads(noise));
+      UploadPacked(kBasePairs, CloudNoise::kBaseSize, [&](int i, float* t) { BasePairTexel(noise.base.data(), i, t); });
+      UploadPacked(kDetailQuads, CloudNoise::kDetailSize, [&](int i, float* t) { DetailQuadTexel(noise.detail.data(), i, t); });
       UploadPadded(kCurl, noise.curl);
       noise_key_ = noise_key;
       noise_uploaded_ = true;
@@ -146,6 +167,11 @@ class VulkanCloudRenderer final : public CloudRenderer {
 };
 
 }  // namespace
+
+DeviceStats RendererDeviceStats(const CloudRenderer& renderer) {
+  const auto* vulkan = dynamic_cast<const VulkanCloudRenderer*>(&renderer);
+  return vulkan ? vulkan->Stats() : DeviceStats{};
+}
 
 std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation) {
   return std::make_unique<VulkanCloudRenderer>(validation);

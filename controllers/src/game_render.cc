@@ -9,6 +9,7 @@
 
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/clouds/cloud_renderer.h"
+#include "skycal/clouds/cloud_renderer_stats.h"
 #include "skycal/clouds/composite.h"
 #include "skycal/color/preview.h"
 #include "skycal/core/atomic_file.h"
@@ -19,6 +20,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/output_kind.h"
+#include "skycal/render/renderer_stats.h"
 
 namespace skycal::controllers {
 namespace {
@@ -149,6 +151,23 @@ std::unique_ptr<clouds::CloudRenderer> CreateCloudRenderer(const GameRenderOptio
   return clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
 }
 
+nlohmann::json OrNull(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+// time_ms.gpu: each pass's device time by timestamp queries (null for the CPU backend, a
+// pass not drawn, or a device without timestamps: then a warning says so).
+nlohmann::json GpuTimes(const GameRenderOptions& o, const render::SkyRenderer& sky, const clouds::CloudRenderer* cloud,
+                        nlohmann::json* warnings) {
+  const DeviceStats s = render::RendererDeviceStats(sky);
+  nlohmann::json j = {{"sky", OrNull(s.gpu_ms)}, {"clouds", nullptr}};
+  if (cloud) j["clouds"] = OrNull(clouds::RendererDeviceStats(*cloud).gpu_ms);
+  if (o.backend == render::Backend::kVulkan && !s.gpu_ms) {
+    const std::string w = "the Vulkan device's queue reports no timestamp support: time_ms.gpu is null";
+    warnings->push_back(w);
+    Say(o, "warning: " + w);
+  }
+  return j;
+}
+
 void ApplyExposure(double exposure, ImageRGB* radiance) {
   if (exposure == 1.0) return;
   for (float& v : radiance->pixels) v = static_cast<float>(v * exposure);
@@ -188,6 +207,8 @@ GameImage RenderGameImage(const GameRenderOptions& o) {
   if (cloud_inputs) clouds_summary = RenderCloudsOver(o, preset, *cloud_inputs, *cloud_renderer, &g);
   const auto t_done = Clock::now();
   ApplyExposure(o.exposure, &g.radiance);
+  nlohmann::json warnings_out = warnings;
+  const nlohmann::json gpu = GpuTimes(o, *renderer, cloud_renderer.get(), &warnings_out);
   g.summary = {{"backend", render::ToString(o.backend)},
                {"device", renderer->Describe()},
                {"preset", g.preset_path},
@@ -201,8 +222,9 @@ GameImage RenderGameImage(const GameRenderOptions& o) {
                 {{"init", Ms(t_init, t_render)},
                  {"render", Ms(t_render, t_done)},
                  {"sky", Ms(t_render, t_sky)},
-                 {"clouds", Ms(t_sky, t_done)}}},
-               {"warnings", warnings}};
+                 {"clouds", Ms(t_sky, t_done)},
+                 {"gpu", gpu}}},
+               {"warnings", warnings_out}};
   if (o.exposure != 1.0) g.summary["exposure"] = o.exposure;
   return g;
 }

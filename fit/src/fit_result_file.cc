@@ -75,6 +75,8 @@ nlohmann::json ToJson(const LevelReport& l) {
           {"cost_per_iteration", l.cost_per_iteration},
           {"termination", l.termination},
           {"renders", l.renders},
+          {"render_wall_ms", l.render_wall_ms},
+          {"render_gpu_ms", l.render_gpu_ms ? nlohmann::json(*l.render_gpu_ms) : nlohmann::json(nullptr)},
           {"probe_final_solve_iterations", l.probe_final_solve_iterations},
           {"time_s", l.time_s}};
 }
@@ -366,6 +368,8 @@ void Read(const At& a, LevelReport* x) {
   Optional(a, "cost_per_iteration", &x->cost_per_iteration);
   Optional(a, "termination", &x->termination);
   Optional(a, "renders", &x->renders);
+  Optional(a, "render_wall_ms", &x->render_wall_ms);
+  Optional(a, "render_gpu_ms", &x->render_gpu_ms);
   Optional(a, "probe_final_solve_iterations", &x->probe_final_solve_iterations);
   Optional(a, "time_s", &x->time_s);
 }

@@ -8,6 +8,7 @@
 
 #include "pyramid.h"
 #include "skycal/core/error.h"
+#include "skycal/render/renderer_stats.h"
 
 namespace skycal::fit {
 namespace {
@@ -46,12 +47,18 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
       req.height = height_;
       req.sun_disc = false;
       req.ground = render::GroundMode::kZero;
+      const auto t0 = Clock::now();
       (*images_)[r] = renderer_->Render(preset, req);
+      wall_ms_ += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      const std::optional<double> gpu = render::RendererDeviceStats(*renderer_).gpu_ms;
+      if (gpu) gpu_ms_ = gpu_ms_.value_or(0.0) + *gpu;
     }
     ++renders_;
     *valid_ = true;
   }
   int renders() const { return renders_; }
+  double wall_ms() const { return wall_ms_; }
+  std::optional<double> gpu_ms() const { return gpu_ms_; }
 
  private:
   const FitState* state_;
@@ -61,6 +68,8 @@ class RenderAtEvaluationPoint final : public ceres::EvaluationCallback {
   std::vector<ImageRGB>* images_;
   bool* valid_;
   int renders_ = 0;
+  double wall_ms_ = 0.0;
+  std::optional<double> gpu_ms_;  // summed device time (none: the backend reports none)
 };
 
 class ProgressPrinter final : public ceres::IterationCallback {
@@ -198,6 +207,8 @@ LevelReport SolveLevel(const std::vector<FitTerm*>& terms, const std::vector<Ref
   for (const ceres::IterationSummary& it : summary.iterations) report.cost_per_iteration.push_back(it.cost);
   report.termination = ceres::TerminationTypeToString(summary.termination_type);
   report.renders = callback ? callback->renders() : 0;
+  report.render_wall_ms = callback ? callback->wall_ms() : 0.0;
+  if (callback) report.render_gpu_ms = callback->gpu_ms();
   report.time_s = Seconds(t_level, Clock::now());
   return report;
 }

@@ -1,10 +1,22 @@
 #include "skycal/gpu/compute_pipeline.h"
 
+#include <cstdlib>
 #include <string>
 
 #include "skycal/core/error.h"
+#include "skycal/core/device_stats.h"
 
 namespace skycal::gpu {
+
+MemoryMode MemoryModeFromEnvironment() {
+  const char* env = std::getenv("SKYCAL_VULKAN_MEMORY");
+  const std::string v = env ? env : "";
+  if (v.empty() || v == "auto") return MemoryMode::kAuto;
+  if (v == "direct") return MemoryMode::kDirect;
+  if (v == "staged") return MemoryMode::kStaged;
+  throw Error("SKYCAL_VULKAN_MEMORY = '" + v + "': expected auto, direct or staged");
+}
+
 namespace {
 
 VkBufferUsageFlags UsageFor(VkDescriptorType type) {
@@ -19,9 +31,20 @@ VkBufferUsageFlags UsageFor(VkDescriptorType type) {
 }  // namespace
 
 ComputePipeline::ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
-                                 std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec)
-    : ctx_(std::move(ctx)), types_(std::move(bindings)), buffers_(types_.size()), views_(types_.size(), VK_NULL_HANDLE) {
+                                 std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec, MemoryMode memory)
+    : ctx_(std::move(ctx)),
+      types_(std::move(bindings)),
+      buffers_(types_.size()),
+      staging_(types_.size()),
+      readback_(types_.size(), false),
+      dirty_(types_.size(), false),
+      requested_(types_.size(), 0),
+      uploads_(types_.size(), 0),
+      upload_bytes_(types_.size(), 0),
+      views_(types_.size(), VK_NULL_HANDLE) {
   for (VkDescriptorType t : types_) UsageFor(t);  // reject other types before creating anything
+  if (memory == MemoryMode::kAuto) memory = MemoryModeFromEnvironment();
+  staged_ = memory == MemoryMode::kStaged || (memory == MemoryMode::kAuto && ctx_->has_device_only_memory());
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(ctx_->physical_device(), &props);
   max_texel_buffer_elements_ = props.limits.maxTexelBufferElements;
@@ -43,6 +66,9 @@ void ComputePipeline::Release() {
     v = VK_NULL_HANDLE;
   }
   for (MappedBuffer& b : buffers_) ctx_->DestroyBuffer(b);
+  for (MappedBuffer& b : staging_) ctx_->DestroyBuffer(b);
+  if (queries_) vkDestroyQueryPool(d, queries_, nullptr);
+  queries_ = VK_NULL_HANDLE;
   if (fence_) vkDestroyFence(d, fence_, nullptr);
   if (pool_) vkDestroyCommandPool(d, pool_, nullptr);
   if (descriptor_pool_) vkDestroyDescriptorPool(d, descriptor_pool_, nullptr);
@@ -104,7 +130,8 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
   cpci.stage.pName = "main";
   cpci.stage.pSpecializationInfo = spec.empty() ? nullptr : &spec_info;
   cpci.layout = pipeline_layout_;
-  CheckVk(vkCreateComputePipelines(d, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
+  CheckVk(vkCreateComputePipelines(d, ctx_->pipeline_cache(), 1, &cpci, nullptr, &pipeline_), "vkCreateComputePipelines");
+  ctx_->SavePipelineCache();  // a new process finds this pipeline compiled
 
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = 1;
@@ -128,11 +155,18 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
   CheckVk(vkAllocateCommandBuffers(d, &cbai, &cmd_), "vkAllocateCommandBuffers");
   VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   CheckVk(vkCreateFence(d, &fci, nullptr, &fence_), "vkCreateFence");
+  if (ctx_->timestamp_valid_bits() > 0) {
+    VkQueryPoolCreateInfo qpci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qpci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qpci.queryCount = 2;
+    CheckVk(vkCreateQueryPool(d, &qpci, nullptr, &queries_), "vkCreateQueryPool");
+  }
 }
 
 void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
   if (binding >= buffers_.size()) throw Error("ComputePipeline: binding " + std::to_string(binding) + " does not exist");
   MappedBuffer& b = buffers_[binding];
+  if (!b.buffer) readback_[binding] = host_readback;
   if (!b.buffer || b.size < bytes) {
     if (types_[binding] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER && bytes / 16 > max_texel_buffer_elements_) {
       throw Error("ComputePipeline: binding " + std::to_string(binding) + " needs " + std::to_string(bytes / 16) +
@@ -144,25 +178,48 @@ void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
       if (views_[binding]) vkDestroyBufferView(ctx_->device(), views_[binding], nullptr);
       views_[binding] = VK_NULL_HANDLE;
       ctx_->DestroyBuffer(b);
+      ctx_->DestroyBuffer(staging_[binding]);
     }
-    // Vulkan forbids zero-sized buffers; an empty binding still needs a valid descriptor.
-    b = ctx_->CreateMappedBuffer(bytes > 0 ? bytes : 16, UsageFor(types_[binding]), host_readback);
-    if (types_[binding] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
-      VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
-      vci.buffer = b.buffer;
-      vci.format = kTexelBufferFormat;
-      vci.offset = 0;
-      vci.range = VK_WHOLE_SIZE;
-      CheckVk(vkCreateBufferView(ctx_->device(), &vci, nullptr, &views_[binding]), "vkCreateBufferView");
-    }
+    CreateBuffers(binding, bytes, readback_[binding]);
     descriptors_stale_ = true;
   }
-  return b.mapped;
+  requested_[binding] = bytes;
+  return staged_ ? staging_[binding].mapped : b.mapped;
 }
 
-void ComputePipeline::Flush(uint32_t binding) { ctx_->FlushForDevice(buffers_.at(binding)); }
+void ComputePipeline::CreateBuffers(uint32_t binding, size_t bytes, bool host_readback) {
+  // Vulkan forbids zero-sized buffers; an empty binding still needs a valid descriptor.
+  const VkDeviceSize size = bytes > 0 ? bytes : 16;
+  MappedBuffer& b = buffers_[binding];
+  const VkBufferUsageFlags usage = UsageFor(types_[binding]);
+  if (staged_) {
+    b = ctx_->CreateDeviceBuffer(size, usage | (host_readback ? VK_BUFFER_USAGE_TRANSFER_SRC_BIT : VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+    staging_[binding] = ctx_->CreateMappedBuffer(
+        size, host_readback ? VK_BUFFER_USAGE_TRANSFER_DST_BIT : VK_BUFFER_USAGE_TRANSFER_SRC_BIT, host_readback);
+  } else {
+    b = ctx_->CreateMappedBuffer(size, usage, host_readback);
+  }
+  dirty_[binding] = false;
+  if (types_[binding] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+    VkBufferViewCreateInfo vci{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    vci.buffer = b.buffer;
+    vci.format = kTexelBufferFormat;
+    vci.offset = 0;
+    vci.range = VK_WHOLE_SIZE;
+    CheckVk(vkCreateBufferView(ctx_->device(), &vci, nullptr, &views_[binding]), "vkCreateBufferView");
+  }
+}
 
-const void* ComputePipeline::Read(uint32_t binding) const { return buffers_.at(binding).mapped; }
+void ComputePipeline::Flush(uint32_t binding) {
+  ctx_->FlushForDevice(staged_ ? staging_.at(binding) : buffers_.at(binding));
+  if (staged_) dirty_[binding] = true;
+  ++uploads_[binding];
+  upload_bytes_[binding] += static_cast<long long>(requested_[binding]);
+}
+
+const void* ComputePipeline::Read(uint32_t binding) const {
+  return staged_ ? staging_.at(binding).mapped : buffers_.at(binding).mapped;
+}
 
 size_t ComputePipeline::Size(uint32_t binding) const { return static_cast<size_t>(buffers_.at(binding).size); }
 
@@ -188,21 +245,75 @@ void ComputePipeline::WriteDescriptors() {
   descriptors_stale_ = false;
 }
 
+// Staged: the Flush()ed bindings' staging buffers copied to their device buffers, then a
+// barrier that makes the copies visible to the shader's reads.
+void ComputePipeline::RecordUploads() {
+  bool any = false;
+  for (uint32_t i = 0; i < buffers_.size(); ++i) {
+    if (!dirty_[i] || requested_[i] == 0) continue;
+    const VkBufferCopy region{0, 0, requested_[i]};
+    vkCmdCopyBuffer(cmd_, staging_[i].buffer, buffers_[i].buffer, 1, &region);
+    any = true;
+  }
+  if (!any) return;
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT;
+  vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
+                       nullptr, 0, nullptr);
+}
+
+// After the dispatch: staged readback bindings copied to their host buffers; then the
+// writes (the shader's or the copies') made visible to the host once the fence signals.
+void ComputePipeline::RecordReadbacks() {
+  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  if (staged_) {
+    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+    vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier, 0,
+                         nullptr, 0, nullptr);
+    for (uint32_t i = 0; i < buffers_.size(); ++i) {
+      if (!readback_[i] || requested_[i] == 0) continue;
+      const VkBufferCopy region{0, 0, requested_[i]};
+      vkCmdCopyBuffer(cmd_, buffers_[i].buffer, staging_[i].buffer, 1, &region);
+    }
+  }
+  barrier.srcAccessMask = staged_ ? VK_ACCESS_TRANSFER_WRITE_BIT : VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd_, staged_ ? VK_PIPELINE_STAGE_TRANSFER_BIT : VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                       VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+}
+
 void ComputePipeline::Record(uint32_t gx, uint32_t gy, uint32_t gz) {
   CheckVk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   CheckVk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
+  if (queries_) {
+    vkCmdResetQueryPool(cmd_, queries_, 0, 2);
+    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
+  }
+  if (staged_) RecordUploads();
   vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
   vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_layout_, 0, 1, &set_, 0, nullptr);
   vkCmdDispatch(cmd_, gx, gy, gz);
-  // Make the shader's writes visible to the host once the fence signals.
-  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0,
-                       nullptr, 0, nullptr);
+  RecordReadbacks();
+  if (queries_) vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queries_, 1);
   CheckVk(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
+}
+
+// The two timestamps' difference in ms: ticks masked to the valid bits (a counter that
+// wrapped between them still gives the right difference), times timestampPeriod ns.
+std::optional<double> ComputePipeline::ReadTimestamps() {
+  if (!queries_) return std::nullopt;
+  uint64_t ticks[2] = {0, 0};
+  const VkResult r = vkGetQueryPoolResults(ctx_->device(), queries_, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t),
+                                           VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+  if (r != VK_SUCCESS) return std::nullopt;
+  const uint32_t bits = ctx_->timestamp_valid_bits();
+  const uint64_t mask = bits >= 64 ? ~0ull : ((1ull << bits) - 1);
+  const uint64_t delta = ((ticks[1] & mask) - (ticks[0] & mask)) & mask;
+  return static_cast<double>(delta) * ctx_->timestamp_period_ns() * 1e-6;
 }
 
 void ComputePipeline::Dispatch(uint32_t gx, uint32_t gy, uint32_t gz) {
@@ -215,8 +326,12 @@ void ComputePipeline::Dispatch(uint32_t gx, uint32_t gy, uint32_t gz) {
   CheckVk(vkWaitForFences(ctx_->device(), 1, &fence_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
   CheckVk(vkResetFences(ctx_->device(), 1, &fence_), "vkResetFences");
   for (uint32_t i = 0; i < buffers_.size(); ++i) {
-    if (types_[i] == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER) ctx_->InvalidateForRead(buffers_[i]);
+    dirty_[i] = false;
+    if (staged_ && readback_[i]) ctx_->InvalidateForRead(staging_[i]);
+    if (!staged_ && types_[i] == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER) ctx_->InvalidateForRead(buffers_[i]);
   }
+  last_gpu_ms_ = ReadTimestamps();
+  AddDeviceTime(last_gpu_ms_);
 }
 
 }  // namespace skycal::gpu

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "skycal/core/error.h"
+#include "skycal/gpu/pipeline_cache.h"
 
 namespace skycal::gpu {
 
@@ -155,6 +156,7 @@ std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
   }
   if (ctx->physical_ == VK_NULL_HANDLE) throw Error(kNoDevice);
   vkGetPhysicalDeviceMemoryProperties(ctx->physical_, &ctx->memory_);
+  ctx->ReadTimestampSupport();
 
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -166,7 +168,45 @@ std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
   dci.pQueueCreateInfos = &qci;
   CheckVk(vkCreateDevice(ctx->physical_, &dci, nullptr, &ctx->device_), "vkCreateDevice");
   vkGetDeviceQueue(ctx->device_, ctx->queue_family_, 0, &ctx->queue_);
+  ctx->OpenPipelineCache();
   return ctx;
+}
+
+void VulkanContext::ReadTimestampSupport() {
+  uint32_t nq = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nq, nullptr);
+  std::vector<VkQueueFamilyProperties> qf(nq);
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nq, qf.data());
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(physical_, &props);
+  // timestampValidBits 0: this family writes no timestamps (timestampComputeAndGraphics
+  // only promises them on every graphics and compute family; the family's bits decide).
+  timestamp_valid_bits_ = queue_family_ < nq ? qf[queue_family_].timestampValidBits : 0;
+  timestamp_period_ns_ = props.limits.timestampPeriod;
+  if (!(timestamp_period_ns_ > 0.0)) timestamp_valid_bits_ = 0;
+  const char* off = std::getenv("SKYCAL_VULKAN_TIMESTAMPS");  // 0: no queries (device times null)
+  if (off && std::string(off) == "0") timestamp_valid_bits_ = 0;
+}
+
+void VulkanContext::OpenPipelineCache() {
+  const std::string dir = PipelineCacheDir();
+  if (dir.empty()) return;  // SKYCAL_PIPELINE_CACHE=0: pipelines are compiled every time
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(physical_, &props);
+  PipelineCacheKey key;
+  key.vendor_id = props.vendorID;
+  key.device_id = props.deviceID;
+  key.driver_version = props.driverVersion;
+  std::memcpy(key.uuid, props.pipelineCacheUUID, VK_UUID_SIZE);
+  pipeline_cache_ = std::make_unique<PipelineCache>(device_, key, PipelineCachePath(dir, key));
+}
+
+VkPipelineCache VulkanContext::pipeline_cache() const {
+  return pipeline_cache_ ? pipeline_cache_->handle() : VK_NULL_HANDLE;
+}
+
+void VulkanContext::SavePipelineCache() {
+  if (pipeline_cache_) pipeline_cache_->Save();
 }
 
 std::shared_ptr<VulkanContext> VulkanContext::Shared(bool validation) {
@@ -184,6 +224,7 @@ std::shared_ptr<VulkanContext> VulkanContext::Shared(bool validation) {
 }
 
 VulkanContext::~VulkanContext() {
+  pipeline_cache_.reset();  // before its device
   if (device_) vkDestroyDevice(device_, nullptr);
   if (messenger_) {
     auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
@@ -229,9 +270,55 @@ MappedBuffer VulkanContext::CreateMappedBuffer(VkDeviceSize size, VkBufferUsageF
   return b;
 }
 
+bool VulkanContext::has_device_only_memory() const {
+  for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+    const VkMemoryPropertyFlags f = memory_.memoryTypes[i].propertyFlags;
+    if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) return true;
+  }
+  return false;
+}
+
+MappedBuffer VulkanContext::CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageFlags usage) {
+  MappedBuffer b;
+  b.size = size;
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = size;
+  bci.usage = usage;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  CheckVk(vkCreateBuffer(device_, &bci, nullptr, &b.buffer), "vkCreateBuffer");
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(device_, b.buffer, &req);
+  // DEVICE_LOCAL without HOST_VISIBLE first (a discrete GPU's VRAM, not its small BAR
+  // window), then any DEVICE_LOCAL, then anything (unified memory).
+  int chosen = -1;
+  for (int pass = 0; pass < 3 && chosen < 0; ++pass) {
+    for (uint32_t i = 0; i < memory_.memoryTypeCount && chosen < 0; ++i) {
+      const VkMemoryPropertyFlags f = memory_.memoryTypes[i].propertyFlags;
+      const bool ok = pass == 0   ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
+                      : pass == 1 ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0
+                                  : true;
+      if ((req.memoryTypeBits & (1u << i)) && ok) chosen = static_cast<int>(i);
+    }
+  }
+  if (chosen < 0) {
+    vkDestroyBuffer(device_, b.buffer, nullptr);
+    throw Error("Vulkan: no memory type for a device buffer");
+  }
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = static_cast<uint32_t>(chosen);
+  const VkResult r = vkAllocateMemory(device_, &mai, nullptr, &b.memory);
+  if (r != VK_SUCCESS) {
+    vkDestroyBuffer(device_, b.buffer, nullptr);
+    CheckVk(r, "vkAllocateMemory");
+  }
+  CheckVk(vkBindBufferMemory(device_, b.buffer, b.memory, 0), "vkBindBufferMemory");
+  return b;
+}
+
 void VulkanContext::DestroyBuffer(MappedBuffer& b) {
   if (b.memory) {
-    vkUnmapMemory(device_, b.memory);
+    if (b.mapped) vkUnmapMemory(device_, b.memory);
     vkFreeMemory(device_, b.memory, nullptr);
   }
   if (b.buffer) vkDestroyBuffer(device_, b.buffer, nullptr);

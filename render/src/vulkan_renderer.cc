@@ -1,5 +1,7 @@
 // The Vulkan compute renderer: one gpu::ComputePipeline (render/shaders/sky_latlong.comp),
 // buffers reused between renders and grown on demand, one submit and fence wait per render.
+// The LUT slice and the direction table are uploaded only when their content changes (a
+// new sun row, a new size); the uniforms every render.
 #include <cmath>
 #include <cstring>
 #include <iterator>
@@ -11,6 +13,7 @@
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
 #include "skycal/gpu/vulkan_context.h"
+#include "skycal/render/renderer_stats.h"
 
 namespace skycal::spirv {
 extern const uint32_t sky_latlong[];
@@ -46,14 +49,21 @@ class VulkanSkyRenderer final : public SkyRenderer {
     const size_t out_bytes = static_cast<size_t>(request.width) * request.height * 3 * sizeof(float);
     const size_t trig_bytes = static_cast<size_t>(request.width + request.height) * 2 * sizeof(float);
     std::memcpy(pipeline_.Map(kUniforms, sizeof(SkyUniforms)), &u, sizeof(u));
-    FillLutSlice(preset, params, static_cast<float*>(pipeline_.Map(kLuts, lut_bytes)));
+    std::vector<float> slice(lut_bytes / sizeof(float), 0.0f);
+    FillLutSlice(preset, params, slice.data());
+    float* luts = static_cast<float*>(pipeline_.Map(kLuts, lut_bytes));
+    if (slice != lut_slice_ || luts != luts_filled_) {
+      std::memcpy(luts, slice.data(), lut_bytes);
+      pipeline_.Flush(kLuts);
+      lut_slice_ = std::move(slice);
+      luts_filled_ = luts;
+    }
     pipeline_.Map(kOutput, out_bytes, /*host_readback=*/true);
     float* trig = static_cast<float*>(pipeline_.Map(kTrig, trig_bytes));
     if (trig != trig_filled_ || trig_width_ != request.width || trig_height_ != request.height) {
       FillTrigTable(preset, request.width, request.height, trig);
     }
     pipeline_.Flush(kUniforms);
-    pipeline_.Flush(kLuts);
 
     static_assert(kLocalY == 1, "sky_latlong.comp renders one row per workgroup");
     pipeline_.Dispatch((request.width + kLocalX - 1) / kLocalX, request.height, 1);
@@ -68,6 +78,14 @@ class VulkanSkyRenderer final : public SkyRenderer {
   }
 
   int ValidationMessages() const override { return ctx_->validation_messages(); }
+  DeviceStats Stats() const {
+    DeviceStats s;
+    s.gpu_ms = pipeline_.last_gpu_ms();
+    s.resource_uploads = pipeline_.uploads(kLuts) + pipeline_.uploads(kTrig);
+    s.resource_upload_bytes = pipeline_.upload_bytes(kLuts) + pipeline_.upload_bytes(kTrig);
+    s.staged = pipeline_.staged();
+    return s;
+  }
   std::string Describe() const override {
     return std::string("vulkan (") + ctx_->device_name() + (ctx_->validation_enabled() ? ", validation on" : "") + ")";
   }
@@ -118,10 +136,17 @@ class VulkanSkyRenderer final : public SkyRenderer {
   std::shared_ptr<gpu::VulkanContext> ctx_;
   gpu::ComputePipeline pipeline_;
   const float* trig_filled_ = nullptr;  // the trig buffer last filled (a regrown buffer is refilled)
+  std::vector<float> lut_slice_;        // the LUT slice last uploaded
+  const float* luts_filled_ = nullptr;  // the LUT buffer it went to
   int trig_width_ = 0, trig_height_ = 0;  // size the trig table was filled for
 };
 
 }  // namespace
+
+DeviceStats RendererDeviceStats(const SkyRenderer& renderer) {
+  const auto* vulkan = dynamic_cast<const VulkanSkyRenderer*>(&renderer);
+  return vulkan ? vulkan->Stats() : DeviceStats{};
+}
 
 std::unique_ptr<SkyRenderer> CreateRenderer(Backend backend, const VulkanOptions& vk) {
   if (backend == Backend::kCpu) return CreateCpuRenderer();

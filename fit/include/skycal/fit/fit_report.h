@@ -49,6 +49,8 @@ struct LevelReport {
   int renders = 0;                       // backend renders at new evaluation points
   int probe_final_solve_iterations = 0;  // the sun / ground refit after the finest level
   double time_s = 0.0;
+  double render_wall_ms = 0.0;           // the renders' wall time, summed
+  std::optional<double> render_gpu_ms;   // their device time (timestamps); none: CPU or no timestamps
   bool operator==(const LevelReport&) const = default;
 };
 

@@ -1,8 +1,17 @@
 // One compute shader with one descriptor set of buffers: the pipeline setup every skycal
-// renderer needs (shader module, set layout, pipeline with specialization constants,
-// descriptor pool and set, command buffer, fence), written once. Each binding owns a
-// persistently mapped host-visible buffer that grows on demand; a dispatch records, submits
-// and waits, and leaves the shader's storage writes readable by the host.
+// renderer needs (shader module, set layout, pipeline with specialization constants from
+// the context's pipeline cache, descriptor pool and set, command buffer, fence), written
+// once. Each binding owns a buffer that grows on demand; a dispatch records, submits and
+// waits, and leaves the shader's storage writes readable by the host.
+//
+// Memory, chosen per pipeline (MemoryMode): `direct`, every buffer host-visible and read by
+// the shader in place (lavapipe and unified memory, where device-local memory is the
+// host's); `staged`, every buffer device-local, the host writing a persistently mapped
+// staging buffer that the next Dispatch copies over (only bindings Flush()ed since: a
+// texture is uploaded once per change of content), and host-readback bindings copied into
+// a HOST_CACHED buffer after the dispatch. Auto picks staged where the device has memory
+// that is device-local and not host-visible (a discrete GPU); SKYCAL_VULKAN_MEMORY=
+// direct|staged|auto overrides it. Both give the same bits: only where the bytes live differs.
 //
 // Include only from renderer sources (vulkan.h; see vulkan_context.h).
 #pragma once
@@ -11,11 +20,17 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "skycal/gpu/vulkan_context.h"
 
 namespace skycal::gpu {
+
+enum class MemoryMode { kAuto, kDirect, kStaged };
+// SKYCAL_VULKAN_MEMORY (unset or empty: kAuto); throws skycal::Error naming the variable and
+// its value unless it is auto, direct or staged.
+MemoryMode MemoryModeFromEnvironment();
 
 class ComputePipeline {
  public:
@@ -29,8 +44,10 @@ class ComputePipeline {
   // runs a bounds-checked scalar loop per lane and component); spec[i]: specialization
   // constant i (uint32).
   // Throws skycal::Error on a Vulkan failure or an unsupported descriptor type.
+  // `memory`: kAuto resolves SKYCAL_VULKAN_MEMORY, then the device (see above).
   ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
-                  std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec = {});
+                  std::vector<VkDescriptorType> bindings, std::vector<uint32_t> spec = {},
+                  MemoryMode memory = MemoryMode::kAuto);
   ~ComputePipeline();
   ComputePipeline(const ComputePipeline&) = delete;
   ComputePipeline& operator=(const ComputePipeline&) = delete;
@@ -40,7 +57,9 @@ class ComputePipeline {
   // device's maxTexelBufferElements throws skycal::Error). `host_readback` asks for
   // HOST_CACHED memory: reading a large output from write-combined memory is slow.
   void* Map(uint32_t binding, size_t bytes, bool host_readback = false);
-  // Makes host writes to `binding` visible to the device (a no-op on coherent memory).
+  // Makes host writes to `binding` (the first `bytes` Map asked for) visible to the device:
+  // flushes non-coherent memory, and when staged schedules the copy to the device buffer
+  // for the next Dispatch. Counted as one upload of the binding.
   void Flush(uint32_t binding);
   // Records one dispatch of (gx, gy, gz) workgroups, submits it and waits; afterwards
   // every storage buffer's writes are visible through Read().
@@ -49,17 +68,37 @@ class ComputePipeline {
   const void* Read(uint32_t binding) const;
   size_t Size(uint32_t binding) const;
 
+  bool staged() const { return staged_; }
+  // The last Dispatch's device time (timestamps around its command buffer: uploads,
+  // dispatch, readback copy), ms; nullopt before the first or without timestamp support.
+  std::optional<double> last_gpu_ms() const { return last_gpu_ms_; }
+  // Flush()es of `binding` so far, and the bytes they covered.
+  long long uploads(uint32_t binding) const { return uploads_.at(binding); }
+  long long upload_bytes(uint32_t binding) const { return upload_bytes_.at(binding); }
+
   VulkanContext& context() { return *ctx_; }
 
  private:
   void Release();  // destroys every Vulkan object (idempotent)
   void CreateObjects(const uint32_t* spirv, size_t spirv_bytes, const std::vector<uint32_t>& spec);
+  void CreateBuffers(uint32_t binding, size_t bytes, bool host_readback);
   void WriteDescriptors();
   void Record(uint32_t gx, uint32_t gy, uint32_t gz);
+  void RecordUploads();
+  void RecordReadbacks();
+  std::optional<double> ReadTimestamps();
 
   std::shared_ptr<VulkanContext> ctx_;
   std::vector<VkDescriptorType> types_;
-  std::vector<MappedBuffer> buffers_;
+  bool staged_ = false;
+  std::vector<MappedBuffer> buffers_;   // what the shader reads and writes
+  std::vector<MappedBuffer> staging_;   // staged: the host's side (upload or readback buffer)
+  std::vector<bool> readback_;          // the binding is read back by the host
+  std::vector<bool> dirty_;             // staged: Flush()ed since the last upload
+  std::vector<size_t> requested_;       // bytes the last Map asked for
+  std::vector<long long> uploads_, upload_bytes_;
+  VkQueryPool queries_ = VK_NULL_HANDLE;  // two timestamps per Dispatch (none without support)
+  std::optional<double> last_gpu_ms_;
   std::vector<VkBufferView> views_;
   uint32_t max_texel_buffer_elements_ = 0;  // per binding: the texel buffer's view (VK_NULL_HANDLE otherwise)
   bool descriptors_stale_ = true;

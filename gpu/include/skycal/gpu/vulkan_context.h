@@ -7,11 +7,15 @@
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace skycal::gpu {
 
-// A host-visible buffer, persistently mapped.
+class PipelineCache;
+
+// A buffer and its memory: host-visible and persistently mapped, or device-local
+// (mapped == nullptr).
 struct MappedBuffer {
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceMemory memory = VK_NULL_HANDLE;
@@ -43,12 +47,32 @@ class VulkanContext {
 
   // usage: VK_BUFFER_USAGE_*; prefer_cached asks for HOST_CACHED memory (fast readback).
   MappedBuffer CreateMappedBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool prefer_cached);
+  // A DEVICE_LOCAL buffer, preferring a type that is not host-visible (a discrete GPU's
+  // own memory), not mapped; filled and read by transfer commands.
+  MappedBuffer CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageFlags usage);
+  // True when some memory type is DEVICE_LOCAL and not HOST_VISIBLE (a discrete GPU):
+  // resources then go there through staging uploads. False on lavapipe and unified memory,
+  // where device-local memory is the host's.
+  bool has_device_only_memory() const;
+
+  // Timestamp queries on the queue: the nanoseconds per tick and the valid bits (0: the
+  // queue family writes no timestamps; then device times are reported as unknown).
+  uint32_t timestamp_valid_bits() const { return timestamp_valid_bits_; }
+  double timestamp_period_ns() const { return timestamp_period_ns_; }
+
+  // The pipeline cache every pipeline is created with (VK_NULL_HANDLE when disabled), and
+  // its on-disk file (pipeline_cache.h); SavePipelineCache writes it when it changed.
+  VkPipelineCache pipeline_cache() const;
+  void SavePipelineCache();
+  const PipelineCache* pipeline_cache_file() const { return pipeline_cache_.get(); }
   void DestroyBuffer(MappedBuffer& b);
   void InvalidateForRead(const MappedBuffer& b);
   void FlushForDevice(const MappedBuffer& b);
 
  private:
   VulkanContext() = default;
+  void ReadTimestampSupport();
+  void OpenPipelineCache();
   static VKAPI_ATTR VkBool32 VKAPI_CALL OnValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                            VkDebugUtilsMessageTypeFlagsEXT types,
                                                            const VkDebugUtilsMessengerCallbackDataEXT* data, void* user);
@@ -60,6 +84,9 @@ class VulkanContext {
   uint32_t queue_family_ = 0;
   std::string device_name_;
   VkPhysicalDeviceMemoryProperties memory_{};
+  uint32_t timestamp_valid_bits_ = 0;
+  double timestamp_period_ns_ = 0.0;
+  std::unique_ptr<PipelineCache> pipeline_cache_;
   std::atomic<int> validation_messages_{0};
 };
 
