@@ -105,6 +105,31 @@ void ApplyLensArgs(const LensArgs& a, CaptureOptions* o) {
 }
 }  // namespace
 
+// The single camera's lens flags (LensArgs, applied by ApplyLensArgs) and its lens profile.
+void RegisterLensArgs(VerbCommandLine& cl, LensArgs* l, CaptureOptions* opts) {
+  LensArgs& la = *l;
+  CaptureOptions& o = *opts;
+  cl.Text("--lens", &la.lens, "NAME",
+          "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
+          "stereographic or kannala-brandt");
+  cl.Number("--lens-fov-deg", &la.fov, "F", "lens field of view in degrees (default 180)");
+  cl.Text("--lens-center", &la.center, "X,Y", "lens centre in pixels (default: the image centre)");
+  cl.Number("--lens-radius", &la.radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
+  cl.Text("--kb-k", &la.kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
+  cl.Text("--vignetting", &la.vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
+  cl.Text("--lens-profile", &o.lens_profile, "SPEC",
+          "lensfun lens profile (docs/capture.md): default, looked up from the first bracket's\n"
+          "EXIF (Make, Model, LensModel, FocalLength, FNumber; no match: said, and on without);\n"
+          "none: off; LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL] as lensfun names them\n"
+          "(no match: an error naming the closest). Corrects vignetting, TCA and distortion and\n"
+          "gives the projection and image circle; --lens, --lens-center, --lens-radius,\n"
+          "--lens-fov-deg, --kb-k and --vignetting override it");
+  cl.Text("--camera-rotation", &la.rotation, "Y,P,R",
+          "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
+          "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"
+          "panorama is already the world's lat-long)");
+}
+
 CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   VerbCommandLine cl(
       "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
@@ -132,25 +157,7 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Text("--response", &response, "NAME",
           "camera response: auto (default: weighted's per-channel curves, or debevec's when\n"
           "the channels' curves have one shape; docs/capture.md), debevec, weighted, robertson (recovered), linear, srgb");
-  cl.Text("--lens", &la.lens, "NAME",
-          "lens model of the single camera: latlong, equidistant, equisolid (default),\n"
-          "stereographic or kannala-brandt");
-  cl.Number("--lens-fov-deg", &la.fov, "F", "lens field of view in degrees (default 180)");
-  cl.Text("--lens-center", &la.center, "X,Y", "lens centre in pixels (default: the image centre)");
-  cl.Number("--lens-radius", &la.radius, "R", "lens image-circle radius in pixels (default: half the shorter side)");
-  cl.Text("--kb-k", &la.kb_k, "K1,K2,K3,K4", "Kannala-Brandt coefficients (--lens kannala-brandt)");
-  cl.Text("--vignetting", &la.vignetting, "A,B,C", "vignetting gain 1 + a r^2 + b r^4 + c r^6, r = radius / lens radius");
-  cl.Text("--lens-profile", &o.lens_profile, "SPEC",
-          "lensfun lens profile (docs/capture.md): default, looked up from the first bracket's\n"
-          "EXIF (Make, Model, LensModel, FocalLength, FNumber; no match: said, and on without);\n"
-          "none: off; LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL] as lensfun names them\n"
-          "(no match: an error naming the closest). Corrects vignetting, TCA and distortion and\n"
-          "gives the projection and image circle; --lens, --lens-center, --lens-radius,\n"
-          "--lens-fov-deg, --kb-k and --vignetting override it");
-  cl.Text("--camera-rotation", &la.rotation, "Y,P,R",
-          "the camera's optical axis: azimuth (lat-long longitude) and elevation, and roll,\n"
-          "degrees (default 0,90,0: looking straight up; with --lens latlong 0,0,0: the\n"
-          "panorama is already the world's lat-long)");
+  RegisterLensArgs(cl, &la, &o);
   cl.Text("--rig", &o.rig_path, "RIG.json",
           "several cameras (format: capture/include/skycal/capture/rig.h; each camera's\n"
           "image is an HDR EXR, e.g. merged by an earlier capture of that camera with\n"

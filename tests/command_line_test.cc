@@ -159,7 +159,7 @@ TEST(CommandLine, LibraryFieldsReachTheUserAsTheirFlags) {
             "--headroom 2 (expected a fraction in (0, 1])");
   EXPECT_EQ(RunErrorOf(parse_batch, RunBatchImpl, {"--references", "d/*.exr", "--out", "b", "--poll", "0.01"}),
             "--poll 0.01 (expected seconds in [0.05, 600])");
-  EXPECT_EQ(RunErrorOf(parse_batch, RunBatchImpl, {"--references", "d/*.exr", "--out", "b", "--loss-scale", "0"}),
+  EXPECT_EQ(RunErrorOf(parse_batch, RunBatchImpl, {"--references", "d/*.exr", "--out", "b", "--frame-job", "fit", "--loss-scale", "0"}),
             "--loss-scale 0 (expected natural-log units in (0, 10])");
   EXPECT_EQ(RunErrorOf(ParseFlowArgs, RunFlowImpl, {"a.exr", "b.exr", "--out", "v.png"}),
             "--out v.png (expected a path ending in .exr; V.png and V.json are written beside it)");

@@ -177,7 +177,9 @@ Suite BatchSuite() {
       std::vector<std::string> args = {exe, "batch", "--references", (o.scratch / "batch" / "day" / "*.exr").string(),
                                        "--out", out, "--engine", run == "slurm" ? "slurm" : "local",
                                        "--jobs", std::to_string(plan.jobs), "--frames-per-job",
-                                       std::to_string(plan.frames_per_job), "--backend", "cpu", "--quiet", "--poll", "0.2"};
+                                       std::to_string(plan.frames_per_job), "--backend", "cpu", "--quiet", "--poll", "0.2",
+                                       // the fit per frame (what bench/results/batch.md measures), not calibrate's
+                                       "--frame-job", "fit"};
       if (run.rfind("cold", 0) == 0) args.push_back("--cold-start");
       if (run.find("ceres") != std::string::npos) args.push_back("--no-linear-start");
       if (run == "slurm") {

@@ -212,6 +212,25 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
 
 }  // namespace
 
+namespace {
+
+// Why a grid case is skipped ("": run): the held-out family at 5 and 7 brackets 2 EV apart
+// only (and without robertson); --quick: three bracket sets and the first three held-out curves.
+std::string SkipReason(const Settings& st, bool quick) {
+  const std::string shape = Get(st, "shape"), n = Get(st, "brackets"), ev = Get(st, "ev");
+  if (IsHeldOut(shape)) {
+    if (Get(st, "method") == "robertson") return "held-out family: known, auto, weighted, debevec";
+    if (ev != "2" || (n != "5" && n != "7")) return "held-out family: 5 and 7 brackets 2 EV apart";
+    if (quick && (n != "5" || std::stoi(shape.substr(5)) > 3)) return "--quick: the first three held-out curves, 5 brackets";
+    return "";
+  }
+  if (!quick) return "";
+  const bool kept = (n == "5" && ev == "2") || (n == "3" && ev == "3") || (n == "9" && ev == "1");
+  return kept ? "" : "--quick: three bracket sets";
+}
+
+}  // namespace
+
 Suite CaptureResponseSuite() {
   Suite s;
   s.name = "capture-response";
@@ -232,19 +251,7 @@ Suite CaptureResponseSuite() {
                  {"ev", {"1", "2", "3"}, "2"},
                  {"method", {kMethods[0], kMethods[1], kMethods[2], kMethods[3], kMethods[4]},
                   capture::ResponseModelName(capture::MergeOptions{}.response)}};
-    const bool quick = o.quick;
-    grid.skip = [quick](const Settings& st) -> std::string {
-      const std::string shape = Get(st, "shape"), n = Get(st, "brackets"), ev = Get(st, "ev");
-      if (IsHeldOut(shape)) {
-        if (Get(st, "method") == "robertson") return "held-out family: known, auto, weighted, debevec";
-        if (ev != "2" || (n != "5" && n != "7")) return "held-out family: 5 and 7 brackets 2 EV apart";
-        if (quick && (n != "5" || std::stoi(shape.substr(5)) > 3)) return "--quick: the first three held-out curves, 5 brackets";
-        return "";
-      }
-      if (!quick) return "";
-      const bool kept = (n == "5" && ev == "2") || (n == "3" && ev == "3") || (n == "9" && ev == "1");
-      return kept ? "" : "--quick: three bracket sets";
-    };
+    grid.skip = [quick = o.quick](const Settings& st) { return SkipReason(st, quick); };
     std::string source;
     const ImageRGB scene = o.quick ? synthetic::LoadBracketScene(512, 256, &source) : synthetic::LoadBracketScene(1024, 512, &source);
     const std::string scene_label = source + " at " + std::to_string(scene.width) + "x" + std::to_string(scene.height);

@@ -130,30 +130,7 @@ std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
     if (create) CheckVk(create(ctx->instance_, &mci, nullptr, &ctx->messenger_), "vkCreateDebugUtilsMessengerEXT");
   }
 
-  uint32_t count = 0;
-  vkEnumeratePhysicalDevices(ctx->instance_, &count, nullptr);
-  std::vector<VkPhysicalDevice> devices(count);
-  if (count) vkEnumeratePhysicalDevices(ctx->instance_, &count, devices.data());
-  int best_rank = -1;
-  for (VkPhysicalDevice d : devices) {
-    uint32_t nq = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, nullptr);
-    std::vector<VkQueueFamilyProperties> qf(nq);
-    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
-    for (uint32_t i = 0; i < nq; ++i) {
-      if (!(qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
-      VkPhysicalDeviceProperties props;
-      vkGetPhysicalDeviceProperties(d, &props);
-      const int rank = DeviceRank(props.deviceType);
-      if (rank > best_rank) {
-        best_rank = rank;
-        ctx->physical_ = d;
-        ctx->queue_family_ = i;
-        ctx->device_name_ = props.deviceName;
-      }
-      break;
-    }
-  }
+  ctx->ChooseDevice();
   if (ctx->physical_ == VK_NULL_HANDLE) throw Error(kNoDevice);
   vkGetPhysicalDeviceMemoryProperties(ctx->physical_, &ctx->memory_);
   ctx->ReadTimestampSupport();
@@ -170,6 +147,35 @@ std::shared_ptr<VulkanContext> VulkanContext::Create(bool validation) {
   vkGetDeviceQueue(ctx->device_, ctx->queue_family_, 0, &ctx->queue_);
   ctx->OpenPipelineCache();
   return ctx;
+}
+
+// The most capable device with a compute queue (DeviceRank: discrete, integrated, virtual,
+// CPU), its first compute family.
+void VulkanContext::ChooseDevice() {
+  uint32_t count = 0;
+  vkEnumeratePhysicalDevices(instance_, &count, nullptr);
+  std::vector<VkPhysicalDevice> devices(count);
+  if (count) vkEnumeratePhysicalDevices(instance_, &count, devices.data());
+  int best_rank = -1;
+  for (VkPhysicalDevice d : devices) {
+    uint32_t nq = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, nullptr);
+    std::vector<VkQueueFamilyProperties> qf(nq);
+    vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
+    for (uint32_t i = 0; i < nq; ++i) {
+      if (!(qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
+      VkPhysicalDeviceProperties props;
+      vkGetPhysicalDeviceProperties(d, &props);
+      const int rank = DeviceRank(props.deviceType);
+      if (rank > best_rank) {
+        best_rank = rank;
+        physical_ = d;
+        queue_family_ = i;
+        device_name_ = props.deviceName;
+      }
+      break;
+    }
+  }
 }
 
 void VulkanContext::ReadTimestampSupport() {

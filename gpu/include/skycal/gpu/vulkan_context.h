@@ -71,6 +71,7 @@ class VulkanContext {
 
  private:
   VulkanContext() = default;
+  void ChooseDevice();
   void ReadTimestampSupport();
   void OpenPipelineCache();
   static VKAPI_ATTR VkBool32 VKAPI_CALL OnValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
