@@ -39,7 +39,7 @@ void RefuseFitOptionsForCalibrate(const fit::FitOptions& given, const std::strin
 }  // namespace
 
 BatchOptions ParseBatchArgs(int argc, char** argv) {
-  VerbCommandLine cl("batch", "skycal batch: fit a time-lapse day frame by frame (warm starts), then the day's tables",
+  VerbCommandLine cl("batch", "skycal batch: calibrate a time-lapse day frame by frame (warm starts), then the day's fit and tables",
                      "  skycal batch --references 'DIR/*.exr' --out DIR [--frames-per-job N] [--engine local|slurm]\n"
                      "               [--jobs N] [--resume] [--day-frames N] [fit options] [--json]",
                      "Each frame needs the EXR attributes sunDirection and skycalTimeOfDay (capture --time,\n"

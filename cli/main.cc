@@ -49,7 +49,7 @@ const std::vector<Verb>& Verbs() {
       {"compare", "the game's image of a sky against the photo: per-pixel log RMSE and appearance error", &skycal::cli::RunCompare},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
-      {"batch", "fit a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
+      {"batch", "calibrate a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
       {"import", "convert a published HDR panorama (Blender/Poly Haven) to a reference frame", &skycal::cli::RunImport},
       {"flow", "motion vectors between two time-lapse frames (quarter res, 8-bit + per-frame range sidecar)", &skycal::cli::RunFlow},
       {"resample", "a lat-long frame to horizon-biased rows for the game (fit reads them through the exact inverse)", &skycal::cli::RunResample},
