@@ -15,6 +15,7 @@
 #include <numeric>
 #include <utility>
 
+#include "exiv2_read.h"
 #include "skycal/core/error.h"
 
 // exiv2 0.27's API hands out std::auto_ptr (deprecated since C++11, still in libstdc++).
@@ -24,21 +25,6 @@
 
 namespace skycal::capture {
 namespace {
-
-// exiv2 logs warnings (e.g. "no EXIF block") to stderr by default; we report them ourselves.
-void QuietExiv2() {
-  static std::once_flag once;
-  std::call_once(once, [] { Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute); });
-}
-
-double DatumValue(const Exiv2::ExifData& exif, const char* key) {
-  const auto it = exif.findKey(Exiv2::ExifKey(key));
-  if (it == exif.end() || it->count() == 0) return NAN;
-  const Exiv2::Rational r = it->toRational(0);
-  if (r.second != 0) return static_cast<double>(r.first) / r.second;
-  const double v = it->toFloat(0);
-  return std::isfinite(v) ? v : NAN;
-}
 
 // Exposure times as cameras write them (1/250, 1/3, 2, 2.5): 1/n when 1/t is an integer
 // to within 1e-4, else a fraction over 10^6.
@@ -69,20 +55,20 @@ ExifExposure ReadExifExposure(const std::string& path) {
       e.error = "no EXIF block";
       return e;
     }
-    e.exposure_time_s = DatumValue(exif, "Exif.Photo.ExposureTime");
-    if (!std::isfinite(e.exposure_time_s)) e.exposure_time_s = DatumValue(exif, "Exif.Image.ExposureTime");  // TIFF/EP
+    e.exposure_time_s = ExifNumber(exif, "Exif.Photo.ExposureTime");
+    if (!std::isfinite(e.exposure_time_s)) e.exposure_time_s = ExifNumber(exif, "Exif.Image.ExposureTime");  // TIFF/EP
     if (!std::isfinite(e.exposure_time_s)) {
-      const double tv = DatumValue(exif, "Exif.Photo.ShutterSpeedValue");  // APEX
+      const double tv = ExifNumber(exif, "Exif.Photo.ShutterSpeedValue");  // APEX
       if (std::isfinite(tv)) e.exposure_time_s = std::exp2(-tv);
     }
-    e.f_number = DatumValue(exif, "Exif.Photo.FNumber");
-    if (!std::isfinite(e.f_number)) e.f_number = DatumValue(exif, "Exif.Image.FNumber");
+    e.f_number = ExifNumber(exif, "Exif.Photo.FNumber");
+    if (!std::isfinite(e.f_number)) e.f_number = ExifNumber(exif, "Exif.Image.FNumber");
     if (!std::isfinite(e.f_number)) {
-      const double av = DatumValue(exif, "Exif.Photo.ApertureValue");  // APEX
+      const double av = ExifNumber(exif, "Exif.Photo.ApertureValue");  // APEX
       if (std::isfinite(av)) e.f_number = std::exp2(av / 2.0);
     }
-    e.iso = DatumValue(exif, "Exif.Photo.ISOSpeedRatings");
-    if (!std::isfinite(e.iso)) e.iso = DatumValue(exif, "Exif.Image.ISOSpeedRatings");
+    e.iso = ExifNumber(exif, "Exif.Photo.ISOSpeedRatings");
+    if (!std::isfinite(e.iso)) e.iso = ExifNumber(exif, "Exif.Image.ISOSpeedRatings");
     // A 0 (or negative) field is a camera's "unknown", not a value.
     for (double* v : {&e.exposure_time_s, &e.f_number, &e.iso})
       if (!(*v > 0.0)) *v = NAN;

@@ -13,6 +13,7 @@
 
 #include <lensfun.h>
 
+#include "exiv2_read.h"
 #include "parallel_rows.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
@@ -246,26 +247,16 @@ std::string LensQuery::Describe() const {
 
 namespace {
 
-void QuietExiv2() {
-  static std::once_flag once;
-  std::call_once(once, [] { Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute); });
-}
-
 std::string TextDatum(const Exiv2::ExifData& exif, const char* key) {
-  const auto it = exif.findKey(Exiv2::ExifKey(key));
-  if (it == exif.end() || it->count() == 0) return "";
-  std::string v = it->toString();
+  std::string v = ExifText(exif, key).value_or("");
   while (!v.empty() && (v.back() == '\0' || std::isspace(static_cast<unsigned char>(v.back())))) v.pop_back();
   while (!v.empty() && std::isspace(static_cast<unsigned char>(v.front()))) v.erase(v.begin());
   return v;
 }
 
 double NumberDatum(const Exiv2::ExifData& exif, const char* key) {
-  const auto it = exif.findKey(Exiv2::ExifKey(key));
-  if (it == exif.end() || it->count() == 0) return NAN;
-  const Exiv2::Rational r = it->toRational(0);
-  const double v = r.second != 0 ? static_cast<double>(r.first) / r.second : it->toFloat(0);
-  return std::isfinite(v) && v > 0.0 ? v : NAN;  // 0: the camera's "unknown"
+  const double v = ExifNumber(exif, key);
+  return v > 0.0 ? v : NAN;  // 0: the camera's "unknown"
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <mutex>
 
+#include "exiv2_read.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 
@@ -72,17 +73,6 @@ std::string ColonDateTime(const DateTime& d) {
   return local;
 }
 
-void QuietExiv2() {
-  static std::once_flag once;
-  std::call_once(once, [] { Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute); });
-}
-
-std::optional<std::string> Text(const Exiv2::ExifData& exif, const char* key) {
-  const auto it = exif.findKey(Exiv2::ExifKey(key));
-  if (it == exif.end() || it->count() == 0) return std::nullopt;
-  return it->toString();
-}
-
 // Degrees from EXIF's three rationals (degrees, minutes, seconds) and its N/S or E/W ref.
 std::optional<double> GpsDegrees(const Exiv2::ExifData& exif, const char* key, const char* ref_key, char negative) {
   const auto it = exif.findKey(Exiv2::ExifKey(key));
@@ -93,13 +83,13 @@ std::optional<double> GpsDegrees(const Exiv2::ExifData& exif, const char* key, c
     if (r.second == 0) return std::nullopt;
     deg += static_cast<double>(r.first) / r.second / std::pow(60.0, static_cast<double>(i));
   }
-  const auto ref = Text(exif, ref_key);
+  const auto ref = ExifText(exif, ref_key);
   return ref && !ref->empty() && (*ref)[0] == negative ? -deg : deg;
 }
 
 // The time: the GPS UTC stamps, else DateTimeOriginal with OffsetTimeOriginal.
 void ExifTime(const Exiv2::ExifData& exif, TimePlace* t) {
-  const auto gps_date = Text(exif, "Exif.GPSInfo.GPSDateStamp");
+  const auto gps_date = ExifText(exif, "Exif.GPSInfo.GPSDateStamp");
   const auto gps_time = exif.findKey(Exiv2::ExifKey("Exif.GPSInfo.GPSTimeStamp"));
   if (gps_date && gps_time != exif.end() && gps_time->count() >= 3) {
     double hms[3];
@@ -116,13 +106,13 @@ void ExifTime(const Exiv2::ExifData& exif, TimePlace* t) {
       return;
     }
   }
-  const auto local = Text(exif, "Exif.Photo.DateTimeOriginal");
+  const auto local = ExifText(exif, "Exif.Photo.DateTimeOriginal");
   if (!local) {
     t->why_no_time = "no DateTimeOriginal or GPS time stamp in the EXIF";
     return;
   }
   const auto d = ParseColonDateTime(*local);
-  const auto offset = Text(exif, "Exif.Photo.OffsetTimeOriginal");
+  const auto offset = ExifText(exif, "Exif.Photo.OffsetTimeOriginal");
   const auto minutes = offset ? ParseOffsetMinutes(*offset) : std::nullopt;
   if (!d) t->why_no_time = "DateTimeOriginal '" + *local + "' is not YYYY:MM:DD HH:MM:SS";
   else if (!minutes) t->why_no_time = "DateTimeOriginal without OffsetTimeOriginal: the local time of an unknown zone";
@@ -151,7 +141,7 @@ TimePlace ReadExifTimePlace(const std::string& path) {
     t.longitude_deg = GpsDegrees(exif, "Exif.GPSInfo.GPSLongitude", "Exif.GPSInfo.GPSLongitudeRef", 'W');
     const auto alt = exif.findKey(Exiv2::ExifKey("Exif.GPSInfo.GPSAltitude"));
     if (alt != exif.end() && alt->count() > 0 && alt->toRational(0).second != 0) {
-      const auto below = Text(exif, "Exif.GPSInfo.GPSAltitudeRef");  // 1: below sea level
+      const auto below = ExifText(exif, "Exif.GPSInfo.GPSAltitudeRef");  // 1: below sea level
       const double m = static_cast<double>(alt->toRational(0).first) / alt->toRational(0).second;
       t.altitude_m = below && *below == "1" ? -m : m;
     }

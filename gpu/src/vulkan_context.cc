@@ -240,16 +240,43 @@ VulkanContext::~VulkanContext() {
   if (instance_) vkDestroyInstance(instance_, nullptr);
 }
 
-MappedBuffer VulkanContext::CreateMappedBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool prefer_cached) {
-  MappedBuffer b;
-  b.size = size;
+namespace {
+
+// An exclusive buffer of `size` bytes and its memory requirements (no memory bound yet).
+VkBuffer NewBuffer(VkDevice device, VkDeviceSize size, VkBufferUsageFlags usage, VkMemoryRequirements* req) {
   VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   bci.size = size;
   bci.usage = usage;
   bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  CheckVk(vkCreateBuffer(device_, &bci, nullptr, &b.buffer), "vkCreateBuffer");
+  VkBuffer buffer = VK_NULL_HANDLE;
+  CheckVk(vkCreateBuffer(device, &bci, nullptr, &buffer), "vkCreateBuffer");
+  vkGetBufferMemoryRequirements(device, buffer, req);
+  return buffer;
+}
+
+// Memory of type `type` allocated for `buffer` and bound to it; the buffer is destroyed when
+// the allocation fails.
+VkDeviceMemory AllocateBound(VkDevice device, VkBuffer buffer, const VkMemoryRequirements& req, uint32_t type) {
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = type;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  const VkResult r = vkAllocateMemory(device, &mai, nullptr, &memory);
+  if (r != VK_SUCCESS) {
+    vkDestroyBuffer(device, buffer, nullptr);
+    CheckVk(r, "vkAllocateMemory");
+  }
+  CheckVk(vkBindBufferMemory(device, buffer, memory, 0), "vkBindBufferMemory");
+  return memory;
+}
+
+}  // namespace
+
+MappedBuffer VulkanContext::CreateMappedBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool prefer_cached) {
+  MappedBuffer b;
+  b.size = size;
   VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(device_, b.buffer, &req);
+  b.buffer = NewBuffer(device_, size, usage, &req);
   // Prefer HOST_VISIBLE|HOST_COHERENT (+HOST_CACHED for readback); accept any HOST_VISIBLE.
   const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT |
                                      (prefer_cached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT : 0);
@@ -265,13 +292,12 @@ MappedBuffer VulkanContext::CreateMappedBuffer(VkDeviceSize size, VkBufferUsageF
       }
     }
   }
-  if (chosen < 0) throw Error("Vulkan: no host-visible memory type for a buffer");
+  if (chosen < 0) {
+    vkDestroyBuffer(device_, b.buffer, nullptr);
+    throw Error("Vulkan: no host-visible memory type for a buffer");
+  }
   b.coherent = memory_.memoryTypes[chosen].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = static_cast<uint32_t>(chosen);
-  CheckVk(vkAllocateMemory(device_, &mai, nullptr, &b.memory), "vkAllocateMemory");
-  CheckVk(vkBindBufferMemory(device_, b.buffer, b.memory, 0), "vkBindBufferMemory");
+  b.memory = AllocateBound(device_, b.buffer, req, static_cast<uint32_t>(chosen));
   CheckVk(vkMapMemory(device_, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped), "vkMapMemory");
   return b;
 }
@@ -287,13 +313,8 @@ bool VulkanContext::has_device_only_memory() const {
 MappedBuffer VulkanContext::CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageFlags usage) {
   MappedBuffer b;
   b.size = size;
-  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-  bci.size = size;
-  bci.usage = usage;
-  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  CheckVk(vkCreateBuffer(device_, &bci, nullptr, &b.buffer), "vkCreateBuffer");
   VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(device_, b.buffer, &req);
+  b.buffer = NewBuffer(device_, size, usage, &req);
   // DEVICE_LOCAL without HOST_VISIBLE first (a discrete GPU's VRAM, not its small BAR
   // window), then any DEVICE_LOCAL, then anything (unified memory).
   int chosen = -1;
@@ -310,15 +331,7 @@ MappedBuffer VulkanContext::CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageF
     vkDestroyBuffer(device_, b.buffer, nullptr);
     throw Error("Vulkan: no memory type for a device buffer");
   }
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = static_cast<uint32_t>(chosen);
-  const VkResult r = vkAllocateMemory(device_, &mai, nullptr, &b.memory);
-  if (r != VK_SUCCESS) {
-    vkDestroyBuffer(device_, b.buffer, nullptr);
-    CheckVk(r, "vkAllocateMemory");
-  }
-  CheckVk(vkBindBufferMemory(device_, b.buffer, b.memory, 0), "vkBindBufferMemory");
+  b.memory = AllocateBound(device_, b.buffer, req, static_cast<uint32_t>(chosen));
   return b;
 }
 
