@@ -39,6 +39,7 @@ nlohmann::json PhotoJson(const controllers::PhotoCalibration& p) {
   j["sun_uncertainty_deg"] = c.sun_uncertainty_deg ? nlohmann::json(*c.sun_uncertainty_deg) : nlohmann::json();
   j["game_per_pixel_log_rmse"] = c.game_per_pixel_log_rmse;
   j["game_appearance_error"] = c.game_appearance_error;
+  if (c.game_cloud_iou) j["game_cloud_iou"] = *c.game_cloud_iou;
   return j;
 }
 

@@ -126,6 +126,7 @@ FitResultFile FullFile() {
   c.game_sky_pixels = 51234;
   c.game_per_pixel_log_rmse = 0.6 / 7.0;
   c.game_appearance_error = 0.1 / 3.0;
+  c.game_cloud_iou = 2.0 / 3.0;
   c.seconds = 4.25;
   f.calibration = c;
   f.out = "/tmp/fitA";

@@ -1,8 +1,10 @@
 // The weather map inverted from a photo (cloudfit/weather_inversion.h): the links between
-// texels and pixels follow the march's geometry, and the seed and refinement steps move the
-// coverage the way the photo asks (and not at all when the render already matches).
+// texels and pixels follow the march's geometry (the map's tiling included), the carving caps
+// the columns the clear sky crosses, the refinement moves the texels the march would show
+// (and nothing when the render already matches), and the smoothing follows a pixel's footprint.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "skycal/cloudfit/weather_inversion.h"
@@ -16,45 +18,54 @@ namespace {
 
 constexpr int kW = 128, kH = 64, kMap = 64;
 
-// The texel straight above the camera is seen at the top row; a texel at horizontal distance
-// d is seen at the elevation of the layer's mid altitude over d, less the planet's drop
-// d^2 / 2R (small angles: a few hundredths of a degree here).
+// A texel at horizontal distance d is seen at the elevations of the layer over d (less the
+// planet's drop d^2 / 2R, a few hundredths of a degree here) and at its azimuth. The map
+// tiles as the march's sampler does: a link may go through any copy of the texel (offset by
+// whole map extents) within the draw distance.
+bool LinkFollowsTheGeometry(const clouds::CloudParams& p, int texel, int pix, bool* wrapped) {
+  const double texel_m = p.weather_extent_m / kMap;
+  const int i = texel % kMap, j = texel / kMap;
+  for (int a = -1; a <= 1; ++a)
+    for (int b = -1; b <= 1; ++b) {
+      const double x = ((i + 0.5) / kMap - 0.5 + a) * p.weather_extent_m;
+      const double z = ((j + 0.5) / kMap - 0.5 + b) * p.weather_extent_m;
+      const double d = std::hypot(x, z);
+      if (d > p.draw_distance_m + 2.0 * texel_m) continue;
+      const double el_pixel = latlong::Latitude(pix / kW, kH) * 180.0 / kPi;
+      // Between the texel's bottom and top, give or take a texel and a pixel.
+      const double lo = std::atan2(p.layer_bottom_m, d + texel_m) * 180.0 / kPi - 180.0 / (kH - 1);
+      const double hi = std::atan2(p.layer_top_m, std::max(1.0, d - texel_m)) * 180.0 / kPi + 180.0 / (kH - 1);
+      if (el_pixel < lo || el_pixel > hi) continue;
+      // At the texel's azimuth (longitude 0 -> +Z, +90 -> +X: core/latlong.h), within its
+      // angular size and a pixel: a mirrored or rotated map fails here.
+      if (d > 3.0 * texel_m) {
+        const double az_pixel = latlong::Longitude(pix % kW, kW) * 180.0 / kPi;
+        double diff = std::fmod(std::abs(std::atan2(x, z) * 180.0 / kPi - az_pixel), 360.0);
+        diff = std::min(diff, 360.0 - diff);
+        if (diff > std::atan2(texel_m, d - texel_m) * 180.0 / kPi + 360.0 / (kW - 1)) continue;
+      }
+      *wrapped = (a != 0 || b != 0);
+      return true;
+    }
+  return false;
+}
+
 TEST(WeatherInversion, LinksFollowTheMarchGeometry) {
   clouds::CloudParams p;
   const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
   ASSERT_GT(v.constrained, 0);
-  const double texel_m = p.weather_extent_m / kMap, mid = 0.5 * (p.layer_bottom_m + p.layer_top_m);
-  int checked = 0;
+  int wrapped = 0;
   for (const auto& [texel, pix] : v.links) {
-    const int i = texel % kMap, j = texel / kMap;
-    const double x = ((i + 0.5) / kMap - 0.5) * p.weather_extent_m, z = ((j + 0.5) / kMap - 0.5) * p.weather_extent_m;
-    const double d = std::hypot(x, z);
-    const double el_texel = std::atan2(mid - d * d / (2.0 * p.planet_radius_m), d) * 180.0 / kPi;
-    const double el_pixel = latlong::Latitude(pix / kW, kH) * 180.0 / kPi;
-    // A link is the centre's pixel or a ray through the layer (bottom to top, within a texel):
-    // its elevation lies between the texel's bottom and top, give or take a texel and a pixel.
-    const double lo = std::atan2(p.layer_bottom_m, d + texel_m) * 180.0 / kPi - 180.0 / (kH - 1);
-    const double hi = std::atan2(p.layer_top_m, std::max(1.0, d - texel_m)) * 180.0 / kPi + 180.0 / (kH - 1);
-    EXPECT_GE(el_pixel, lo) << "texel " << i << "," << j << " (el " << el_texel << ")";
-    EXPECT_LE(el_pixel, hi) << "texel " << i << "," << j << " (el " << el_texel << ")";
-    // And at the texel's azimuth (longitude 0 -> +Z, +90 -> +X: core/latlong.h), within the
-    // texel's angular size and a pixel: a mirrored or rotated map fails here.
-    if (d > 3.0 * texel_m) {
-      const double az_texel = std::atan2(x, z) * 180.0 / kPi;
-      const double az_pixel = latlong::Longitude(pix % kW, kW) * 180.0 / kPi;
-      double diff = std::fmod(std::abs(az_texel - az_pixel), 360.0);
-      diff = std::min(diff, 360.0 - diff);
-      EXPECT_LE(diff, std::atan2(texel_m, d - texel_m) * 180.0 / kPi + 360.0 / (kW - 1)) << "texel " << i << "," << j;
-    }
-    ++checked;
+    bool w = false;
+    EXPECT_TRUE(LinkFollowsTheGeometry(p, texel, pix, &w)) << "texel " << texel % kMap << "," << texel / kMap << ", pixel " << pix;
+    wrapped += w;
   }
-  EXPECT_EQ(checked, static_cast<int>(v.links.size()));
-  // Nothing beyond the draw distance, and the corners of a map wider than it are unseen.
-  EXPECT_LT(v.constrained, kMap * kMap);
-  const double reach = p.draw_distance_m;  // horizontal reach <= draw distance
-  const int corner = 0;                    // texel (0, 0): ~42 km away
-  EXPECT_GT(std::hypot(0.5 * p.weather_extent_m, 0.5 * p.weather_extent_m), reach);
-  for (const auto& l : v.links) EXPECT_NE(l.first, corner);
+  // The corners of a 60 km map lie beyond the 35 km draw distance: only their copies are seen.
+  EXPECT_GT(std::hypot(0.5 * p.weather_extent_m, 0.5 * p.weather_extent_m), p.draw_distance_m);
+  EXPECT_GT(wrapped, 0);
+  // Every ray runs front to back: its samples' heights in the layer rise.
+  for (size_t k = 1; k < v.rays.size(); ++k)
+    if (v.rays[k].pixel == v.rays[k - 1].pixel) EXPECT_GE(v.rays[k].fraction, v.rays[k - 1].fraction) << k;
 }
 
 TEST(WeatherInversion, NoSkyConstrainsNothing) {
@@ -64,34 +75,109 @@ TEST(WeatherInversion, NoSkyConstrainsNothing) {
   EXPECT_THROW(cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, std::vector<float>(7, 1.0f)), Error);
 }
 
-TEST(WeatherInversion, SeedAndRefineMoveCoverageTowardThePhoto) {
+// The texel under camera-relative (x, 0) of a map `size` texels across.
+int TexelAtX(const clouds::CloudParams& p, int size, double x) {
+  return (size / 2) * size + static_cast<int>(std::floor((x / p.weather_extent_m + 0.5) * size));
+}
+
+// A photo cloudy below 25 degrees and clear above: a texel whose column the clear pixels
+// cross only above ~45% of the layer keeps its coverage as stratus; one they cross only above
+// ~70%, as cumulus; one whose base they cross, nothing. Distances for a 234 m texel at the
+// default layer (1.5-4 km): at 25 deg (+-1.4 deg, a pixel) the ray is at 36-54% of the layer
+// over 5.63 km, 68-92% over 7.5 km, and below 10% beyond 2 km only under 41 deg.
+TEST(WeatherInversion, CarvingCapsTheColumnsTheClearSkyCrosses) {
+  clouds::CloudParams p;
+  const int size = 256;
+  const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, size, size, kW, kH, {});
+  std::vector<float> photo(static_cast<size_t>(kW) * kH, 0.0f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      if (latlong::Latitude(y, kH) * 180.0 / kPi < 25.0) photo[static_cast<size_t>(y) * kW + x] = 1.0f;
+  clouds::WeatherMap map = clouds::NoiseWeatherMap(1, size, p.weather_extent_m, {});
+  const clouds::WeatherMap statistical = map;
+  cloudfit::CarveCoverage(v, photo, {}, &map);
+  const int stratus = TexelAtX(p, size, 5630.0), cumulus = TexelAtX(p, size, 7500.0), clear = TexelAtX(p, size, 2000.0);
+  EXPECT_FLOAT_EQ(map.rgb[3 * stratus], 1.0f);
+  EXPECT_FLOAT_EQ(map.rgb[3 * stratus + 2], 0.0f);
+  EXPECT_FLOAT_EQ(map.rgb[3 * cumulus], 1.0f);
+  EXPECT_FLOAT_EQ(map.rgb[3 * cumulus + 2], 0.5f);
+  EXPECT_FLOAT_EQ(map.rgb[3 * clear], 0.0f);
+  std::vector<char> seen(map.rgb.size() / 3, 0);
+  for (const auto& l : v.links) seen[static_cast<size_t>(l.first)] = 1;
+  ASSERT_GT(std::count(seen.begin(), seen.end(), 0), 0);  // the corners beyond the draw distance
+  for (size_t t = 0; t < seen.size(); ++t) {
+    if (seen[t]) EXPECT_EQ(map.rgb[3 * t + 1], 0.0f) << t;  // no rain where the photo sees the layer
+    for (int c = 0; c < 3; ++c)
+      if (!seen[t]) EXPECT_EQ(map.rgb[3 * t + c], statistical.rgb[3 * t + c]) << t;  // unseen: unchanged
+  }
+  EXPECT_EQ(cloudfit::CloudTypeForTop(0.59), 0.0);
+  EXPECT_EQ(cloudfit::CloudTypeForTop(0.6), 0.5);
+}
+
+// Refinement: a render that matches moves nothing; one too opaque everywhere thins every
+// texel a ray crosses below its cloud top by gain x the excess; one too clear thickens only
+// the first texel along each ray that may hold cloud there (the one the march would show).
+TEST(WeatherInversion, RefinementMovesTheTexelsTheMarchWouldShow) {
   clouds::CloudParams p;
   const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
-  clouds::WeatherMap map = clouds::UniformWeatherMap(0.3, 0.0, 0.5, p.weather_extent_m);
-  map = clouds::NoiseWeatherMap(1, kMap, p.weather_extent_m, {});  // any statistical map
-  const clouds::WeatherMap statistical = map;
-  std::vector<float> photo(static_cast<size_t>(kW) * kH, 0.0f);
-  for (int y = 0; y < kH / 4; ++y)  // cloud overhead only (above ~45 deg)
-    for (int x = 0; x < kW; ++x) photo[static_cast<size_t>(y) * kW + x] = 1.0f;
-  cloudfit::SeedCoverage(v, photo, 0.5, &map);
-  std::vector<char> linked(static_cast<size_t>(kMap) * kMap, 0);
-  for (const auto& l : v.links) linked[static_cast<size_t>(l.first)] = 1;
-  const int zenith = (kMap / 2) * kMap + kMap / 2;
-  EXPECT_FLOAT_EQ(map.rgb[3 * zenith], 0.5f);  // all its pixels cloud: gain x 1
-  for (size_t t = 0; t < linked.size(); ++t)
-    if (!linked[t]) EXPECT_EQ(map.rgb[3 * t], statistical.rgb[3 * t]) << t;  // unseen: the statistics' coverage
-  // The render matches the photo: nothing moves and the RMS is 0.
-  const clouds::WeatherMap seeded = map;
+  clouds::WeatherMap map = clouds::UniformWeatherMap(0.5, 0.0, 0.5, p.weather_extent_m);
+  map = clouds::NoiseWeatherMap(1, kMap, p.weather_extent_m, {});
+  for (size_t t = 0; t < map.rgb.size() / 3; ++t) {
+    map.rgb[3 * t] = 0.5f;
+    map.rgb[3 * t + 2] = (t % 3 == 0) ? 0.0f : 0.5f;  // some stratus (top 0.3), the rest cumulus (top 0.6)
+  }
+  const clouds::WeatherMap start = map;
+  std::vector<float> photo(static_cast<size_t>(kW) * kH, 0.5f);
   EXPECT_EQ(cloudfit::RefineCoverage(v, photo, photo, 0.5, &map), 0.0);
-  EXPECT_EQ(map.rgb, seeded.rgb);
-  // Rendered everywhere 0.2 more opaque than the photo: every constrained texel 0.1 thinner
-  // (clamped at 0), the RMS 0.2.
-  std::vector<float> thicker(photo);
+  EXPECT_EQ(map.rgb, start.rgb);
+  // Which texels each rule reaches, from the rays themselves.
+  std::vector<char> below_top(map.rgb.size() / 3, 0), first(map.rgb.size() / 3, 0);
+  for (size_t b = 0; b < v.rays.size();) {
+    size_t e = b;
+    bool found = false;
+    for (; e < v.rays.size() && v.rays[e].pixel == v.rays[b].pixel; ++e) {
+      const size_t t = static_cast<size_t>(v.rays[e].texel);
+      if (v.rays[e].fraction > (start.rgb[3 * t + 2] > 0.25f ? 0.6f : 0.3f)) continue;
+      below_top[t] = 1;
+      if (!found) first[t] = 1;
+      found = true;
+    }
+    b = e;
+  }
+  std::vector<float> thicker(photo), thinner(photo);
   for (float& o : thicker) o += 0.2f;
+  for (float& o : thinner) o -= 0.2f;
   EXPECT_NEAR(cloudfit::RefineCoverage(v, photo, thicker, 0.5, &map), 0.2, 1e-6);
-  EXPECT_NEAR(map.rgb[3 * zenith], 0.4f, 1e-6);
-  for (size_t t = 0; t < linked.size(); ++t)
-    if (linked[t]) EXPECT_NEAR(map.rgb[3 * t], std::max(0.0f, seeded.rgb[3 * t] - 0.1f), 1e-6) << t;
+  for (size_t t = 0; t < below_top.size(); ++t) EXPECT_NEAR(map.rgb[3 * t], below_top[t] ? 0.4f : 0.5f, 1e-6) << t;
+  map = start;
+  EXPECT_NEAR(cloudfit::RefineCoverage(v, photo, thinner, 0.5, &map), 0.2, 1e-6);
+  int thickened = 0;
+  for (size_t t = 0; t < first.size(); ++t) {
+    EXPECT_NEAR(map.rgb[3 * t], first[t] ? 0.6f : 0.5f, 1e-6) << t;
+    thickened += first[t];
+  }
+  EXPECT_LT(thickened, std::count(below_top.begin(), below_top.end(), 1));  // the texels behind stay
+}
+
+// Resolution by distance: a map of one value stays one value; a lone far texel spreads over
+// its neighbours; a texel overhead (wider than a pixel) keeps its value.
+TEST(WeatherInversion, SmoothingFollowsThePixelFootprint) {
+  clouds::CloudParams p;
+  const int size = 256;
+  const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, size, size, kW, kH, {});
+  clouds::WeatherMap map = clouds::NoiseWeatherMap(1, size, p.weather_extent_m, {});
+  for (size_t t = 0; t < map.rgb.size() / 3; ++t) map.rgb[3 * t] = 0.25f;
+  clouds::WeatherMap smoothed = map;
+  cloudfit::SmoothCoverageByFootprint(v, p.weather_extent_m, &smoothed);
+  for (size_t t = 0; t < map.rgb.size(); ++t) EXPECT_FLOAT_EQ(smoothed.rgb[t], map.rgb[t]) << t;
+  // A pixel of a 128-wide lat-long spans 2.8 deg: 1 km across at 20 km, half of it 2 texels.
+  const int far = TexelAtX(p, size, 20000.0), zenith = TexelAtX(p, size, 100.0);
+  map.rgb[3 * far] = 1.0f;
+  map.rgb[3 * zenith] = 1.0f;
+  cloudfit::SmoothCoverageByFootprint(v, p.weather_extent_m, &map);
+  EXPECT_FLOAT_EQ(map.rgb[3 * zenith], 1.0f);
+  EXPECT_NEAR(map.rgb[3 * far], 0.25f + 0.75f / 25.0f, 1e-6);  // a 5 x 5 box
+  EXPECT_NEAR(map.rgb[3 * (far + 1)], 0.25f + 0.75f / 25.0f, 1e-6);
 }
 
 TEST(WeatherInversion, DownsampleAveragesBlocks) {

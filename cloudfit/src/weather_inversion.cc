@@ -7,12 +7,20 @@
 
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::cloudfit {
 
 namespace {
 
-constexpr int kLayerSamples = 4;  // altitudes per ray through the layer, at (k + 0.5) / kLayerSamples
+// Rays are followed from this height fraction of the layer: below ~10% the march's bases are
+// too thin to see (the height gradients rise over 8-15% and the bottoms' reduction over 20%).
+constexpr double kBaseFraction = 0.1;
+// The march's type blend cannot cut a column at any height: a type between stratus and
+// cumulus keeps part of the cumulus gradient up to 70% of the layer. Only pure types cut:
+// stratus is empty from 30% up, cumulus has fallen to 15% of its peak by 60% (its gradient
+// falls from 40% to 70%).
+constexpr double kCumulusClearFraction = 0.6;
 
 // The pixel seeing the camera-relative point (x, y, z), or -1 (below the horizon, beyond the
 // draw distance, not sky).
@@ -26,12 +34,11 @@ int PixelOf(double x, double y, double z, const clouds::CloudParams& p, int widt
   return (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f)) ? -1 : pix;
 }
 
-// The texel under camera-relative (x, z), or -1 outside the map (it tiles beyond: those
-// positions repeat texels nearer the camera, which are constrained directly).
+// The texel under camera-relative (x, z); the map tiles (the march's sampler wraps).
 int TexelOf(double x, double z, const clouds::CloudParams& p, int map_width, int map_height) {
   const double u = (x / p.weather_extent_m + 0.5) * map_width, v = (z / p.weather_extent_m + 0.5) * map_height;
-  if (!(u >= 0.0 && u < map_width && v >= 0.0 && v < map_height)) return -1;
-  return static_cast<int>(v) * map_width + static_cast<int>(u);
+  const int i = static_cast<int>(std::floor(u)), j = static_cast<int>(std::floor(v));
+  return ((j % map_height + map_height) % map_height) * map_width + ((i % map_width + map_width) % map_width);
 }
 
 // Each texel's centre at the layer's mid altitude, to the pixel that sees it.
@@ -45,26 +52,43 @@ void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sk
       if (x * x + z * z >= r_mid * r_mid) continue;
       const double y = std::sqrt(r_mid * r_mid - x * x - z * z) - (R + hc);
       const int pix = PixelOf(x, y, z, p, v->width, v->height, sky);
-      if (pix >= 0) v->links.emplace_back(j * v->map_width + i, pix);
+      if (pix < 0) continue;
+      v->links.emplace_back(j * v->map_width + i, pix);
+      v->rays.push_back({pix, j * v->map_width + i, 0.5f});
     }
 }
 
-// Each sky pixel's ray through the layer, to the texels under it.
-void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v) {
+// The distance along direction d (unit, camera-relative) to the sphere of radius R + alt.
+double DistanceToAltitude(const clouds::CloudParams& p, const latlong::Vec3d& d, double alt) {
   const double R = p.planet_radius_m, hc = p.camera_height_m;
+  // |c + t d| = R + alt with c = (0, R + hc, 0): t^2 + 2 b t - c' = 0 (the far root).
+  const double b = (R + hc) * d[1], c = (alt - hc) * (2.0 * R + hc + alt);
+  return -b + std::sqrt(b * b + c);
+}
+
+// Each sky pixel's ray through the layer, front to back, to every texel under it (steps of
+// half a texel across and an eighth of the layer up; the map wraps as the march's sampler does).
+void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v) {
+  const double R = p.planet_radius_m, hc = p.camera_height_m, thick = p.layer_top_m - p.layer_bottom_m;
+  const double texel_m = p.weather_extent_m / v->map_width;
   for (int py = 0; py < v->height; ++py)
     for (int px = 0; px < v->width; ++px) {
       const int pix = py * v->width + px;
       const latlong::Vec3d d = latlong::PixelDirection(px, py, v->width, v->height);
       if (d[1] <= 0.0 || (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f))) continue;
-      for (int k = 0; k < kLayerSamples; ++k) {
-        const double alt = p.layer_bottom_m + (k + 0.5) / kLayerSamples * (p.layer_top_m - p.layer_bottom_m);
-        // Ray from the camera to the sphere of radius R + alt: t^2 + 2 b t - c' = 0 (the far root).
-        const double b = (R + hc) * d[1], c = (alt - hc) * (2.0 * R + hc + alt);
-        const double t = -b + std::sqrt(b * b + c);
-        if (t > p.draw_distance_m) break;
+      const double t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
+      const double t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
+      const double cos_el = std::sqrt(std::max(0.0, 1.0 - d[1] * d[1]));
+      const double step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
+      int last = -1;
+      for (double t = t0; t <= t1; t += step) {
         const int texel = TexelOf(t * d[0], t * d[2], p, v->map_width, v->map_height);
-        if (texel >= 0) v->links.emplace_back(texel, pix);
+        if (texel == last) continue;
+        last = texel;
+        const double x = t * d[0], y = R + hc + t * d[1], z = t * d[2];
+        const double f = (std::sqrt(x * x + y * y + z * z) - R - p.layer_bottom_m) / thick;
+        v->links.emplace_back(texel, pix);
+        v->rays.push_back({pix, texel, static_cast<float>(f)});
       }
     }
 }
@@ -79,50 +103,92 @@ WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_widt
   WeatherTexelView v{map_width, map_height, width, height, {}, 0};
   LinkTexelCentres(p, sky, &v);
   LinkPixelRays(p, sky, &v);
+  std::sort(v.rays.begin(), v.rays.end(), [](const auto& a, const auto& b) {
+    return a.pixel != b.pixel ? a.pixel < b.pixel : a.fraction < b.fraction;
+  });
   std::sort(v.links.begin(), v.links.end());
   v.links.erase(std::unique(v.links.begin(), v.links.end()), v.links.end());
   for (size_t i = 0; i < v.links.size(); ++i) v.constrained += (i == 0 || v.links[i].first != v.links[i - 1].first);
   return v;
 }
 
+double CloudTypeForTop(double top) { return top >= kCumulusClearFraction ? 0.5 : 0.0; }
+
 namespace {
 
-// Per texel, the mean of `values` over its linked pixels (NaN where it has none).
-std::vector<double> TexelMeans(const WeatherTexelView& v, const std::vector<double>& values) {
-  std::vector<double> sum(static_cast<size_t>(v.map_width) * v.map_height, 0.0), n(sum.size(), 0.0);
-  for (const auto& [texel, pix] : v.links) {
-    sum[static_cast<size_t>(texel)] += values[static_cast<size_t>(pix)];
-    n[static_cast<size_t>(texel)] += 1.0;
-  }
-  for (size_t t = 0; t < sum.size(); ++t) sum[t] = n[t] > 0.0 ? sum[t] / n[t] : std::numeric_limits<double>::quiet_NaN();
-  return sum;
-}
+// The height fraction up to which a texel of this type holds cloud (CloudTypeForTop's inverse).
+double TopForType(double type) { return type >= 0.25 ? kCumulusClearFraction : 0.3; }
 
 }  // namespace
 
-void SeedCoverage(const WeatherTexelView& v, const std::vector<float>& opacity, double gain, clouds::WeatherMap* map) {
-  const std::vector<double> mean = TexelMeans(v, std::vector<double>(opacity.begin(), opacity.end()));
-  for (size_t t = 0; t < mean.size(); ++t)
-    if (std::isfinite(mean[t])) map->rgb[3 * t] = static_cast<float>(std::clamp(gain * mean[t], 0.0, 1.0));
+void CarveCoverage(const WeatherTexelView& v, const std::vector<float>& opacity, const CarveOptions& o,
+                   clouds::WeatherMap* map) {
+  const size_t n = static_cast<size_t>(v.map_width) * v.map_height;
+  std::vector<double> lowest(n, std::numeric_limits<double>::infinity()), top(n, o.cumulus_top);
+  std::vector<char> seen(n, 0);
+  for (const auto& [texel, pix] : v.links) seen[static_cast<size_t>(texel)] = 1;
+  for (const auto& s : v.rays) {
+    const size_t t = static_cast<size_t>(s.texel);
+    const double op = opacity[static_cast<size_t>(s.pixel)];
+    if (s.fraction <= o.base_top) lowest[t] = std::min(lowest[t], op);
+    if (op < o.clear_opacity) top[t] = std::min(top[t], static_cast<double>(s.fraction));
+  }
+  for (size_t t = 0; t < n; ++t) {
+    if (!seen[t]) continue;
+    map->rgb[3 * t] = static_cast<float>(std::clamp(o.gain * lowest[t], 0.0, 1.0));
+    map->rgb[3 * t + 1] = 0.0f;
+    map->rgb[3 * t + 2] = static_cast<float>(CloudTypeForTop(top[t]));
+  }
 }
 
 double RefineCoverage(const WeatherTexelView& v, const std::vector<float>& photo, const std::vector<float>& rendered,
                       double gain, clouds::WeatherMap* map) {
-  std::vector<double> diff(photo.size(), 0.0);
-  std::vector<char> linked(photo.size(), 0);
-  for (size_t i = 0; i < diff.size(); ++i) diff[i] = static_cast<double>(rendered[i]) - photo[i];
-  double sum = 0.0, n = 0.0;
-  for (const auto& link : v.links) {
-    const size_t pix = static_cast<size_t>(link.second);
-    if (linked[pix]) continue;
-    linked[pix] = 1;
-    sum += diff[pix] * diff[pix];
-    n += 1.0;
+  const size_t n = static_cast<size_t>(v.map_width) * v.map_height;
+  std::vector<double> sum(n, 0.0), count(n, 0.0);
+  double sq = 0.0, pixels = 0.0;
+  for (size_t b = 0; b < v.rays.size();) {  // one pixel's ray: samples b .. e - 1
+    size_t e = b;
+    while (e < v.rays.size() && v.rays[e].pixel == v.rays[b].pixel) ++e;
+    const size_t pix = static_cast<size_t>(v.rays[b].pixel);
+    const double r = static_cast<double>(rendered[pix]) - photo[pix];
+    sq += r * r;
+    pixels += 1.0;
+    for (size_t i = b; i < e; ++i) {
+      const size_t t = static_cast<size_t>(v.rays[i].texel);
+      if (v.rays[i].fraction > TopForType(map->rgb[3 * t + 2])) continue;  // above the texel's cloud top
+      sum[t] -= r;
+      count[t] += 1.0;
+      if (r < 0.0) break;  // too clear: only the first texel that may hold cloud here
+    }
+    b = e;
   }
-  const std::vector<double> mean = TexelMeans(v, diff);
-  for (size_t t = 0; t < mean.size(); ++t)
-    if (std::isfinite(mean[t])) map->rgb[3 * t] = static_cast<float>(std::clamp(map->rgb[3 * t] - gain * mean[t], 0.0, 1.0));
-  return n > 0.0 ? std::sqrt(sum / n) : 0.0;
+  for (size_t t = 0; t < n; ++t)
+    if (count[t] > 0.0) map->rgb[3 * t] = static_cast<float>(std::clamp(map->rgb[3 * t] + gain * sum[t] / count[t], 0.0, 1.0));
+  return pixels > 0.0 ? std::sqrt(sq / pixels) : 0.0;
+}
+
+void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, clouds::WeatherMap* map) {
+  const int W = v.map_width, H = v.map_height;
+  std::vector<char> constrained(static_cast<size_t>(W) * H, 0);
+  for (const auto& l : v.links) constrained[static_cast<size_t>(l.first)] = 1;
+  const double texel_m = extent_m / W, pixel_rad = 2.0 * kPi / v.width;
+  std::vector<float> out(map->rgb);
+  for (int j = 0; j < H; ++j)
+    for (int i = 0; i < W; ++i) {
+      if (!constrained[static_cast<size_t>(j) * W + i]) continue;
+      const double d = texel_m * std::hypot(i + 0.5 - 0.5 * W, j + 0.5 - 0.5 * H);
+      const int k = static_cast<int>(0.5 * d * pixel_rad / texel_m);
+      if (k < 1) continue;
+      double sum = 0.0, n = 0.0;
+      for (int y = std::max(0, j - k); y <= std::min(H - 1, j + k); ++y)
+        for (int x = std::max(0, i - k); x <= std::min(W - 1, i + k); ++x)
+          if (constrained[static_cast<size_t>(y) * W + x]) {
+            sum += map->rgb[3 * (static_cast<size_t>(y) * W + x)];
+            n += 1.0;
+          }
+      out[3 * (static_cast<size_t>(j) * W + i)] = static_cast<float>(sum / n);
+    }
+  map->rgb = std::move(out);
 }
 
 std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "calibrate_figure.h"
 #include "calibrate_plan.h"
@@ -72,9 +73,30 @@ std::vector<float> ComparedPixels(const PhotoAnalysis& a, const FitPlan& plan) {
   return sky;
 }
 
+// Intersection over union of the game's clouds (transmittance < 0.5) and the photo's (cloud
+// probability >= 0.5) over the compared pixels; unset without drawn clouds or a cloud probability.
+std::optional<double> CloudMaskIou(const PhotoAnalysis& a, const std::vector<float>& transmittance,
+                                   const std::vector<float>& compared) {
+  if (transmittance.empty() || a.cloud_probability.size() != transmittance.size()) return std::nullopt;
+  double both = 0.0, either = 0.0;
+  for (size_t i = 0; i < compared.size(); ++i) {
+    if (!(compared[i] > 0.5f)) continue;
+    const bool game = transmittance[i] < 0.5f, photo = a.cloud_probability[i] >= 0.5f;
+    both += (game && photo);
+    either += (game || photo);
+  }
+  if (either == 0.0) return std::nullopt;
+  return both / either;
+}
+
+struct GameJudgement {
+  appearance::Comparison comparison;
+  std::optional<double> cloud_iou;
+};
+
 // The calibrated preset rendered as the game renders it, at the photo's sun, size and
-// exposure: render.exr, compare.png, and the two numbers against the photo.
-appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const StagedDirectory& out, double exposure) {
+// exposure: render.exr, compare.png, and the numbers against the photo.
+GameJudgement RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const StagedDirectory& out, double exposure) {
   GameRenderOptions r;
   r.preset_path = out / "preset.json";
   r.sun_dir = *a.sun.direction;
@@ -94,10 +116,12 @@ appearance::Comparison RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan
   capture::WriteLatLongFrame(out / "render.exr", f);
   const std::vector<float> compared = ComparedPixels(a, plan);
   WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, compared);
-  return appearance::Compare(a.frame.radiance, game.radiance, compared, {}, "photo.exr", "render.exr");
+  return {appearance::Compare(a.frame.radiance, game.radiance, compared, {}, "photo.exr", "render.exr"),
+          CloudMaskIou(a, game.cloud_transmittance, compared)};
 }
 
-fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const appearance::Comparison& c) {
+fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const GameJudgement& g) {
+  const appearance::Comparison& c = g.comparison;
   fit::FitCalibration r;
   r.photo = photo;
   r.sky_kind = capture::ToString(a.kind.kind);
@@ -114,6 +138,7 @@ fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, con
   r.game_sky_pixels = c.sky_pixels;
   r.game_per_pixel_log_rmse = c.per_pixel_log_rmse;
   r.game_appearance_error = c.appearance_error;
+  r.game_cloud_iou = g.cloud_iou;
   return r;
 }
 
@@ -184,7 +209,7 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   PlaceTheClouds(a, out, final_dir, o, &plan);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
   Log(o, "rendering the calibrated preset as the game renders it" + std::string(plan.draw_clouds ? " (sky + clouds)" : ""));
-  const appearance::Comparison c = RenderTheGame(a, plan, out, f.references.at(0).exposure);
+  const GameJudgement c = RenderTheGame(a, plan, out, f.references.at(0).exposure);
   PhotoCalibration r;
   r.photo = photo;
   r.dir = final_dir;
@@ -206,8 +231,9 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
     }
   }
   out.Commit();
-  Log(o, "wrote " + final_dir + ": the game's image against the photo: per-pixel log RMSE " + Round(c.per_pixel_log_rmse) +
-             ", appearance error " + Round(c.appearance_error) + " (" + Round(r.seconds, 0.1) + " s)");
+  Log(o, "wrote " + final_dir + ": the game's image against the photo: per-pixel log RMSE " +
+             Round(c.comparison.per_pixel_log_rmse) + ", appearance error " + Round(c.comparison.appearance_error) +
+             (c.cloud_iou ? ", clouds' IoU " + Round(*c.cloud_iou) : std::string()) + " (" + Round(r.seconds, 0.1) + " s)");
   return r;
 }
 

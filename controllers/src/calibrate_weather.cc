@@ -10,6 +10,7 @@
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/json_file.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
 
@@ -17,27 +18,27 @@ namespace skycal::controllers {
 namespace {
 
 constexpr int kRenderWidth = 256;   // the refinement renders (pixels): a texel near the zenith is ~1 pixel at 512
-constexpr int kRefinements = 3;     // renders; each moves every constrained texel toward the photo
+constexpr int kRefinements = 5;     // renders; each moves every constrained texel toward the photo
 // Coverage per unit opacity error: the march's opacity grows about twice as fast as the mean
 // coverage at partly cloudy coverages (the statistics fit's matched coverage steps, fit.json).
 constexpr double kStep = 0.5;
-
-// The statistics fit's coverage per unit of photo cloud probability (its matched mean
-// coverage over the photo's mean probability), the first guess's gain.
-double SeedGain(const std::string& fit_json) {
-  const nlohmann::json cs = fit::ReadFitResultFile(fit_json).cloud_stats;
-  const auto c = cs.is_object() ? cs.find("coverage") : cs.end();
-  if (c != cs.end() && c->is_object() && c->contains("matched_mean_coverage") && c->contains("photo_mean_cloud_probability")) {
-    const double p = (*c)["photo_mean_cloud_probability"].get<double>();
-    if (p > 1e-3) return std::clamp((*c)["matched_mean_coverage"].get<double>() / p, 0.1, 2.0);
-  }
-  return kStep;
-}
+// The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
+// inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
+constexpr int kRefitIterations = 10;
 
 std::vector<float> Opacity(const std::vector<float>& transmittance) {
   std::vector<float> o(transmittance.size());
   for (size_t i = 0; i < o.size(); ++i) o[i] = 1.0f - transmittance[i];
   return o;
+}
+
+// The horizon rule puts cumulus at a fixed coverage beyond 15 km whatever the map says: below
+// about 20 degrees it would draw a bank of cloud where the photo shows the sky. The photo's
+// horizon is the truth, so the inverted map draws it.
+void TurnOffHorizonRule(const std::filesystem::path& preset_json) {
+  nlohmann::json j = ReadJsonFile(preset_json.string());
+  j.at("clouds").at("horizon_rule")["value"] = false;
+  WriteJsonFileAtomically(preset_json.string(), j);
 }
 
 }  // namespace
@@ -55,6 +56,8 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
           "statistics fit's coverage); rendered vs photo cloud opacity RMS";
   for (double r : rms) d.why += " " + FormatNumber(std::round(r * 1000.0) / 1000.0);
   d.why += " over " + std::to_string(rms.size()) + " renders at " + std::to_string(render_width) + " px wide";
+  if (horizon_rule_off)
+    d.why += "; the horizon rule off (it would draw a bank of cumulus beyond 15 km where the photo shows its own horizon)";
   return d;
 }
 
@@ -74,7 +77,12 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
                 std::to_string(kRenderWidth) + "x" + std::to_string(kRenderWidth / 2) + " (the refinement renders')";
     return r;
   }
-  const clouds::CloudParams params = clouds::ParseCloudSectionText(preset.clouds_json, out / "preset.json");
+  clouds::CloudParams params = clouds::ParseCloudSectionText(preset.clouds_json, out / "preset.json");
+  r.horizon_rule_off = params.horizon_rule != 0.0;
+  if (r.horizon_rule_off) {
+    params.horizon_rule = 0.0;
+    TurnOffHorizonRule(out / "preset.json");
+  }
   clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", params.weather_extent_m);
   std::vector<float> photo(a.cloud_probability.size());
   for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
@@ -82,7 +90,8 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   const std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
-  cloudfit::SeedCoverage(view, photo_small, SeedGain(out / "fit.json"), &map);
+  cloudfit::CarveCoverage(view, photo_small, {}, &map);
+  cloudfit::SmoothCoverageByFootprint(view, params.weather_extent_m, &map);
   GameRenderOptions ro;
   ro.preset_path = out / "preset.json";
   ro.sun_dir = *a.sun.direction;
@@ -97,6 +106,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
     clouds::SaveWeatherMap(map, out / "preset.weather.exr");
     const GameImage g = RenderGameImage(ro);
     r.rms.push_back(cloudfit::RefineCoverage(view, photo_small, Opacity(g.cloud_transmittance), kStep, &map));
+    cloudfit::SmoothCoverageByFootprint(view, params.weather_extent_m, &map);
   }
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");
   r.done = true;
@@ -149,6 +159,8 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.cloud_mask = false;
     k.clouds.mode = "on";
     k.clouds.preset = (shapes / "preset.json").string();
+    k.clouds.hold.push_back("extinction");
+    k.clouds.max_iterations = kRefitIterations;
     {
       StagedDirectory refit(refit_dir.string(), "CalibrateOptions::out_dir", "calibrate", {});
       RunFitInto(k, refit);
@@ -158,7 +170,9 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     MoveUp(refit_dir, out.staging());
     const nlohmann::json clouds = fit::ReadFitResultFile(out / "fit.json").clouds;
     d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
-    d.why = "cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
+    d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
+            "would thin or thicken the shapes it placed); at most " + std::to_string(kRefitIterations) +
+            " iterations; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
     d.what = "cloud lighting: the statistics fit's kept";

@@ -17,6 +17,7 @@ struct WeatherInversionRecord {
   int texels = 0, constrained = 0;
   int render_width = 0;         // the refinement renders' lat-long width (pixels)
   std::vector<double> rms;      // per refinement render: RMS of rendered - photo opacity
+  bool horizon_rule_off = false;  // the preset's horizon rule turned off (the map draws the horizon)
   double seconds = 0.0;
   fit::FitDecision Decision() const;
 };

@@ -50,6 +50,7 @@ bool FitCloudOptions::IsValid(std::string* why) const {
   }
   cloudfit::CloudLightingOptions co;
   co.samples = samples;
+  co.max_iterations = max_iterations;
   co.day_smoothness = day_smoothness;
   co.hold = hold;
   return co.IsValid(why);  // its messages name CloudLightingOptions' fields of the same names
@@ -97,6 +98,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   if (fo.verbose) FitLog("clouds: " + d.why);  // fit --quiet and skycal bench: off
   cloudfit::CloudLightingOptions co;
   co.samples = o.samples;
+  co.max_iterations = o.max_iterations;
   co.hold = o.hold;
   co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;

@@ -349,6 +349,9 @@ std::string CalibrationBlock(const FitRecord& f, PageCounts* counts) {
   h += Row({"per-pixel log RMSE", FormatNumber(c.game_per_pixel_log_rmse, 3) + " (natural log, " +
                                       std::to_string(c.game_sky_pixels) + " sky pixels above the horizon)"});
   h += Row({"appearance error", FormatNumber(c.game_appearance_error, 3) + " (per 10 deg band: luminance quantiles, chromaticity)"});
+  if (c.game_cloud_iou)
+    h += Row({"clouds where the photo has them", FormatNumber(*c.game_cloud_iou, 3) +
+                                                   " (intersection over union: game transmittance < 0.5, photo cloud probability >= 0.5)"});
   h += Row({"calibration time", FormatNumber(c.seconds, 3) + " s"});
   h += "</table>\n";
   if (!f.compare_png.empty())

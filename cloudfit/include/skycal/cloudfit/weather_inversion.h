@@ -12,9 +12,20 @@
 // sky pixel above the horizon within the draw distance; the others (below the horizon,
 // behind buildings, beyond the draw distance) keep the statistical map's coverage.
 //
+// One viewpoint sees each column of the layer along one azimuth, over a range of elevations
+// (a texel 10 km away spans about 10 to 18 degrees from the base to 70% of the layer): a
+// 2D map cannot put cloud in part of a column, so the first guess carves (space carving,
+// Kutulakos & Seitz, IJCV 2000, with one camera): a clear pixel empties every texel its ray
+// crosses at that height, which caps the texel's cloud top (written as the cloud type: the
+// march's height gradients end near 30% of the layer for stratus, 70% for cumulus) and bounds its coverage by the clearest pixel that crosses it. Precipitation
+// is cleared where the photo constrains the map (it would push the texel to a cumulonimbus the
+// photo did not show).
+//
 // The march's coverage -> opacity relation is monotone (what the base noise keeps above
-// 1 - coverage grows with coverage), so the map is refined with renders: each constrained
-// texel's coverage moves by gain x (photo opacity - rendered opacity) at its pixel.
+// 1 - coverage grows with coverage), so the map is then refined with renders: a pixel
+// rendered too opaque thins every texel its ray crosses below the texel's cloud top; a pixel
+// rendered too clear thickens the first texel its ray meets that may hold cloud there (the
+// one the march would show); each texel moves by gain x the mean of what its pixels ask.
 #pragma once
 #include <vector>
 
@@ -30,7 +41,35 @@ struct WeatherTexelView {
   int map_width = 0, map_height = 0, width = 0, height = 0;
   std::vector<std::pair<int, int>> links;  // (texel, pixel)
   int constrained = 0;                     // texels with at least one link
+  // Each sky pixel's ray through the layer, front to back: the texel under each sample and
+  // the sample's height fraction in the layer (0 base, 1 top).
+  struct RaySample {
+    int pixel = 0, texel = 0;
+    float fraction = 0.0f;
+  };
+  std::vector<RaySample> rays;  // grouped by pixel, each pixel's samples in order
 };
+
+// The tallest cloud type whose column is clear from `top` (a fraction of the layer) up:
+// cumulus (0.5) from 0.6 up, else stratus (0). A blend of the two keeps cumulus up to 0.7 of
+// the layer, and the tops the photo never sees are taken as cumulus, not cumulonimbus.
+double CloudTypeForTop(double top);
+
+struct CarveOptions {
+  double clear_opacity = 0.3;   // a pixel below this opacity is clear sky
+  double cumulus_top = 0.7;     // a column no clear pixel caps is taken as cumulus (its top unseen)
+  double base_top = 0.3;        // below this height fraction every cloud type has cloud: a clear pixel there empties the texel
+  // Coverage per unit opacity: 1 makes a texel that every crossing pixel sees opaque fully
+  // covered (the refinement thins it where the render is denser than the photo).
+  double gain = 1.0;
+};
+
+// The first guess: each constrained texel's coverage = gain x the lowest opacity of the
+// pixels crossing it below base_top, its type = CloudTypeForTop(the lowest height at
+// which a clear pixel crosses it, at most cumulus_top), its precipitation 0; unconstrained
+// texels unchanged. `opacity`: width * height values in [0, 1].
+void CarveCoverage(const WeatherTexelView& view, const std::vector<float>& opacity, const CarveOptions& options,
+                   clouds::WeatherMap* map);
 
 // `sky`: width * height weights (>= 0.5 sky) or empty (every pixel above the horizon).
 WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_width, int map_height, int width, int height,
@@ -40,11 +79,18 @@ WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_widt
 // pixels); unconstrained texels unchanged. `opacity`: width * height values in [0, 1].
 void SeedCoverage(const WeatherTexelView& view, const std::vector<float>& opacity, double gain, clouds::WeatherMap* map);
 
-// One refinement step: coverage += gain x the mean (photo - rendered) opacity of each
-// constrained texel's pixels, clamped to [0, 1]. Returns the RMS of (rendered - photo) over
-// the linked pixels (each counted once) before the step.
+// One refinement step (the rule above): coverage moves by gain x the mean of what the
+// texel's pixels ask, clamped to [0, 1]. Returns the RMS of (rendered - photo) over the
+// linked pixels (each counted once) before the step.
 double RefineCoverage(const WeatherTexelView& view, const std::vector<float>& photo_opacity,
                       const std::vector<float>& rendered_opacity, double gain, clouds::WeatherMap* map);
+
+// Resolution by distance: what the photo resolves. A pixel of the view's lat-long spans
+// d x 2 pi / width metres across at horizontal distance d; each constrained texel's coverage
+// becomes the mean of the constrained texels within half that footprint (a box; none near the
+// zenith, where a texel is wider than a pixel), so that texels between two far pixels' rays
+// follow their neighbours instead of keeping a seed the photo never saw.
+void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_extent_m, clouds::WeatherMap* map);
 
 // A lat-long of width x height box-averaged to out_width x out_height (integer factors).
 std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height);

@@ -25,6 +25,7 @@ struct FitCloudOptions {
   std::optional<double> time_s;
   double day_smoothness = 0.02;     // the day's prior over time of day (CloudLightingOptions)
   int samples = 256;                // cloud pixels in the Jacobian (CloudLightingOptions)
+  int max_iterations = 100;         // of the lighting solve (CloudLightingOptions)
   std::vector<std::string> hold;    // cloud lighting parameters held at the preset's values
   // False and the field (FitCloudOptions::, CloudLightingOptions::), its value and the
   // expectation in *why.
