@@ -191,6 +191,19 @@ void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, cloud
   map->rgb = std::move(out);
 }
 
+std::vector<double> InvertWeatherMap(const WeatherTexelView& view, double extent_m, const std::vector<float>& photo,
+                                     const std::function<std::vector<float>(const clouds::WeatherMap&)>& render_opacity,
+                                     const InversionOptions& o, clouds::WeatherMap* map) {
+  CarveCoverage(view, photo, o.carve, map);
+  SmoothCoverageByFootprint(view, extent_m, map);
+  std::vector<double> rms;
+  for (int k = 0; k < o.refinements; ++k) {
+    rms.push_back(RefineCoverage(view, photo, render_opacity(*map), o.step, map));
+    SmoothCoverageByFootprint(view, extent_m, map);
+  }
+  return rms;
+}
+
 std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height) {
   if (out_width <= 0 || out_height <= 0 || width % out_width != 0 || height % out_height != 0)
     throw Error("weather inversion: cannot box-average " + std::to_string(width) + "x" + std::to_string(height) + " to " +

@@ -18,10 +18,6 @@ namespace skycal::controllers {
 namespace {
 
 constexpr int kRenderWidth = 256;   // the refinement renders (pixels): a texel near the zenith is ~1 pixel at 512
-constexpr int kRefinements = 5;     // renders; each moves every constrained texel toward the photo
-// Coverage per unit opacity error: the march's opacity grows about twice as fast as the mean
-// coverage at partly cloudy coverages (the statistics fit's matched coverage steps, fit.json).
-constexpr double kStep = 0.5;
 // The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
 // inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
 constexpr int kRefitIterations = 10;
@@ -90,8 +86,6 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   const std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
-  cloudfit::CarveCoverage(view, photo_small, {}, &map);
-  cloudfit::SmoothCoverageByFootprint(view, params.weather_extent_m, &map);
   GameRenderOptions ro;
   ro.preset_path = out / "preset.json";
   ro.sun_dir = *a.sun.direction;
@@ -102,12 +96,11 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   ro.exposure = exposure;
   ro.verbose = false;
   ro.clouds.enabled = true;
-  for (int k = 0; k < kRefinements; ++k) {
-    clouds::SaveWeatherMap(map, out / "preset.weather.exr");
-    const GameImage g = RenderGameImage(ro);
-    r.rms.push_back(cloudfit::RefineCoverage(view, photo_small, Opacity(g.cloud_transmittance), kStep, &map));
-    cloudfit::SmoothCoverageByFootprint(view, params.weather_extent_m, &map);
-  }
+  const auto render = [&](const clouds::WeatherMap& m) {
+    clouds::SaveWeatherMap(m, out / "preset.weather.exr");
+    return Opacity(RenderGameImage(ro).cloud_transmittance);
+  };
+  r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, photo_small, render, {}, &map);
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");
   r.done = true;
   r.texels = map.width * map.height;

@@ -27,6 +27,7 @@
 // rendered too clear thickens the first texel its ray meets that may hold cloud there (the
 // one the march would show); each texel moves by gain x the mean of what its pixels ask.
 #pragma once
+#include <functional>
 #include <vector>
 
 #include "skycal/clouds/cloud_params.h"
@@ -91,6 +92,21 @@ double RefineCoverage(const WeatherTexelView& view, const std::vector<float>& ph
 // zenith, where a texel is wider than a pixel), so that texels between two far pixels' rays
 // follow their neighbours instead of keeping a seed the photo never saw.
 void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_extent_m, clouds::WeatherMap* map);
+
+// The whole inversion: carve, smooth, then `refinements` times render (the march's opacity,
+// view.width x view.height, through `render_opacity` of the current map), refine by `step`
+// and smooth. Returns the RMS of rendered - photo opacity of each render.
+struct InversionOptions {
+  CarveOptions carve;
+  int refinements = 5;
+  // Coverage per unit opacity error: the march's opacity grows about twice as fast as the
+  // mean coverage at partly cloudy coverages (the statistics fit's matched coverage steps).
+  double step = 0.5;
+};
+std::vector<double> InvertWeatherMap(const WeatherTexelView& view, double weather_extent_m,
+                                     const std::vector<float>& photo_opacity,
+                                     const std::function<std::vector<float>(const clouds::WeatherMap&)>& render_opacity,
+                                     const InversionOptions& options, clouds::WeatherMap* map);
 
 // A lat-long of width x height box-averaged to out_width x out_height (integer factors).
 std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height);
