@@ -176,8 +176,7 @@ void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const st
     return;
   }
   Log(o, "inverting the weather map: the clouds where the photo has them");
-  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
-  const WeatherInversionRecord w = InvertPhotoWeather(a, out, exposure, plan->fit.fit.backend);
+  const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend);
   plan->decisions.push_back(w.Decision());
   Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
   if (!w.done) return;

@@ -2,9 +2,12 @@
 
 #include <chrono>
 #include <filesystem>
+#include <memory>
 
 #include "skycal/cloudfit/weather_inversion.h"
+#include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/controllers/fit_controller.h"
 #include "skycal/controllers/game_render.h"
@@ -57,8 +60,7 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
   return d;
 }
 
-WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure,
-                                          render::Backend backend) {
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend) {
   const auto t0 = std::chrono::steady_clock::now();
   WeatherInversionRecord r;
   const render::Preset preset = render::LoadPreset(out / "preset.json");
@@ -86,19 +88,20 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   const std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
-  GameRenderOptions ro;
-  ro.preset_path = out / "preset.json";
-  ro.sun_dir = *a.sun.direction;
-  ro.width = rw;
-  ro.height = rh;
-  ro.sun_disc = false;
-  ro.backend = backend;
-  ro.exposure = exposure;
-  ro.verbose = false;
-  ro.clouds.enabled = true;
+  // The march's transmittance through the map being refined: the game's march (its noise,
+  // steps and optimisations) without the light toward the sun, which the opacity does not read.
+  const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
+  const std::unique_ptr<clouds::CloudRenderer> renderer =
+      backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
+                                          : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat);
+  clouds::CloudRenderRequest request;
+  request.sun_dir = *a.sun.direction;
+  request.width = rw;
+  request.height = rh;
+  request.march.light_samples = 0;
+  request.march.far_light = false;
   const auto render = [&](const clouds::WeatherMap& m) {
-    clouds::SaveWeatherMap(m, out / "preset.weather.exr");
-    return Opacity(RenderGameImage(ro).cloud_transmittance);
+    return Opacity(renderer->Render({&preset, &params, &noise, &m}, request).transmittance);
   };
   r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, photo_small, render, {}, &map);
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");

@@ -24,10 +24,8 @@ struct WeatherInversionRecord {
 
 // Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
 // clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud
-// probability covers. `exposure`: the fit's (the renders' transmittance does not depend on it);
-// `backend` renders the march.
-WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, double exposure,
-                                          render::Backend backend);
+// probability covers. `backend` marches the renders (their transmittance only).
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend);
 
 // The cloud lighting refitted pixel by pixel on the recovered shapes: the known-shapes fit
 // (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in

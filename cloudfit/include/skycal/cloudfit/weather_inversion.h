@@ -98,7 +98,7 @@ void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_exte
 // and smooth. Returns the RMS of rendered - photo opacity of each render.
 struct InversionOptions {
   CarveOptions carve;
-  int refinements = 5;
+  int refinements = 8;  // the opacity RMS flattens by about the eighth (bench/results/calibrate.md)
   // Coverage per unit opacity error: the march's opacity grows about twice as fast as the
   // mean coverage at partly cloudy coverages (the statistics fit's matched coverage steps).
   double step = 0.5;
