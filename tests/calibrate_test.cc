@@ -285,6 +285,20 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
     }
   ASSERT_GE(rms.size(), 2u);
   for (size_t i = 1; i < rms.size(); ++i) EXPECT_LT(rms[i], rms[i - 1]) << i;
+  // Which texels the photo constrained: the map beside the preset, as many as the decision says.
+  int constrained = -1, texels = -1;
+  for (const fit::FitDecision& d : inv.decisions)
+    if (d.what.starts_with("weather map inverted")) std::istringstream(d.why) >> constrained;
+  for (const fit::FitDecision& d : inv.decisions)
+    if (d.what.starts_with("weather map inverted")) texels = std::stoi(d.why.substr(d.why.find(" of ") + 4));
+  const ImageRGB seen = ReadExrRGB(s / "inverted/scattered/weather_constrained.exr").image;
+  EXPECT_EQ(seen.width * seen.height, texels);
+  EXPECT_EQ(ReadExrRGB(s / "inverted/scattered/preset.weather.exr").image.width, seen.width);
+  int ones = 0;
+  for (size_t i = 0; i < seen.pixels.size(); i += 3) ones += seen.pixels[i] > 0.5f;
+  EXPECT_EQ(ones, constrained);
+  EXPECT_GT(constrained, 0);
+  EXPECT_LT(constrained, texels);
   // Then the lighting refitted on those shapes: its decision, and the statistics fit's record kept.
   bool refitted = false;
   for (const fit::FitDecision& d : inv.decisions) refitted |= d.what.starts_with("cloud lighting refitted");

@@ -12,6 +12,7 @@
 #include "skycal/controllers/fit_controller.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/fit/fit_result_file.h"
@@ -40,6 +41,17 @@ void TurnOffHorizonRule(const std::filesystem::path& preset_json) {
   WriteJsonFileAtomically(preset_json.string(), j);
 }
 
+// Which texels the photo constrained (1) and which kept the statistics fit's coverage (0),
+// on the map's grid (EXR row 0 is map row 0, as the weather map).
+void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::filesystem::path& path) {
+  ImageRGB image(v.map_width, v.map_height);
+  for (const auto& l : v.links)
+    for (int c = 0; c < 3; ++c) image.pixels[3 * static_cast<size_t>(l.first) + c] = 1.0f;
+  ExrAttributes attributes;
+  attributes.strings["skycalContent"] = "weather-map texels the photo constrained (1) or left to the statistics (0)";
+  WriteExrRGB(path.string(), image, attributes, ExrPixelType::kHalf);
+}
+
 }  // namespace
 
 fit::FitDecision WeatherInversionRecord::Decision() const {
@@ -51,8 +63,8 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
     return d;
   }
   d.what = "weather map inverted from the photo: the clouds where the photo has them";
-  d.why = std::to_string(constrained) + " of " + std::to_string(texels) + " texels seen by the photo (the rest keep the "
-          "statistics fit's coverage); rendered vs photo cloud opacity RMS";
+  d.why = std::to_string(constrained) + " of " + std::to_string(texels) + " texels seen by the photo (" +
+          kConstrainedTexelsFile + "; the rest keep the statistics fit's coverage); rendered vs photo cloud opacity RMS";
   for (double r : rms) d.why += " " + FormatNumber(std::round(r * 1000.0) / 1000.0);
   d.why += " over " + std::to_string(rms.size()) + " renders at " + std::to_string(render_width) + " px wide";
   if (horizon_rule_off)
@@ -105,6 +117,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   };
   r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, photo_small, render, {}, &map);
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");
+  WriteConstrainedTexels(view, out / kConstrainedTexelsFile);
   r.done = true;
   r.texels = map.width * map.height;
   r.constrained = view.constrained;

@@ -11,6 +11,9 @@
 
 namespace skycal::controllers {
 
+// Written beside the preset by the inversion: 1 where the photo constrained the map.
+inline constexpr const char* kConstrainedTexelsFile = "weather_constrained.exr";
+
 struct WeatherInversionRecord {
   bool done = false;
   std::string why_not;          // !done: why the statistical map stayed
