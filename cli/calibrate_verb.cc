@@ -17,6 +17,7 @@ const FieldFlag kFlags[] = {{"CalibrateOptions::photos", "--photo"},
                             {"CalibrateOptions::sun_elevation_deg", "--sun-elevation"},
                             {"CalibrateOptions::sun_azimuth_deg", "--sun-azimuth"},
                             {"CalibrateOptions::invert_weather is off", "--no-weather-inversion was given"},
+                            {"CalibrateOptions::weather_map", "--weather-map"},
                             {"time_iso8601", "--time"},
                             {"latitude_deg", "--lat"},
                             {"longitude_deg", "--lon"},
@@ -69,8 +70,8 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   VerbCommandLine cl("calibrate",
                      "skycal calibrate: photographs of the sky in, calibrated presets, game tables and a report out",
                      "  skycal calibrate --photo P.exr [--photo ...] --out DIR [--time ISO8601 --lat DEG --lon DEG [--north DEG]]\n"
-                     "                   [--sun-elevation DEG --sun-azimuth DEG] [--no-weather-inversion] [--no-export] [--no-report]\n"
-                     "                   [--quiet] [--json]",
+                     "                   [--sun-elevation DEG --sun-azimuth DEG] [--no-weather-inversion | --weather-map W.exr]\n"
+                     "                   [--no-export] [--no-report] [--quiet] [--json]",
                      "Per photo, into DIR/<stem>/: the sky found (mask.exr), the sun placed (disc, time and place, or\n"
                      "the sky's own pattern), the kind of sky decided (clear, partly cloudy, overcast, twilight; night\n"
                      "and not-a-sky are refused), the fit (preset.json, fit.json), the game's image of the calibrated\n"
@@ -89,6 +90,9 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   bool no_export = false, no_report = false, quiet = false, json = false, no_inversion = false;
   cl.Flag("--no-weather-inversion", &no_inversion,
           "partly cloudy: keep the cloud statistics fit's weather map (clouds where its noise puts them)");
+  cl.Text("--weather-map", &o.weather_map, "W.exr",
+          "partly cloudy: the clouds' shapes given (RGB EXR: coverage, precipitation, type) and held; the lighting is "
+          "fitted on them");
   cl.Flag("--no-export", &no_export, "do not write DIR/game (the game tables)");
   cl.Flag("--no-report", &no_report, "do not write the HTML reports");
   cl.Flag("--quiet", &quiet, "no progress lines");

@@ -306,6 +306,29 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_TRUE(std::filesystem::exists(s / "inverted/scattered/fit.statistics.json"));
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/refit"));
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/inverted_shapes"));
+
+  // The true map given and held: the preset carries it texel for texel, nothing is inverted,
+  // and the game's image is nearer the photo than with the inverted shapes (the shapes are
+  // the photo's own: what is left is the lighting fit's).
+  const auto held = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "held --no-report --no-export" +
+                           " --weather-map " + s / "w.exr");
+  ASSERT_EQ(held.rc, 0) << held.err;
+  const ImageRGB given = ReadExrRGB(s / "w.exr").image, kept = ReadExrRGB(s / "held/scattered/preset.weather.exr").image;
+  EXPECT_EQ(given.pixels, kept.pixels);
+  EXPECT_FALSE(std::filesystem::exists(s / "held/scattered/weather_constrained.exr"));
+  const fit::FitResultFile h = fit::ReadFitResultFile(s / "held/scattered/fit.json");
+  bool said = false;
+  for (const fit::FitDecision& d : h.decisions) said |= d.what == "weather map: the user's, held (not inverted)";
+  EXPECT_TRUE(said);
+  std::cout << "[calibrate] the true map held: per-pixel " << h.calibration->game_per_pixel_log_rmse << ", appearance "
+            << h.calibration->game_appearance_error << "\n";
+  EXPECT_LT(h.calibration->game_per_pixel_log_rmse, inv.calibration->game_per_pixel_log_rmse);
+  // A map that is not there: exit 1, named, nothing written.
+  const auto missing = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "none --weather-map " +
+                              s / "nope.exr");
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_NE(missing.err.find("nope.exr"), std::string::npos) << missing.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "none"));
 }
 
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).

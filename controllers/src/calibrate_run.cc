@@ -8,6 +8,8 @@
 #include "calibrate_figure.h"
 #include "calibrate_plan.h"
 #include "calibrate_weather.h"
+#include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/weather_map.h"
 #include "skycal/controllers/calibrate.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/appearance.h"
@@ -162,24 +164,29 @@ void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* 
   }
 }
 
-// Partly cloudy: the weather map inverted from the photo, then the cloud lighting refitted
-// on those shapes (calibrate_weather.h); each step a decision. Nothing without clouds.
+// Partly cloudy: the weather map inverted from the photo (or the user's, held), then the cloud
+// lighting refitted on those shapes (calibrate_weather.h); each step a decision. Nothing
+// without clouds.
 void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir,
                     const CalibrateOptions& o, FitPlan* plan) {
   if (!plan->draw_clouds) return;
-  if (!o.invert_weather) {
+  if (!o.weather_map.empty()) {
+    plan->decisions.push_back(HoldWeatherMap(o.weather_map, out));
+    Log(o, plan->decisions.back().what);
+  } else if (!o.invert_weather) {
     fit::FitDecision d;
     d.what = "weather map: the statistics fit's (clouds where its noise puts them)";
     d.why = "CalibrateOptions::invert_weather is off";
     d.saved_ms_basis = "not measured in this run";
     plan->decisions.push_back(d);
     return;
+  } else {
+    Log(o, "inverting the weather map: the clouds where the photo has them");
+    const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend);
+    plan->decisions.push_back(w.Decision());
+    Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
+    if (!w.done) return;
   }
-  Log(o, "inverting the weather map: the clouds where the photo has them");
-  const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend);
-  plan->decisions.push_back(w.Decision());
-  Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
-  if (!w.done) return;
   Log(o, "refitting the cloud lighting on the recovered shapes");
   plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir));
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
@@ -199,7 +206,9 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   RefuseWhatCannotBeCalibrated(photo, a);
   const std::string final_dir = (fs::path(o.out_dir) / fs::path(photo).stem()).string();
   fs::create_directories(o.out_dir);
-  StagedDirectory out(final_dir, "CalibrateOptions::out_dir", "calibrate", {{"CalibrateOptions::photos", photo}});
+  std::vector<NamedPath> inputs = {{"CalibrateOptions::photos", photo}};
+  if (!o.weather_map.empty()) inputs.push_back({"CalibrateOptions::weather_map", o.weather_map});
+  StagedDirectory out(final_dir, "CalibrateOptions::out_dir", "calibrate", inputs);
   WriteStagedInputs(a, out, photo);
   FitPlan plan = PlanFit(a, out, final_dir, o);
   for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
@@ -303,6 +312,7 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
     throw Error("CalibrateOptions::out_dir = '" + o.out_dir +
                 "': exists and is not a directory (expected a directory, or a path to create)");
   const bool dir_existed = fs::exists(st);
+  if (!o.weather_map.empty()) clouds::LoadWeatherMap(o.weather_map, clouds::CloudParams{}.weather_extent_m);  // names the file
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));

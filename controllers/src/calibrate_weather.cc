@@ -126,6 +126,17 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   return r;
 }
 
+fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDirectory& out) {
+  const render::Preset preset = render::LoadPreset(out / "preset.json");
+  const clouds::CloudParams params = clouds::ParseCloudSectionText(preset.clouds_json, out / "preset.json");
+  clouds::SaveWeatherMap(clouds::LoadWeatherMap(weather_map, params.weather_extent_m), out / "preset.weather.exr");
+  fit::FitDecision d;
+  d.what = "weather map: the user's, held (not inverted)";
+  d.why = "CalibrateOptions::weather_map = " + weather_map + ": the clouds' shapes given; the lighting is fitted on them";
+  d.saved_ms_basis = "not measured in this run";
+  return d;
+}
+
 namespace {
 
 namespace fs = std::filesystem;

@@ -30,6 +30,10 @@ struct WeatherInversionRecord {
 // probability covers. `backend` marches the renders (their transmittance only).
 WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend);
 
+// The user's weather map (CalibrateOptions::weather_map) as the preset's, held: read over the
+// preset's weather extent (its errors name the file) and written as `out`/preset.weather.exr.
+fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDirectory& out);
+
 // The cloud lighting refitted pixel by pixel on the recovered shapes: the known-shapes fit
 // (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
 // a staged subdirectory and moved over the statistics fit's files only when it succeeds

@@ -31,6 +31,11 @@ struct CalibrateOptions {
   // Partly cloudy photos: invert the weather map from the photo so that the clouds sit where
   // the photo has them (off: the cloud statistics fit's map, clouds where its noise puts them).
   bool invert_weather = true;
+  // Partly cloudy photos: the clouds' shapes given (an RGB EXR weather map: coverage,
+  // precipitation, type, over the preset's weather extent) and held: nothing is inverted, the
+  // lighting is fitted pixel by pixel on this map, and the preset carries it unchanged.
+  // Empty: inverted (or the statistics fit's, invert_weather off).
+  std::string weather_map;
   // The start of a clear or partly cloudy photo's fit (a time-lapse's previous frame: a warm
   // start); empty: the bundled default. An overcast photo starts from the default with the
   // overcast term whatever this says.
