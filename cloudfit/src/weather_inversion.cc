@@ -135,7 +135,8 @@ void CarveCoverage(const WeatherTexelView& v, const std::vector<float>& opacity,
   }
   for (size_t t = 0; t < n; ++t) {
     if (!seen[t]) continue;
-    map->rgb[3 * t] = static_cast<float>(std::clamp(o.gain * lowest[t], 0.0, 1.0));
+    // Crossed only above the base: what it holds there is unseen; the statistics' coverage stays.
+    if (std::isfinite(lowest[t])) map->rgb[3 * t] = static_cast<float>(std::clamp(o.gain * lowest[t], 0.0, 1.0));
     map->rgb[3 * t + 1] = 0.0f;
     map->rgb[3 * t + 2] = static_cast<float>(CloudTypeForTop(top[t]));
   }

@@ -66,7 +66,7 @@ struct CarveOptions {
 };
 
 // The first guess: each constrained texel's coverage = gain x the lowest opacity of the
-// pixels crossing it below base_top, its type = CloudTypeForTop(the lowest height at
+// pixels crossing it below base_top (a texel no pixel crosses that low keeps its coverage), its type = CloudTypeForTop(the lowest height at
 // which a clear pixel crosses it, at most cumulus_top), its precipitation 0; unconstrained
 // texels unchanged. `opacity`: width * height values in [0, 1].
 void CarveCoverage(const WeatherTexelView& view, const std::vector<float>& opacity, const CarveOptions& options,
