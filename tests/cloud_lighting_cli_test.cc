@@ -49,7 +49,7 @@ TEST(CloudLightingCli, ClearReferenceNeverMarchesAndHoldsEveryCloudParameter) {
   EXPECT_FALSE(c["fitted"].get<bool>());
   EXPECT_NE(c["decision"].get<std::string>().find("clear"), std::string::npos) << c["decision"];
   EXPECT_FALSE(c.contains("solve"));  // no render, no Jet march
-  ASSERT_EQ(c["parameters"].size(), 14u);
+  ASSERT_EQ(c["parameters"].size(), 15u);  // cloudfit::kCloudLightingParameters
   for (const auto& [name, p] : c["parameters"].items()) {
     EXPECT_TRUE(p["held"].get<bool>()) << name;
     EXPECT_EQ(p["value"], p["initial"]) << name;
@@ -125,7 +125,7 @@ TEST(CloudLightingCli, CloudyReferenceFitsAndExportsCloudKeyframes) {
     }
   }
   EXPECT_GE(free, 2);
-  EXPECT_EQ(c["singular_values"].size(), 13u);  // rain_absorption unobserved: no rain in the bundled map
+  EXPECT_EQ(c["singular_values"].size(), 14u);  // of 15: rain_absorption unobserved (no rain in the bundled map)
   const nlohmann::json preset = ReadJsonFile(out + "/preset.json");
   ASSERT_TRUE(preset.contains("clouds"));
   EXPECT_TRUE(fs::exists(out + "/preset.weather.exr"));
@@ -168,7 +168,7 @@ TEST(CloudLightingCli, ADayOfCloudyReferencesExportsOneKeyPerTimeOfDay) {
   const nlohmann::json c = ReadJsonFile(out + "/fit.json")["clouds"];
   ASSERT_TRUE(c["fitted"].get<bool>());
   EXPECT_EQ(c["day"]["references"], 3);
-  EXPECT_EQ(c["day"]["prior_residuals"], 14);
+  EXPECT_EQ(c["day"]["prior_residuals"], 15);  // one middle key x 15 parameters
   ASSERT_EQ(c["keyframes"].size(), 3u);
   for (int k = 0; k < 3; ++k) EXPECT_EQ(c["keyframes"][k]["time_of_day_h"].get<double>(), 8.0 + 2.0 * k);
   // The truth is the preset's lighting at every time: each key's free parameters within 1%.

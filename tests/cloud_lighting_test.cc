@@ -124,7 +124,7 @@ double ScaledError(const ceres::GradientChecker::ProbeResults& r) {
   return worst;
 }
 
-// GradientChecker: the Jet Jacobian of the whole march (all 14 lighting parameters, 40
+// GradientChecker: the Jet Jacobian of the whole march (all 15 lighting parameters, 40
 // cloud pixels x 3 channels) against Ceres' central differences of the double model.
 // Tolerance 1e-4 relative: the differences' step (1e-6 relative) leaves truncation ~1e-12
 // and rounding ~1e-10 relative; what remains is the march's data-dependent branches
@@ -158,6 +158,40 @@ TEST(CloudLighting, JetJacobianMatchesCentralDifferencesAndAWrongOneFails) {
   EXPECT_GT(ScaledError(wrong_results), 1e-2);
 }
 
+// The clouds' sun scale (CloudParams::sun_scale, the 15th parameter): the model's values at
+// a scale of 1.7 (the sun and the sunlit ground's part scaled inside the shade) equal the
+// double renderer's with the clouds section's sun_scale = 1.7 (scaled where the preset's sun
+// is resolved), to the float rounding of the renderer's image (1e-6 in log); control: the
+// values at scale 1 differ by more than 1%.
+TEST(CloudLighting, SunScaleMatchesTheRenderersOwn) {
+  DoubleModel d;
+  CloudLighting theta = GetCloudLighting(d.scene.shapes.params);
+  const int k = CloudLightingIndex("sun_scale");
+  ASSERT_EQ(k, kCloudLightingParameters - 1);
+  EXPECT_EQ(theta[static_cast<size_t>(k)], 1.0);
+  const size_t n = d.model->samples().size();
+  std::vector<double> at1(3 * n), scaled(3 * n);
+  ASSERT_TRUE(d.model->Evaluate(theta.data(), at1.data(), nullptr));
+  theta[static_cast<size_t>(k)] = 1.7;
+  ASSERT_TRUE(d.model->Evaluate(theta.data(), scaled.data(), nullptr));
+  clouds::CloudParams p = d.scene.shapes.params;
+  p.sun_scale = 1.7;
+  const clouds::CloudImage img = clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble, 2)
+                                     ->Render({&d.scene.sky, &p, &d.scene.noise, &d.scene.weather}, d.scene.Request());
+  double worst = 0.0, moved = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const CloudSample& s = d.model->samples()[i];
+    const size_t px = static_cast<size_t>(s.y) * d.scene.width + s.x;
+    for (int c = 0; c < 3; ++c) {
+      const double want = std::log(s.sky[c] * img.transmittance[px] + img.radiance.pixels[3 * px + c]);
+      worst = std::max(worst, std::abs(scaled[3 * i + c] - want));
+      moved = std::max(moved, std::abs(scaled[3 * i + c] - at1[3 * i + c]));
+    }
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_GT(moved, 0.01);
+}
+
 // The hold rule can fail: a parameter the clouds do not see (rain absorption with no rain)
 // is held as unobserved, one they see (extinction) is not.
 TEST(CloudLighting, ConditioningHoldsWhatThePixelsDoNotSee) {
@@ -178,7 +212,7 @@ TEST(CloudLighting, ConditioningHoldsWhatThePixelsDoNotSee) {
     }
   }
   EXPECT_GE(free, 2);
-  EXPECT_EQ(with_rain.singular_values.size(), 14u);
+  EXPECT_EQ(with_rain.singular_values.size(), static_cast<size_t>(kCloudLightingParameters));
   EXPECT_GT(with_rain.singular_values.front() / with_rain.singular_values.back(), 10.0)
       << "the lighting parameters are not all independent in the images: some must be collinear";
 
@@ -390,7 +424,7 @@ DayRecovery RecoverDay(const DayScenes& d, double smoothness, double noise) {
 TEST(CloudLightingDay, RecoversASmoothDayAndThePriorHelps) {
   const DayScenes d;
   const DayRecovery on = RecoverDay(d, 0.02, 0.02), off = RecoverDay(d, 0.0, 0.02);
-  EXPECT_EQ(on.prior_residuals, kCloudLightingParameters);  // one middle key x 14 parameters
+  EXPECT_EQ(on.prior_residuals, kCloudLightingParameters);  // one middle key x every parameter
   EXPECT_EQ(off.prior_residuals, 0);
   std::cout << "day, 2% noise: RMS (worst) error with the prior "
             << 100.0 * on.rms << "% (" << 100.0 * on.max << "%), without " << 100.0 * off.rms << "% (" << 100.0 * off.max

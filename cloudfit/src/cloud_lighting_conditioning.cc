@@ -84,7 +84,7 @@ Conditioning AnalyseConditioning(const std::vector<double>& jacobian, const Clou
     observed.push_back(k);
     if (!o.user_held.empty() && o.user_held[k]) {
       pc.held = true;
-      pc.why = "held on request (--cloud-hold)";
+      pc.why = k < static_cast<int>(o.held_why.size()) && !o.held_why[k].empty() ? o.held_why[k] : "held on request (--cloud-hold)";
     } else {
       free.push_back(k);
     }

@@ -18,6 +18,7 @@ struct ConditioningOptions {
   double max_relative_error = 0.01;  // hold a parameter predicted worse than this
   double min_sensitivity = 1e-6;     // RMS d log(composite) / d log(theta) below: unobserved
   std::vector<bool> user_held;       // size kCloudLightingParameters, or empty
+  std::vector<std::string> held_why; // per user-held parameter, its reason ("" or empty: on request)
   bool auto_hold = true;
 };
 

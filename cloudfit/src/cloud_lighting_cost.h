@@ -1,6 +1,6 @@
 // The cloud-lighting residuals as one Ceres cost function: per sampled cloud pixel and
 // channel, sqrt(weight / 3) x (log composite - log reference), over one parameter block
-// of the 14 lighting parameters (CloudLightingNames order). Log residuals: the composite
+// of the 15 lighting parameters (CloudLightingNames order). Log residuals: the composite
 // spans orders of magnitude between sunlit tops and dark bases, and a relative error is
 // what the eye and the sky fit (log rows) measure. Values and Jacobian from
 // CloudSampleModel (the render and the Jet march). Kept out of public headers (Ceres).

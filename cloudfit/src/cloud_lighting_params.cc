@@ -10,7 +10,7 @@ const std::array<const char*, kCloudLightingParameters>& CloudLightingNames() {
   static const std::array<const char*, kCloudLightingParameters> names = {
       "extinction",      "scattering_albedo", "phase_g1",         "phase_g2",         "phase_blend",
       "powder_strength", "powder_view_fade",  "rain_absorption",  "ambient_strength", "ambient_height_bias",
-      "ground_bounce",   "ms_a",              "ms_b",             "ms_c"};
+      "ground_bounce",   "ms_a",              "ms_b",             "ms_c",             "sun_scale"};
   return names;
 }
 

@@ -18,9 +18,12 @@ using JetL = ceres::Jet<double, kCloudLightingParameters>;
 using CloudModelJ = clouds::CloudModel<JetL, clouds::CpuCloudTextures>;
 
 // The shade's lighting fields in CloudLightingNames() order (cloud_lighting_params.cc):
-// the one place that maps the fitted block onto the model's CloudShadeParams.
+// the one place that maps the fitted block onto the model's CloudShadeParams. The sun's
+// scale multiplies the direct sun and the sunlit part of the ground's radiance (`sun`,
+// `ground_sun`, `ground_sky`: those parts per unit scale, resolved in double).
 template <typename Shade, typename S>
-void SetShadeLighting(const S* t, Shade* s) {
+void SetShadeLighting(const S* t, const glsl::Vec3<double>& sun, const glsl::Vec3<double>& ground_sun,
+                      const glsl::Vec3<double>& ground_sky, Shade* s) {
   s->extinction = t[0];
   s->albedo = t[1];
   s->g1 = t[2];
@@ -35,6 +38,12 @@ void SetShadeLighting(const S* t, Shade* s) {
   s->ms_a = t[11];
   s->ms_b = t[12];
   s->ms_c = t[13];
+  s->sun_illuminance.x = t[14] * sun.x;
+  s->sun_illuminance.y = t[14] * sun.y;
+  s->sun_illuminance.z = t[14] * sun.z;
+  s->ground_radiance.x = ground_sky.x + t[14] * ground_sun.x;
+  s->ground_radiance.y = ground_sky.y + t[14] * ground_sun.y;
+  s->ground_radiance.z = ground_sky.z + t[14] * ground_sun.z;
 }
 
 // Runs f(i) for i in [0, n) over `threads` workers (interleaved: neighbouring samples cost
@@ -71,6 +80,18 @@ CloudSampleModel::CloudSampleModel(CloudSampleScene scene, std::vector<CloudSamp
     const double cl = trig.cos_lat[s.y];
     views_.push_back({trig.sin_lon[s.x] * cl, trig.sin_lat[s.y], trig.cos_lon[s.x] * cl});
   }
+  ResolveShade();
+}
+
+void CloudSampleModel::ResolveShade() {
+  clouds::CloudParams p = scene_.params;
+  p.sun_scale = 1.0;
+  const clouds::CloudShadeD one = clouds::ResolveCloudShade({&scene_.sky_preset, &p, scene_.noise, scene_.weather}, scene_.request);
+  p.sun_scale = 2.0;
+  const clouds::CloudShadeD two = clouds::ResolveCloudShade({&scene_.sky_preset, &p, scene_.noise, scene_.weather}, scene_.request);
+  sun_per_scale_ = one.sun_illuminance;
+  ground_sun_per_scale_ = two.ground_radiance - one.ground_radiance;
+  ground_sky_ = one.ground_radiance - ground_sun_per_scale_;
   shade_ = clouds::ResolveCloudShade({&scene_.sky_preset, &scene_.params, scene_.noise, scene_.weather}, scene_.request);
 }
 
@@ -79,7 +100,7 @@ void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& 
     throw Error("cloud lighting fit: the sky image is not the reference's size");
   }
   scene_.sky_preset = sky_preset;
-  shade_ = clouds::ResolveCloudShade({&scene_.sky_preset, &scene_.params, scene_.noise, scene_.weather}, scene_.request);
+  ResolveShade();
   exposure_ = exposure;
   for (CloudSample& s : samples_) {
     const size_t i = static_cast<size_t>(s.y) * sky_image.width + s.x;
@@ -160,7 +181,7 @@ bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
 
 bool CloudSampleModel::DoubleValues(const double* theta, double* log_model) const {
   clouds::CloudShadeD shade = shade_;
-  SetShadeLighting(theta, &shade);
+  SetShadeLighting(theta, sun_per_scale_, ground_sun_per_scale_, ground_sky_, &shade);
   std::vector<char> ok(samples_.size(), 1);
   ParallelFor(samples_.size(), threads_, [&](size_t k) {
     clouds::CloudModelD m(textures_);
@@ -183,7 +204,7 @@ bool CloudSampleModel::JetValues(const double* theta, double* log_model, double*
   auto shade = clouds::CastCloudShade<CloudModelJ::CloudShadeParams>(shade_);
   JetL t[kCloudLightingParameters];
   for (int k = 0; k < kCloudLightingParameters; ++k) t[k] = JetL(theta[k], k);
-  SetShadeLighting(t, &shade);
+  SetShadeLighting(t, sun_per_scale_, ground_sun_per_scale_, ground_sky_, &shade);
   std::vector<char> ok(samples_.size(), 1);
   ParallelFor(samples_.size(), threads_, [&](size_t k) {
     CloudModelJ m(textures_);

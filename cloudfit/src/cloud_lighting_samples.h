@@ -83,6 +83,10 @@ class CloudSampleModel {
   int threads_;
   double exposure_ = 1.0;
   clouds::CloudShadeD shade_{};
+  // The sun's part of the shade per unit CloudParams::sun_scale (the direct sun and the
+  // sunlit ground's radiance) and the ground's sky-lit part: the scale is a fitted parameter.
+  glsl::Vec3<double> sun_per_scale_, ground_sun_per_scale_, ground_sky_;
+  void ResolveShade();
   clouds::CpuCloudTextures textures_;
   std::vector<std::array<double, 3>> views_;  // per sample, the renderer's view direction
   // The last rendered point and its composite (Ceres asks for the residuals and then the

@@ -74,6 +74,13 @@ Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, co
   co.auto_hold = o.auto_hold;
   co.user_held.assign(kCloudLightingParameters, false);
   for (const std::string& h : o.hold) co.user_held[CloudLightingIndex(h)] = true;
+  if (!o.fit_sun_scale) {
+    const int k = CloudLightingIndex("sun_scale");
+    co.user_held[k] = true;
+    co.held_why.assign(kCloudLightingParameters, "");
+    co.held_why[k] = "held: the sun's scale is fitted only when asked (CloudLightingOptions::fit_sun_scale; calibrate's "
+                     "refit on a photo's recovered shapes)";
+  }
   return AnalyseConditioning(jac, theta, co);
 }
 
@@ -120,7 +127,7 @@ ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& model
   }
   if (prior_residuals) *prior_residuals = priors * kCloudLightingParameters;
   ceres::Solver::Options so;
-  // 14 parameters per reference, ~800 rows each: dense normal equations are tiny.
+  // 15 parameters per reference, ~800 rows each: dense normal equations are tiny.
   so.linear_solver_type = models.size() == 1 ? ceres::DENSE_QR : ceres::DENSE_NORMAL_CHOLESKY;
   so.max_num_iterations = o.max_iterations;
   // The recovery targets are 1% on parameters whose effect on the image can be ~1e-3 in

@@ -103,6 +103,10 @@ const std::vector<CloudParamSpec>& CloudParameterSpecs() {
        "ambient rises with height in the layer: 1 - bias at the base, 1 at the top", SC_CLOUD_FIELD(ambient_height_bias)},
       {"ground_bounce", "1", 0.0, 10.0, 1.0, S::kReal, "scale of the light from the lit ground below (strongest at the base)",
        SC_CLOUD_FIELD(ground_bounce)},
+      {"sun_scale", "1", 0.05, 20.0, 1.0, S::kReal,
+       "the sun lighting the clouds (and the ground they see), x the preset's sun illuminance: a calibration's sky "
+       "fit does not pin the sun apart from the exposure",
+       SC_CLOUD_FIELD(sun_scale)},
       {"ms_octaves", "1", 0.0, 4.0, 2.0, S::kInteger,
        "extra multiple-scattering octaves (Wrenninge et al., as Frostbite 2016); 0: single scattering",
        SC_CLOUD_FIELD(ms_octaves)},

@@ -139,13 +139,14 @@ void ShadeFromParams(const CloudParams& c, double time_s, CloudShadeD& s) {
 
 // The light the atmosphere already models, into s: direct sun, the clear sky's SH-9 and
 // its irradiance on an upward face, the lit ground's radiance.
-void ShadeFromAtmosphere(const render::Preset& preset, const std::array<double, 3>& sun, CloudShadeD& s) {
+void ShadeFromAtmosphere(const render::Preset& preset, const std::array<double, 3>& sun, double sun_scale, CloudShadeD& s) {
   // Direct sun at the ground, the clear sky's SH-9 (no disc: the sun is the direct term)
   // and the lit ground below.
   // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
   // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
   // at dusk has no sunlit clouds rather than ones lit through the ground).
-  const render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
+  render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
+  for (double& e : e_sun) e *= sun_scale;  // CloudParams::sun_scale: the clouds' sun (and their ground's)
   s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
   render::RenderRequest sky_request;
   sky_request.sun_dir = sun;
@@ -198,7 +199,7 @@ CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest&
   CloudShadeD s{};
   ShadeFromParams(c, request.time_s, s);
   s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
-  ShadeFromAtmosphere(preset, sun, s);
+  ShadeFromAtmosphere(preset, sun, c.sun_scale, s);
   s.weather_width = scene.weather->width;
   s.weather_height = scene.weather->height;
   s.ms_octaves = static_cast<int>(c.ms_octaves);

@@ -181,6 +181,12 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.clouds.preset = (shapes / "preset.json").string();
     k.clouds.hold.push_back("extinction");
     k.clouds.max_iterations = kRefitIterations;
+    // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
+    // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
+    // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the
+    // exposure; water droplets' albedo is known).
+    k.clouds.fit_sun_scale = true;
+    k.clouds.hold.push_back("scattering_albedo");
     {
       StagedDirectory refit(refit_dir.string(), "CalibrateOptions::out_dir", "calibrate", {});
       RunFitInto(k, refit);
@@ -191,7 +197,8 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     const nlohmann::json clouds = fit::ReadFitResultFile(out / "fit.json").clouds;
     d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
     d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
-            "would thin or thicken the shapes it placed); at most " + std::to_string(kRefitIterations) +
+            "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
+            "degree of freedom in the clouds' radiance); at most " + std::to_string(kRefitIterations) +
             " iterations; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands

@@ -99,6 +99,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   cloudfit::CloudLightingOptions co;
   co.samples = o.samples;
   co.max_iterations = o.max_iterations;
+  co.fit_sun_scale = o.fit_sun_scale;
   co.hold = o.hold;
   co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;

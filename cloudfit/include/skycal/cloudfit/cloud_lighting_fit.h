@@ -1,7 +1,7 @@
 // Fitting the cloud lighting (docs/cloud-fitting.md, regime 1: known shapes). A reference rendered (or
 // photographed) with clouds whose shapes are known -- noise seed, weather map, wind time --
 // is compared with the sky + clouds composite exposure x (L_sky T + L_cloud); Ceres tunes
-// the 14 lighting parameters of the clouds section (cloud_lighting_params.h): values
+// the 15 lighting parameters of the clouds section (cloud_lighting_params.h): values
 // through the cloud renderer (Vulkan: what the game computes), derivatives forward-mode
 // through the same model source on ceres::Jet (CPU) at a sample of the cloud pixels.
 // What the pixels cannot separate is held and said (cloud_lighting_conditioning.h).
@@ -63,6 +63,9 @@ struct CloudLightingOptions {
   double max_predicted_error = 0.01;
   bool auto_hold = true;
   std::vector<std::string> hold;  // parameter names held whatever the conditioning says
+  // Fit sun_scale (the clouds' sun relative to the preset's) as well: the cloud pixels then
+  // set the sun-to-sky ratio a sky fit leaves to its exposure. Off: held at the start's.
+  bool fit_sun_scale = false;
   int max_iterations = 100;
   // A day (three or more references): weight of the second-difference prior on each
   // lighting parameter over time of day (cloud_lighting_day_prior.h: relative curvature per

@@ -10,12 +10,12 @@
 
 namespace skycal::cloudfit {
 
-inline constexpr int kCloudLightingParameters = 14;
+inline constexpr int kCloudLightingParameters = 15;
 using CloudLighting = std::array<double, kCloudLightingParameters>;
 
 // Spec-table names, in block order: extinction, scattering_albedo, phase_g1, phase_g2,
 // phase_blend, powder_strength, powder_view_fade, rain_absorption, ambient_strength,
-// ambient_height_bias, ground_bounce, ms_a, ms_b, ms_c.
+// ambient_height_bias, ground_bounce, ms_a, ms_b, ms_c, sun_scale.
 const std::array<const char*, kCloudLightingParameters>& CloudLightingNames();
 // The spec row of parameter k (unit, bounds, description).
 const clouds::CloudParamSpec& CloudLightingSpec(int k);

@@ -60,6 +60,7 @@ struct CloudParams {
   double ambient_strength = 1.0;
   double ambient_height_bias = 0.6;
   double ground_bounce = 1.0;
+  double sun_scale = 1.0;   // the sun lighting the clouds, x the preset's sun illuminance
   double ms_octaves = 2.0;  // integer
   double ms_a = 0.5, ms_b = 0.5, ms_c = 0.5;
   double atmosphere_blend_m = 60000.0;

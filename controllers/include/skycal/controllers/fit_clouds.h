@@ -26,6 +26,7 @@ struct FitCloudOptions {
   double day_smoothness = 0.02;     // the day's prior over time of day (CloudLightingOptions)
   int samples = 256;                // cloud pixels in the Jacobian (CloudLightingOptions)
   int max_iterations = 100;         // of the lighting solve (CloudLightingOptions)
+  bool fit_sun_scale = false;       // the clouds' sun scale free (CloudLightingOptions)
   std::vector<std::string> hold;    // cloud lighting parameters held at the preset's values
   // False and the field (FitCloudOptions::, CloudLightingOptions::), its value and the
   // expectation in *why.
