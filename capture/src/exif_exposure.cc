@@ -44,11 +44,9 @@ Exiv2::URational ToRational(double v) {
 
 ExifExposure ReadExifExposure(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(path + ": no such file (reading EXIF exposure)");
-  QuietExiv2();
   ExifExposure e;
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     const Exiv2::ExifData& exif = image->exifData();
     e.has_exif = !exif.empty();
     if (!e.has_exif) {
@@ -81,10 +79,8 @@ ExifExposure ReadExifExposure(const std::string& path) {
 }
 
 void WriteExifExposure(const std::string& path, const ExifExposure& exposure) {
-  QuietExiv2();
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     Exiv2::ExifData exif = image->exifData();
     if (std::isfinite(exposure.exposure_time_s)) exif["Exif.Photo.ExposureTime"] = ToRational(exposure.exposure_time_s);
     if (std::isfinite(exposure.f_number)) exif["Exif.Photo.FNumber"] = ToRational(exposure.f_number);

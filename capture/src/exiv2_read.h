@@ -1,6 +1,6 @@
-// exiv2 reading shared by the capture library's EXIF readers (exif_exposure.cc,
-// lens_profile.cc, time_place.cc): exiv2's own logging muted once, and a datum by key as
-// text or as a number.
+// exiv2 reading shared by the capture library's EXIF readers and writers (exif_exposure.cc,
+// lens_profile.cc, time_place.cc): a file opened with its metadata read and exiv2's own
+// logging muted once, and a datum by key as text or as a number.
 #pragma once
 #include <cmath>
 #include <mutex>
@@ -19,6 +19,15 @@ namespace skycal::capture {
 inline void QuietExiv2() {
   static std::once_flag once;
   std::call_once(once, [] { Exiv2::LogMsg::setLevel(Exiv2::LogMsg::mute); });
+}
+
+// The file opened by exiv2 (its logging muted) with its metadata read; exiv2's errors
+// (Exiv2::AnyError, a std::exception) propagate to the caller, which names what it was doing.
+inline auto OpenExif(const std::string& path) {
+  QuietExiv2();
+  auto image = Exiv2::ImageFactory::open(path);
+  image->readMetadata();
+  return image;
 }
 
 // The datum as exiv2 prints it; nullopt when absent or empty.

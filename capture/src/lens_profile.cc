@@ -263,11 +263,9 @@ double NumberDatum(const Exiv2::ExifData& exif, const char* key) {
 
 LensQuery ReadLensQuery(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(path + ": no such file (reading the EXIF lens names)");
-  QuietExiv2();
   LensQuery q;
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     const Exiv2::ExifData& exif = image->exifData();
     if (exif.empty()) return q;
     q.camera_maker = TextDatum(exif, "Exif.Image.Make");
@@ -289,10 +287,8 @@ LensQuery ReadLensQuery(const std::string& path) {
 }
 
 void WriteLensQuery(const std::string& path, const LensQuery& q) {
-  QuietExiv2();
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     Exiv2::ExifData exif = image->exifData();
     if (!q.camera_maker.empty()) exif["Exif.Image.Make"] = q.camera_maker;
     if (!q.camera_model.empty()) exif["Exif.Image.Model"] = q.camera_model;

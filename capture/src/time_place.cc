@@ -126,11 +126,9 @@ void ExifTime(const Exiv2::ExifData& exif, TimePlace* t) {
 
 TimePlace ReadExifTimePlace(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(path + ": no such file (reading EXIF time and place)");
-  QuietExiv2();
   TimePlace t;
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     const Exiv2::ExifData& exif = image->exifData();
     if (exif.empty()) {
       t.why_no_time = "no EXIF block";
@@ -165,10 +163,8 @@ std::string Dms(double deg) {  // three rationals: degrees, minutes, 1/1000 seco
 }  // namespace
 
 void WriteExifTimePlace(const std::string& path, const TimePlace& t) {
-  QuietExiv2();
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    image->readMetadata();
+    auto image = OpenExif(path);
     Exiv2::ExifData exif = image->exifData();
     std::optional<int> offset;
     if (const auto d = ParseIsoBack(t.time_iso8601, &offset)) {
