@@ -65,7 +65,9 @@ TEST(WeatherInversion, LinksFollowTheMarchGeometry) {
   EXPECT_GT(wrapped, 0);
   // Every ray runs front to back: its samples' heights in the layer rise.
   for (size_t k = 1; k < v.rays.size(); ++k)
-    if (v.rays[k].pixel == v.rays[k - 1].pixel) EXPECT_GE(v.rays[k].fraction, v.rays[k - 1].fraction) << k;
+    if (v.rays[k].pixel == v.rays[k - 1].pixel) {
+      EXPECT_GE(v.rays[k].fraction, v.rays[k - 1].fraction) << k;
+    }
 }
 
 TEST(WeatherInversion, NoSkyConstrainsNothing) {
@@ -106,9 +108,11 @@ TEST(WeatherInversion, CarvingCapsTheColumnsTheClearSkyCrosses) {
   for (const auto& l : v.links) seen[static_cast<size_t>(l.first)] = 1;
   ASSERT_GT(std::count(seen.begin(), seen.end(), 0), 0);  // the corners beyond the draw distance
   for (size_t t = 0; t < seen.size(); ++t) {
-    if (seen[t]) EXPECT_EQ(map.rgb[3 * t + 1], 0.0f) << t;  // no rain where the photo sees the layer
-    for (int c = 0; c < 3; ++c)
-      if (!seen[t]) EXPECT_EQ(map.rgb[3 * t + c], statistical.rgb[3 * t + c]) << t;  // unseen: unchanged
+    if (seen[t]) {
+      EXPECT_EQ(map.rgb[3 * t + 1], 0.0f) << t;  // no rain where the photo sees the layer
+    } else {
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(map.rgb[3 * t + c], statistical.rgb[3 * t + c]) << t;  // unseen: unchanged
+    }
   }
   EXPECT_EQ(cloudfit::CloudTypeForTop(0.59), 0.0);
   EXPECT_EQ(cloudfit::CloudTypeForTop(0.6), 0.5);

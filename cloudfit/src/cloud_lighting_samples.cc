@@ -17,6 +17,20 @@ double Seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock
 using JetL = ceres::Jet<double, kCloudLightingParameters>;
 using CloudModelJ = clouds::CloudModel<JetL, clouds::CpuCloudTextures>;
 
+// The sun's part of the shade at `scale` (CloudParams::sun_scale): the direct sun and the
+// sunlit part of the ground's radiance (`sun`, `ground_sun`: per unit scale; `ground_sky`: the
+// sky-lit part).
+template <typename Shade, typename S>
+void SetShadeSun(const S& scale, const glsl::Vec3<double>& sun, const glsl::Vec3<double>& ground_sun,
+                 const glsl::Vec3<double>& ground_sky, Shade* s) {
+  s->sun_illuminance.x = scale * sun.x;
+  s->sun_illuminance.y = scale * sun.y;
+  s->sun_illuminance.z = scale * sun.z;
+  s->ground_radiance.x = ground_sky.x + scale * ground_sun.x;
+  s->ground_radiance.y = ground_sky.y + scale * ground_sun.y;
+  s->ground_radiance.z = ground_sky.z + scale * ground_sun.z;
+}
+
 // The shade's lighting fields in CloudLightingNames() order (cloud_lighting_params.cc):
 // the one place that maps the fitted block onto the model's CloudShadeParams. The sun's
 // scale multiplies the direct sun and the sunlit part of the ground's radiance (`sun`,
@@ -38,12 +52,7 @@ void SetShadeLighting(const S* t, const glsl::Vec3<double>& sun, const glsl::Vec
   s->ms_a = t[11];
   s->ms_b = t[12];
   s->ms_c = t[13];
-  s->sun_illuminance.x = t[14] * sun.x;
-  s->sun_illuminance.y = t[14] * sun.y;
-  s->sun_illuminance.z = t[14] * sun.z;
-  s->ground_radiance.x = ground_sky.x + t[14] * ground_sun.x;
-  s->ground_radiance.y = ground_sky.y + t[14] * ground_sun.y;
-  s->ground_radiance.z = ground_sky.z + t[14] * ground_sun.z;
+  SetShadeSun(t[14], sun, ground_sun, ground_sky, s);
 }
 
 // Runs f(i) for i in [0, n) over `threads` workers (interleaved: neighbouring samples cost
@@ -92,7 +101,8 @@ void CloudSampleModel::ResolveShade() {
   sun_per_scale_ = one.sun_illuminance;
   ground_sun_per_scale_ = two.ground_radiance - one.ground_radiance;
   ground_sky_ = one.ground_radiance - ground_sun_per_scale_;
-  shade_ = clouds::ResolveCloudShade({&scene_.sky_preset, &scene_.params, scene_.noise, scene_.weather}, scene_.request);
+  shade_ = one;  // the same but for the sun's scale (the sky's SH-9 rendered twice, not three times)
+  SetShadeSun(scene_.params.sun_scale, sun_per_scale_, ground_sun_per_scale_, ground_sky_, &shade_);
 }
 
 void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& sky_image, double exposure) {
