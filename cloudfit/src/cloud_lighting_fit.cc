@@ -391,6 +391,28 @@ std::vector<fit::Reference> MaskCloudPixels(const std::vector<fit::Reference>& r
   return masked;
 }
 
+// The sky stage's pixels given by the caller (their classes and counts), per reference.
+void UseSkyPixelClasses(const std::vector<std::vector<fit::PixelClass>>& classes, std::vector<fit::Reference>* refs) {
+  if (classes.size() != refs->size()) throw Error("FitSkyAndClouds: sky_pixel_class has " + std::to_string(classes.size()) +
+                                                  " references' classes for " + std::to_string(refs->size()) + " references");
+  for (size_t r = 0; r < refs->size(); ++r) {
+    fit::Reference& ref = (*refs)[r];
+    if (classes[r].size() != ref.pixel_class.size()) throw Error(ref.path + ": sky_pixel_class is not the frame's size");
+    ref.pixel_class = classes[r];
+    ref.counts = fit::MaskCounts{};
+    for (fit::PixelClass c : ref.pixel_class) {
+      switch (c) {
+        case fit::PixelClass::kSky: ++ref.counts.sky; break;
+        case fit::PixelClass::kBelowHorizon: ++ref.counts.below_horizon; break;
+        case fit::PixelClass::kSunCone: ++ref.counts.sun_cone; break;
+        case fit::PixelClass::kInvalid: ++ref.counts.invalid; break;
+        case fit::PixelClass::kClipped: ++ref.counts.clipped; break;
+        case fit::PixelClass::kUserMasked: ++ref.counts.user_masked; break;
+      }
+    }
+  }
+}
+
 // The cloud blocks on the fitted sky (after its gauge move), values through the renderer.
 void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitResult& sky_fit,
                       const KnownCloudShapes& shapes, const CloudLightingOptions& o,
@@ -479,7 +501,8 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
                             const fit::FitOptions& fo, render::SkyRenderer& renderer,
                             const std::vector<const fit::ProbeSamples*>& probes, const CloudDecision& decision,
                             CloudTermKind kind, const KnownCloudShapes* shapes, const CloudLightingOptions& o,
-                            clouds::CloudRenderer* cloud_renderer) {
+                            clouds::CloudRenderer* cloud_renderer,
+                            const std::vector<std::vector<fit::PixelClass>>* sky_pixel_class) {
   SkyCloudFit out;
   CloudLightingReport& rep = out.clouds;
   rep.decision = decision.why;
@@ -496,7 +519,8 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
   const auto t0 = Clock::now();
   CheckSkyAndCloudsInputs(refs, kind, shapes, o, cloud_renderer);
   std::vector<Member> m(refs.size());
-  const std::vector<fit::Reference> masked = MaskCloudPixels(refs, init, *shapes, o, cloud_renderer, &m);
+  std::vector<fit::Reference> masked = MaskCloudPixels(refs, init, *shapes, o, cloud_renderer, &m);
+  if (sky_pixel_class) UseSkyPixelClasses(*sky_pixel_class, &masked);
   CheckDayTimes(m);
   rep.cloud_pixels_time_s = Seconds(t0);
 

@@ -181,6 +181,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.clouds.preset = (shapes / "preset.json").string();
     k.clouds.hold.push_back("extinction");
     k.clouds.max_iterations = kRefitIterations;
+    k.clouds.sky_pixels_from_photo = true;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the

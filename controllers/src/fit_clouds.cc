@@ -11,6 +11,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/format_number.h"
+#include "fit_cloud_mask.h"
 #include "fit_internal.h"
 
 namespace skycal::controllers {
@@ -123,9 +124,19 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
                                                             : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kDouble);
     if (fo.verbose) FitLog("clouds: values from " + cloud_renderer->Describe() + ", derivatives from the Jet march (CPU)");
   }
+  std::vector<std::vector<fit::PixelClass>> photo_clear;  // FitCloudOptions::sky_pixels_from_photo
+  if (d.march && o.sky_pixels_from_photo) {
+    for (const fit::Reference& r : refs) {
+      fit::Reference masked = r;
+      const CloudMaskApplied cm = ApplyCloudMask(&masked, DefaultClearPresetPath());
+      if (fo.verbose) FitLog("clouds: the sky stage fits the photo's clear pixels (" + std::to_string(masked.counts.sky) +
+                             "; cloud probability < 0.5, " + cm.source + ")");
+      photo_clear.push_back(std::move(masked.pixel_class));
+    }
+  }
   cloudfit::SkyCloudFit f =
       cloudfit::FitSkyAndClouds(refs, init, fo, renderer, probes, d, cloudfit::CloudTermKind::kKnownShapes,
-                                shapes ? &known : nullptr, co, cloud_renderer.get());
+                                shapes ? &known : nullptr, co, cloud_renderer.get(), photo_clear.empty() ? nullptr : &photo_clear);
   if (d.march) {
     f.clouds.decision = d.why;
     for (cloudfit::CloudLightingReport& r : f.references) r.decision = d.why;

@@ -186,10 +186,13 @@ struct SkyCloudFit {
 // sun's illuminance is not scaled with the LUT, so the clouds' sun-to-ambient balance is
 // final only then), through the renderer with exact Jet Jacobians. Else the sky alone with
 // every cloud parameter held. `cloud_renderer` gives the cloud values (Vulkan in the verb).
+// `sky_pixel_class`, per reference: the sky stage's own classes (kSky: fitted) instead of
+// the pixels clear through the shapes; null: those.
 SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const render::Preset& init,
                             const fit::FitOptions& fit_options, render::SkyRenderer& renderer,
                             const std::vector<const fit::ProbeSamples*>& probes, const CloudDecision& decision,
                             CloudTermKind kind, const KnownCloudShapes* shapes, const CloudLightingOptions& o,
-                            clouds::CloudRenderer* cloud_renderer);
+                            clouds::CloudRenderer* cloud_renderer,
+                            const std::vector<std::vector<fit::PixelClass>>* sky_pixel_class = nullptr);
 
 }  // namespace skycal::cloudfit

@@ -28,6 +28,12 @@ struct FitCloudOptions {
   int max_iterations = 100;         // of the lighting solve (CloudLightingOptions)
   bool fit_sun_scale = false;       // the clouds' sun scale free (CloudLightingOptions)
   std::vector<std::string> hold;    // cloud lighting parameters held at the preset's values
+  // The sky stage's pixels: false, those clear through the known shapes (exact for shapes
+  // that are the scene's); true, the photo's own clear pixels (cloud probability < 0.5, as
+  // FitControllerOptions::cloud_mask): for shapes inverted from the photo, whose cloud near
+  // the horizon covers every pixel of some LUT columns, which the sky stage would then
+  // extrapolate from their neighbours' bilinear tails.
+  bool sky_pixels_from_photo = false;
   // False and the field (FitCloudOptions::, CloudLightingOptions::), its value and the
   // expectation in *why.
   bool IsValid(std::string* why) const;
