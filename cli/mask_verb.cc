@@ -88,7 +88,7 @@ MaskOptions ParseMaskArgs(int argc, char** argv) {
   cl.Number("--texture", &s.texture_threshold, "LOG",
             "local RMS of log luminance that marks texture (foliage, lattice; default 0.06)");
   cl.Number("--ground-band-deg", &s.ground_band_deg, "DEG",
-            "candidates count only when connected to this band above the horizon (default 4)");
+            "candidates count only when connected to this band above the horizon (default 1)");
   cl.Integer("--dilate", &s.dilate_px, 0, 16, "expected an integer in [0, 16] pixels", "PX",
              "grow the non-sky class by this many pixels (default 1)");
   cl.Flag("--no-grabcut", &no_grabcut, "skip the cv::grabCut refinement (cues and ground connection only)");

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <unistd.h>
+#include <utility>
 
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sky_segmentation.h"
@@ -71,6 +72,40 @@ TEST(SkySegmentation, FindsTheBuildingAndKeepsTheFloatingCloud) {
   // Control: the clear sky alone has no non-sky above the horizon.
   const capture::SkyMask clear = capture::EstimateSkyMask(ClearSky(sun), sun, {});
   EXPECT_EQ(clear.non_sky_above_horizon, 0);
+}
+
+// A dark cloud mass standing on a bank of cumulus near the horizon floats: the bank's base is
+// ~2.3 deg up where the game's draw distance puts it (1.5 km up, 35 km away), so the mass
+// never reaches the ground band (1 deg: the lowest row above the horizon here, 0.7 deg). With
+// the band at 4 deg the bank's lowest row (3.5 deg) grounded both: the control.
+TEST(SkySegmentation, ADarkCloudMassOnACumulusBankFloats) {
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
+  ImageRGB img = ClearSky(sun);
+  const int h = img.height;
+  int horizon = 0;
+  while (latlong::Latitude(horizon, h) > 0.0) ++horizon;
+  const double deg = 180.0 / M_PI;
+  int base = horizon - 1;  // the lowest row at or above 2.3 deg
+  while (latlong::Latitude(base, h) * deg < 2.3) --base;
+  Paint(&img, 20, 120, base - 3, base + 1, 0.3f, true);  // the bank: 4 rows, textured
+  Paint(&img, 40, 90, 30, base - 3, 0.25f, false);       // the mass above it, to ~40 deg
+  Paint(&img, 150, 170, horizon - 12, horizon, 0.1f, true);  // a building, for the contrast
+  const auto count = [&](const capture::SkyMask& m) {
+    long long cloud = 0, building = 0;
+    for (int y = 0; y < horizon; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const bool ns = m.sky[static_cast<size_t>(y) * img.width + x] < 0.5f;
+        if (x >= 20 && x < 120 && y >= 30 && y <= base) cloud += ns;
+        if (x >= 150 && x < 170 && y >= horizon - 12) building += ns;
+      }
+    return std::pair(cloud, building);
+  };
+  const auto [cloud, building] = count(capture::EstimateSkyMask(img, sun, {}));
+  EXPECT_EQ(cloud, 0);
+  EXPECT_EQ(building, 240);
+  capture::SkyMaskOptions four;
+  four.ground_band_deg = 4.0;
+  EXPECT_GT(count(capture::EstimateSkyMask(img, sun, four)).first, 1000);  // the control: grounded
 }
 
 // Where segmentations fail: thin dark structures standing on the horizon (a pylon 2 px wide,

@@ -283,6 +283,7 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
   int rows = 0, band_top = 0;
   while (rows < h && latlong::Latitude(rows, h) * deg > o.horizon_deg) ++rows;
   while (band_top < rows && latlong::Latitude(band_top, h) * deg > o.horizon_deg + o.ground_band_deg) ++band_top;
+  band_top = std::min(band_top, rows - 1);  // at least the lowest row above the horizon (a coarse frame)
 
   SkyMask m;
   m.width = w;

@@ -36,7 +36,11 @@ struct SkyMaskOptions {
   double texture_sigma_px = 1.5;       // Gaussian scale (pixels) of the gradient-energy residual, [0.5, 8]
   double texture_threshold = 0.06;     // local RMS of log luminance about its blur: textured, > 0
   double textured_darkness = 0.2;      // a textured pixel must also be this much darker (log units), >= 0
-  double ground_band_deg = 4.0;        // a candidate component must reach this band above the horizon (deg), [0, 45]
+  // A candidate component must reach this band above the horizon (deg, at least the lowest
+  // row above it), [0, 45]. Buildings, trees and terrain stand on the ground and cross the
+  // horizon; a cloud's base at the game's draw distance (1.5 km up, 35 km away) is ~2.3 deg
+  // up, so a dark cloud mass over a cumulus bank is not grounded (4 deg grounded it).
+  double ground_band_deg = 1.0;
   double sun_exclusion_deg = 6.0;      // no candidates within this angle of the sun (glare, DWAB ringing), [0, 45]
   bool grabcut = true;                 // refine with cv::grabCut
   int grabcut_iterations = 3;          // [1, 20]
