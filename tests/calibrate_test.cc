@@ -344,6 +344,53 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_FALSE(std::filesystem::exists(s / "none"));
 }
 
+// A time-lapse of two partly cloudy frames 60 s apart under a wind of 12 m/s toward azimuth
+// 60 deg (the game's march moving one map and its noise, render --cloud-time): calibrate
+// finds one wind for the day from the frames' inverted maps, writes it into both presets and
+// day.json, and the first frame's map moved by it predicts the second frame's clouds better
+// than the unmoved map (the control). Measured: 10.7 m/s toward 59.6 deg (three frames),
+// prediction IoU 0.82 against 0.65 unmoved and 0.88 for the frame's own map.
+TEST(Calibrate, ADaysWindFromTwoFrames) {
+  testing::ScratchDir s("calibrate-wind");
+  ASSERT_EQ(Skycal("weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 "
+                   "--mean-precipitation 0 --out " + s / "w.exr").rc, 0);
+  const std::string presets = kRoot + "/datasets/presets/";
+  for (const char* f : {"default_cloudy.rayleigh.exr", "default_cloudy.mie.exr", "default_cloudy.sun_transmittance.exr",
+                        "default_cloudy.weather.exr"})
+    std::filesystem::copy_file(presets + f, s / f);
+  nlohmann::json windy = ReadJsonFile(presets + "default_cloudy.json");
+  windy["clouds"]["wind_direction"]["value"] = 60.0;
+  windy["clouds"]["wind_speed"]["value"] = 12.0;
+  WriteJsonFileAtomically(s / "default_cloudy.json", windy);
+  for (int t : {0, 60}) {
+    const auto rr = Skycal("render --preset " + s / "default_cloudy.json" + " --clouds --weather-map " + s / "w.exr" +
+                           " --cloud-time " + std::to_string(t) + " --sun-elevation 40 --sun-azimuth 60 --size 512x256 --out " +
+                           s / ("f" + std::to_string(t) + ".exr"));
+    ASSERT_EQ(rr.rc, 0) << rr.err;
+  }
+  const auto a = Skycal("calibrate --photo " + s / "f60.exr" + " --photo " + s / "f0.exr" + " --out " + s / "day" +
+                        " --no-report --no-export");
+  ASSERT_EQ(a.rc, 0) << a.err;
+  EXPECT_NE(a.err.find("the day's wind from 2 partly cloudy frames"), std::string::npos) << a.err;
+  const nlohmann::json day = ReadJsonFile(s / "day/day.json");
+  std::cout << "[calibrate] the day's wind: " << day["wind"].dump() << "\n" << day["pairs"].dump() << "\n";
+  EXPECT_NEAR(day["wind"]["speed_m_s"].get<double>(), 12.0, 2.4);
+  EXPECT_NEAR(day["wind"]["direction_deg"].get<double>(), 60.0, 5.0);
+  EXPECT_EQ(day["time_source"], "skycalCloudTimeS");
+  ASSERT_EQ(day["pairs"].size(), 1u);
+  const nlohmann::json& pair = day["pairs"][0];
+  EXPECT_EQ(pair["dt_s"].get<double>(), 60.0);  // in time order, whatever the order given
+  EXPECT_GT(pair["predicted_by_the_moved_map"]["cloud_iou"].get<double>(),
+            pair["unmoved_map"]["cloud_iou"].get<double>() + 0.1);
+  EXPECT_LT(pair["predicted_by_the_moved_map"]["opacity_rms"].get<double>(),
+            pair["unmoved_map"]["opacity_rms"].get<double>());
+  for (const char* f : {"f0", "f60"}) {
+    const nlohmann::json c = ReadJsonFile(s / ("day/" + std::string(f) + "/preset.json")).at("clouds");
+    EXPECT_EQ(c["wind_speed"]["value"], day["wind"]["speed_m_s"]) << f;
+    EXPECT_EQ(c["wind_direction"]["value"], day["wind"]["direction_deg"]) << f;
+  }
+}
+
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).
 TEST(Calibrate, BadPhotosAreRefusedByNameLeavingNothing) {
   testing::ScratchDir s("calibrate-bad");
