@@ -75,9 +75,10 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
                      "Per photo, into DIR/<stem>/: the sky found (mask.exr), the sun placed (disc, time and place, or\n"
                      "the sky's own pattern), the kind of sky decided (clear, partly cloudy, overcast, twilight; night\n"
                      "and not-a-sky are refused), the fit (preset.json, fit.json), the game's image of the calibrated\n"
-                     "preset (render.exr) and the photo beside it (compare.png, report.html). Then DIR/game (the\n"
-                     "game tables) and DIR/report.html. Exit 1 when a photo was not calibrated (the others are\n"
-                     "written). docs/calibrate.md.");
+                     "preset (render.exr) and the photo beside it (compare.png, report.html). Partly cloudy photos\n"
+                     "that carry their times: one wind for the day (DIR/day.json, written into their presets). Then\n"
+                     "DIR/game (the game tables) and DIR/report.html. Exit 1 when a photo was not calibrated (the\n"
+                     "others are written). docs/calibrate.md.");
   controllers::CalibrateOptions o;
   cl.Repeatable("--photo", &o.photos, "P.exr", "a lat-long HDR photo (either convention `import` reads); repeatable");
   cl.Text("--out", &o.out_dir, "DIR", "output directory (required)");
