@@ -25,6 +25,7 @@ SuiteRegistry BuiltinSuites() {
   r.Add(ProbeSuite());
   r.Add(CaptureSuite());
   r.Add(SkySegmentationSuite());
+  r.Add(WeatherInversionSuite());
   r.Add(CaptureChartSuite());
   r.Add(CaptureStarsSuite());
   r.Add(CaptureResponseSuite());

@@ -13,6 +13,7 @@ Suite FitCieSuite();   // fit_cie_suite.cc
 Suite FitCieStudySuite();  // fit_cie_study_suite.cc
 Suite FitDecisionsSuite();  // fit_decisions_suite.cc
 Suite SkySegmentationSuite();  // sky_segmentation_suite.cc
+Suite WeatherInversionSuite();  // weather_inversion_suite.cc
 Suite CaptureChartSuite();  // capture_chart_suite.cc
 Suite CaptureStarsSuite();  // capture_stars_suite.cc
 Suite FitSkiesSuite();  // fit_skies_suite.cc

@@ -125,17 +125,20 @@ void CarveCoverage(const WeatherTexelView& v, const std::vector<float>& opacity,
                    clouds::WeatherMap* map) {
   const size_t n = static_cast<size_t>(v.map_width) * v.map_height;
   std::vector<double> lowest(n, std::numeric_limits<double>::infinity()), top(n, o.cumulus_top);
+  std::vector<double> lowest_high(n, std::numeric_limits<double>::infinity());  // below fallback_top
   std::vector<char> seen(n, 0);
   for (const auto& [texel, pix] : v.links) seen[static_cast<size_t>(texel)] = 1;
   for (const auto& s : v.rays) {
     const size_t t = static_cast<size_t>(s.texel);
     const double op = opacity[static_cast<size_t>(s.pixel)];
     if (s.fraction <= o.base_top) lowest[t] = std::min(lowest[t], op);
+    else if (s.fraction <= o.fallback_top) lowest_high[t] = std::min(lowest_high[t], op);
     if (op < o.clear_opacity) top[t] = std::min(top[t], static_cast<double>(s.fraction));
   }
   for (size_t t = 0; t < n; ++t) {
     if (!seen[t]) continue;
     // Crossed only above the base: what it holds there is unseen; the statistics' coverage stays.
+    if (!std::isfinite(lowest[t])) lowest[t] = lowest_high[t];  // crossed only higher up
     if (std::isfinite(lowest[t])) map->rgb[3 * t] = static_cast<float>(std::clamp(o.gain * lowest[t], 0.0, 1.0));
     map->rgb[3 * t + 1] = 0.0f;
     map->rgb[3 * t + 2] = static_cast<float>(CloudTypeForTop(top[t]));

@@ -66,7 +66,7 @@ class SuiteRegistry {
 
 // render, fit, fit-day, fit-cie, fit-cie-study, fit-decisions, fit-skies, fit-probe, fit-clouds,
 // fit-clouds-process, fit-cloud-stats, cloud-stats-noise, batch, probe, capture, sky-segmentation,
-// capture-chart, capture-stars, capture-response, export, stress, clouds (suites.cc).
+// capture-chart, capture-stars, capture-response, export, stress, clouds, weather-inversion (suites.cc).
 SuiteRegistry BuiltinSuites();
 
 }  // namespace skycal::bench
