@@ -1,6 +1,6 @@
 // Suite `weather-inversion`: the weather map inverted from a reference's cloud opacity
-// (cloudfit/weather_inversion.h, what `calibrate` runs on a partly cloudy photo) against the
-// map that made the reference. Truths: procedural noise (the scattered cumulus of the
+// (cloudfit/weather_inversion.h, what `calibrate` runs on a partly cloudy photo: 256x128
+// renders, a 256-texel map over 60 km) against the map that made the reference. Truths: procedural noise (the scattered cumulus of the
 // calibrate tests), and three painted maps that are not noise: cumulus blobs, cloud streets
 // (bands), a front (a stratus sheet behind a soft edge). Each reference is the game's march
 // (CPU float, the game's steps) at 256x128, transmittance only, sun irrelevant; the inversion
@@ -28,7 +28,7 @@
 namespace skycal::bench {
 namespace {
 
-constexpr int kW = 256, kH = 128, kMap = 128;
+constexpr int kW = 256, kH = 128, kMap = 256;  // as calibrate: its renders, the statistics fit's map
 
 // A painted map: coverage c(x, z) in metres about the camera, one cloud type, no rain.
 template <typename F>
@@ -51,9 +51,9 @@ clouds::WeatherMap TruthMap(const std::string& kind, double extent_m) {
     clouds::WeatherNoiseOptions o;
     o.mean_coverage = 0.25;
     o.coverage_contrast = 3.0;
-    o.coverage_cells = 4;
+    o.coverage_cells = 8;
     o.mean_precipitation = 0.0;
-    return clouds::NoiseWeatherMap(5, kMap, extent_m, o);
+    return clouds::NoiseWeatherMap(5, kMap, extent_m, o);  // the calibrate tests' `weather --seed 5 ...`
   }
   if (kind == "blobs") {  // cumulus of 0.8 at the centre, Gaussian, 1-2 km, 2-12 km away
     const double b[][3] = {{3000, 1000, 900},   {-2500, 4000, 1200}, {6000, -5000, 1500}, {-8000, -3000, 1800},

@@ -62,8 +62,8 @@ struct CarveOptions {
   // Below this height fraction every cloud type has cloud: a clear pixel there empties the
   // texel. A texel no pixel crosses that low takes the lowest opacity of the pixels crossing
   // it below fallback_top, else keeps its coverage. 0.15 / 0.4 against 0.3 / none: opacity
-  // RMS 0.069 -> 0.066 (noise), 0.089 -> 0.052 (blobs), 0.153 -> 0.108 (bands), 0.049 -> 0.038
-  // (a front) in `skycal bench --suite weather-inversion`; on `sky` 0.234 -> 0.217.
+  // RMS lower on every map of `skycal bench --suite weather-inversion` (painted blobs 0.089
+  // -> 0.052 with a 128-texel map), and on `sky` 0.234 -> 0.217.
   double base_top = 0.15;
   double fallback_top = 0.4;
   // Coverage per unit opacity: 1 makes a texel that every crossing pixel sees opaque fully
