@@ -34,7 +34,8 @@ std::string CloudNoiseSha256(const CloudNoise& noise);
 // in one line naming the file when a cache existed but was corrupt or truncated, and
 // writes the cache atomically. A cache directory that cannot be created or written is a
 // warning, never an error: rendering goes on with the generated noise. An empty cache_dir
-// (no home directory known) generates without a cache.
+// (no home directory known) generates without a cache. The last noise read is kept for the
+// process and returned again while its cache file is the same (inode, size, mtime).
 CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir);
 
 // $XDG_CACHE_HOME/skycal when XDG_CACHE_HOME is set and absolute (the XDG base-directory
