@@ -62,8 +62,8 @@ ReportVerbOptions ParseReportArgs(int argc, char** argv) {
                      "preset.json), a directory of several (a day: time-of-day plots of sun illuminance,\n"
                      "haziness, exposure and error), a `skycal export` output (manifest.json, keyframes.json)\n"
                      "or a `skycal bench` output (results.json, Pareto plots), or any directory holding\n"
-                     "these up to --depth levels down. Images and plots (PLplot) are embedded: the page can\n"
-                     "be mailed or archived alone.",
+                     "these up to --depth levels down; a `skycal calibrate` output's day.json adds the day's\n"
+                     "wind. Images and plots (PLplot) are embedded: the page can be mailed or archived alone.",
                      "  skycal report DIR [--out report.html] [--title TEXT] [--depth N] [--json]");
   ReportVerbOptions o;
   bool json = false;

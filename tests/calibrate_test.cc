@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -389,6 +391,19 @@ TEST(Calibrate, ADaysWindFromTwoFrames) {
     EXPECT_EQ(c["wind_speed"]["value"], day["wind"]["speed_m_s"]) << f;
     EXPECT_EQ(c["wind_direction"]["value"], day["wind"]["direction_deg"]) << f;
   }
+  // The report shows it; a day.json without its wind is named by file and field.
+  ASSERT_EQ(Skycal("report " + s / "day" + " --out " + s / "day.html").rc, 0);
+  std::ifstream page(s / "day.html");
+  const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("The day's wind"), std::string::npos);
+  nlohmann::json broken = day;
+  broken.erase("wind");
+  WriteJsonFileAtomically(s / "day/day.json", broken);
+  const auto bad = Skycal("report " + s / "day" + " --out " + s / "bad.html");
+  EXPECT_EQ(bad.rc, 1);
+  EXPECT_NE(bad.err.find("day.json"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("wind"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "bad.html"));
 }
 
 // Each bad photo: exit 1, the file and the reason named, nothing written (DIR not created).

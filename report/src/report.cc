@@ -49,6 +49,7 @@ std::string UtcNow() {
 // Every file the page is made from (the output must not replace one).
 std::vector<NamedPath> InputsOf(const Sources& s) {
   std::vector<NamedPath> in;
+  if (s.wind) in.push_back({"day.json", s.wind->json_path});
   for (const FitRecord& f : s.fits) {
     in.push_back({"fit.json", f.json_path});
     in.push_back({"preset.json", (fs::path(f.dir) / "preset.json").string()});
@@ -112,6 +113,10 @@ ReportSummary WriteReport(const std::string& dir, const ReportOptions& o) {
   PageCounts counts;
   ReportSummary sum;
   std::string body, nav;
+  if (s.wind) {
+    body += WindSection(*s.wind);
+    nav += "<li><a href=\"#wind\">the day's wind</a></li>\n";
+  }
   const std::string day = DaySection(s.fits, &counts);
   if (!day.empty()) {
     body += day;

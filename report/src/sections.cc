@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include "charts.h"
@@ -215,6 +216,21 @@ std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts) {
        "Frames fitted with <code>--cloud-mask</code> are fitted on their clear pixels.</p>\n";
   h += DayTable(frames);
   return h + "</section>\n";
+}
+
+std::string WindSection(const WindRecord& w) {
+  std::string h = "<section id=\"wind\">\n<h2>The day's wind</h2>\n<p>" + FormatNumber(std::round(w.speed_m_s * 100.0) / 100.0) +
+                  " m/s toward azimuth " + FormatNumber(std::round(w.direction_deg * 10.0) / 10.0) +
+                  "&deg; (as <code>clouds.wind_direction</code>: 0 toward +z, 90 toward +x), fitted from the weather maps "
+                  "inverted from consecutive frames and written into each frame's preset. Each row: the earlier frame's "
+                  "map moved by the wind to the later frame's time, against the later photo's clouds (cloud IoU); the "
+                  "unmoved map is the control, the later frame's own map the best a map does.</p>\n<table>\n" +
+                  Row({"from", "to", "seconds apart", "IoU, moved by the wind", "IoU, unmoved", "IoU, its own map"}, true);
+  for (const WindRecord::Pair& p : w.pairs)
+    h += Row({E(std::filesystem::path(p.from).filename().string()), E(std::filesystem::path(p.to).filename().string()),
+              FormatNumber(p.dt_s), FormatNumber(std::round(p.iou_moved * 1000.0) / 1000.0),
+              FormatNumber(std::round(p.iou_unmoved * 1000.0) / 1000.0), FormatNumber(std::round(p.iou_own * 1000.0) / 1000.0)});
+  return h + "</table>\n<p class=\"note\">" + E(w.json_path) + "</p>\n</section>\n";
 }
 
 namespace {

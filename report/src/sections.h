@@ -18,6 +18,10 @@ struct PageCounts {
 // Every frame of the fits (one per reference) over time of day, or over frame order when a
 // frame has no time: sun illuminance, haziness, exposure, error. Empty when fewer than 2 frames.
 std::string DaySection(const std::vector<FitRecord>& fits, PageCounts* counts);
+
+// The day's wind (calibrate's day.json): the wind, and per pair of frames how far the earlier
+// frame's map moved by it predicts the later photo's clouds.
+std::string WindSection(const WindRecord& w);
 std::string FitSection(const FitRecord& fit, const std::string& anchor, PageCounts* counts);
 std::string ExportSection(const ExportRecord& e, const std::string& anchor, PageCounts* counts);
 std::string BenchSection(const BenchRecord& b, const std::string& anchor, PageCounts* counts);

@@ -343,6 +343,23 @@ BenchRecord ReadBench(const fs::path& root, const fs::path& dir) {
   return b;
 }
 
+WindRecord ReadWind(const fs::path& path) {
+  WindRecord w;
+  w.json_path = path.string();
+  const nlohmann::json j = ReadJsonObject(w.json_path);
+  const JsonAt root{j, w.json_path, ""};
+  w.speed_m_s = root.Child("wind").Number("speed_m_s");
+  w.direction_deg = root.Child("wind").Number("direction_deg");
+  const JsonAt pairs = root.Child("pairs");
+  for (size_t k = 0; k < pairs.Size(); ++k) {
+    const JsonAt p = pairs.Index(k);
+    w.pairs.push_back({p.String("from"), p.String("to"), p.Number("dt_s"),
+                       p.Child("predicted_by_the_moved_map").Number("cloud_iou"), p.Child("unmoved_map").Number("cloud_iou"),
+                       p.Child("own_inverted_map").Number("cloud_iou")});
+  }
+  return w;
+}
+
 void Walk(const fs::path& root, const fs::path& dir, int depth, int max_depth, Sources* s) {
   if (fs::is_regular_file(dir / "fit.json")) s->fits.push_back(ReadFit(root, dir));
   if (fs::is_regular_file(dir / "manifest.json")) s->exports.push_back(ReadExport(root, dir));
@@ -374,6 +391,7 @@ Sources FindSources(const std::string& root_dir, int max_depth) {
   if (!fs::is_directory(root, ec)) throw Error(root_dir + ": not a directory (expected a skycal fit, export or bench output)");
   Sources s;
   Walk(root, root, 0, max_depth, &s);
+  if (fs::is_regular_file(root / "day.json")) s.wind = ReadWind(root / "day.json");
   if (s.empty()) {
     throw Error(root_dir + ": no fit.json (skycal fit), manifest.json (skycal export) or results.json (skycal bench) in it or " +
                 std::to_string(max_depth) + " levels below");

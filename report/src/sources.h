@@ -107,7 +107,19 @@ struct BenchRecord {
   std::string stress_md;  // contents of stress.md when present
 };
 
+// calibrate's day.json (the day's wind from timed partly cloudy frames), at the root only.
+struct WindRecord {
+  std::string json_path;
+  double speed_m_s = 0.0, direction_deg = 0.0;
+  struct Pair {
+    std::string from, to;
+    double dt_s = 0.0, iou_moved = 0.0, iou_unmoved = 0.0, iou_own = 0.0;
+  };
+  std::vector<Pair> pairs;
+};
+
 struct Sources {
+  std::optional<WindRecord> wind;
   std::vector<FitRecord> fits;  // sorted by time of day when every fit has one, else by path
   std::vector<ExportRecord> exports;
   std::vector<BenchRecord> benches;
