@@ -20,6 +20,7 @@
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sky_segmentation.h"
 #include "skycal/capture/solar_position.h"
+#include "skycal/capture/time_place.h"
 #include "skycal/controllers/calibrate.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
@@ -370,6 +371,17 @@ TEST(Calibrate, ADaysWindFromTwoFrames) {
                            s / ("f" + std::to_string(t) + ".exr"));
     ASSERT_EQ(rr.rc, 0) << rr.err;
   }
+  // Their capture times, 60 s apart across midnight (local, UTC+2): the EXR's capDate and
+  // utcOffset order the frames before render's skycalCloudTimeS would.
+  const std::pair<const char*, const char*> stamps[] = {{"f0.exr", "2026-06-21T23:59:30+02:00"},
+                                                        {"f60.exr", "2026-06-22T00:00:30+02:00"}};
+  for (const auto& [file, when] : stamps) {
+    capture::LatLongFrame f = capture::ReadLatLongFrame(s / file);
+    capture::TimePlace t;
+    t.time_iso8601 = when;
+    capture::AddTimePlaceAttributes(t, &f.extra);
+    capture::WriteLatLongFrame(s / file, f);
+  }
   const auto a = Skycal("calibrate --photo " + s / "f60.exr" + " --photo " + s / "f0.exr" + " --out " + s / "day" +
                         " --no-report --no-export");
   ASSERT_EQ(a.rc, 0) << a.err;
@@ -378,7 +390,7 @@ TEST(Calibrate, ADaysWindFromTwoFrames) {
   std::cout << "[calibrate] the day's wind: " << day["wind"].dump() << "\n" << day["pairs"].dump() << "\n";
   EXPECT_NEAR(day["wind"]["speed_m_s"].get<double>(), 12.0, 2.4);
   EXPECT_NEAR(day["wind"]["direction_deg"].get<double>(), 60.0, 5.0);
-  EXPECT_EQ(day["time_source"], "skycalCloudTimeS");
+  EXPECT_EQ(day["time_source"], "capDate + utcOffset");
   ASSERT_EQ(day["pairs"].size(), 1u);
   const nlohmann::json& pair = day["pairs"][0];
   EXPECT_EQ(pair["dt_s"].get<double>(), 60.0);  // in time order, whatever the order given
