@@ -15,6 +15,8 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
+#include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
 
@@ -50,6 +52,29 @@ void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::file
   ExrAttributes attributes;
   attributes.strings["skycalContent"] = "weather-map texels the photo constrained (1) or left to the statistics (0)";
   WriteExrRGB(path.string(), image, attributes, ExrPixelType::kHalf);
+}
+
+// Near the sun the cloud probability's colour test reads glare, and the silver lining of a
+// cloud in front of the sun, as clear sky: a sun hidden by a cloud carved a hole through it,
+// where the game then drew the disc. Within kSunGlareDeg of the sun the photo's opacity is
+// taken from the ring around it (kSunGlareDeg to 1.5x), where the test is trusted.
+constexpr double kSunGlareDeg = 10.0;
+
+void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, int width, int height,
+                  const std::array<double, 3>& sun) {
+  const double inner = std::cos(kSunGlareDeg * kRadiansPerDegree), outer = std::cos(1.5 * kSunGlareDeg * kRadiansPerDegree);
+  std::vector<size_t> glare;
+  double sum = 0.0, n = 0.0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, width, height);
+      const double c = d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2];
+      const size_t i = static_cast<size_t>(y) * width + x;
+      if (c > inner) glare.push_back(i);
+      else if (c > outer && sky[i] >= 0.5f) sum += (*opacity)[i], n += 1.0;
+    }
+  if (n > 0.0)
+    for (size_t i : glare) (*opacity)[i] = static_cast<float>(sum / n);
 }
 
 }  // namespace
@@ -97,8 +122,9 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   std::vector<float> photo(a.cloud_probability.size());
   for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
   const int rw = kRenderWidth, rh = kRenderWidth / 2;
-  const std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
+  std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
+  FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
   // The march's transmittance through the map being refined: the game's march (its noise,
   // steps and optimisations) without the light toward the sun, which the opacity does not read.
