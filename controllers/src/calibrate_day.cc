@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -34,14 +35,17 @@ namespace {
 namespace fs = std::filesystem;
 constexpr int kWidth = 256, kHeight = 128;  // the prediction's renders and comparison (as the inversion's)
 
-// Seconds since 1970-01-01 UTC of an ISO 8601 time with its offset (days from the civil
-// calendar: H. Hinnant's algorithm).
+// Seconds since 1970-01-01 UTC of an ISO 8601 time with its offset (glibc's timegm reads the
+// fields as UTC; the offset is then taken off).
 double EpochSeconds(const std::string& iso) {
   const capture::SpaInput t = capture::ParseIso8601(iso);
-  const int y = t.year - (t.month <= 2), era = (y >= 0 ? y : y - 399) / 400, yoe = y - era * 400;
-  const int doy = (153 * (t.month + (t.month > 2 ? -3 : 9)) + 2) / 5 + t.day - 1;
-  const long long days = static_cast<long long>(era) * 146097 + yoe * 365 + yoe / 4 - yoe / 100 + doy - 719468;
-  return static_cast<double>(days) * 86400.0 + t.hour * 3600.0 + t.minute * 60.0 + t.second - t.timezone_h * 3600.0;
+  std::tm tm{};
+  tm.tm_year = t.year - 1900;
+  tm.tm_mon = t.month - 1;
+  tm.tm_mday = t.day;
+  tm.tm_hour = t.hour;
+  tm.tm_min = t.minute;
+  return static_cast<double>(timegm(&tm)) + t.second - t.timezone_h * 3600.0;
 }
 
 // One qualifying frame: its directory, time, preset, map and what the photo constrained.

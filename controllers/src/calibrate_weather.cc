@@ -225,7 +225,9 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
     d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
             "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
-            "degree of freedom in the clouds' radiance); at most " + std::to_string(kRefitIterations) +
+            "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
+            "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
+            std::to_string(kRefitIterations) +
             " iterations; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
