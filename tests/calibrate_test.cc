@@ -367,8 +367,8 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
 
 // A time-lapse of two partly cloudy frames 60 s apart under a wind of 12 m/s toward azimuth
 // 60 deg (the game's march moving one map and its noise, render --cloud-time): calibrate
-// finds one wind for the day from the frames' inverted maps, writes it into both presets and
-// day.json, and the first frame's map moved by it predicts the second frame's clouds better
+// finds one wind for the day from the inverted maps of the frames in DIR (added one command
+// at a time), writes it into both presets and day.json, and the first frame's map moved by it predicts the second frame's clouds better
 // than the unmoved map (the control). Measured: 10.7 m/s toward 59.6 deg (three frames),
 // prediction IoU 0.82 against 0.65 unmoved and 0.88 for the frame's own map.
 TEST(Calibrate, ADaysWindFromTwoFrames) {
@@ -400,8 +400,12 @@ TEST(Calibrate, ADaysWindFromTwoFrames) {
     capture::AddTimePlaceAttributes(t, &f.extra);
     capture::WriteLatLongFrame(s / file, f);
   }
-  const auto a = Skycal("calibrate --photo " + s / "f60.exr" + " --photo " + s / "f0.exr" + " --out " + s / "day" +
-                        " --no-report --no-export");
+  // One photo a command, the later first (a calibration grows a photo at a time): the first
+  // run has no day; the second fits it over both frames in DIR.
+  const auto first = Skycal("calibrate --photo " + s / "f60.exr" + " --out " + s / "day" + " --no-report --no-export");
+  ASSERT_EQ(first.rc, 0) << first.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "day/day.json"));
+  const auto a = Skycal("calibrate --photo " + s / "f0.exr" + " --out " + s / "day" + " --no-report --no-export");
   ASSERT_EQ(a.rc, 0) << a.err;
   EXPECT_NE(a.err.find("the day's wind from 2 partly cloudy frames"), std::string::npos) << a.err;
   const nlohmann::json day = ReadJsonFile(s / "day/day.json");

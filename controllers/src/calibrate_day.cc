@@ -27,6 +27,7 @@
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/math_constants.h"
+#include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
 
 namespace skycal::controllers {
@@ -65,10 +66,31 @@ std::optional<std::pair<double, std::string>> FrameTime(const PhotoCalibration& 
   const std::string photo_exr = (fs::path(p.dir) / "photo.exr").string();
   const capture::TimePlace t = capture::TimePlaceFromExrAttributes(ReadExrHeader(photo_exr).attributes, photo_exr);
   if (!t.time_iso8601.empty()) return std::pair(EpochSeconds(t.time_iso8601), std::string("capDate + utcOffset"));
+  std::error_code ec;
+  if (!fs::is_regular_file(p.photo, ec)) return std::nullopt;  // an earlier run's photo, moved since
   const ExrAttributes given = ReadExrHeader(p.photo).attributes;
   if (const auto it = given.floats.find("skycalCloudTimeS"); it != given.floats.end())
     return std::pair(static_cast<double>(it->second), std::string("skycalCloudTimeS"));
   return std::nullopt;
+}
+
+// Every photo calibrated in `out_dir`, this run's and earlier runs' (photos may be added one
+// command at a time, as the tables are): DIR/<stem>/ with fit.json, in name order.
+std::vector<PhotoCalibration> CalibratedInDir(const std::string& out_dir) {
+  std::vector<fs::path> dirs;
+  for (const auto& e : fs::directory_iterator(out_dir))
+    if (e.is_directory() && !e.path().filename().string().starts_with(".") && fs::is_regular_file(e.path() / "fit.json"))
+      dirs.push_back(e.path());
+  std::sort(dirs.begin(), dirs.end());
+  std::vector<PhotoCalibration> photos;
+  for (const fs::path& d : dirs) {
+    PhotoCalibration p;
+    p.dir = d.string();
+    const fit::FitResultFile f = fit::ReadFitResultFile(d / "fit.json");
+    p.photo = f.calibration ? f.calibration->photo : (d / "photo.exr").string();
+    photos.push_back(std::move(p));
+  }
+  return photos;
 }
 
 // Texels farther than this from the camera are left out of the wind: beyond it a pixel's
@@ -186,11 +208,11 @@ void WriteWind(const DayFrame& f, const cloudfit::DayWind& wind) {
 }
 
 // The qualifying frames, or why there are fewer than two (empty when not a day at all).
-std::vector<DayFrame> DayFrames(const CalibrateResult& r, std::string* why_not) {
+std::vector<DayFrame> DayFrames(const std::string& out_dir, std::string* why_not) {
   std::vector<DayFrame> frames;
   int cloudy = 0;
   std::string source;
-  for (const PhotoCalibration& p : r.photos) {
+  for (const PhotoCalibration& p : CalibratedInDir(out_dir)) {
     if (p.dir.empty() || !fs::exists(fs::path(p.dir) / kConstrainedTexelsFile)) continue;
     ++cloudy;
     const auto t = FrameTime(p);
@@ -233,8 +255,10 @@ nlohmann::json DayJson(const std::vector<DayFrame>& frames, const cloudfit::DayW
 void FitTheDaysWind(const CalibrateOptions& o, CalibrateResult* r) {
   std::string why_not;
   try {
-    const std::vector<DayFrame> frames = DayFrames(*r, &why_not);
+    const std::vector<DayFrame> frames = DayFrames(o.out_dir, &why_not);
     if (frames.empty()) {
+      std::error_code ec;  // an earlier run's wind no longer stands on two frames
+      fs::remove(fs::path(o.out_dir) / kDayWindFile, ec);
       if (!why_not.empty()) {
         r->warnings.push_back("no wind for the day: " + why_not);
         CalibrateLog(o, "warning: " + r->warnings.back());

@@ -13,10 +13,11 @@ namespace skycal::controllers {
 inline constexpr const char* kDayWindFile = "day.json";
 
 // Runs after the photos are calibrated and before the tables are exported (they carry the
-// wind). Frames qualify with an inverted weather map and a time: the EXR's capDate and
+// wind), over every photo calibrated in DIR (earlier runs' too, as the export). Frames
+// qualify with an inverted weather map and a time: the EXR's capDate and
 // utcOffset (capture, import), else skycalCloudTimeS (render --clouds --cloud-time); one
-// source for all. Fewer than two: nothing is written, and with two or more partly cloudy
-// frames the reason goes to the log and r->warnings. A failure is a warning: the frames'
+// source for all. Fewer than two: no DIR/day.json (an earlier one is removed), and with two
+// or more partly cloudy frames the reason goes to the log and r->warnings. A failure is a warning: the frames'
 // calibrations stand.
 void FitTheDaysWind(const CalibrateOptions& o, CalibrateResult* r);
 

@@ -329,7 +329,7 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
   }
   std::error_code ec;  // nothing calibrated: a DIR this run created goes again (remove only takes it empty)
   if (r.calibrated() == 0 && !dir_existed) fs::remove(o.out_dir, ec);
-  if (r.calibrated() > 1) FitTheDaysWind(o, &r);  // before the tables: they carry the wind
+  if (r.calibrated() > 0) FitTheDaysWind(o, &r);  // before the tables: they carry the wind
   if (r.calibrated() > 0 && o.export_tables) ExportTables(o, &r);
   if (r.calibrated() > 0 && o.report) WriteRunReport(o, &r);
   r.seconds = Since(t0);
