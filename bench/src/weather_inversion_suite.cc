@@ -10,7 +10,6 @@
 // within 8 km and 20 km of the camera (the photo resolves a texel radially to ~7 km at 512 px);
 // the inversion's time. Error: the inverted opacity RMS.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -130,12 +129,12 @@ void RunCase(Scene& scene, CaseResult& c) {
   clouds::WeatherMap map = clouds::NoiseWeatherMap(7, kMap, scene.params.weather_extent_m, start);
   const auto [iou0, rms0] = Agreement(photo, scene.Opacity(map));
   const double corr0 = Correlation(truth, map, 8000.0);
-  const auto t0 = std::chrono::steady_clock::now();
-  cloudfit::InvertWeatherMap(view, scene.params.weather_extent_m, photo,
-                             [&](const clouds::WeatherMap& m) { return scene.Opacity(m); }, {}, &map);
-  c.time.median_ms = c.time.min_ms = c.time.max_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  c.time.runs = 1;
+  c.time = Measure(  // once: the inversion refines `map` in place
+      [&] {
+        cloudfit::InvertWeatherMap(view, scene.params.weather_extent_m, photo,
+                                   [&](const clouds::WeatherMap& m) { return scene.Opacity(m); }, {}, &map);
+      },
+      0, 1);
   const auto [iou, rms] = Agreement(photo, scene.Opacity(map));
   c.error = rms;
   c.extra = {{"iou_start", iou0}, {"iou", iou},           {"opacity_rms_start", rms0},

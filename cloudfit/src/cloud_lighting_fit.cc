@@ -399,17 +399,7 @@ void UseSkyPixelClasses(const std::vector<std::vector<fit::PixelClass>>& classes
     fit::Reference& ref = (*refs)[r];
     if (classes[r].size() != ref.pixel_class.size()) throw Error(ref.path + ": sky_pixel_class is not the frame's size");
     ref.pixel_class = classes[r];
-    ref.counts = fit::MaskCounts{};
-    for (fit::PixelClass c : ref.pixel_class) {
-      switch (c) {
-        case fit::PixelClass::kSky: ++ref.counts.sky; break;
-        case fit::PixelClass::kBelowHorizon: ++ref.counts.below_horizon; break;
-        case fit::PixelClass::kSunCone: ++ref.counts.sun_cone; break;
-        case fit::PixelClass::kInvalid: ++ref.counts.invalid; break;
-        case fit::PixelClass::kClipped: ++ref.counts.clipped; break;
-        case fit::PixelClass::kUserMasked: ++ref.counts.user_masked; break;
-      }
-    }
+    ref.counts = fit::CountPixelClasses(ref.pixel_class);
   }
 }
 

@@ -154,17 +154,14 @@ struct Agreement {
   double opacity_rms = 0.0, iou = 0.0;
 };
 Agreement Agree(const std::vector<float>& transmittance, const PhotoClouds& c) {
-  double sum = 0.0, n = 0.0, both = 0.0, either = 0.0;
+  double sum = 0.0, n = 0.0;
   for (size_t i = 0; i < transmittance.size(); ++i) {
     if (!(c.sky[i] >= 0.5f)) continue;
     const double d = (1.0 - transmittance[i]) - c.probability[i];
     sum += d * d;
     ++n;
-    const bool game = transmittance[i] < 0.5f, photo = c.probability[i] >= 0.5f;
-    both += game && photo;
-    either += game || photo;
   }
-  return {n > 0.0 ? std::sqrt(sum / n) : 0.0, either > 0.0 ? both / either : 1.0};
+  return {n > 0.0 ? std::sqrt(sum / n) : 0.0, CloudIou(transmittance, c.probability, c.sky).value_or(1.0)};
 }
 
 nlohmann::json AgreementJson(const Agreement& a) {
@@ -176,11 +173,7 @@ nlohmann::json AgreementJson(const Agreement& a) {
 nlohmann::json PredictPair(const DayFrame& from, const DayFrame& to, const cloudfit::DayWind& wind,
                            const cloudfit::MapShift& shift, clouds::CloudRenderer& renderer, const clouds::CloudNoise& noise) {
   const PhotoClouds photo = PhotoCloudsOf(to);
-  clouds::CloudRenderRequest q;
-  q.width = kWidth;
-  q.height = kHeight;
-  q.march.light_samples = 0;  // the opacity only
-  q.march.far_light = false;
+  clouds::CloudRenderRequest q = OpacityRequest(kWidth, kHeight);
   const auto transmittance = [&](const DayFrame& f, const clouds::CloudParams& p, double t) {
     q.time_s = t;
     return renderer.Render({&f.preset, &p, &noise, &f.map}, q).transmittance;
@@ -233,9 +226,7 @@ std::vector<DayFrame> DayFrames(const std::string& out_dir, std::string* why_not
 
 nlohmann::json DayJson(const std::vector<DayFrame>& frames, const cloudfit::DayWind& wind, const CalibrateOptions& o) {
   const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
-  const std::unique_ptr<clouds::CloudRenderer> renderer =
-      o.backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
-                                            : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat);
+  const std::unique_ptr<clouds::CloudRenderer> renderer = OpacityRenderer(o.backend);
   nlohmann::json pairs = nlohmann::json::array(), list = nlohmann::json::array();
   for (const DayFrame& f : frames) list.push_back({{"photo", f.photo}, {"time_s", f.time_s}});
   for (size_t k = 1; k < frames.size(); ++k)

@@ -76,22 +76,6 @@ std::vector<float> ComparedPixels(const PhotoAnalysis& a, const FitPlan& plan) {
   return sky;
 }
 
-// Intersection over union of the game's clouds (transmittance < 0.5) and the photo's (cloud
-// probability >= 0.5) over the compared pixels; unset without drawn clouds or a cloud probability.
-std::optional<double> CloudMaskIou(const PhotoAnalysis& a, const std::vector<float>& transmittance,
-                                   const std::vector<float>& compared) {
-  if (transmittance.empty() || a.cloud_probability.size() != transmittance.size()) return std::nullopt;
-  double both = 0.0, either = 0.0;
-  for (size_t i = 0; i < compared.size(); ++i) {
-    if (!(compared[i] > 0.5f)) continue;
-    const bool game = transmittance[i] < 0.5f, photo = a.cloud_probability[i] >= 0.5f;
-    both += (game && photo);
-    either += (game || photo);
-  }
-  if (either == 0.0) return std::nullopt;
-  return both / either;
-}
-
 struct GameJudgement {
   appearance::Comparison comparison;
   std::optional<double> cloud_iou;
@@ -120,7 +104,7 @@ GameJudgement RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const S
   const std::vector<float> compared = ComparedPixels(a, plan);
   WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, compared);
   return {appearance::Compare(a.frame.radiance, game.radiance, compared, {}, "photo.exr", "render.exr"),
-          CloudMaskIou(a, game.cloud_transmittance, compared)};
+          CloudIou(game.cloud_transmittance, a.cloud_probability, compared)};
 }
 
 fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const GameJudgement& g) {

@@ -97,6 +97,34 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
   return d;
 }
 
+std::unique_ptr<clouds::CloudRenderer> OpacityRenderer(render::Backend backend) {
+  return backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
+                                             : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat);
+}
+
+clouds::CloudRenderRequest OpacityRequest(int width, int height) {
+  clouds::CloudRenderRequest r;
+  r.width = width;
+  r.height = height;
+  r.march.light_samples = 0;
+  r.march.far_light = false;
+  return r;
+}
+
+std::optional<double> CloudIou(const std::vector<float>& transmittance, const std::vector<float>& probability,
+                               const std::vector<float>& compared) {
+  if (transmittance.empty() || probability.size() != transmittance.size()) return std::nullopt;
+  double both = 0.0, either = 0.0;
+  for (size_t i = 0; i < compared.size(); ++i) {
+    if (!(compared[i] >= 0.5f)) continue;
+    const bool game = transmittance[i] < 0.5f, photo = probability[i] >= 0.5f;
+    both += game && photo;
+    either += game || photo;
+  }
+  if (either == 0.0) return std::nullopt;
+  return both / either;
+}
+
 WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend) {
   const auto t0 = std::chrono::steady_clock::now();
   WeatherInversionRecord r;
@@ -126,18 +154,11 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
   FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
-  // The march's transmittance through the map being refined: the game's march (its noise,
-  // steps and optimisations) without the light toward the sun, which the opacity does not read.
+  // The march's transmittance through the map being refined.
   const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
-  const std::unique_ptr<clouds::CloudRenderer> renderer =
-      backend == render::Backend::kVulkan ? clouds::CreateVulkanCloudRenderer()
-                                          : clouds::CreateCpuCloudRenderer(clouds::CloudPrecision::kFloat);
-  clouds::CloudRenderRequest request;
+  const std::unique_ptr<clouds::CloudRenderer> renderer = OpacityRenderer(backend);
+  clouds::CloudRenderRequest request = OpacityRequest(rw, rh);
   request.sun_dir = *a.sun.direction;
-  request.width = rw;
-  request.height = rh;
-  request.march.light_samples = 0;
-  request.march.far_light = false;
   const auto render = [&](const clouds::WeatherMap& m) {
     return Opacity(renderer->Render({&preset, &params, &noise, &m}, request).transmittance);
   };

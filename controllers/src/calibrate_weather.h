@@ -2,10 +2,13 @@
 // (cloudfit/weather_inversion.h), by inverting its weather map through the game's march.
 #pragma once
 #include <array>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "calibrate_plan.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/staged_directory.h"
 #include "skycal/fit/fit_report.h"
 
@@ -24,6 +27,17 @@ struct WeatherInversionRecord {
   double seconds = 0.0;
   fit::FitDecision Decision() const;
 };
+
+// The march the inversion and the day's predictions render: the game's (its noise, steps and
+// optimisations) on `backend` (Vulkan, else the float CPU twin), its transmittance only (no
+// light toward the sun, which the opacity does not read).
+std::unique_ptr<clouds::CloudRenderer> OpacityRenderer(render::Backend backend);
+clouds::CloudRenderRequest OpacityRequest(int width, int height);
+
+// The clouds' IoU: the game's (transmittance < 0.5) against the photo's (cloud probability
+// >= 0.5) over the compared pixels (weight >= 0.5); unset when neither has cloud there.
+std::optional<double> CloudIou(const std::vector<float>& transmittance, const std::vector<float>& probability,
+                               const std::vector<float>& compared);
 
 // Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
 // clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud

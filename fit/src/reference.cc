@@ -143,19 +143,27 @@ void ClassifyPixels(const FitOptions& o, const std::vector<float>& user, Referen
         c = PixelClass::kUserMasked;
       }
       r.pixel_class[i] = c;
-      switch (c) {
-        case PixelClass::kSky: ++r.counts.sky; break;
-        case PixelClass::kBelowHorizon: ++r.counts.below_horizon; break;
-        case PixelClass::kSunCone: ++r.counts.sun_cone; break;
-        case PixelClass::kInvalid: ++r.counts.invalid; break;
-        case PixelClass::kClipped: ++r.counts.clipped; break;
-        case PixelClass::kUserMasked: ++r.counts.user_masked; break;
-      }
     }
   }
+  r.counts = CountPixelClasses(r.pixel_class);
 }
 
 }  // namespace
+
+MaskCounts CountPixelClasses(const std::vector<PixelClass>& classes) {
+  MaskCounts n;
+  for (PixelClass c : classes) {
+    switch (c) {
+      case PixelClass::kSky: ++n.sky; break;
+      case PixelClass::kBelowHorizon: ++n.below_horizon; break;
+      case PixelClass::kSunCone: ++n.sun_cone; break;
+      case PixelClass::kInvalid: ++n.invalid; break;
+      case PixelClass::kClipped: ++n.clipped; break;
+      case PixelClass::kUserMasked: ++n.user_masked; break;
+    }
+  }
+  return n;
+}
 
 Reference LoadReference(const std::string& path, const FitOptions& o) {
   Reference r;

@@ -28,6 +28,9 @@ struct MaskCounts {
   bool operator==(const MaskCounts&) const = default;
 };
 
+// The counts of a pixel-class map.
+MaskCounts CountPixelClasses(const std::vector<PixelClass>& classes);
+
 struct Reference {
   std::string path, name, sha256;
   ImageRGB radiance;
