@@ -179,9 +179,9 @@ TEST(FlowWind, CloudsMovedByTheWindAreRecoveredOnCloudPixels) {
   request.width = kW;
   request.height = kH;
   request.time_s = kT0;
-  const clouds::CloudScene scene{&preset, &in.params, &in.noise, &in.weather};
+  const clouds::CloudScene scene{&preset, &in.params, in.noise.get(), &in.weather};
   const clouds::CloudShadeD shade = clouds::ResolveCloudShade(scene, request);
-  const clouds::CpuCloudTextures textures(in.noise, in.weather);
+  const clouds::CpuCloudTextures textures(*in.noise, in.weather);
   clouds::CloudModelD model(textures);
   // Density at x is the texture at x + wind(t) with wind(t) = -v t (resolved_clouds.cc):
   // the clouds move by +v dt.

@@ -164,6 +164,45 @@ TEST(VulkanRenderers, UnchangedContentIsNotUploadedAgain) {
   }
 }
 
+// Renderers alive together share one pipeline and what is uploaded to it, and a
+// KeepCloudDevices keeps that pipeline after the last renderer goes: a calibration's stages
+// (statistics, inversion, refit, the game's image) each make a renderer, and the noise goes
+// to the device once. Two renderers interleaving weather maps still see their own. Control:
+// with no keeper, a renderer made after the last one went uploads the noise again.
+TEST(VulkanRenderers, StagesShareOnePipelineWhileKept) {
+  MemoryModeEnv env("direct");
+  CloudFixture f;
+  const clouds::WeatherMap first_weather = f.weather, other_weather = testing::PatchyWeather(0.3f, 0.5f);
+  auto render = [&](clouds::CloudRenderer& r, const clouds::WeatherMap& w) {
+    f.weather = w;
+    return r.Render(f.Scene(), SmallCloudRequest(64, 0.4));
+  };
+  {
+    auto a = clouds::CreateVulkanCloudRenderer();
+    render(*a, first_weather);
+    a.reset();
+    auto b = clouds::CreateVulkanCloudRenderer();
+    render(*b, first_weather);
+    EXPECT_EQ(Stats(*b).resource_uploads, 6);  // a fresh pipeline: noise (4), weather map, directions
+  }
+  const clouds::KeepCloudDevices keep;
+  auto a = clouds::CreateVulkanCloudRenderer();
+  const clouds::CloudImage a_first = render(*a, first_weather);
+  EXPECT_EQ(Stats(*a).resource_uploads, 6);
+  auto b = clouds::CreateVulkanCloudRenderer();
+  const clouds::CloudImage b_other = render(*b, other_weather);
+  EXPECT_EQ(Stats(*b).resource_uploads, 7);  // one pipeline: the other weather map alone
+  const clouds::CloudImage a_again = render(*a, first_weather);
+  EXPECT_EQ(Stats(*a).resource_uploads, 8);  // its weather map back
+  EXPECT_EQ(0, std::memcmp(a_first.transmittance.data(), a_again.transmittance.data(), a_first.transmittance.size() * sizeof(float)));
+  EXPECT_NE(0, std::memcmp(a_first.transmittance.data(), b_other.transmittance.data(), a_first.transmittance.size() * sizeof(float)));
+  a.reset();
+  b.reset();
+  auto c = clouds::CreateVulkanCloudRenderer();
+  render(*c, first_weather);
+  EXPECT_EQ(Stats(*c).resource_uploads, 8);  // kept: nothing new to upload
+}
+
 // Resident set size in MiB (/proc/self/statm's second field, in pages).
 double RssMb() {
   std::ifstream statm("/proc/self/statm");

@@ -110,10 +110,10 @@ PhotoCloudStatsResult FitPhotoCloudStats(const PhotoCloudStatsOptions& o, const 
     out.photos.push_back(PreparePhoto(o, so, photos[r], sky.references[r], sky.preset, *sky_renderer));
   out.cloud_preset = CloudSunPreset(o, out.photos, sky.preset);
   const std::unique_ptr<clouds::CloudRenderer> renderer = CreateStatsRenderer(o);
-  const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(
+  const auto noise = clouds::SharedCloudNoise(
       o.noise_seed, o.noise_cache_dir.empty() ? clouds::UsableCloudNoiseCacheDir() : o.noise_cache_dir);
-  out.coverage = MatchCoverage(o, so, out.photos, out.cloud_preset, noise, *renderer);
-  out.fit = FitStatistics(o, so, out.photos, out.coverage, noise, *renderer, sky.preset, &out.cloud_preset);
+  out.coverage = MatchCoverage(o, so, out.photos, out.cloud_preset, *noise, *renderer);
+  out.fit = FitStatistics(o, so, out.photos, out.coverage, *noise, *renderer, sky.preset, &out.cloud_preset);
   const CloudStatsResult& res = out.fit.result;
   for (size_t r = 0; r < photos.size(); ++r) {
     const CloudStatistics& model = res.final_stats.empty() ? res.reference_stats[r] : res.final_stats[r];

@@ -88,7 +88,7 @@ std::string Parse(const std::string& bytes, uint64_t seed, CloudNoise* noise) {
       h.sizes[2] != CloudNoise::kCurlSize)
     return "texture sizes differ from 128/32/128";
   if (h.seed != seed) return "seed " + std::to_string(h.seed) + ", expected " + std::to_string(seed);
-  const std::string sha = Sha256Hex(bytes.substr(kHeaderBytes));
+  const std::string sha = Sha256Hex(std::string_view(bytes).substr(kHeaderBytes));
   if (sha != std::string(h.sha256, sizeof h.sha256)) return "sha256 of the payload does not match its header";
   noise->seed = seed;
   noise->base = Floats(bytes, kHeaderBytes, BaseCount());
@@ -152,18 +152,22 @@ std::string FileIdentity(const std::string& path) {
 }  // namespace
 
 // The last noise read, kept for the process: a calibration reads it for each step that marches
-// (the inversion, the lighting refit, the game's image, the day's predictions), and each read
-// of the cache file costs ~0.7 s (35 MB, its sha256 and the range check of 8.7 M values).
-CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir) {
+// (the statistics, the inversion, the lighting refit, the game's image, the day's
+// predictions), and each read of the cache file means 34 MB read, hashed and range-checked.
+std::shared_ptr<const CloudNoise> SharedCloudNoise(uint64_t seed, const std::string& cache_dir) {
   static std::mutex mutex;
-  static std::optional<std::pair<std::string, CloudNoise>> last;
+  static std::optional<std::pair<std::string, std::shared_ptr<const CloudNoise>>> last;
   const std::string path = cache_dir.empty() ? std::string() : CachePath(cache_dir, seed);
   std::lock_guard<std::mutex> lock(mutex);
   const std::string key = std::to_string(seed) + "|" + path + "|" + FileIdentity(path);
   if (last && last->first == key) return last->second;
-  CloudNoise noise = LoadOrGenerateUncached(seed, cache_dir);
+  auto noise = std::make_shared<const CloudNoise>(LoadOrGenerateUncached(seed, cache_dir));
   last.emplace(std::to_string(seed) + "|" + path + "|" + FileIdentity(path), noise);  // the file as written, if it was
   return noise;
+}
+
+CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir) {
+  return *SharedCloudNoise(seed, cache_dir);
 }
 
 std::string DefaultCloudNoiseCacheDir() {

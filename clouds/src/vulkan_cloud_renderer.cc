@@ -14,7 +14,11 @@
 // a workgroup's invocations in SIMD lanes and workgroups on its threads: a compact tile
 // holds pixels of similar cost (less lane divergence than 128 pixels spread over 90 deg
 // of azimuth), and 64-pixel workgroups are small enough to balance the 2 cores.
+#include <algorithm>
 #include <cstring>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -45,9 +49,14 @@ uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
   return h;
 }
 
-class VulkanCloudRenderer final : public CloudRenderer {
+// The device side of the renderer: the pipeline and what has been uploaded to it. One per
+// (validation, memory mode) while a renderer or a KeepCloudDevices holds it: a calibration
+// makes a renderer per stage (statistics, inversion, refit, the game's image), and each new
+// pipeline would upload the 34 MB of noise (and its packed views) again. Render holds the
+// mutex: renderers on several threads take turns on the one pipeline.
+class CloudDevice {
  public:
-  explicit VulkanCloudRenderer(bool validation)
+  explicit CloudDevice(bool validation)
       : ctx_(gpu::VulkanContext::Shared(validation)),
         pipeline_(ctx_, spirv::clouds_latlong, spirv::clouds_latlong_size,
                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
@@ -56,7 +65,7 @@ class VulkanCloudRenderer final : public CloudRenderer {
                    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
                   {kLocalX, kLocalY}) {}
 
-  CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
+  CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) {
     const CloudShadeD shade = ResolveCloudShade(scene, request);
     const int w = request.width, h = request.height;
     std::vector<float> params = PackCloudShade(shade);
@@ -64,26 +73,10 @@ class VulkanCloudRenderer final : public CloudRenderer {
     params.push_back(static_cast<float>(h));
     const uint32_t tile_rows = (h + kLocalY - 1) / kLocalY;
     params.push_back(static_cast<float>(gpu::WorkgroupRowStride(tile_rows)));  // exact: < 2^24
+    std::lock_guard<std::mutex> lock(mutex_);
     Upload(kParams, params);
     UploadTextures(*scene.noise, *scene.weather);
-
-    const size_t trig_bytes = static_cast<size_t>(w + h) * 2 * sizeof(float);
-    float* trig = static_cast<float*>(pipeline_.Map(kTrig, trig_bytes));
-    if (trig_width_ != w || trig_height_ != h || trig != trig_filled_) {
-      const LatLongTrig t = MakeLatLongTrig(w, h);
-      for (int y = 0; y < h; ++y) {
-        trig[2 * y] = static_cast<float>(t.sin_lat[y]);
-        trig[2 * y + 1] = static_cast<float>(t.cos_lat[y]);
-      }
-      for (int x = 0; x < w; ++x) {
-        trig[2 * (h + x)] = static_cast<float>(t.sin_lon[x]);
-        trig[2 * (h + x) + 1] = static_cast<float>(t.cos_lon[x]);
-      }
-      pipeline_.Flush(kTrig);
-      trig_width_ = w;
-      trig_height_ = h;
-      trig_filled_ = trig;
-    }
+    UploadTrig(w, h);
     pipeline_.Map(kOutput, static_cast<size_t>(w) * h * 4 * sizeof(float), /*host_readback=*/true);
     pipeline_.Dispatch((w + kLocalX - 1) / kLocalX, tile_rows, 1);
 
@@ -100,8 +93,9 @@ class VulkanCloudRenderer final : public CloudRenderer {
     return image;
   }
 
-  std::string Describe() const override { return "vulkan clouds (" + ctx_->device_name() + ")"; }
-  DeviceStats Stats() const {
+  std::string DeviceName() const { return ctx_->device_name(); }
+  DeviceStats Stats() {
+    std::lock_guard<std::mutex> lock(mutex_);
     DeviceStats s;
     s.gpu_ms = pipeline_.last_gpu_ms();
     for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig, kBasePairs}) {
@@ -157,7 +151,27 @@ class VulkanCloudRenderer final : public CloudRenderer {
       weather_uploaded_ = true;
     }
   }
+  // The direction table (sin, cos of each row's latitude and each column's longitude).
+  void UploadTrig(int w, int h) {
+    const size_t trig_bytes = static_cast<size_t>(w + h) * 2 * sizeof(float);
+    float* trig = static_cast<float*>(pipeline_.Map(kTrig, trig_bytes));
+    if (trig_width_ == w && trig_height_ == h && trig == trig_filled_) return;
+    const LatLongTrig t = MakeLatLongTrig(w, h);
+    for (int y = 0; y < h; ++y) {
+      trig[2 * y] = static_cast<float>(t.sin_lat[y]);
+      trig[2 * y + 1] = static_cast<float>(t.cos_lat[y]);
+    }
+    for (int x = 0; x < w; ++x) {
+      trig[2 * (h + x)] = static_cast<float>(t.sin_lon[x]);
+      trig[2 * (h + x) + 1] = static_cast<float>(t.cos_lon[x]);
+    }
+    pipeline_.Flush(kTrig);
+    trig_width_ = w;
+    trig_height_ = h;
+    trig_filled_ = trig;
+  }
 
+  std::mutex mutex_;
   std::shared_ptr<gpu::VulkanContext> ctx_;
   gpu::ComputePipeline pipeline_;
   uint64_t noise_key_ = 0, weather_key_ = 0;
@@ -166,11 +180,62 @@ class VulkanCloudRenderer final : public CloudRenderer {
   const float* trig_filled_ = nullptr;
 };
 
+// The process's devices, by (validation, memory mode), and those a KeepCloudDevices holds.
+struct DeviceRegistry {
+  std::mutex mutex;
+  std::map<std::pair<bool, int>, std::weak_ptr<CloudDevice>> devices;
+  int keepers = 0;
+  std::vector<std::shared_ptr<CloudDevice>> kept;
+};
+DeviceRegistry& Registry() {
+  static DeviceRegistry* registry = new DeviceRegistry;  // never destroyed: no order at exit to get wrong
+  return *registry;
+}
+
+std::shared_ptr<CloudDevice> SharedCloudDevice(bool validation) {
+  DeviceRegistry& r = Registry();
+  const std::pair<bool, int> key{validation, static_cast<int>(gpu::MemoryModeFromEnvironment())};
+  std::lock_guard<std::mutex> lock(r.mutex);
+  std::shared_ptr<CloudDevice> device = r.devices[key].lock();
+  if (!device) {
+    device = std::make_shared<CloudDevice>(validation);
+    r.devices[key] = device;
+  }
+  if (r.keepers > 0 && std::find(r.kept.begin(), r.kept.end(), device) == r.kept.end()) r.kept.push_back(device);
+  return device;
+}
+
+class VulkanCloudRenderer final : public CloudRenderer {
+ public:
+  explicit VulkanCloudRenderer(bool validation) : device_(SharedCloudDevice(validation)) {}
+  CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
+    return device_->Render(scene, request);
+  }
+  std::string Describe() const override { return "vulkan clouds (" + device_->DeviceName() + ")"; }
+  DeviceStats Stats() const { return device_->Stats(); }
+
+ private:
+  std::shared_ptr<CloudDevice> device_;
+};
+
 }  // namespace
 
 DeviceStats RendererDeviceStats(const CloudRenderer& renderer) {
   const auto* vulkan = dynamic_cast<const VulkanCloudRenderer*>(&renderer);
   return vulkan ? vulkan->Stats() : DeviceStats{};
+}
+
+KeepCloudDevices::KeepCloudDevices() {
+  DeviceRegistry& r = Registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  ++r.keepers;
+}
+
+KeepCloudDevices::~KeepCloudDevices() {
+  std::vector<std::shared_ptr<CloudDevice>> released;  // destroyed after the lock is let go
+  DeviceRegistry& r = Registry();
+  std::lock_guard<std::mutex> lock(r.mutex);
+  if (--r.keepers == 0) released.swap(r.kept);
 }
 
 std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation) {

@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
+#include <tuple>
 #include <vector>
 
 #include "noise_primitives.h"
@@ -54,6 +57,27 @@ std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells,
       }
       field[static_cast<size_t>(y) * size + x] = value;
     }
+  return field;
+}
+
+// NoiseField, kept for the process: a statistics fit draws the same few seeds at each
+// coverage it tries (only RemapToMean differs), and a calibration draws them again for the
+// game's image. A field is size^2 floats (256 KB at 256); at most kKeptFields are kept.
+std::vector<float> KeptNoiseField(uint64_t seed, uint32_t salt, int size, int cells, int octaves, bool billows) {
+  constexpr size_t kKeptFields = 64;
+  using Key = std::tuple<uint64_t, uint32_t, int, int, int, bool>;
+  static std::mutex mutex;
+  static std::map<Key, std::vector<float>> kept;
+  const Key key{seed, salt, size, cells, octaves, billows};
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = kept.find(key);
+    if (it != kept.end()) return it->second;
+  }
+  std::vector<float> field = NoiseField(seed, salt, size, cells, octaves, billows);
+  std::lock_guard<std::mutex> lock(mutex);
+  if (kept.size() >= kKeptFields) kept.erase(kept.begin());
+  kept.emplace(key, field);
   return field;
 }
 
@@ -132,9 +156,9 @@ WeatherMap NoiseWeatherMap(uint64_t seed, int size, double extent_m, const Weath
     throw Error(origin + ": WeatherNoiseOptions.coverage_cells = " + std::to_string(options.coverage_cells) +
                 " is too fine for a " + std::to_string(size) + "-texel map: expected at most size / 2");
   std::vector<float> fields[3] = {
-      NoiseField(seed, kSaltCoverage, size, options.coverage_cells, options.octaves, true),
-      NoiseField(seed, kSaltPrecipitation, size, options.coverage_cells, options.octaves, false),
-      NoiseField(seed, kSaltType, size, options.coverage_cells, options.octaves, false)};
+      KeptNoiseField(seed, kSaltCoverage, size, options.coverage_cells, options.octaves, true),
+      KeptNoiseField(seed, kSaltPrecipitation, size, options.coverage_cells, options.octaves, false),
+      KeptNoiseField(seed, kSaltType, size, options.coverage_cells, options.octaves, false)};
   RemapToMean(fields[0], options.mean_coverage, options.coverage_contrast);
   RemapToMean(fields[1], options.mean_precipitation, options.precipitation_contrast);
   RemapToMean(fields[2], options.mean_type, options.type_contrast);

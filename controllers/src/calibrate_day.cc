@@ -225,12 +225,12 @@ std::vector<DayFrame> DayFrames(const std::string& out_dir, std::string* why_not
 }
 
 nlohmann::json DayJson(const std::vector<DayFrame>& frames, const cloudfit::DayWind& wind, const CalibrateOptions& o) {
-  const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
+  const auto noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   const std::unique_ptr<clouds::CloudRenderer> renderer = OpacityRenderer(o.backend);
   nlohmann::json pairs = nlohmann::json::array(), list = nlohmann::json::array();
   for (const DayFrame& f : frames) list.push_back({{"photo", f.photo}, {"time_s", f.time_s}});
   for (size_t k = 1; k < frames.size(); ++k)
-    pairs.push_back(PredictPair(frames[k - 1], frames[k], wind, wind.pairs[k - 1], *renderer, noise));
+    pairs.push_back(PredictPair(frames[k - 1], frames[k], wind, wind.pairs[k - 1], *renderer, *noise));
   return {{"wind", {{"speed_m_s", wind.speed_m_s}, {"direction_deg", wind.direction_deg},
                     {"from_texels_within_m", frames.front().resolved_radius_m},
                     {"convention", "the azimuth the wind blows toward (lat-long: 0 -> +z, 90 -> +x), as clouds.wind_direction"}}},

@@ -10,6 +10,7 @@
 #include "calibrate_plan.h"
 #include "calibrate_weather.h"
 #include "skycal/clouds/cloud_params.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/weather_map.h"
 #include "skycal/controllers/calibrate.h"
 #include "skycal/controllers/game_render.h"
@@ -298,6 +299,7 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
                 "': exists and is not a directory (expected a directory, or a path to create)");
   const bool dir_existed = fs::exists(st);
   if (!o.weather_map.empty()) clouds::LoadWeatherMap(o.weather_map, clouds::CloudParams{}.weather_extent_m);  // names the file
+  const clouds::KeepCloudDevices keep;  // every stage's clouds on one pipeline: the noise uploaded once
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));

@@ -155,12 +155,12 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
   // The march's transmittance through the map being refined.
-  const clouds::CloudNoise noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
+  const auto noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   const std::unique_ptr<clouds::CloudRenderer> renderer = OpacityRenderer(backend);
   clouds::CloudRenderRequest request = OpacityRequest(rw, rh);
   request.sun_dir = *a.sun.direction;
   const auto render = [&](const clouds::WeatherMap& m) {
-    return Opacity(renderer->Render({&preset, &params, &noise, &m}, request).transmittance);
+    return Opacity(renderer->Render({&preset, &params, noise.get(), &m}, request).transmittance);
   };
   r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, photo_small, render, {}, &map);
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");

@@ -75,8 +75,8 @@ std::unique_ptr<LoadedCloudShapes> LoadFitCloudShapes(const FitCloudOptions& o) 
   }
   out->weather_origin = (fs::path(o.preset).parent_path() / out->shapes.params.weather_map).string();
   out->weather = clouds::LoadWeatherMap(out->weather_origin, out->shapes.params.weather_extent_m);
-  out->noise = clouds::LoadOrGenerateCloudNoise(kRenderCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
-  out->shapes.noise = &out->noise;
+  out->noise = clouds::SharedCloudNoise(kRenderCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
+  out->shapes.noise = out->noise.get();
   out->shapes.weather = &out->weather;
   out->shapes.time_s = o.time_s.value_or(0.0);
   return out;

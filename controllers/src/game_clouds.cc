@@ -46,7 +46,7 @@ CloudInputsLoaded LoadCloudInputs(const GameCloudOptions& o, const render::Prese
                 "(expected an RGB EXR: coverage, precipitation, type)");
   }
   in.weather = clouds::LoadWeatherMap(in.weather_origin, in.params.weather_extent_m);
-  in.noise = clouds::LoadOrGenerateCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
+  in.noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   return in;
 }
 

@@ -116,7 +116,7 @@ nlohmann::json RenderCloudsOver(const GameRenderOptions& o, const render::Preset
   cr.height = o.height;
   cr.time_s = o.clouds.time_s;
   cr.march = o.clouds.march;
-  const clouds::CloudScene scene{&preset, &in.params, &in.noise, &in.weather};
+  const clouds::CloudScene scene{&preset, &in.params, in.noise.get(), &in.weather};
   clouds::CloudImage cloud = cloud_renderer.Render(scene, cr);
   image->radiance = clouds::CompositeClouds(image->radiance, cloud);
   image->clouds_drawn = true;

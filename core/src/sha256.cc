@@ -10,7 +10,7 @@
 
 namespace skycal {
 
-std::string Sha256Hex(const std::string& bytes) {
+std::string Sha256Hex(std::string_view bytes) {
   sha256_ctx ctx;
   sha256_init(&ctx);
   sha256_update(&ctx, bytes.size(), reinterpret_cast<const uint8_t*>(bytes.data()));

@@ -4,6 +4,7 @@
 // change to it is a new version (and a new golden checksum in tests/cloud_noise_test.cc).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "skycal/clouds/cloud_textures.h"
@@ -37,6 +38,9 @@ std::string CloudNoiseSha256(const CloudNoise& noise);
 // (no home directory known) generates without a cache. The last noise read is kept for the
 // process and returned again while its cache file is the same (inode, size, mtime).
 CloudNoise LoadOrGenerateCloudNoise(uint64_t seed, const std::string& cache_dir);
+// The same noise, shared rather than copied: what the pipelines hold (a copy of 34 MB costs
+// more than a render at the fit's sizes).
+std::shared_ptr<const CloudNoise> SharedCloudNoise(uint64_t seed, const std::string& cache_dir);
 
 // $XDG_CACHE_HOME/skycal when XDG_CACHE_HOME is set and absolute (the XDG base-directory
 // rule), else $HOME/.cache/skycal; "" when neither is known (then no cache is used).

@@ -54,8 +54,21 @@ class CloudRenderer {
 // CPU: `threads` workers over rows (0: the hardware's count).
 std::unique_ptr<CloudRenderer> CreateCpuCloudRenderer(CloudPrecision precision, int threads = 0);
 // Vulkan (lavapipe or a GPU); keeps its pipeline and uploaded textures between renders.
-// Throws skycal::Error when no Vulkan device is available.
+// Renderers alive at the same time (same validation and SKYCAL_VULKAN_MEMORY) share one
+// pipeline and its textures. Throws skycal::Error when no Vulkan device is available.
 std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation = false);
+
+// While one lives, the Vulkan cloud pipelines made in the process outlive their renderers:
+// a controller whose stages each make a renderer (statistics, inversion, refit, the game's
+// image) holds one so the noise goes to the device once, not once per stage. The last one
+// to go releases them.
+class KeepCloudDevices {
+ public:
+  KeepCloudDevices();
+  ~KeepCloudDevices();
+  KeepCloudDevices(const KeepCloudDevices&) = delete;
+  KeepCloudDevices& operator=(const KeepCloudDevices&) = delete;
+};
 
 // Throws skycal::Error naming `origin` unless the textures match the layout contract
 // (sizes, finite values, the weather map's channels in [0, 1]). Noise carrying its sha256

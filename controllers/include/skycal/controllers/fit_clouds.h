@@ -45,7 +45,7 @@ std::vector<NamedPath> FitCloudInputs(const FitCloudOptions& o);
 // The known shapes of FitCloudOptions::preset, loaded (noise from its seed cache); null without one.
 struct LoadedCloudShapes {
   std::string origin, weather_origin;
-  clouds::CloudNoise noise;
+  std::shared_ptr<const clouds::CloudNoise> noise;
   clouds::WeatherMap weather;
   cloudfit::KnownCloudShapes shapes;  // points into noise and weather (do not copy)
 };

@@ -4,6 +4,7 @@
 // from GameCloudOptions::weather_map, else the one the section names (next to its preset).
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,7 +37,7 @@ struct CloudInputsLoaded {
   std::string params_origin;   // the file the section came from
   clouds::WeatherMap weather;
   std::string weather_origin;  // the EXR it came from
-  clouds::CloudNoise noise;
+  std::shared_ptr<const clouds::CloudNoise> noise;  // never null
 };
 // Parses the section and loads the weather map and the noise. Throws skycal::Error naming
 // the file and field: unknown or out-of-range cloud fields, a weather map of the wrong

@@ -3,8 +3,9 @@
 // fitted to.
 #pragma once
 #include <string>
+#include <string_view>
 
 namespace skycal {
-std::string Sha256Hex(const std::string& bytes);
+std::string Sha256Hex(std::string_view bytes);
 std::string Sha256OfFile(const std::string& path);  // throws skycal::Error if unreadable
 }  // namespace skycal
