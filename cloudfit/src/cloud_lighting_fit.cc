@@ -128,7 +128,9 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
     rep.conditioning_time_s = conditioning_s;
     rep.solve_time_s = solve_s;
     rep.prior_residuals = prior_residuals;
-    rep.value_source = images->Describe();
+    rep.value_source = x.model->source() == CloudValueSource::kRenderer
+                           ? images->Describe()
+                           : "cpu double model at the samples (renders by " + images->Describe() + ")";
   }
   const double report_s = Seconds(tr);
   for (CloudLightingReport& rep : out) rep.report_time_s = report_s;
@@ -269,7 +271,7 @@ std::vector<CloudLightingReport> FitCloudDayKnownSky(const std::vector<DayRefere
     x.model = std::make_unique<CloudSampleModel>(
         CloudSampleScene{*d.sky_preset, shapes.params, shapes.noise, shapes.weather, x.request},
         ChooseSamples(x.pixels, *d.reference, o.samples),
-        renderer ? CloudValueSource::kRenderer : CloudValueSource::kCpuDouble, renderer, o.threads);
+        renderer && o.values_from_renderer ? CloudValueSource::kRenderer : CloudValueSource::kCpuDouble, renderer, o.threads);
     x.model->SetSky(*d.sky_preset, *d.sky, d.exposure);
     m.push_back(std::move(x));
   }
@@ -423,7 +425,8 @@ void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitRes
     x.sky_exposed = sky_fit.references[r].rendered;
     x.model = std::make_unique<CloudSampleModel>(
         CloudSampleScene{sky_fit.preset, shapes.params, shapes.noise, shapes.weather, x.request},
-        ChooseSamples(x.pixels, refs[r].radiance, o.samples), CloudValueSource::kRenderer, cloud_renderer, o.threads);
+        ChooseSamples(x.pixels, refs[r].radiance, o.samples),
+        o.values_from_renderer ? CloudValueSource::kRenderer : CloudValueSource::kCpuDouble, cloud_renderer, o.threads);
     x.model->SetSky(sky_fit.preset, sky, x.exposure);
   }
 }

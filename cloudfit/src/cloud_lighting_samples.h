@@ -63,6 +63,7 @@ class CloudSampleModel {
   const clouds::CloudImage* RenderedAt(const double* theta) const;
 
   const std::vector<CloudSample>& samples() const { return samples_; }
+  CloudValueSource source() const { return source_; }
   size_t residuals() const { return 3 * samples_.size(); }
   double exposure() const { return exposure_; }
   const CloudSampleScene& scene() const { return scene_; }

@@ -229,6 +229,9 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.clouds.hold.push_back("extinction");
     k.clouds.max_iterations = kRefitIterations;
     k.clouds.sky_pixels_from_photo = true;
+    // The solve's values from the model at its samples: a frame's march per trial point cost
+    // most of the refit, and the game's image is rendered from the result anyway.
+    k.clouds.values_from_renderer = false;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the
@@ -249,7 +252,8 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
             "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
             "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
             std::to_string(kRefitIterations) +
-            " iterations; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
+            " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
+            "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
     d.what = "cloud lighting: the statistics fit's kept";

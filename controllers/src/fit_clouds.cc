@@ -101,6 +101,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   co.samples = o.samples;
   co.max_iterations = o.max_iterations;
   co.fit_sun_scale = o.fit_sun_scale;
+  co.values_from_renderer = o.values_from_renderer;
   co.hold = o.hold;
   co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;

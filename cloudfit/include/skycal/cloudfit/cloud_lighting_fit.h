@@ -74,6 +74,12 @@ struct CloudLightingOptions {
   // they predict to 1% at 2% noise (256 samples), so it steers the weakly determined ones
   // and barely moves the well determined ones.
   double day_smoothness = 0.02;
+  // FitSkyAndClouds: where the solve's values come from. True: a cloud render of the whole
+  // frame per trial point (the renderer's numbers, the game's on Vulkan). False: the double
+  // CPU model at the samples alone (the same model source as the shader, parity-tested
+  // against it; ~1/10 of a Jet march a sample, not a frame's march): the refit of a
+  // calibration, where the frame is rendered for the report and the game's image anyway.
+  bool values_from_renderer = true;
   int threads = 2;
   bool verbose = false;
   bool IsValid(std::string* why) const;
