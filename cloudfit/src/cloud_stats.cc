@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <numeric>
 
 #include <Eigen/Core>
@@ -35,11 +37,8 @@ int FindBin(const std::vector<double>& edges, double v) {
 
 // Weighted quantile along the interpolated CDF: sample i sits at cumulative weight
 // c_i = sum_{j<i} w_j + w_i / 2 (sorted by value); the quantile at q W interpolates linearly
-// between neighbouring samples. Continuous in the values and in the weights.
-double WeightedQuantile(std::vector<std::pair<double, double>>& vw, double q) {
-  std::sort(vw.begin(), vw.end());
-  double total = 0.0;
-  for (const auto& p : vw) total += p.second;
+// between neighbouring samples. Continuous in the values and in the weights. `vw` sorted.
+double WeightedQuantileOfSorted(const std::vector<std::pair<double, double>>& vw, double total, double q) {
   const double target = q * total;
   double c_prev = 0.0, v_prev = vw.front().first, acc = 0.0;
   bool first = true;
@@ -55,6 +54,66 @@ double WeightedQuantile(std::vector<std::pair<double, double>>& vw, double q) {
     first = false;
   }
   return vw.back().first;
+}
+
+// Where each pixel of a width x height frame falls for one sun: its elevation bin (per row),
+// sun-angle bin and solid angle (-1: outside the bins). The same for every render of a
+// statistics fit (one sun, one size), which computes statistics hundreds of times: kept for
+// the last few (frame, sun, bins).
+struct StatsGeometry {
+  int width = 0, height = 0;
+  std::array<double, 3> sun{};
+  std::vector<double> sun_edges, elevation_edges;
+  std::vector<int> elevation_bin;  // per row
+  std::vector<int> sun_bin;        // per pixel
+  std::vector<double> omega;       // per pixel, sr
+};
+
+std::shared_ptr<const StatsGeometry> MakeStatsGeometry(int width, int height, const std::array<double, 3>& sun,
+                                                       const CloudStatsOptions& o) {
+  auto g = std::make_shared<StatsGeometry>();
+  g->width = width;
+  g->height = height;
+  g->sun = sun;
+  g->sun_edges = o.sun_angle_edges_deg;
+  g->elevation_edges = o.elevation_edges_deg;
+  const double deg = 180.0 / M_PI;
+  g->elevation_bin.resize(height);
+  g->sun_bin.assign(static_cast<size_t>(width) * height, -1);
+  g->omega.assign(static_cast<size_t>(width) * height, 0.0);
+  for (int y = 0; y < height; ++y) {
+    g->elevation_bin[y] = FindBin(o.elevation_edges_deg, latlong::Latitude(y, height) * deg);
+    if (g->elevation_bin[y] < 0) continue;
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      const auto v = latlong::PixelDirection(x, y, width, height);
+      const double c = std::clamp(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], -1.0, 1.0);
+      g->sun_bin[i] = FindBin(o.sun_angle_edges_deg, std::acos(c) * deg);
+      g->omega[i] = latlong::PixelSolidAngle(x, y, width, height);
+    }
+  }
+  return g;
+}
+
+std::shared_ptr<const StatsGeometry> StatsGeometryFor(int width, int height, const std::array<double, 3>& sun,
+                                                      const CloudStatsOptions& o) {
+  constexpr size_t kKept = 8;
+  static std::mutex mutex;
+  static std::vector<std::shared_ptr<const StatsGeometry>> kept;
+  auto same = [&](const StatsGeometry& g) {
+    return g.width == width && g.height == height && g.sun == sun && g.sun_edges == o.sun_angle_edges_deg &&
+           g.elevation_edges == o.elevation_edges_deg;
+  };
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& g : kept)
+      if (same(*g)) return g;
+  }
+  auto g = MakeStatsGeometry(width, height, sun, o);
+  std::lock_guard<std::mutex> lock(mutex);
+  if (kept.size() >= kKept) kept.erase(kept.begin());
+  kept.push_back(g);
+  return g;
 }
 
 }  // namespace
@@ -167,41 +226,39 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
   s.log_quantile.assign(static_cast<size_t>(bins) * 3 * nq, 0.0);
   s.thick_share.assign(static_cast<size_t>(s.sun_bins) * s.elevation_bins, 0.0);
   std::vector<std::vector<std::pair<double, double>>> samples(static_cast<size_t>(bins) * 3);
-  const double deg = 180.0 / M_PI;
   for (size_t image = 0; image < images.size(); ++image) {
-  const ImageRGB& img = *images[image];
-  const std::vector<float>& opacity = *opacities[image];
-  const size_t n = static_cast<size_t>(img.width) * img.height;
-  if (opacity.size() != n || (!sky.empty() && sky.size() != n))
-    throw Error("cloud stats: the opacity (" + std::to_string(opacity.size()) + ") and sky mask (" +
-                std::to_string(sky.size()) + ") must have one value per pixel of the " + std::to_string(img.width) +
-                "x" + std::to_string(img.height) + " image");
-  for (int y = 0; y < img.height; ++y) {
-    const int eb = FindBin(o.elevation_edges_deg, latlong::Latitude(y, img.height) * deg);
-    if (eb < 0) continue;
-    for (int x = 0; x < img.width; ++x) {
-      const size_t i = static_cast<size_t>(y) * img.width + x;
-      if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
-      double thin = 0.0, thick = 0.0;
-      OpacityClassWeights(o, opacity[i], &thin, &thick);
-      if (thick <= 0.0 && thin <= 0.0) continue;
-      const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
-      if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
-      const auto v = latlong::PixelDirection(x, y, img.width, img.height);
-      const double c = std::clamp(v[0] * sun[0] + v[1] * sun[1] + v[2] * sun[2], -1.0, 1.0);
-      const int sb = FindBin(o.sun_angle_edges_deg, std::acos(c) * deg);
-      if (sb < 0) continue;
-      const double omega = latlong::PixelSolidAngle(x, y, img.width, img.height);
-      const double class_weight[2] = {thin, thick};
-      for (int k = 0; k < 2; ++k) {
-        if (class_weight[k] <= 0.0) continue;
-        const int bin = s.Bin(sb, eb, k);
-        const double w = omega * class_weight[k];
-        s.weight[bin] += w;
-        for (int ch = 0; ch < 3; ++ch) samples[static_cast<size_t>(bin) * 3 + ch].emplace_back(std::log(img.pixels[3 * i + ch]), w);
+    const ImageRGB& img = *images[image];
+    const std::vector<float>& opacity = *opacities[image];
+    const size_t n = static_cast<size_t>(img.width) * img.height;
+    if (opacity.size() != n || (!sky.empty() && sky.size() != n))
+      throw Error("cloud stats: the opacity (" + std::to_string(opacity.size()) + ") and sky mask (" +
+                  std::to_string(sky.size()) + ") must have one value per pixel of the " + std::to_string(img.width) +
+                  "x" + std::to_string(img.height) + " image");
+    const std::shared_ptr<const StatsGeometry> geometry = StatsGeometryFor(img.width, img.height, sun, o);
+    for (int y = 0; y < img.height; ++y) {
+      const int eb = geometry->elevation_bin[y];
+      if (eb < 0) continue;
+      for (int x = 0; x < img.width; ++x) {
+        const size_t i = static_cast<size_t>(y) * img.width + x;
+        if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
+        double thin = 0.0, thick = 0.0;
+        OpacityClassWeights(o, opacity[i], &thin, &thick);
+        if (thick <= 0.0 && thin <= 0.0) continue;
+        const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
+        if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
+        const int sb = geometry->sun_bin[i];
+        if (sb < 0) continue;
+        const double omega = geometry->omega[i];
+        const double class_weight[2] = {thin, thick};
+        for (int k = 0; k < 2; ++k) {
+          if (class_weight[k] <= 0.0) continue;
+          const int bin = s.Bin(sb, eb, k);
+          const double w = omega * class_weight[k];
+          s.weight[bin] += w;
+          for (int ch = 0; ch < 3; ++ch) samples[static_cast<size_t>(bin) * 3 + ch].emplace_back(std::log(img.pixels[3 * i + ch]), w);
+        }
       }
     }
-  }
   }
   for (int sb = 0; sb < s.sun_bins; ++sb)
     for (int eb = 0; eb < s.elevation_bins; ++eb) {
@@ -212,8 +269,11 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
     for (int ch = 0; ch < 3; ++ch) {
       auto& vw = samples[static_cast<size_t>(bin) * 3 + ch];
       if (vw.empty()) continue;
+      std::sort(vw.begin(), vw.end());
+      double total = 0.0;
+      for (const auto& p : vw) total += p.second;
       for (int q = 0; q < nq; ++q)
-        s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + q] = WeightedQuantile(vw, o.quantiles[q]);
+        s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + q] = WeightedQuantileOfSorted(vw, total, o.quantiles[q]);
     }
   return s;
 }
