@@ -26,6 +26,7 @@
 #include "flow_verb.h"
 #include "resample_verb.h"
 #include "weather_verb.h"
+#include "skycal/core/huge_pages.h"
 #include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/data_dir.h"
 #include "skycal/core/version.h"
@@ -76,6 +77,7 @@ void PrintUsage() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  skycal::ReexecWithHugePages(argv);  // first: glibc reads its tunables at start-up only
   // Before any thread starts (lavapipe and Ceres start theirs): SIGINT/SIGTERM/SIGHUP remove
   // the run's temporaries and exit 128 + signal; SIGPIPE becomes a write error.
   skycal::InstallInterruptCleanup();

@@ -22,9 +22,10 @@ namespace {
 std::atomic<int> temporary_counter{0};
 
 std::string TemporaryName(const fs::path& dir, const fs::path& final_path) {
-  return (dir / ("." + final_path.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                 std::to_string(temporary_counter++)))
-      .string();
+  std::string name = ".";  // built by append: GCC 12's -Wrestrict misfires on "." + std::string&&
+  name += final_path.filename().string();
+  name += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(temporary_counter++);
+  return (dir / name).string();
 }
 
 fs::path DirectoryOf(const fs::path& p) { return p.parent_path().empty() ? fs::path(".") : p.parent_path(); }
