@@ -7,6 +7,7 @@
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -135,6 +136,42 @@ TEST(WeatherMap, NoiseOptionsNameTheBadField) {
   o.coverage_cells = 64;  // valid alone, too fine for 64 texels
   ExpectErrorNaming([&] { NoiseWeatherMap(1, 64, 1000.0, o); }, {"coverage_cells", "64-texel"});
   ExpectErrorNaming([] { NoiseWeatherMap(1, 100, 1000.0, {}); }, {"100 x 100", "power of two"});
+}
+
+// Resampling (calibrate's statistics map to the inverted map's finer grid): the same size
+// is the identity; a field linear across the map comes back on the finer grid's texel
+// centres exactly (bilinear reproduces a linear field) away from the wrap seam, where the
+// tiling blends the two edges; a coarser grid averages. Control: nearest-texel lookup is
+// off by up to half a texel's step.
+TEST(WeatherMap, ResamplingKeepsTheFieldTheMarchSees) {
+  WeatherMap m = UniformWeatherMap(0.0, 0.0, 0.5, 60000.0);
+  m.width = m.height = 16;
+  m.rgb.assign(16 * 16 * 3, 0.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) {
+      m.rgb[(y * 16 + x) * 3] = static_cast<float>(0.05 * x);  // linear in x: 0 .. 0.75
+      m.rgb[(y * 16 + x) * 3 + 1] = static_cast<float>(0.04 * y);
+      m.rgb[(y * 16 + x) * 3 + 2] = 0.5f;
+    }
+  const WeatherMap same = ResampleWeatherMap(m, 16);
+  EXPECT_EQ(same.rgb, m.rgb);
+  const WeatherMap fine = ResampleWeatherMap(m, 32);
+  EXPECT_EQ(fine.width, 32);
+  EXPECT_EQ(fine.extent_m, m.extent_m);
+  double worst = 0.0, nearest_worst = 0.0;
+  for (int y = 2; y < 30; ++y)
+    for (int x = 2; x < 30; ++x) {  // away from the seam
+      const double u = (x + 0.5) / 2.0 - 0.5;  // the old grid's coordinate, texel centre at i
+      const double v = (y + 0.5) / 2.0 - 0.5;
+      const float* t = &fine.rgb[(y * 32 + x) * 3];
+      worst = std::max({worst, std::abs(t[0] - 0.05 * u), std::abs(t[1] - 0.04 * v), std::abs(t[2] - 0.5)});
+      nearest_worst = std::max(nearest_worst, std::abs(0.05 * (x / 2) - 0.05 * u));
+    }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_GT(nearest_worst, 0.01);
+  const WeatherMap coarse = ResampleWeatherMap(m, 8);
+  EXPECT_NEAR(coarse.rgb[(3 * 8 + 3) * 3], 0.05 * 6.5, 1e-6);  // midway between old texels 6 and 7
+  EXPECT_THROW(ResampleWeatherMap(m, 24), Error);               // not a power of two
 }
 
 TEST(WeatherMap, ExrRoundTripKeepsEveryTexelAndPutsRowZeroAtTheTop) {

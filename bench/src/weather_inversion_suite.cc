@@ -1,6 +1,7 @@
 // Suite `weather-inversion`: the weather map inverted from a reference's cloud opacity
 // (cloudfit/weather_inversion.h, what `calibrate` runs on a partly cloudy photo: 256x128
-// renders, a 256-texel map over 60 km) against the map that made the reference. Truths: procedural noise (the scattered cumulus of the
+// renders, the statistics fit's 256-texel map over 60 km resampled to kInvertedMapSize)
+// against the map that made the reference (256 texels; the correlation on its grid). Truths: procedural noise (the scattered cumulus of the
 // calibrate tests), and three painted maps that are not noise: cumulus blobs, cloud streets
 // (bands), a front (a stratus sheet behind a soft edge). Each reference is the game's march
 // (CPU float, the game's steps) at 256x128, transmittance only, sun irrelevant; the inversion
@@ -27,7 +28,9 @@
 namespace skycal::bench {
 namespace {
 
-constexpr int kW = 256, kH = 128, kMap = 256;  // as calibrate: its renders, the statistics fit's map
+// As calibrate: its renders, the statistics fit's map (the truths and the start), the map it
+// inverts (the start resampled).
+constexpr int kW = 256, kH = 128, kMap = 256, kInverted = cloudfit::kInvertedMapSize;
 
 // A painted map: coverage c(x, z) in metres about the camera, one cloud type, no rain.
 template <typename F>
@@ -96,12 +99,15 @@ struct Scene {
   }
 };
 
-double Correlation(const clouds::WeatherMap& truth, const clouds::WeatherMap& map, double radius_m) {
+// Over the texels within radius_m of the camera, on the truth's grid (the map resampled to it).
+double Correlation(const clouds::WeatherMap& truth, const clouds::WeatherMap& inverted, double radius_m) {
+  const clouds::WeatherMap map = inverted.width == truth.width ? inverted : clouds::ResampleWeatherMap(inverted, truth.width);
+  const int size = truth.width;
   double n = 0, sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-  for (int j = 0; j < kMap; ++j)
-    for (int i = 0; i < kMap; ++i) {
-      if (std::hypot((i + 0.5) / kMap - 0.5, (j + 0.5) / kMap - 0.5) * truth.extent_m > radius_m) continue;
-      const size_t t = static_cast<size_t>(j) * kMap + i;
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) {
+      if (std::hypot((i + 0.5) / size - 0.5, (j + 0.5) / size - 0.5) * truth.extent_m > radius_m) continue;
+      const size_t t = static_cast<size_t>(j) * size + i;
       const double a = truth.rgb[3 * t], b = map.rgb[3 * t];
       n += 1, sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b;
     }
@@ -122,11 +128,12 @@ std::pair<double, double> Agreement(const std::vector<float>& truth, const std::
 void RunCase(Scene& scene, CaseResult& c) {
   const clouds::WeatherMap truth = TruthMap(Get(c.settings, "map"), scene.params.weather_extent_m);
   const std::vector<float> photo = scene.Opacity(truth);
-  const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(scene.params, kMap, kMap, kW, kH, {});
+  const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(scene.params, kInverted, kInverted, kW, kH, {});
   clouds::WeatherNoiseOptions start;
   start.mean_coverage = 0.2;
   start.mean_precipitation = 0.0;
-  clouds::WeatherMap map = clouds::NoiseWeatherMap(7, kMap, scene.params.weather_extent_m, start);
+  clouds::WeatherMap map =
+      clouds::ResampleWeatherMap(clouds::NoiseWeatherMap(7, kMap, scene.params.weather_extent_m, start), kInverted);
   const auto [iou0, rms0] = Agreement(photo, scene.Opacity(map));
   const double corr0 = Correlation(truth, map, 8000.0);
   c.time = Measure(  // once: the inversion refines `map` in place
@@ -147,7 +154,7 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
       "# The weather map inverted from a reference's opacity, against its truth\n\n"
       "`skycal bench --suite weather-inversion` (bench/src/weather_inversion_suite.cc; cloudfit/weather_inversion.h). "
       "References: the game's march (CPU float) at 256x128 over each truth map; the inversion starts from noise of "
-      "mean coverage 0.2 and renders as `calibrate` does. IoU of the opacity masks (>= 0.5) and opacity RMS over the "
+      "mean coverage 0.2 on a 256-texel map resampled to " + std::to_string(kInverted) + " and renders as `calibrate` does. IoU of the opacity masks (>= 0.5) and opacity RMS over the "
       "upper hemisphere; coverage correlation with the truth within 8 and 20 km of the camera. The issue's target: "
       "correlation >= 0.9.\n\n| map | IoU start -> inverted | opacity RMS start -> inverted | correlation <= 8 km "
       "start -> inverted | <= 20 km | inversion (s) |\n|---|---|---|---|---|---|\n";

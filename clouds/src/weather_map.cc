@@ -172,4 +172,34 @@ WeatherMap NoiseWeatherMap(uint64_t seed, int size, double extent_m, const Weath
   return map;
 }
 
+WeatherMap ResampleWeatherMap(const WeatherMap& map, int size) {
+  CheckWeatherMapSize(size, size, "resampled weather map");
+  WeatherMap out;
+  out.width = out.height = size;
+  out.extent_m = map.extent_m;
+  out.rgb.resize(static_cast<size_t>(size) * size * 3);
+  const auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
+  for (int y = 0; y < size; ++y) {
+    const double v = (y + 0.5) * map.height / size - 0.5;  // in the old map's texels, centre at i
+    const int y0 = static_cast<int>(std::floor(v));
+    const double fy = v - y0;
+    for (int x = 0; x < size; ++x) {
+      const double u = (x + 0.5) * map.width / size - 0.5;
+      const int x0 = static_cast<int>(std::floor(u));
+      const double fx = u - x0;
+      const size_t i00 = (static_cast<size_t>(wrap(y0, map.height)) * map.width + wrap(x0, map.width)) * 3;
+      const size_t i01 = (static_cast<size_t>(wrap(y0, map.height)) * map.width + wrap(x0 + 1, map.width)) * 3;
+      const size_t i10 = (static_cast<size_t>(wrap(y0 + 1, map.height)) * map.width + wrap(x0, map.width)) * 3;
+      const size_t i11 = (static_cast<size_t>(wrap(y0 + 1, map.height)) * map.width + wrap(x0 + 1, map.width)) * 3;
+      for (int c = 0; c < 3; ++c) {
+        const double top = (1.0 - fx) * map.rgb[i00 + c] + fx * map.rgb[i01 + c];
+        const double bottom = (1.0 - fx) * map.rgb[i10 + c] + fx * map.rgb[i11 + c];
+        out.rgb[(static_cast<size_t>(y) * size + x) * 3 + c] = static_cast<float>((1.0 - fy) * top + fy * bottom);
+      }
+    }
+  }
+  ValidateWeatherMap(out, "resampled weather map");
+  return out;
+}
+
 }  // namespace skycal::clouds

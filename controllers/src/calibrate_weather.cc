@@ -147,6 +147,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
     TurnOffHorizonRule(out / "preset.json");
   }
   clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", params.weather_extent_m);
+  if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
   std::vector<float> photo(a.cloud_probability.size());
   for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
   const int rw = kRenderWidth, rh = kRenderWidth / 2;

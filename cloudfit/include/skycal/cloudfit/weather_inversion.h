@@ -100,6 +100,13 @@ double RefineCoverage(const WeatherTexelView& view, const std::vector<float>& ph
 // follow their neighbours instead of keeping a seed the photo never saw.
 void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_extent_m, clouds::WeatherMap* map);
 
+// The inverted map's texels a side (calibrate resamples a coarser statistics map to it first):
+// over HZD's 60 km extent a 256 map's texel is 234 m, about 5 degrees seen from under a
+// 2.75 km mid-layer, so the photo's zenith, its finest detail on the layer, averages into
+// partial coverage; 512 gives 117 m. Finer (1024) costs more than it gains on the bundled
+// partly cloudy photo (bench/results/calibrate.md).
+inline constexpr int kInvertedMapSize = 512;
+
 // The whole inversion: carve, smooth, then `refinements` times render (the march's opacity,
 // view.width x view.height, through `render_opacity` of the current map), refine by `step`
 // and smooth. Returns the RMS of rendered - photo opacity of each render.

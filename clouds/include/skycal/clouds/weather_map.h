@@ -55,6 +55,11 @@ struct WeatherNoiseOptions {
 // accepted size (above) and at least 2 * coverage_cells; throws skycal::Error otherwise.
 WeatherMap NoiseWeatherMap(uint64_t seed, int size, double extent_m, const WeatherNoiseOptions& options);
 
+// `map` on a size x size grid over the same extent: each new texel centre samples the old
+// map bilinearly with wrap, as the march does (cloud_textures.glsl.h sample_image). Throws
+// skycal::Error for a size that CheckWeatherMapSize refuses.
+WeatherMap ResampleWeatherMap(const WeatherMap& map, int size);
+
 // Reads an RGB EXR (R coverage, G precipitation, B type; an A channel is ignored, any other
 // channel is refused) and validates it. Throws skycal::Error naming the file and what was
 // expected: missing or unreadable file, wrong channels, wrong size, a bad texel, a bad extent.
