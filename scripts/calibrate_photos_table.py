@@ -61,6 +61,21 @@ for set_name, title, with_before in (("bundled", "Bundled frames (the method was
     print(header)
     print("\n".join(r))
     print()
+def fresh(mode):
+    try:
+        v = sorted(float(x) for x in open(os.path.join(work, "fresh_huge%d.seconds" % mode)).read().split())
+    except (OSError, ValueError):
+        return None
+    return v
+on, off = fresh(1), fresh(0)
+if on and off:
+    print("## One photo, one fresh process\n")
+    print("`skycal calibrate --photo datasets/real/sky.exr` (partly cloudy, the slowest frame) in a new process each time,")
+    print("5 runs interleaved; the issue's target is 5 s a 512x256 photo. Seconds, median (min - max):\n")
+    print("| huge pages (core/huge_pages.h) | wall s |\n|---|---|")
+    for name, v in (("on (the default)", on), ("off (SKYCAL_HUGE_PAGES=0)", off)):
+        print("| %s | %.2f (%.2f - %.2f) |" % (name, v[len(v) // 2], v[0], v[-1]))
+    print()
 print("## The clear frames over their hand masks\n")
 print("| photo | calibrate, per-pixel log RMSE | main job (hand mask, hand flags) | ratio (target <= 1.1) |\n|---|---|---|---|")
 for stem in ("sunrise", "sunset"):
