@@ -66,6 +66,12 @@ const std::vector<Verb>& Verbs() {
   return verbs;
 }
 
+bool IsHeavyVerb(const char* verb) {
+  for (const char* v : {"calibrate", "fit", "render", "bench", "ceiling"})
+    if (!std::strcmp(verb, v)) return true;
+  return false;
+}
+
 void PrintUsage() {
   std::cout << "skycal " << skycal::kSkycalVersion << ": calibration and fitting workbench for real-time game skies\n\n"
             << "usage: skycal VERB [options]   (skycal VERB --help for a verb's options)\n\nverbs:\n";
@@ -77,7 +83,10 @@ void PrintUsage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  skycal::ReexecWithHugePages(argv);  // first: glibc reads its tunables at start-up only
+  // First: glibc reads its tunables at start-up only. The verbs that touch hundreds of MB
+  // (the cloud noise on the device, frames, fits) gain more than the second start costs
+  // (the dynamic loader again, ~0.1 s); the quick ones (sun, compare, --version) do not.
+  if (argc >= 2 && IsHeavyVerb(argv[1])) skycal::ReexecWithHugePages(argv);
   // Before any thread starts (lavapipe and Ceres start theirs): SIGINT/SIGTERM/SIGHUP remove
   // the run's temporaries and exit 128 + signal; SIGPIPE becomes a write error.
   skycal::InstallInterruptCleanup();

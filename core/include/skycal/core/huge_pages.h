@@ -14,7 +14,7 @@ namespace skycal {
 // binary (/proc/self/exe) once with it added to GLIBC_TUNABLES, arguments and the rest of
 // the environment unchanged. Returns when that does not apply, when SKYCAL_HUGE_PAGES=0,
 // or when the exec fails (the process goes on as it is). Call first in main, before any
-// thread or handler.
+// thread or handler, for work that touches enough memory to repay a second start.
 void ReexecWithHugePages(char** argv);
 
 // What ReexecWithHugePages sets GLIBC_TUNABLES to, given its current value (null: unset) and
