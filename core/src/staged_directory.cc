@@ -14,6 +14,15 @@ namespace skycal {
 namespace fs = std::filesystem;
 namespace {
 
+// ".<name><tag><pid>": built by append (GCC 12's -Wrestrict misfires on "." + std::string&&).
+std::string HiddenSibling(const fs::path& p, const char* tag) {
+  std::string name = ".";
+  name += p.filename().string();
+  name += tag;
+  name += std::to_string(::getpid());
+  return name;
+}
+
 // Files (not directories) below `dir`, as generic relative paths, sorted; with `folders`,
 // the directories too, each with a trailing '/'.
 std::vector<std::string> FilesBelow(const fs::path& dir, bool folders = false) {
@@ -92,7 +101,7 @@ StagedDirectory::StagedDirectory(const std::string& dir, const std::string& opti
     RequireReplaceable(final_, shown, verb);
   }
   RemoveStaleTemporaries(final_.parent_path().string());
-  staging_ = final_.parent_path() / ("." + final_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  staging_ = final_.parent_path() / HiddenSibling(final_, ".tmp-");
   guard_ = std::make_unique<TemporaryGuard>(staging_.string());
   fs::remove_all(staging_, ec);
   if (!fs::create_directories(staging_, ec)) {
@@ -110,7 +119,7 @@ void StagedDirectory::Commit() {
                           {{"verb", verb_}, {"files", FilesBelow(staging_, true)},
                            {"note", "written by skycal: a later `skycal " + verb_ +
                                         " --out` may replace this directory only while it holds just these files"}});
-  const fs::path old = final_.parent_path() / ("." + final_.filename().string() + ".old-" + std::to_string(::getpid()));
+  const fs::path old = final_.parent_path() / HiddenSibling(final_, ".old-");
   std::error_code ec;
   {
     // The watcher waits for this block: the destination is never left missing.
