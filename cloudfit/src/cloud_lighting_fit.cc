@@ -112,10 +112,9 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
     rep.fitted_params = shapes.params;
     SetCloudLighting(theta[r], &rep.fitted_params);
     auto composite = [&](const CloudLighting& l, const clouds::CloudParams& params) {
-      const clouds::CloudImage* cached = x.model->RenderedAt(l.data());
-      if (cached) return Composite(x.sky_exposed, *cached, x.exposure);
-      return Composite(x.sky_exposed, images->Render({&x.sky_preset, &params, shapes.noise, shapes.weather}, x.request),
-                       x.exposure);
+      if (!x.model->RenderedAt(l.data()))  // kept: the outputs' composite reuses the fitted one
+        x.model->KeepRendered(l.data(), images->Render({&x.sky_preset, &params, shapes.noise, shapes.weather}, x.request));
+      return Composite(x.sky_exposed, *x.model->RenderedAt(l.data()), x.exposure);
     };
     rep.cloud_initial = CompositeErrors(x.pixels, *x.reference, composite(start, shapes.params));
     rep.cloud_final = CompositeErrors(x.pixels, *x.reference, composite(theta[r], rep.fitted_params));

@@ -151,6 +151,11 @@ const clouds::CloudImage* CloudSampleModel::RenderedAt(const double* theta) cons
   return nullptr;
 }
 
+void CloudSampleModel::KeepRendered(const double* theta, clouds::CloudImage image) {
+  if (images_.size() == kKeptImages) images_.erase(images_.begin() + 1);  // keep the first
+  images_.emplace_back(std::vector<double>(theta, theta + kCloudLightingParameters), std::move(image));
+}
+
 bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
   const size_t n3 = residuals();
   if (cached_theta_.size() == kCloudLightingParameters &&
@@ -178,8 +183,7 @@ bool CloudSampleModel::RenderValues(const double* theta, double* log_model) {
       cached_log_[3 * k + c] = ok ? std::log(m) : 0.0;
     }
   }
-  if (images_.size() == kKeptImages) images_.erase(images_.begin() + 1);  // keep the first
-  images_.emplace_back(std::vector<double>(theta, theta + kCloudLightingParameters), std::move(img));
+  KeepRendered(theta, std::move(img));
   if (!ok) {
     cached_theta_.clear();
     return false;

@@ -61,6 +61,9 @@ class CloudSampleModel {
   // values). Each kept image is ~2 MB at 512x256.
   static constexpr size_t kKeptImages = 4;
   const clouds::CloudImage* RenderedAt(const double* theta) const;
+  // A render at `theta` made elsewhere (the report's, with values from the CPU model), kept
+  // as RenderValues keeps its own, for RenderedAt.
+  void KeepRendered(const double* theta, clouds::CloudImage image);
 
   const std::vector<CloudSample>& samples() const { return samples_; }
   CloudValueSource source() const { return source_; }
