@@ -134,6 +134,7 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   VerbCommandLine cl(
       "capture", "skycal capture: exposure brackets to a calibrated lat-long reference frame",
       "  skycal capture --brackets IMG... [--exposure-times T1,T2,...] [--response auto|debevec|weighted|robertson|linear|srgb]\n"
+      "                 [--no-response-prior]\n"
       "                 [--lens latlong|equidistant|equisolid|stereographic|kannala-brandt] [--lens-fov-deg F]\n"
       "                 [--lens-center X,Y] [--lens-radius R] [--kb-k K1,K2,K3,K4] [--vignetting A,B,C]\n"
       "                 [--camera-rotation YAW,PITCH,ROLL] [--lens-profile none|LENS_MAKER:LENS_MODEL[@CAMERA_MAKER:CAMERA_MODEL]]\n"
@@ -157,6 +158,10 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   cl.Text("--response", &response, "NAME",
           "camera response: auto (default: weighted's per-channel curves, or debevec's when\n"
           "the channels' curves have one shape; docs/capture.md), debevec, weighted, robertson (recovered), linear, srgb");
+  bool no_prior = false;
+  cl.Flag("--no-response-prior", &no_prior,
+          "debevec / auto: leave what brackets a constant step apart cannot determine to the\n"
+          "smoothness term instead of the EMoR camera-curve prior (docs/capture.md)");
   RegisterLensArgs(cl, &la, &o);
   cl.Text("--rig", &o.rig_path, "RIG.json",
           "several cameras (format: capture/include/skycal/capture/rig.h; each camera's\n"
@@ -193,6 +198,7 @@ CaptureOptions ParseCaptureArgs(int argc, char** argv) {
   if (chart_corners) o.chart_corners = ParseChartCorners(*chart_corners, "--chart-corners");
   if (exposure_times) o.exposure_times_s = ParseNumberList(*exposure_times, "--exposure-times");
   if (response) o.merge.response = capture::ParseResponseModel(*response, "--response");
+  o.merge.emor_prior = !no_prior;
   ApplyLensArgs(la, &o);
   if (size) {
     const auto wh = ParseSize(*size, "--size");

@@ -9,10 +9,12 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
 #include "camera_response.h"
+#include "emor_prior.h"
 #include "skycal/testing/response_shapes.h"
 #include "skycal/capture/hdr_merge.h"
 
@@ -201,6 +203,159 @@ TEST(ResponseRecovery, BracketsThatCannotDetermineTheCurveSaySo) {
   }
 }
 
+// The EMoR curve with coefficients c (datasets/response/emor_basis.csv), as a tone curve.
+synthetic::ToneCurve EmorCurve(const std::array<double, 6>& c) {
+  const synthetic::EmorBasis basis = synthetic::LoadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv");
+  return synthetic::SampledCurve(synthetic::EmorSamples(basis, c));
+}
+
+// The cause of the held-out family's misses (docs/capture.md): brackets a constant 2 EV apart
+// cannot see a part of the curve periodic in 2 stops, and Debevec's smoothness alone picks
+// the wrong one for a camera curve that bends within one step. A curve of the EMoR space made
+// here (not one of the bench's draws), with such a bend (its local slope in log-log falls from
+// ~1 at white to ~0.35 two stops down and rises again), 5 brackets 2 EV apart: with the EMoR
+// prior (the default) within 1.5x of the known-response merge; control: the prior off misses
+// by 2x or more. Brackets at unequal steps (1.7, 1.8, 2.1, 2.4 EV) leave no exactly
+// periodic part: the prior is not used and the report says why (their error is printed: a
+// nearly periodic part stays weakly determined, docs/capture.md).
+TEST(ResponseRecovery, ConstantStepsLeaveAPeriodicPartTheEmorPriorPicks) {
+  const synthetic::ToneCurve t = EmorCurve({1.5, -2.0, -0.3, 0.1, 0.0, 0.0});
+  for (int i = 1; i <= 1000; ++i) ASSERT_GT(t(i / 1000.0), t((i - 1) / 1000.0)) << "the test's curve must increase";
+  const synthetic::ResponseShape shape{"EMoR (1.5, -2.0, -0.3, 0.1)", {t, t, t}};
+  for (const bool constant : {true, false}) {
+    synthetic::ShapeBracketSpec spec;  // 5 brackets 2 EV apart
+    spec.seed = 3;
+    if (!constant) spec.stops = {-4.0, -2.3, -0.5, 1.6, 4.0};
+    const synthetic::SyntheticBrackets s = synthetic::MakeShapeBrackets(Scene(), shape, spec);
+    MergeOptions known;
+    known.response_curve = s.truth_response;
+    const auto k = synthetic::EvaluateShapeMerge(MergeBrackets(s.brackets, known).radiance, s);
+    const capture::MergeResult with = MergeBrackets(s.brackets, MergeOptions());
+    MergeOptions off;
+    off.emor_prior = false;
+    const auto a = synthetic::EvaluateShapeMerge(with.radiance, s);
+    const auto b = synthetic::EvaluateShapeMerge(MergeBrackets(s.brackets, off).radiance, s);
+    const nlohmann::json& prior = with.report["response"]["calibration"]["emor_prior"];
+    std::printf("[measured] %s steps: known %.4f / %.4f; auto x%.2f / x%.2f (prior %s); without the prior x%.2f / x%.2f\n",
+                constant ? "2 EV" : "unequal", k.median, k.p90, a.median / k.median, a.p90 / k.p90, prior.dump().c_str(),
+                b.median / k.median, b.p90 / k.p90);
+    ASSERT_EQ(with.report["response"]["calibration"]["auto"]["chose"], "debevec");
+    if (constant) {
+      EXPECT_TRUE(prior["used"].get<bool>());
+      EXPECT_NEAR(prior["undetermined_period_stops"].get<double>(), 2.0, 1e-9);
+      EXPECT_LT(a.median, 1.5 * k.median);
+      EXPECT_LT(a.p90, 1.5 * k.p90);
+      EXPECT_GT(std::max(b.median / k.median, b.p90 / k.p90), 2.0);  // control: the smoothness alone
+    } else {
+      EXPECT_FALSE(prior["used"].get<bool>());
+      EXPECT_NE(prior["why"].get<std::string>().find("not multiples of one step"), std::string::npos) << prior;
+      EXPECT_EQ(a.median, b.median);  // the prior off and unused: the same merge
+    }
+  }
+}
+
+// The period the brackets leave undetermined: the largest step every step is a whole
+// multiple of (>= a quarter stop), 0 when none.
+TEST(ResponseRecovery, UndeterminedPeriodOfBracketSteps) {
+  const double ln2 = std::log(2.0);
+  auto period = [&](std::vector<double> stops) {
+    for (double& v : stops) v *= ln2;
+    return capture::detail::UndeterminedPeriod(stops) / ln2;
+  };
+  EXPECT_NEAR(period({-4, -2, 0, 2, 4}), 2.0, 1e-12);
+  EXPECT_NEAR(period({4, 0, -2, 2}), 2.0, 1e-12);    // order does not matter
+  EXPECT_NEAR(period({0, 1, 3, 4}), 1.0, 1e-12);     // steps 1, 2, 1
+  EXPECT_NEAR(period({0, 2, 3.5}), 0.5, 1e-12);      // steps 2 and 1.5: both multiples of 0.5
+  EXPECT_NEAR(period({0, 2.02, 4}), 2.0, 0.03);      // metadata rounding within 5% of a step
+  EXPECT_EQ(period({0, 2, 3.3}), 0.0);               // 2 and 1.3 share no step >= 0.25
+  EXPECT_EQ(period({0}), 0.0);
+}
+
+// AdoptPeriodicPart changes only what the brackets cannot see. A prior that differs from the
+// free curve by a wiggle periodic in the step (plus a constant) is taken whole. One that
+// differs by a bump one stop wide is visible to the brackets: taken whole it would spread a
+// pixel's brackets apart (control), while the adopted curve explains noise-free codes of a
+// gamma-2.2 camera 2 EV apart as well as the free (true) curve does.
+TEST(ResponseRecovery, AdoptPeriodicPartChangesOnlyTheUndeterminedPart) {
+  const double L = 2.0 * std::log(2.0), pi = 3.14159265358979;
+  std::vector<double> g(256), wiggled(256), bumped(256);
+  std::vector<float> w(256);
+  for (int z = 0; z < 256; ++z) {
+    g[z] = 2.2 * std::log((z + 0.5) / 255.5);
+    wiggled[z] = g[z] + 0.3 + 0.04 * std::sin(2.0 * pi * g[z] / L);
+    bumped[z] = g[z] + 0.3 * std::exp(-std::pow((g[z] + 3.0) / 0.7, 2.0));
+    w[z] = 1.0f - std::fabs(2.0f * z / 255.0f - 1.0f);
+  }
+  const std::vector<double> a = capture::detail::AdoptPeriodicPart(g, wiggled, L, 5, 250, w);
+  for (int z = 10; z < 246; ++z) EXPECT_NEAR(a[z], wiggled[z], 2e-3) << z;
+  const std::vector<double> b = capture::detail::AdoptPeriodicPart(g, bumped, L, 5, 250, w);
+  // RMS spread of gg(z_j) - ln k_j over each pixel's codes 40..249 (above 40 the 8-bit
+  // rounding costs < 0.03 in ln), pixels of random radiance, brackets 2 EV apart.
+  auto spread = [&](const std::vector<double>& gg) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-10.0, 0.0);
+    double ss = 0.0;
+    int count = 0;
+    for (int p = 0; p < 2000; ++p) {
+      const double ln_e = u(rng) * std::log(2.0);
+      std::vector<double> v;
+      for (int j = 0; j < 5; ++j) {
+        const double ln_k = -2.0 * j * std::log(2.0);
+        const long z = std::lround(255.5 * std::exp((ln_e + ln_k) / 2.2) - 0.5);
+        if (z >= 40 && z < 250) v.push_back(gg[z] - ln_k);
+      }
+      if (v.size() < 2) continue;
+      double mean = 0.0;
+      for (double x : v) mean += x / v.size();
+      for (double x : v) ss += (x - mean) * (x - mean), ++count;
+    }
+    return std::sqrt(ss / count);
+  };
+  const double free = spread(g), adopted = spread(b), whole = spread(bumped);
+  double moved = 0.0;
+  for (int z = 6; z < 250; ++z) moved = std::max(moved, std::fabs(b[z] - g[z] - (b[128] - g[128])));
+  std::printf("[measured] spread of a pixel's brackets (ln): free %.4f, adopted %.4f, the bumped prior whole %.4f; moved %.3f\n",
+              free, adopted, whole, moved);
+  EXPECT_LT(adopted, free + 0.003);
+  EXPECT_GT(whole, 3.0 * adopted);  // control
+  EXPECT_GT(moved, 0.02);           // it did move (by the bump's periodic part)
+}
+
+// The EMoR fit recovers a curve of the space from quantised codes: brackets 2 EV apart of
+// random radiances through a known EMoR curve, codes rounded to 8 bits. Its inverse within
+// 0.01 in ln over the well-exposed codes; control: one coefficient cannot draw it.
+TEST(ResponseRecovery, EmorFitRecoversACurveOfTheSpace) {
+  std::string why;
+  const capture::detail::EmorTable* basis = capture::detail::BundledEmorTable(&why);
+  ASSERT_NE(basis, nullptr) << why;
+  const std::array<double, 6> c = {0.8, -1.2, 0.3, -0.1, 0.05, 0.0};
+  std::vector<double> f = basis->f0;
+  for (size_t i = 0; i < f.size(); ++i)
+    for (int m = 0; m < 6; ++m) f[i] += c[m] * basis->h[m][i];
+  const synthetic::ToneCurve t = synthetic::SampledCurve(f);
+  const std::vector<double> ln_k = {-8 * std::log(2.0), -6 * std::log(2.0), -4 * std::log(2.0), -2 * std::log(2.0), 0.0};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-9.0, 0.0);
+  std::vector<uint8_t> codes;
+  for (int p = 0; p < 400; ++p) {
+    const double ln_e = u(rng) * std::log(2.0);
+    for (double lk : ln_k) codes.push_back(static_cast<uint8_t>(std::lround(255.0 * t(std::min(1.0, std::exp(ln_e + lk))))));
+  }
+  std::vector<double> start(256);
+  for (int z = 0; z < 256; ++z) start[z] = std::log((z + 0.5) / 255.5);  // a linear camera's
+  auto worst = [&](int coefficients) {
+    const capture::detail::EmorFit fit = capture::detail::FitEmorToSamples(*basis, codes, 5, ln_k, 5, 250, start, coefficients);
+    EXPECT_TRUE(fit.usable) << fit.why;
+    double e = 0.0;
+    for (int z = 10; z < 246; ++z) e = std::max(e, std::fabs(fit.g[z] - std::log(synthetic::InvertCurve(t, z / 255.0))));
+    std::printf("[measured] EMoR fit, %d coefficients: rms %.3f codes, worst |ln f^-1 error| %.4f over codes 10..245\n",
+                coefficients, fit.rms_dn, e);
+    return e;
+  };
+  EXPECT_LT(worst(6), 0.01);
+  EXPECT_GT(worst(1), 0.03);  // control
+}
+
 // auto's shape test: a channel's scale (a constant in ln f) does not count; a wiggle does,
 // by its RMS over the codes compared (a sine of amplitude a over whole periods: a / sqrt 2).
 TEST(ResponseRecovery, ChannelShapeDifferenceIgnoresScaleAndMeasuresShape) {
@@ -231,6 +386,10 @@ TEST(ResponseRecovery, BadOptionsAreRefused) {
   EXPECT_NE(why.find("weighted_lambda"), std::string::npos) << why;
   EXPECT_EQ(capture::ParseResponseModel("weighted", "--response"), ResponseModel::kWeighted);
   EXPECT_EQ(capture::ParseResponseModel("auto", "--response"), ResponseModel::kAuto);
+  o = MergeOptions();
+  o.emor_coefficients = 7;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("emor_coefficients"), std::string::npos) << why;
   o = MergeOptions();
   o.auto_shape_tolerance = -0.1;
   EXPECT_FALSE(o.IsValid(&why));

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/photo.hpp>
 
+#include "emor_prior.h"
 #include "parallel_rows.h"
 #include "skycal/core/error.h"
 
@@ -123,6 +124,40 @@ std::vector<double> SolveDebevec(const std::vector<uint8_t>& codes, size_t n, co
   H.at<double>(128, 128) += 1.0;
   AddSmoothness(&H, smooth_w, lambda);
   return SolveNormal(H, rhs, "Debevec");
+}
+
+// Debevec's solve, then (MergeOptions::emor_prior), when the brackets' steps leave a part of
+// the curve periodic in ln x undetermined (UndeterminedPeriod), that part taken from the EMoR
+// curve the samples choose instead of from the smoothness term (emor_prior.h): the result
+// fits the samples exactly as Debevec's does. *report: whether the prior was used (and why
+// not), its fit, and how far it moved the curve (ln units, over the well-exposed codes).
+std::vector<double> SolveDebevecWithPrior(const std::vector<uint8_t>& codes, size_t n, const std::vector<double>& ln_k,
+                                          const WeightTable& data_w, const WeightTable& smooth_w, double lambda,
+                                          const MergeOptions& o, nlohmann::json* report) {
+  const std::vector<double> g = SolveDebevec(codes, n, ln_k, data_w, smooth_w, lambda);
+  const double period = UndeterminedPeriod(ln_k);
+  std::string why;
+  const EmorTable* basis = o.emor_prior && period > 0.0 ? BundledEmorTable(&why) : nullptr;
+  if (!basis) {
+    if (!o.emor_prior) why = "MergeOptions::emor_prior is off";
+    if (period == 0.0) why = "the brackets' steps are not multiples of one step: they determine the curve's wiggles";
+    *report = {{"used", false}, {"why", why}};
+    return g;
+  }
+  const int lo = data_w.low_code, hi = data_w.high_code;
+  const EmorFit fit = FitEmorToSamples(*basis, codes, n, ln_k, lo, hi, g, o.emor_coefficients);
+  *report = {{"used", fit.usable}, {"undetermined_period_stops", period / std::log(2.0)}, {"coefficients", fit.c},
+             {"rms_code", fit.rms_dn}, {"residuals", fit.residuals}, {"iterations", fit.iterations}};
+  if (!fit.usable) {
+    (*report)["why"] = fit.why;
+    return g;
+  }
+  const std::vector<double> out = AdoptPeriodicPart(g, fit.g, period, lo, hi, smooth_w.w);
+  double mean = 0.0, low = 1e300, high = -1e300;
+  for (int z = lo + 1; z < hi; ++z) mean += (out[z] - g[z]) / (hi - lo - 1);
+  for (int z = lo + 1; z < hi; ++z) low = std::min(low, out[z] - g[z] - mean), high = std::max(high, out[z] - g[z] - mean);
+  (*report)["moved_ln"] = {low, high};
+  return out;
 }
 
 // Robertson, Borman & Stevenson: alternate E_p = sum w k_j f(Z) / sum w k_j^2 and
@@ -389,13 +424,15 @@ std::vector<float> CalibrateWithOpenCv(const std::vector<const BracketImage*>& i
 // that MergeOptions::lambda was chosen for on one channel's samples.
 std::vector<float> CalibrateSharedDebevec(const std::vector<const BracketImage*>& images,
                                           const std::vector<size_t>& pixel_index, const std::vector<double>& ln_k,
-                                          const WeightTable& data_w, const WeightTable& smooth_w, double lambda) {
+                                          const WeightTable& data_w, const WeightTable& smooth_w, const MergeOptions& o,
+                                          nlohmann::json* prior_report) {
   std::vector<uint8_t> codes;
   for (int c = 0; c < 3; ++c) {
     const std::vector<uint8_t> channel = ChannelCodes(images, pixel_index, c);
     codes.insert(codes.end(), channel.begin(), channel.end());
   }
-  const std::vector<double> g = SolveDebevec(codes, images.size(), ln_k, data_w, smooth_w, lambda * std::sqrt(3.0));
+  const std::vector<double> g =
+      SolveDebevecWithPrior(codes, images.size(), ln_k, data_w, smooth_w, o.lambda * std::sqrt(3.0), o, prior_report);
   std::vector<float> curve(256 * 3);
   for (int z = 0; z < 256; ++z)
     for (int c = 0; c < 3; ++c) curve[z * 3 + c] = static_cast<float>(std::exp(g[z]));
@@ -416,17 +453,18 @@ std::vector<float> CalibrateWellExposed(const std::vector<const BracketImage*>& 
   for (size_t j = 0; j < n; ++j) ln_k[j] = std::log(relative_exposure[j]);
   if (shared && o.response == ResponseModel::kDebevec) {
     (*cal)["channels"] = "one curve for the three channels";
-    return CalibrateSharedDebevec(images, pixel_index, ln_k, data_w, smooth_w, o.lambda);
+    return CalibrateSharedDebevec(images, pixel_index, ln_k, data_w, smooth_w, o, &(*cal)["emor_prior"]);
   }
   curve.assign(256 * 3, 0.0f);
   std::vector<int> iterations(3, 0);
+  std::vector<nlohmann::json> prior(3);
   // One channel per worker (the three solves are independent).
   ParallelChunks(3, ResolveThreads(o.threads), [&](int c0, int c1, int) {
     for (int c = c0; c < c1; ++c) {
       const std::vector<uint8_t> codes = ChannelCodes(images, pixel_index, c);
       std::vector<double> lin(256);
       if (o.response == ResponseModel::kDebevec) {
-        const std::vector<double> g = SolveDebevec(codes, n, ln_k, data_w, smooth_w, o.lambda);
+        const std::vector<double> g = SolveDebevecWithPrior(codes, n, ln_k, data_w, smooth_w, o.lambda, o, &prior[c]);
         for (int z = 0; z < 256; ++z) lin[z] = std::exp(g[z]);
       } else {
         lin = SolveRobertson(codes, n, relative_exposure, data_w, smooth_w, o.lambda, o.robertson_max_iterations,
@@ -436,6 +474,7 @@ std::vector<float> CalibrateWellExposed(const std::vector<const BracketImage*>& 
     }
   });
   if (o.response == ResponseModel::kRobertson) (*cal)["iterations"] = iterations;
+  if (o.response == ResponseModel::kDebevec) (*cal)["emor_prior"] = prior;
   return curve;
 }
 

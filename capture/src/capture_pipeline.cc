@@ -29,6 +29,26 @@ using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
 void Log(const std::string& message) { std::cerr << "[capture] " << message << std::endl; }
+// One line on the recovered response: the method auto chose and what the EMoR prior did
+// (hdr_merge.h, MergeOptions::emor_prior); "" for a fixed or analytic curve.
+std::string ResponseSummary(const nlohmann::json& merge_report) {
+  const nlohmann::json cal = merge_report.value("response", nlohmann::json::object()).value("calibration", nlohmann::json::object());
+  if (!cal.contains("method")) return "";
+  std::string line = "response: " + cal["method"].get<std::string>();
+  const nlohmann::json prior = cal.value("emor_prior", nlohmann::json());
+  if (!prior.is_object()) return line;
+  char buf[256];
+  if (prior.value("used", false)) {
+    const auto& moved = prior["moved_ln"];
+    std::snprintf(buf, sizeof buf,
+                  "; the brackets' steps leave a wiggle of %.2f stops undetermined: taken from the EMoR camera-curve prior "
+                  "(it moved ln f by %.3f..%.3f)",
+                  prior["undetermined_period_stops"].get<double>(), moved[0].get<double>(), moved[1].get<double>());
+    return line + buf;
+  }
+  return line + "; EMoR prior not used: " + prior.value("why", std::string("?"));
+}
+
 // Progress lines: only with options.verbose (the bench runs the pipeline many times).
 void Progress(const CaptureOptions& o, const std::string& line) {
   if (o.verbose) Log(line);
@@ -358,6 +378,7 @@ CameraImages MergeStage(const CaptureOptions& o, const CapturePlan& plan, nlohma
   r.response_curve = merged.response_curve;
   Progress(o, "merged " + std::to_string(brackets.size()) + " brackets (" + std::to_string(merged.not_well_measured) +
                   " pixels no exposure measured well)");
+  if (const std::string line = ResponseSummary(merged.report); !line.empty()) Progress(o, line);
   r.lens_profile = plan.lens_profile_report;
   if (plan.lens_profile) CorrectWithProfile(o, *plan.lens_profile, &merged.radiance, &r.lens_profile, skipped);
   const RigCamera cam =

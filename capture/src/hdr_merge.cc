@@ -61,6 +61,8 @@ bool MergeOptions::IsValid(std::string* why) const {
   };
   if (samples < 2) return fail("samples: need >= 2 pixel locations for the response calibration, got " + std::to_string(samples));
   if (!(lambda > 0.0) || !std::isfinite(lambda)) return fail("lambda: need a finite smoothness weight > 0, got " + Num(lambda));
+  if (emor_coefficients < 1 || emor_coefficients > 6)
+    return fail("emor_coefficients: need 1..6 (the bundled EMoR basis has 6 curves), got " + std::to_string(emor_coefficients));
   if (weighted_samples < 2) return fail("weighted_samples: need >= 2, got " + std::to_string(weighted_samples));
   if (!(weighted_lambda > 0.0) || !std::isfinite(weighted_lambda))
     return fail("weighted_lambda: need a finite smoothness weight > 0, got " + Num(weighted_lambda));
@@ -91,6 +93,8 @@ nlohmann::json MergeOptionsToJson(const MergeOptions& o) {
           {"fixed_curve_levels", o.response_curve.size() / 3},
           {"samples", o.samples},
           {"lambda", o.lambda},
+          {"emor_prior", o.emor_prior},
+          {"emor_coefficients", o.emor_coefficients},
           {"weighted_samples", o.weighted_samples},
           {"weighted_lambda", o.weighted_lambda},
           {"weighted_iterations", o.weighted_iterations},

@@ -80,12 +80,12 @@ struct Bracket {
 };
 
 struct MergeOptions {
-  // auto: within 1.5x of the known-response merge (median and p90, once a colour chart
-  // balances the channels) on all 60 bracket sets of the project's five original curves in
-  // `skycal bench --suite capture-response` (3..9 brackets x 1..3 EV), where debevec meets it
-  // on 56 and weighted on 49; on 14 of 24 sets of the held-out EMoR family (docs/capture.md);
-  // it costs a weighted recovery plus, for one shape, a Debevec one (~0.1-0.3 s at 1024x512,
-  // once per calibration frame when a time-lapse reuses the curve).
+  // auto: weighted's per-channel curves, or one Debevec curve for the three channels (with
+  // the EMoR prior, emor_prior below) when they share one shape; how close each method comes
+  // to the known-response merge, on the project's curves and on two held-out families:
+  // bench/results/capture-response/capture-response.md (docs/capture.md). It costs a weighted
+  // recovery plus, for one shape, a Debevec one, once per calibration frame when a time-lapse
+  // reuses the curve.
   ResponseModel response = ResponseModel::kAuto;
   // A fixed response (e.g. MergeResult::response_curve of an earlier merge), which skips
   // calibration and keeps a time-lapse on one scale: levels * 3 linear values, R G B
@@ -101,6 +101,14 @@ struct MergeOptions {
   // 8% to under 3%; the error of the overall scale (a gauge, see response_curve) stayed
   // under 10% (8.8% vs 7.5% at worst).
   double lambda = 100.0;
+  // skycal's Debevec solves (debevec, and auto's shared curve): after the solve, fit the
+  // EMoR camera-curve model (Grossberg & Nayar 2004, its first emor_coefficients of 6) to the
+  // samples and solve again with the smoothness term pulling toward that curve's bending
+  // rather than toward none. Brackets a constant step apart cannot tell a curve from the same
+  // curve plus any wiggle periodic in that step (capture/src/emor_prior.h); the prior picks
+  // the wiggle a camera would have. bench/results/capture-response/capture-response.md.
+  bool emor_prior = true;
+  int emor_coefficients = 6;
   // kWeighted: pixel samples per channel, smoothness (the data term is in chi-square units
   // of 1 DN of code noise, so this does not scale with the sample count), reweighting
   // passes and the codes fitted (the curve past them is extrapolated log-linearly).

@@ -82,6 +82,66 @@ inline ResponseShape FlatShoulderShape() {
   return {"flat shoulder (gamma 2.6 + contrast S)", {GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5), GammaContrast(2.6, 1.5)}};
 }
 
+// A second held-out family, for a method that uses the EMoR itself as its prior (the
+// Debevec solve's MergeOptions::emor_prior): the transfer curves camera makers and standards
+// publish, none of them from the DoRF database or the EMoR. Each curve V(L) of scene-linear
+// L (black at V(0), the curve's own offset removed) is scaled so that its top code is L_max,
+// where V reaches 1 (or L = 1 for the display OETFs): v(x) = (V(x L_max) - V(0)) / (V(L_max) - V(0)).
+// Formulas from the published documents: IEC 61966-2-1 (sRGB), ITU-R BT.709-6 and BT.2100-2
+// (HLG), Sony's "Technical Summary for S-Gamut3.Cine/S-Log3", ARRI's "ALEXA Log C Curve"
+// (LogC3, EI 800), Panasonic's "V-Log/V-Gamut Reference Manual", Canon's Canon Log
+// white paper, Fujifilm's "F-Log Data Sheet", and the Academy's ACEScct (S-2016-001).
+struct PublishedCurve {
+  std::string name;
+  std::function<double(double)> V;  // scene-linear L >= 0 -> code value
+  double l_max;                      // L at the top code
+};
+
+inline std::vector<PublishedCurve> PublishedCameraCurveFormulas() {
+  const auto log10 = [](double v) { return std::log10(v); };
+  return {
+      {"sRGB (IEC 61966-2-1)", [](double L) { return L <= 0.0031308 ? 12.92 * L : 1.055 * std::pow(L, 1.0 / 2.4) - 0.055; }, 1.0},
+      {"BT.709 OETF", [](double L) { return L < 0.018 ? 4.5 * L : 1.099 * std::pow(L, 0.45) - 0.099; }, 1.0},
+      {"BT.2100 HLG OETF",
+       [](double L) {
+         const double a = 0.17883277, b = 1.0 - 4.0 * a, c = 0.5 - a * std::log(4.0 * a);
+         return L <= 1.0 / 12.0 ? std::sqrt(3.0 * L) : a * std::log(12.0 * L - b) + c;
+       },
+       1.0},
+      {"Sony S-Log3",
+       [log10](double L) {
+         return L >= 0.01125 ? (420.0 + log10((L + 0.01) / 0.19) * 261.5) / 1023.0
+                             : (L * (171.2102946929 - 95.0) / 0.01125 + 95.0) / 1023.0;
+       },
+       0.19 * std::pow(10.0, (1023.0 - 420.0) / 261.5) - 0.01},
+      {"ARRI LogC3 (EI 800)",
+       [log10](double L) { return L > 0.010591 ? 0.247190 * log10(5.555556 * L + 0.052272) + 0.385537 : 5.367655 * L + 0.092809; },
+       (std::pow(10.0, (1.0 - 0.385537) / 0.247190) - 0.052272) / 5.555556},
+      {"Panasonic V-Log",
+       [log10](double L) { return L < 0.01 ? 5.6 * L + 0.125 : 0.241514 * log10(L + 0.00873) + 0.598206; },
+       std::pow(10.0, (1.0 - 0.598206) / 0.241514) - 0.00873},
+      {"Canon Log", [log10](double L) { return 0.529136 * log10(10.1596 * L + 1.0) + 0.0730597; },
+       (std::pow(10.0, (1.0 - 0.0730597) / 0.529136) - 1.0) / 10.1596},
+      {"Fujifilm F-Log",
+       [log10](double L) { return L >= 0.00089 ? 0.344676 * log10(0.555556 * L + 0.009468) + 0.790453 : 8.735631 * L + 0.092864; },
+       (std::pow(10.0, (1.0 - 0.790453) / 0.344676) - 0.009468) / 0.555556},
+      {"ACEScct",
+       [](double L) { return L <= 0.0078125 ? 10.5402377416545 * L + 0.0729055341958355 : (std::log2(L) + 9.72) / 17.52; },
+       std::exp2(17.52 - 9.72)},
+  };
+}
+
+// The published curves as shapes (the same curve in the three channels).
+inline std::vector<ResponseShape> PublishedCameraShapes() {
+  std::vector<ResponseShape> out;
+  for (const PublishedCurve& c : PublishedCameraCurveFormulas()) {
+    const double v0 = c.V(0.0), v1 = c.V(c.l_max);
+    const ToneCurve t = [c, v0, v1](double x) { return (c.V(std::clamp(x, 0.0, 1.0) * c.l_max) - v0) / (v1 - v0); };
+    out.push_back({c.name, {t, t, t}});
+  }
+  return out;
+}
+
 // The held-out family: curves of Grossberg & Nayar's Empirical Model of Response ("Modeling
 // the space of camera response functions", IEEE PAMI 26(10), 2004), a PCA of the 201
 // measured curves of their DoRF database: f = f0 + sum_i c_i h_i over irradiance E in
@@ -170,6 +230,9 @@ inline std::vector<ResponseShape> EmorHeldOutShapes(const EmorBasis& b, int coun
 struct ShapeBracketSpec {
   int brackets = 5;
   double ev_step = 2.0;         // stops between consecutive brackets
+  // Each bracket's exposure in stops from 1/60 s, ascending (brackets' count and spacing
+  // when not empty, overriding `brackets` and `ev_step`): unequal steps.
+  std::vector<double> stops;
   double dn_noise = 0.6;        // Gaussian noise in 8-bit code units, after the tone curve
   double full_well_e = 10000.0; // photon noise as synthetic_brackets.h's camera
   double read_noise_e = 3.0;
@@ -192,12 +255,13 @@ inline double InvertCurve(const ToneCurve& f, double v) {
 inline SyntheticBrackets MakeShapeBrackets(const ImageRGB& scene, const ResponseShape& shape, const ShapeBracketSpec& spec) {
   BracketSpec base;
   base.exposure_times_s.clear();
-  for (int i = 0; i < spec.brackets; ++i)
+  for (int i = 0; i < spec.brackets && spec.stops.empty(); ++i)
     base.exposure_times_s.push_back(std::exp2(spec.ev_step * (i - 0.5 * (spec.brackets - 1))) / 60.0);
+  for (double stop : spec.stops) base.exposure_times_s.push_back(std::exp2(stop) / 60.0);
   base.noise = false;
   base.curve = CameraCurve::kLinear;
   SyntheticBrackets out = MakeSyntheticBrackets(scene, base);  // truth, gain, exposures; codes redone below
-  const int n = spec.brackets;
+  const int n = static_cast<int>(base.exposure_times_s.size());
   std::vector<double> k(n);
   for (int i = 0; i < n; ++i) k[i] = base.exposure_times_s[i] * (base.iso / 100.0) / (base.f_number * base.f_number);
   std::vector<std::thread> pool;
