@@ -158,6 +158,44 @@ TEST(CloudLighting, JetJacobianMatchesCentralDifferencesAndAWrongOneFails) {
   EXPECT_GT(ScaledError(wrong_results), 1e-2);
 }
 
+// The solve's Jacobian marches only its free parameters (CloudSampleModel::SetFreeParameters:
+// a Jet of 2, 4 or 8 dual parts instead of 15): for free sets of 1, 4 and 7 parameters the
+// columns equal the full Jacobian's bit for bit in the values and to 1e-12 relative in the
+// derivatives (the same march, fewer dual parts), the held columns are 0, and the values are
+// the same. Control: the full Jacobian's column of a neighbouring parameter differs.
+TEST(CloudLighting, FreeParametersJacobianIsTheFullOnesColumns) {
+  DoubleModel d;
+  CloudLighting theta = GetCloudLighting(d.scene.shapes.params);
+  const size_t rows = d.model->residuals(), n = rows * kCloudLightingParameters;
+  std::vector<double> v_all(rows), j_all(n);
+  ASSERT_TRUE(d.model->Evaluate(theta.data(), v_all.data(), j_all.data()));
+  auto column_error = [&](const std::vector<double>& j, int col, int full_col) {
+    double worst = 0.0, scale = 1e-300;
+    for (size_t r = 0; r < rows; ++r) scale = std::max(scale, std::fabs(j_all[r * kCloudLightingParameters + full_col]));
+    for (size_t r = 0; r < rows; ++r)
+      worst = std::max(worst, std::fabs(j[r * kCloudLightingParameters + col] - j_all[r * kCloudLightingParameters + full_col]) / scale);
+    return worst;
+  };
+  for (const std::vector<int>& free : std::vector<std::vector<int>>{{8}, {0, 5, 8, 14}, {1, 2, 3, 6, 9, 11, 14}}) {
+    d.model->SetFreeParameters(free);
+    theta[8] += 1e-3;  // another point: nothing kept from the full Jacobian
+    std::vector<double> v(rows), j(n, 7.0);
+    ASSERT_TRUE(d.model->Evaluate(theta.data(), v.data(), j.data()));
+    d.model->SetFreeParameters(std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14});
+    ASSERT_TRUE(d.model->Evaluate(theta.data(), v_all.data(), j_all.data()));
+    for (size_t r = 0; r < rows; ++r) EXPECT_EQ(v[r], v_all[r]);
+    for (int k = 0; k < kCloudLightingParameters; ++k) {
+      const bool is_free = std::find(free.begin(), free.end(), k) != free.end();
+      if (is_free) {
+        EXPECT_LT(column_error(j, k, k), 1e-12) << "free set of " << free.size() << ", column " << k;
+        EXPECT_GT(column_error(j, k, (k + 1) % kCloudLightingParameters), 1e-3) << "control, column " << k;
+      } else {
+        for (size_t r = 0; r < rows; ++r) ASSERT_EQ(j[r * kCloudLightingParameters + k], 0.0) << "held column " << k;
+      }
+    }
+  }
+}
+
 // The clouds' sun scale (CloudParams::sun_scale, the 15th parameter): the model's values at
 // a scale of 1.7 (the sun and the sunlit ground's part scaled inside the shade) equal the
 // double renderer's with the clouds section's sun_scale = 1.7 (scaled where the preset's sun

@@ -2,6 +2,7 @@
 
 #include <ceres/jet.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -14,8 +15,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
 
-using JetL = ceres::Jet<double, kCloudLightingParameters>;
-using CloudModelJ = clouds::CloudModel<JetL, clouds::CpuCloudTextures>;
 
 // The sun's part of the shade at `scale` (CloudParams::sun_scale): the direct sun and the
 // sunlit part of the ground's radiance (`sun`, `ground_sun`: per unit scale; `ground_sky`: the
@@ -79,6 +78,7 @@ CloudSampleModel::CloudSampleModel(CloudSampleScene scene, std::vector<CloudSamp
       renderer_(renderer),
       threads_(std::max(1, threads)),
       textures_(*scene_.noise, *scene_.weather) {
+  for (int k = 0; k < kCloudLightingParameters; ++k) free_.push_back(k);
   if (samples_.empty()) throw Error("cloud lighting fit: no cloud pixels to fit");
   if (source_ == CloudValueSource::kRenderer && !renderer_) throw Error("cloud lighting fit: no renderer for the values");
   const clouds::LatLongTrig trig = clouds::MakeLatLongTrig(scene_.request.width, scene_.request.height);
@@ -120,6 +120,19 @@ void CloudSampleModel::SetSky(const render::Preset& sky_preset, const ImageRGB& 
   cached_theta_.clear();
   jet_theta_.clear();
   images_.clear();
+}
+
+void CloudSampleModel::SetFreeParameters(const std::vector<int>& free) {
+  for (int k : free)
+    if (k < 0 || k >= kCloudLightingParameters) throw Error("cloud lighting fit: a free parameter index out of range");
+  if (free == free_) return;
+  // A kept Jacobian with every wanted column (the conditioning's, at the solve's start)
+  // still serves: the extra columns are held parameters', which the solve's manifold drops.
+  const bool subset = std::all_of(free.begin(), free.end(), [&](int k) {
+    return std::find(free_.begin(), free_.end(), k) != free_.end();
+  });
+  free_ = free;
+  if (!subset) jet_theta_.clear();
 }
 
 bool CloudSampleModel::Evaluate(const double* theta, double* log_model, double* jacobian) {
@@ -215,26 +228,40 @@ bool CloudSampleModel::DoubleValues(const double* theta, double* log_model) cons
 }
 
 bool CloudSampleModel::JetValues(const double* theta, double* log_model, double* jacobian) const {
-  auto shade = clouds::CastCloudShade<CloudModelJ::CloudShadeParams>(shade_);
-  JetL t[kCloudLightingParameters];
-  for (int k = 0; k < kCloudLightingParameters; ++k) t[k] = JetL(theta[k], k);
+  const size_t n = free_.size();
+  if (n <= 2) return JetValuesOf<2>(theta, log_model, jacobian);
+  if (n <= 4) return JetValuesOf<4>(theta, log_model, jacobian);
+  if (n <= 8) return JetValuesOf<8>(theta, log_model, jacobian);
+  return JetValuesOf<kCloudLightingParameters>(theta, log_model, jacobian);
+}
+
+// The march on Jets of N dual parts, part s the derivative by parameter free_[s] (the held
+// parameters constants); their Jacobian columns filled, the others left as they are (0).
+template <int N>
+bool CloudSampleModel::JetValuesOf(const double* theta, double* log_model, double* jacobian) const {
+  using J = ceres::Jet<double, N>;
+  using Model = clouds::CloudModel<J, clouds::CpuCloudTextures>;
+  auto shade = clouds::CastCloudShade<typename Model::CloudShadeParams>(shade_);
+  J t[kCloudLightingParameters];
+  for (int k = 0; k < kCloudLightingParameters; ++k) t[k] = J(theta[k]);
+  for (size_t s = 0; s < free_.size(); ++s) t[free_[s]] = J(theta[free_[s]], static_cast<int>(s));
   SetShadeLighting(t, sun_per_scale_, ground_sun_per_scale_, ground_sky_, &shade);
   std::vector<char> ok(samples_.size(), 1);
   ParallelFor(samples_.size(), threads_, [&](size_t k) {
-    CloudModelJ m(textures_);
+    Model m(textures_);
     const auto& v = views_[k];
-    const auto r = m.cloud_march(glsl::Vec3<JetL>(JetL(v[0]), JetL(v[1]), JetL(v[2])), shade);
-    const JetL rad[3] = {r.radiance.x, r.radiance.y, r.radiance.z};
+    const auto r = m.cloud_march(glsl::Vec3<J>(J(v[0]), J(v[1]), J(v[2])), shade);
+    const J rad[3] = {r.radiance.x, r.radiance.y, r.radiance.z};
     for (int c = 0; c < 3; ++c) {
-      const JetL mv = exposure_ * (samples_[k].sky[c] * r.transmittance + rad[c]);
+      const J mv = exposure_ * (samples_[k].sky[c] * r.transmittance + rad[c]);
       if (!(std::isfinite(mv.a) && mv.a > 0.0)) {
         ok[k] = 0;
         continue;
       }
-      const JetL lg = log(mv);
+      const J lg = log(mv);
       const size_t row = 3 * k + c;
       log_model[row] = lg.a;
-      for (int j = 0; j < kCloudLightingParameters; ++j) jacobian[row * kCloudLightingParameters + j] = lg.v[j];
+      for (size_t s = 0; s < free_.size(); ++s) jacobian[row * kCloudLightingParameters + free_[s]] = lg.v[s];
     }
   });
   for (char o : ok) {

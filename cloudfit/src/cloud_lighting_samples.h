@@ -5,9 +5,10 @@
 // Values come from a cloud render of the whole frame (the Vulkan renderer: what the game
 // computes) or from the double CPU model at the samples alone (for GradientChecker, whose
 // central differences need double values); derivatives always come from the same model
-// source instantiated on ceres::Jet (forward mode through the whole march, 14 dual parts)
-// on the CPU, at the samples only: a Jet march costs ~15 double marches, so the fit's
-// Jacobian rows are a sample of the cloud pixels (CloudLightingOptions::samples).
+// source instantiated on ceres::Jet (forward mode through the whole march, one dual part
+// per free parameter: SetFreeParameters) on the CPU, at the samples only: a Jet march of 15
+// dual parts costs ~15 double marches, so the fit's Jacobian rows are a sample of the cloud
+// pixels (CloudLightingOptions::samples).
 #pragma once
 #include <array>
 #include <vector>
@@ -55,6 +56,13 @@ class CloudSampleModel {
   // not positive and finite (the trial point leaves the model's domain).
   bool Evaluate(const double* theta, double* log_model, double* jacobian);
 
+  // The parameters the Jacobian is wanted for (CloudLightingNames() indices); the other
+  // columns are 0 (or, at the point of an earlier Jacobian with more columns, its values:
+  // that one is reused). Default: all (the conditioning needs every column; the solve only its
+  // free ones, and a Jet of 4 dual parts marches several times faster than one of 15). The
+  // Jet's width is the smallest of 2, 4, 8, 15 that holds them.
+  void SetFreeParameters(const std::vector<int>& free);
+
   // The full-frame cloud render at `theta` when one of the renders since SetSky was made
   // there (the first, at the solve's start, and the last kKeptImages - 1): the report's
   // composites reuse them instead of rendering again. Null otherwise (or with kCpuDouble
@@ -79,6 +87,8 @@ class CloudSampleModel {
   bool RenderValues(const double* theta, double* log_model);
   bool DoubleValues(const double* theta, double* log_model) const;
   bool JetValues(const double* theta, double* log_model, double* jacobian) const;
+  template <int N>
+  bool JetValuesOf(const double* theta, double* log_model, double* jacobian) const;
 
   CloudSampleScene scene_;
   std::vector<CloudSample> samples_;
@@ -98,6 +108,7 @@ class CloudSampleModel {
   std::vector<double> cached_theta_, cached_log_;
   // The last Jet march (the conditioning's Jacobian at the start is the solve's first).
   std::vector<double> jet_theta_, jet_log_, jet_jacobian_;
+  std::vector<int> free_;  // SetFreeParameters; the Jet's dual parts, in order
   // Full-frame renders since SetSky, each with its point: the first, then the latest.
   std::vector<std::pair<std::vector<double>, clouds::CloudImage>> images_;
 };

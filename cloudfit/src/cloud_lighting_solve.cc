@@ -64,6 +64,9 @@ std::vector<CloudSample> ChooseSamples(const std::vector<size_t>& pixels, const 
 }
 
 Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, const CloudLightingOptions& o) {
+  std::vector<int> every(kCloudLightingParameters);
+  std::iota(every.begin(), every.end(), 0);
+  model->SetFreeParameters(every);  // the conditioning looks at every column
   std::vector<double> values(model->residuals()), jac(model->residuals() * kCloudLightingParameters);
   if (!model->Evaluate(theta.data(), values.data(), jac.data())) {
     throw Error("cloud lighting fit: the composite is not positive and finite at the starting lighting");
@@ -86,13 +89,14 @@ Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, co
 
 void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* theta, const Conditioning& c) {
   problem->AddResidualBlock(new CloudLightingCost(model), nullptr, theta);
-  std::vector<int> held;
+  std::vector<int> held, free;
   for (int k = 0; k < kCloudLightingParameters; ++k) {
     const clouds::CloudParamSpec& s = CloudLightingSpec(k);
     problem->SetParameterLowerBound(theta, k, s.min);
     problem->SetParameterUpperBound(theta, k, s.max);
-    if (c.parameters[k].held) held.push_back(k);
+    (c.parameters[k].held ? held : free).push_back(k);
   }
+  model->SetFreeParameters(free);  // the held columns are the manifold's to drop: not marched
   if (held.size() == static_cast<size_t>(kCloudLightingParameters)) {
     problem->SetParameterBlockConstant(theta);
   } else if (!held.empty()) {
