@@ -1,7 +1,7 @@
 // Work is never lost, through the binary: no verb writes over one of its inputs (same
 // path, another spelling, a symlink, a preset's LUT), an output directory is replaced only
 // when it is the same verb's own earlier output holding nothing else, an interrupted run
-// leaves no temporary behind (and exits 128 + signal), a dead run's temporaries are
+// leaves no temporary behind and no partial output (and exits 128 + signal), a dead run's temporaries are
 // cleaned by the next run in that directory, and a JSON summary that cannot be written
 // is an error.
 #include <gtest/gtest.h>
@@ -20,6 +20,7 @@
 #include "run_binary.h"
 #include "skycal/core/atomic_output_group.h"
 #include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/core/interrupt_cleanup.h"
 #include "skycal/core/sha256.h"
 #include "test_util.h"
@@ -155,20 +156,31 @@ TEST(OutputSafety, InterruptedRunsLeaveNothingBehind) {
   const std::string sky = Render(dir, "sky.exr");
   // A large render (about 1 s of CPU work, then a 37 MB EXR) interrupted at several points:
   // during start-up, the render and the write. Either it finished (0) or it stopped with
-  // 128 + signal and left neither its output nor a temporary.
+  // 128 + signal and left neither its output nor a temporary. The points are fractions of
+  // an uninterrupted run timed here first (the run's length depends on the machine and its
+  // load; fixed delays let a faster build finish before the late ones).
+  const std::vector<std::string> big = {"render", "--sun-elevation", "10", "--sun-azimuth", "0", "--size", "4096x2048",
+                                        "--backend", "cpu", "--out", dir / "big.exr"};
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(ExitCode(Spawn(big)), 0);
+  const double run_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   int interrupted = 0;
-  for (int delay_ms : {50, 300, 700, 1100, 1500, 2000}) {
+  for (double at : {0.0, 0.15, 0.35, 0.55, 0.75, 0.9}) {
+    const int delay_ms = at == 0.0 ? 50 : static_cast<int>(at * run_ms);
     for (int sig : {SIGINT, SIGTERM}) {
       const std::string out = dir / "big.exr";
       fs::remove(out);
-      const pid_t pid = Spawn({"render", "--sun-elevation", "10", "--sun-azimuth", "0", "--size", "4096x2048",
-                               "--backend", "cpu", "--out", out});
+      const pid_t pid = Spawn(big);
       std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
       kill(pid, sig);
       const int rc = ExitCode(pid);
+      std::printf("[measured] signal %d at %d ms (%.0f%% of the run): exit %d, output %s\n", sig, delay_ms,
+                  100.0 * delay_ms / run_ms, rc, fs::exists(out) ? "complete" : "none");
       if (rc == 128 + sig) {
         ++interrupted;
-        EXPECT_FALSE(fs::exists(out)) << "interrupted at " << delay_ms << " ms";
+        // Nothing, or (a signal after the EXR was moved into place, during the teardown)
+        // the whole image: never a part of one.
+        if (fs::exists(out)) EXPECT_EQ(ReadExrRGB(out).image.width, 4096) << "interrupted at " << delay_ms << " ms";
       } else if (rc == 1000 + sig) {
         // Killed by the default action: the signal came before main() installed the
         // cleanup (the dynamic loader takes ~0.1 s), when nothing can have been written.
@@ -179,7 +191,7 @@ TEST(OutputSafety, InterruptedRunsLeaveNothingBehind) {
       EXPECT_TRUE(Leftovers(dir.path()).empty()) << "signal " << sig << " at " << delay_ms << " ms";
     }
   }
-  EXPECT_GE(interrupted, 6);  // most points fall inside the run, else the test tests nothing
+  EXPECT_GE(interrupted, 6) << "uninterrupted run " << run_ms << " ms";  // most points fall inside the run, else the test tests nothing
   // A fit (staging directory) interrupted during its solve.
   for (int delay_ms : {150, 400}) {
     const pid_t pid = Spawn({"fit", "--quiet", "--reference", sky, "--out", dir / "fitted"});

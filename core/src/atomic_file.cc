@@ -59,12 +59,14 @@ AtomicOutput::~AtomicOutput() {
 }
 
 void AtomicOutput::Commit() {
+  InterruptCleanupCriticalSection hold;  // the move and its record together
   if (std::rename(temp_path_.c_str(), final_path_.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     std::remove(temp_path_.c_str());
     throw Error(final_path_ + ": could not move the finished file into place (" + why + ")");
   }
   committed_ = true;
+  NoteCommittedOutput(final_path_);
 }
 
 struct AtomicOutputGroup::Entry {
@@ -123,6 +125,7 @@ void AtomicOutputGroup::Commit() {
     throw Error(entries_[i].final_path + ": could not move the finished file into place (" + why +
                 "); the other files of this output were put back as they were");
   }
+  for (const Entry& e : entries_) NoteCommittedOutput(e.final_path);
 }
 
 std::string AtomicOutputGroup::Unstaged(std::string message) const {

@@ -10,20 +10,28 @@
 #include <mutex>
 #include <set>
 #include <thread>
+#include <vector>
 
 namespace skycal {
 namespace fs = std::filesystem;
 namespace {
 
-// Recursive: a critical section may register or unregister temporaries inside it.
+// Recursive: a critical section may register or unregister temporaries inside it. These
+// three are never destroyed: the watcher may still be using them while the main thread
+// runs the static destructors of a normal exit (a signal just after the last commit).
 std::recursive_mutex& RegistryMutex() {
-  static std::recursive_mutex m;
-  return m;
+  static auto* m = new std::recursive_mutex;
+  return *m;
 }
 
 std::multiset<std::string>& Registry() {
-  static std::multiset<std::string> paths;
-  return paths;
+  static auto* paths = new std::multiset<std::string>;
+  return *paths;
+}
+
+std::vector<std::string>& Committed() {
+  static auto* paths = new std::vector<std::string>;
+  return *paths;
 }
 
 sigset_t InterruptSignals() {
@@ -56,8 +64,15 @@ void WatchForInterrupts() {
     std::error_code ec;
     removed += fs::remove_all(p, ec) > 0 ? 1 : 0;
   }
-  std::fprintf(stderr, "skycal: interrupted by %s: removed %d temporary output%s, nothing else was written\n",
-               SignalName(sig), removed, removed == 1 ? "" : "s");
+  if (Committed().empty()) {
+    std::fprintf(stderr, "skycal: interrupted by %s: removed %d temporary output%s, nothing else was written\n",
+                 SignalName(sig), removed, removed == 1 ? "" : "s");
+  } else {
+    std::string done;
+    for (const std::string& p : Committed()) done += (done.empty() ? "" : ", ") + p;
+    std::fprintf(stderr, "skycal: interrupted by %s: removed %d temporary output%s; already complete before it: %s\n",
+                 SignalName(sig), removed, removed == 1 ? "" : "s", done.c_str());
+  }
   std::fflush(stderr);
   _exit(128 + sig);
 }
@@ -73,6 +88,11 @@ TemporaryGuard::~TemporaryGuard() {
   std::lock_guard<std::recursive_mutex> lock(RegistryMutex());
   auto it = Registry().find(path_);
   if (it != Registry().end()) Registry().erase(it);
+}
+
+void NoteCommittedOutput(const std::string& path) {
+  std::lock_guard<std::recursive_mutex> lock(RegistryMutex());
+  Committed().push_back(path);
 }
 
 InterruptCleanupCriticalSection::InterruptCleanupCriticalSection() { RegistryMutex().lock(); }

@@ -137,6 +137,7 @@ void StagedDirectory::Commit() {
       throw Error(final_.string() + ": could not move the finished output into place (" + ec.message() + ")");
     }
     committed_ = true;
+    NoteCommittedOutput(final_.string());
     if (replacing) fs::remove_all(old, ec);
   }
 }

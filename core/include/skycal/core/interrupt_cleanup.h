@@ -2,7 +2,8 @@
 // staging directory) register themselves while they exist; `InstallInterruptCleanup()`
 // (the binary's main, before any other thread starts) blocks SIGINT, SIGTERM and SIGHUP in
 // every thread and leaves them to one watcher thread, which removes what is registered
-// and exits with 128 + the signal number. A watcher thread rather than a signal handler:
+// and exits with 128 + the signal number (naming any output already moved into place
+// complete before the signal: NoteCommittedOutput). A watcher thread rather than a signal handler:
 // removing a directory tree is not async-signal-safe, and the watcher can wait for a
 // commit in progress (InterruptCleanupCriticalSection) instead of tearing it in half.
 //
@@ -36,6 +37,12 @@ class InterruptCleanupCriticalSection {
   InterruptCleanupCriticalSection(const InterruptCleanupCriticalSection&) = delete;
   InterruptCleanupCriticalSection& operator=(const InterruptCleanupCriticalSection&) = delete;
 };
+
+// Records that `path` (a file or directory) was just moved into place complete: an
+// interrupt after this leaves it (it is not partial) and the watcher's message names it,
+// so that "interrupted" never hides a finished output. Call it in the same critical
+// section as the move.
+void NoteCommittedOutput(const std::string& path);
 
 // Call once, from main, before other threads exist. Also ignores SIGPIPE so that writes to
 // a closed pipe fail with EPIPE (and the verb reports it) instead of killing the process
