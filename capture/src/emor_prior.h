@@ -34,7 +34,7 @@ struct EmorFit {
   std::string why;                 // when !usable: what failed
   std::array<double, 6> c{};       // coefficients (the first `coefficients` fitted, the rest 0)
   std::vector<double> g;           // 256 codes: ln f^-1(z / 255), f^-1(1) = 1
-  double rms_dn = 0.0;             // RMS residual of the well-exposed samples, 8-bit codes
+  double rms_dn = 0.0;             // RMS residual of the well-exposed samples, 8-bit codes (as the Huber cost counts them)
   int residuals = 0;
   int iterations = 0;
 };
