@@ -162,6 +162,27 @@ std::string HeldOutSections(const std::vector<SetRow>& held_out) {
   return md;
 }
 
+// Per shape, the sets each method brings within 1.5x of the known merge (median and p90,
+// one global scale).
+std::string WithinCounts(const std::vector<SetRow>& rows, const std::vector<std::string>& shape_order) {
+  std::string md =
+      "\n| shape | sets within 1.5x (median and p90): weighted | debevec | robertson | auto | auto without the EMoR prior |\n"
+      "|---|---|---|---|---|---|\n";
+  const char* methods[5] = {"weighted", "debevec", "robertson", "auto", "auto-no-prior"};
+  for (const std::string& shape : shape_order) {
+    int total = 0, within[5] = {0, 0, 0, 0, 0};
+    for (const SetRow& r : rows) {
+      if (r.shape_name != shape) continue;
+      ++total;
+      for (int m = 0; m < 5; ++m) within[m] += r.Within(methods[m], false);
+    }
+    md += "| " + shape + " |";
+    for (int m = 0; m < 5; ++m) md += " " + std::to_string(within[m]) + " / " + std::to_string(total) + " |";
+    md += "\n";
+  }
+  return md;
+}
+
 std::string Markdown(const std::vector<CaseResult>& cases) {
   std::vector<SetRow> rows, held_out;
   for (SetRow& r : Rows(cases)) (IsHeldOut(r.shape) ? held_out : rows).push_back(std::move(r));
@@ -198,19 +219,7 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
   std::vector<std::string> shape_order;
   for (const SetRow& r : rows)
     if (std::find(shape_order.begin(), shape_order.end(), r.shape_name) == shape_order.end()) shape_order.push_back(r.shape_name);
-  md += "\n| shape | sets within 1.5x (median and p90): weighted | debevec | robertson | auto | auto without the EMoR prior |\n"
-        "|---|---|---|---|---|---|\n";
-  for (const std::string& shape : shape_order) {
-    int total = 0, w = 0, d = 0, rb = 0, au = 0, an = 0;
-    for (const SetRow& r : rows) {
-      if (r.shape_name != shape) continue;
-      ++total, w += r.Within("weighted", false), d += r.Within("debevec", false), rb += r.Within("robertson", false),
-          au += r.Within("auto", false), an += r.Within("auto-no-prior", false);
-    }
-    const std::string t = " / " + std::to_string(total);
-    md += "| " + shape + " | " + std::to_string(w) + t + " | " + std::to_string(d) + t + " | " + std::to_string(rb) + t + " | " +
-          std::to_string(au) + t + " | " + std::to_string(an) + t + " |\n";
-  }
+  md += WithinCounts(rows, shape_order);
   char worst[128];
   std::snprintf(worst, sizeof worst, "\nWorst weighted / known: median x%.2f, p90 x%.2f (target: 1.5).\n", worst_median, worst_p90);
   md += worst;
