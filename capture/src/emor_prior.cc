@@ -168,10 +168,18 @@ double UndeterminedPeriod(const std::vector<double>& ln_k) {
   if (steps.empty()) return 0.0;
   const double smallest = *std::min_element(steps.begin(), steps.end());
   for (int m = 1; m <= 8; ++m) {
-    const double L = smallest / m;
-    if (L < 0.25 * std::log(2.0)) break;
+    const double guess = smallest / m;
+    if (guess < 0.25 * std::log(2.0)) break;
+    // Each step's multiple of the guess, then the period that fits them best (least
+    // squares): nominal shutter speeds (1/15 s for 1/16) make a constant step look uneven.
+    double num = 0.0, den = 0.0;
+    for (double d : steps) {
+      const double n = std::max(1.0, std::round(d / guess));
+      num += d * n, den += n * n;
+    }
+    const double L = num / den;
     bool whole = true;
-    for (double d : steps) whole = whole && std::fabs(d / L - std::round(d / L)) <= 0.05;
+    for (double d : steps) whole = whole && std::fabs(d - std::max(1.0, std::round(d / guess)) * L) <= 0.05 * L;
     if (whole) return L;
   }
   return 0.0;

@@ -49,10 +49,12 @@ EmorFit FitEmorToSamples(const EmorTable& basis, const std::vector<uint8_t>& cod
                          const std::vector<double>& g_start, int coefficients);
 
 // The period, in ln x, of the wiggles the brackets cannot see: brackets whose steps (ln_k
-// sorted, differences) are all whole multiples of one step L (within 5% of L) leave every
-// component of ln f^-1 periodic in ln x with period L undetermined. L is the largest such
-// step of at least a quarter stop, tried as the smallest step divided by 1..8; 0 when none
-// (the steps pin the curve's wiggles) or fewer than two brackets.
+// sorted, differences) are all whole multiples of one step L (within 5% of L; L fitted to
+// them by least squares, so that nominal shutter speeds such as 1/15 s for 1/16 s still
+// count as one step) leave every component of ln f^-1 periodic in ln x with period L
+// undetermined. L is the largest such step of at least a quarter stop, starting from the
+// smallest step divided by 1..8; 0 when none (the steps pin the curve's wiggles) or fewer
+// than two brackets.
 double UndeterminedPeriod(const std::vector<double>& ln_k);
 
 // g_free + p(g_free(z)) with p periodic in ln x (period `period`), chosen nearest g_prior
