@@ -15,7 +15,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
 
-
 // The sun's part of the shade at `scale` (CloudParams::sun_scale): the direct sun and the
 // sunlit part of the ground's radiance (`sun`, `ground_sun`: per unit scale; `ground_sky`: the
 // sky-lit part).

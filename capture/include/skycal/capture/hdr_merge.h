@@ -101,12 +101,14 @@ struct MergeOptions {
   // 8% to under 3%; the error of the overall scale (a gauge, see response_curve) stayed
   // under 10% (8.8% vs 7.5% at worst).
   double lambda = 100.0;
-  // skycal's Debevec solves (debevec, and auto's shared curve): after the solve, fit the
-  // EMoR camera-curve model (Grossberg & Nayar 2004, its first emor_coefficients of 6) to the
-  // samples and solve again with the smoothness term pulling toward that curve's bending
-  // rather than toward none. Brackets a constant step apart cannot tell a curve from the same
-  // curve plus any wiggle periodic in that step (capture/src/emor_prior.h); the prior picks
-  // the wiggle a camera would have. bench/results/capture-response/capture-response.md.
+  // skycal's Debevec solves (debevec, and auto's shared curve): brackets a constant step
+  // apart cannot tell a curve from the same curve plus any wiggle periodic in that step
+  // (capture/src/emor_prior.h). After the solve, the EMoR camera-curve model (Grossberg &
+  // Nayar 2004, its first emor_coefficients of 6) is fitted to the samples, and the curve's
+  // periodic part is taken from it instead of from the smoothness term: the wiggle a camera
+  // would have; what the samples do determine stays Debevec's. Not used when the steps are
+  // not multiples of one step or the fitted EMoR curve does not increase (the report says
+  // which). bench/results/capture-response/capture-response.md.
   bool emor_prior = true;
   int emor_coefficients = 6;
   // kWeighted: pixel samples per channel, smoothness (the data term is in chi-square units
