@@ -4,12 +4,15 @@
 // compared with the merge through the true curve, median and p90 relative error after one
 // global scale. The full table (6 shapes x 12 bracket sets, and the held-out EMoR family) is bench/results/capture-response/capture-response.md.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <fstream>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -17,6 +20,7 @@
 #include "emor_prior.h"
 #include "skycal/testing/response_shapes.h"
 #include "skycal/capture/hdr_merge.h"
+#include "skycal/core/error.h"
 
 namespace skycal {
 namespace {
@@ -205,8 +209,8 @@ TEST(ResponseRecovery, BracketsThatCannotDetermineTheCurveSaySo) {
 
 // The EMoR curve with coefficients c (datasets/response/emor_basis.csv), as a tone curve.
 synthetic::ToneCurve EmorCurve(const std::array<double, 6>& c) {
-  const synthetic::EmorBasis basis = synthetic::LoadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv");
-  return synthetic::SampledCurve(synthetic::EmorSamples(basis, c));
+  const synthetic::EmorBasis basis = capture::ReadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv");
+  return synthetic::SampledCurve(capture::EmorCurve(basis, c));
 }
 
 // The cause of the held-out family's misses (docs/capture.md): brackets a constant 2 EV apart
@@ -338,13 +342,10 @@ TEST(ResponseRecovery, AdoptPeriodicPartChangesOnlyTheUndeterminedPart) {
 // 0.01 in ln over the well-exposed codes; control: one coefficient cannot draw it.
 TEST(ResponseRecovery, EmorFitRecoversACurveOfTheSpace) {
   std::string why;
-  const capture::detail::EmorTable* basis = capture::detail::BundledEmorTable(&why);
+  const capture::EmorBasis* basis = capture::detail::BundledEmorBasis(&why);
   ASSERT_NE(basis, nullptr) << why;
   const std::array<double, 6> c = {0.8, -1.2, 0.3, -0.1, 0.05, 0.0};
-  std::vector<double> f = basis->f0;
-  for (size_t i = 0; i < f.size(); ++i)
-    for (int m = 0; m < 6; ++m) f[i] += c[m] * basis->h[m][i];
-  const synthetic::ToneCurve t = synthetic::SampledCurve(f);
+  const synthetic::ToneCurve t = synthetic::SampledCurve(capture::EmorCurve(*basis, c));
   const std::vector<double> ln_k = {-8 * std::log(2.0), -6 * std::log(2.0), -4 * std::log(2.0), -2 * std::log(2.0), 0.0};
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-9.0, 0.0);
@@ -366,6 +367,22 @@ TEST(ResponseRecovery, EmorFitRecoversACurveOfTheSpace) {
   };
   EXPECT_LT(worst(6), 0.01);
   EXPECT_GT(worst(1), 0.03);  // control
+}
+
+// A basis file that is not the EMoR table is refused naming the file and the row.
+TEST(ResponseRecovery, AMalformedEmorBasisNamesFileAndRow) {
+  const std::string path = (std::filesystem::temp_directory_path() / ("emor_bad_" + std::to_string(::getpid()) + ".csv")).string();
+  std::ofstream(path) << "E,f0,h1,h2,h3,h4,h5,h6\n0,0,0,0,0,0,0,0\n0.001,0.008,0.1\n";
+  try {
+    capture::ReadEmorBasis(path);
+    ADD_FAILURE() << "accepted a malformed basis";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": row 3: need 8 columns"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(capture::ReadEmorBasis(path), Error);  // missing
+  EXPECT_EQ(capture::ReadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv").f0.size(),
+            static_cast<size_t>(capture::kEmorSamples));
 }
 
 // auto's shape test: a channel's scale (a constant in ln f) does not count; a wiggle does,

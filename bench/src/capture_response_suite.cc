@@ -43,7 +43,7 @@ std::vector<std::pair<std::string, synthetic::ResponseShape>> Shapes() {
       {"per-channel", unseen[3]},
       {"flat-shoulder", synthetic::FlatShoulderShape()},
       {"strong-shoulder", {"strong shoulder (logistic in stops, 1.2/stop, -3)", {shoulder, shoulder, shoulder}}}};
-  const synthetic::EmorBasis basis = synthetic::LoadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv");
+  const synthetic::EmorBasis basis = capture::ReadEmorBasis(std::string(SKYCAL_SOURCE_DIR) + "/datasets/response/emor_basis.csv");
   const auto emor = synthetic::EmorHeldOutShapes(basis, kEmorCurves, kEmorSeed);
   for (int i = 0; i < kEmorCurves; ++i) shapes.push_back({"emor-" + std::to_string(i + 1), emor[i]});
   const auto published = synthetic::PublishedCameraShapes();

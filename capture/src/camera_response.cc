@@ -137,7 +137,7 @@ std::vector<double> SolveDebevecWithPrior(const std::vector<uint8_t>& codes, siz
   const std::vector<double> g = SolveDebevec(codes, n, ln_k, data_w, smooth_w, lambda);
   const double period = UndeterminedPeriod(ln_k);
   std::string why;
-  const EmorTable* basis = o.emor_prior && period > 0.0 ? BundledEmorTable(&why) : nullptr;
+  const EmorBasis* basis = o.emor_prior && period > 0.0 ? BundledEmorBasis(&why) : nullptr;
   if (!basis) {
     if (!o.emor_prior) why = "MergeOptions::emor_prior is off";
     if (period == 0.0) why = "the brackets' steps are not multiples of one step: they determine the curve's wiggles";

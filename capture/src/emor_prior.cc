@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <mutex>
-#include <sstream>
 
 #include <ceres/ceres.h>
 
@@ -13,36 +11,6 @@
 
 namespace skycal::capture::detail {
 namespace {
-
-constexpr int kSamples = 1024;  // the basis' E = i / 1023
-
-std::unique_ptr<EmorTable> ReadEmorTable(const std::string& path, std::string* why) {
-  std::ifstream in(path);
-  if (!in) {
-    *why = path + ": cannot be read";
-    return nullptr;
-  }
-  auto t = std::make_unique<EmorTable>();
-  std::string line;
-  std::getline(in, line);  // header: E,f0,h1..h6
-  for (int row = 2; std::getline(in, line); ++row) {
-    std::stringstream cells(line);
-    std::string cell;
-    std::vector<double> v;
-    while (std::getline(cells, cell, ',')) v.push_back(std::strtod(cell.c_str(), nullptr));
-    if (v.size() != 8) {
-      *why = path + ": row " + std::to_string(row) + ": need 8 columns (E,f0,h1..h6), got " + std::to_string(v.size());
-      return nullptr;
-    }
-    t->f0.push_back(v[1]);
-    for (int i = 0; i < 6; ++i) t->h[i].push_back(v[2 + i]);
-  }
-  if (t->f0.size() != kSamples) {
-    *why = path + ": need " + std::to_string(kSamples) + " rows, got " + std::to_string(t->f0.size());
-    return nullptr;
-  }
-  return t;
-}
 
 double Scalar(double v) { return v; }
 template <typename J, int N>
@@ -55,12 +23,12 @@ double Scalar(const ceres::Jet<J, N>& v) {
 // samples and past E = 1 along its last segment (a well-exposed code predicted beyond the
 // clip keeps a gradient).
 struct CodeResidual {
-  const EmorTable* basis;
+  const EmorBasis* basis;
   double code, ln_k;
   template <typename T>
   bool operator()(const T* c, const T* ln_e, T* r) const {
-    const T u = exp(ln_e[0] + ln_k) * double(kSamples - 1);
-    const int i = std::clamp(static_cast<int>(std::floor(Scalar(u))), 0, kSamples - 2);
+    const T u = exp(ln_e[0] + ln_k) * double(kEmorSamples - 1);
+    const int i = std::clamp(static_cast<int>(std::floor(Scalar(u))), 0, kEmorSamples - 2);
     T lo = T(basis->f0[i]), hi = T(basis->f0[i + 1]);
     for (int m = 0; m < 6; ++m) lo += c[m] * basis->h[m][i], hi += c[m] * basis->h[m][i + 1];
     r[0] = T(code) - 255.0 * (lo + (hi - lo) * (u - double(i)));
@@ -68,24 +36,16 @@ struct CodeResidual {
   }
 };
 
-// f = f0 + sum c h at the basis' samples.
-std::vector<double> Curve(const EmorTable& b, const std::array<double, 6>& c) {
-  std::vector<double> f = b.f0;
-  for (int k = 0; k < kSamples; ++k)
-    for (int m = 0; m < 6; ++m) f[k] += c[m] * b.h[m][k];
-  return f;
-}
-
 // ln f^-1(z / 255) per code from an increasing curve; code 0 (E = 0) continues codes 1-2.
 std::vector<double> InverseLog(const std::vector<double>& f) {
   std::vector<double> g(256);
   int k = 0;
   for (int z = 1; z < 256; ++z) {
     const double v = z / 255.0;
-    while (k < kSamples - 2 && f[k + 1] < v) ++k;
+    while (k < kEmorSamples - 2 && f[k + 1] < v) ++k;
     const double step = f[k + 1] - f[k];
     const double t = step > 0.0 ? std::clamp((v - f[k]) / step, 0.0, 1.0) : 0.0;
-    g[z] = std::log(std::max((k + t) / (kSamples - 1), 1e-9));
+    g[z] = std::log(std::max((k + t) / (kEmorSamples - 1), 1e-9));
   }
   g[0] = 2.0 * g[1] - g[2];
   return g;
@@ -93,16 +53,22 @@ std::vector<double> InverseLog(const std::vector<double>& f) {
 
 }  // namespace
 
-const EmorTable* BundledEmorTable(std::string* why) {
+const EmorBasis* BundledEmorBasis(std::string* why) {
   static std::once_flag once;
-  static std::unique_ptr<EmorTable> table;
+  static std::unique_ptr<EmorBasis> basis;
   static std::string error;
-  std::call_once(once, [] { table = ReadEmorTable(DataPath("datasets/response/emor_basis.csv"), &error); });
-  if (!table && why) *why = error;
-  return table.get();
+  std::call_once(once, [] {
+    try {
+      basis = std::make_unique<EmorBasis>(ReadEmorBasis(DataPath("datasets/response/emor_basis.csv")));
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  });
+  if (!basis && why) *why = error;
+  return basis.get();
 }
 
-EmorFit FitEmorToSamples(const EmorTable& basis, const std::vector<uint8_t>& codes, size_t n,
+EmorFit FitEmorToSamples(const EmorBasis& basis, const std::vector<uint8_t>& codes, size_t n,
                          const std::vector<double>& ln_k, int low_code, int high_code,
                          const std::vector<double>& g_start, int coefficients) {
   EmorFit fit;
@@ -145,10 +111,10 @@ EmorFit FitEmorToSamples(const EmorTable& basis, const std::vector<uint8_t>& cod
   fit.iterations = static_cast<int>(summary.iterations.size());
   fit.rms_dn = std::sqrt(2.0 * summary.final_cost / fit.residuals);
   // A camera curve increases everywhere; a fit that does not is no camera's.
-  const std::vector<double> f = Curve(basis, fit.c);
-  for (int k = 1; k < kSamples; ++k)
+  const std::vector<double> f = EmorCurve(basis, fit.c);
+  for (int k = 1; k < kEmorSamples; ++k)
     if (!(f[k] > f[k - 1])) {
-      fit.why = "the fitted EMoR curve is not increasing (at E = " + std::to_string(double(k) / (kSamples - 1)) + ")";
+      fit.why = "the fitted EMoR curve is not increasing (at E = " + std::to_string(double(k) / (kEmorSamples - 1)) + ")";
       return fit;
     }
   if (!summary.IsSolutionUsable() || !std::isfinite(fit.rms_dn)) {

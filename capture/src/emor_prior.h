@@ -17,17 +17,13 @@
 #include <string>
 #include <vector>
 
-namespace skycal::capture::detail {
+#include "skycal/capture/emor.h"
 
-// f0 and h1..h6 at E = i / 1023 (datasets/response/emor_basis.csv, source in datasets/README.md).
-struct EmorTable {
-  std::vector<double> f0;
-  std::array<std::vector<double>, 6> h;
-};
+namespace skycal::capture::detail {
 
 // The bundled basis (DataPath), read once per process; nullptr with *why when it cannot be
 // read or is malformed (the caller goes on without the prior and says so).
-const EmorTable* BundledEmorTable(std::string* why);
+const EmorBasis* BundledEmorBasis(std::string* why);
 
 struct EmorFit {
   bool usable = false;
@@ -44,7 +40,7 @@ struct EmorFit {
 // Levenberg-Marquardt in code units over c and each sample's ln E (Ceres). g_start: a
 // recovered ln f^-1 per code (any constant offset), which starts each ln E. Unusable when
 // the fitted curve is not strictly increasing over the codes or the solve fails.
-EmorFit FitEmorToSamples(const EmorTable& basis, const std::vector<uint8_t>& codes, size_t n,
+EmorFit FitEmorToSamples(const EmorBasis& basis, const std::vector<uint8_t>& codes, size_t n,
                          const std::vector<double>& ln_k, int low_code, int high_code,
                          const std::vector<double>& g_start, int coefficients);
 

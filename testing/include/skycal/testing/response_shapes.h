@@ -11,15 +11,14 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 #include <memory>
 #include <random>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "skycal/capture/emor.h"
 #include "skycal/testing/synthetic_brackets.h"
 
 namespace skycal::synthetic {
@@ -142,44 +141,12 @@ inline std::vector<ResponseShape> PublishedCameraShapes() {
   return out;
 }
 
-// The held-out family: curves of Grossberg & Nayar's Empirical Model of Response ("Modeling
-// the space of camera response functions", IEEE PAMI 26(10), 2004), a PCA of the 201
-// measured curves of their DoRF database: f = f0 + sum_i c_i h_i over irradiance E in
-// [0, 1], 1024 samples (E = i / 1023); f(0) = 0 and f(1) = 1 for every c (each h_i is 0 at
-// both ends). datasets/response/emor_basis.csv holds f0 and h1..h6 (datasets/README.md).
-// The merge code was not designed on these curves: they measure it on a family it has not
-// seen (bench/results/capture-response/capture-response.md, its own section).
-struct EmorBasis {
-  std::vector<double> f0;
-  std::array<std::vector<double>, 6> h;
-};
-
-inline EmorBasis LoadEmorBasis(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error("EMoR basis: cannot read " + path);
-  EmorBasis b;
-  std::string line;
-  std::getline(in, line);  // header: E,f0,h1..h6
-  while (std::getline(in, line)) {
-    std::stringstream row(line);
-    std::string cell;
-    std::vector<double> v;
-    while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
-    if (v.size() != 8) throw Error("EMoR basis: " + path + ": a row without 8 columns");
-    b.f0.push_back(v[1]);
-    for (int i = 0; i < 6; ++i) b.h[i].push_back(v[2 + i]);
-  }
-  if (b.f0.size() != 1024) throw Error("EMoR basis: " + path + ": expected 1024 rows");
-  return b;
-}
-
-// f0 + sum c_i h_i at the 1024 samples.
-inline std::vector<double> EmorSamples(const EmorBasis& b, const std::array<double, 6>& c) {
-  std::vector<double> f = b.f0;
-  for (size_t k = 0; k < f.size(); ++k)
-    for (int i = 0; i < 6; ++i) f[k] += c[i] * b.h[i][k];
-  return f;
-}
+// The EMoR family: curves of Grossberg & Nayar's Empirical Model of Response
+// (skycal/capture/emor.h, the same basis file). The merge's defaults were set without them;
+// since the Debevec solve takes the EMoR as its prior (MergeOptions::emor_prior) they no
+// longer measure `auto` from outside, and PublishedCameraShapes above is the held-out family
+// (bench/results/capture-response/capture-response.md, their own sections).
+using capture::EmorBasis;
 
 // The curve through the samples, linear between them.
 inline ToneCurve SampledCurve(std::vector<double> samples) {
@@ -211,7 +178,7 @@ inline std::vector<ResponseShape> EmorHeldOutShapes(const EmorBasis& b, int coun
     std::array<double, 6> c{};
     c[0] = c1(rng);
     for (int i = 1; i < 6; ++i) c[i] = std::normal_distribution<double>(0.0, sigma[i - 1])(rng);
-    const std::vector<double> f = EmorSamples(b, c);
+    const std::vector<double> f = capture::EmorCurve(b, c);
     bool increasing = true;
     for (size_t k = 1; k < f.size() && increasing; ++k) increasing = f[k] > f[k - 1] && f[k] <= 1.0;
     if (!increasing) {
