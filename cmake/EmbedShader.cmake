@@ -1,15 +1,19 @@
 # skycal_embed_shader(TARGET <lib> SOURCE <file.comp> NAME <c_identifier>
-#                     [INCLUDE_DIRS <dir>...])
+#                     [INCLUDE_DIRS <dir>...] [DEFINES <NAME[=value]>...])
 # Compiles a GLSL compute shader to SPIR-V with glslc at build time and embeds the words
 # as a C array (glslc -mfmt=c). A DEPFILE makes edits to #included model sources
 # (render/model/*.glsl.h and any INCLUDE_DIRS, e.g. clouds/model) rebuild the shader.
+# DEFINES compile a variant of one source (glslc -D), under its own NAME.
 # libshaderc is not used: its Debian 12 package has an ABI mismatch (docs/architecture.md).
 function(skycal_embed_shader)
-  cmake_parse_arguments(ARG "" "TARGET;SOURCE;NAME" "INCLUDE_DIRS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TARGET;SOURCE;NAME" "INCLUDE_DIRS;DEFINES" ${ARGN})
   set(include_flags -I "${PROJECT_SOURCE_DIR}/render/model")
   foreach(dir IN LISTS ARG_INCLUDE_DIRS)
     get_filename_component(abs_dir "${dir}" ABSOLUTE)
     list(APPEND include_flags -I "${abs_dir}")
+  endforeach()
+  foreach(def IN LISTS ARG_DEFINES)
+    list(APPEND include_flags "-D${def}")
   endforeach()
   get_filename_component(src "${ARG_SOURCE}" ABSOLUTE)
   set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/shaders")

@@ -7,10 +7,12 @@
 # pipeline cache's first fill: it is reported apart): the process's wall time, the render's
 # wall (time_ms.sky / time_ms.clouds) and its device time (time_ms.gpu). Warm: `skycal bench
 # --suite gpu` (renderers and textures kept): wall and device medians per render. Cases:
-# sky 2048x1024; clouds 512x256 and 2048x1024, the game's march and the naive one.
+# sky 2048x1024; clouds 512x256 and 2048x1024, the game's march and the naive one, each with
+# the textures as sampled images (hardware filter) and as texel buffers
+# (SKYCAL_VULKAN_TEXTURES).
 # --small: 256x128 and 128x64 (a smoke test on lavapipe). SKYCAL: the binary (default
 # build/skycal). Prints one table; everything lands in OUTDIR (default $OUT or a temp dir).
-# Budget: about 3 minutes on an H200 (the 2048x1024 naive march is the longest case).
+# Budget: about 4 minutes on an H200 (the 2048x1024 naive march is the longest case).
 set -euo pipefail
 SMALL=0
 if [[ "${1:-}" == "--small" ]]; then SMALL=1; shift; fi
@@ -30,22 +32,24 @@ else SKY=2048x1024; CL_SMALL=512x256; CL_BIG=2048x1024; QUICK=""; fi
 "$BIN" --version 2>/dev/null | head -1 || true
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,clocks.sm --format=csv,noheader || true
 
-fresh() {  # name, then render flags
-  local name=$1; shift
+fresh() {  # name, textures (images|buffers), then render flags
+  local name=$1 textures=$2; shift 2
   for i in 1 2 3; do
     local t0 t1
     t0=$(date +%s%N)
-    "$BIN" render --sun-elevation 25 --sun-azimuth 40 --out "$OUTDIR/$name.exr" --json "$@" \
+    SKYCAL_VULKAN_TEXTURES=$textures "$BIN" render --sun-elevation 25 --sun-azimuth 40 --out "$OUTDIR/$name.exr" --json "$@" \
       > "$OUTDIR/fresh_${name}_$i.json" 2> "$OUTDIR/fresh_${name}_$i.log"
     t1=$(date +%s%N)
     echo "$(( (t1 - t0) / 1000 ))" > "$OUTDIR/fresh_${name}_$i.process_us"
   done
 }
-fresh sky --size "$SKY"
-fresh clouds_game_small --size "$CL_SMALL" --clouds
-fresh clouds_naive_small --size "$CL_SMALL" --clouds --cloud-naive
-fresh clouds_game_big --size "$CL_BIG" --clouds
-fresh clouds_naive_big --size "$CL_BIG" --clouds --cloud-naive
+fresh sky buffers --size "$SKY"
+for tex in images buffers; do
+  fresh clouds_game_small_$tex $tex --size "$CL_SMALL" --clouds
+  fresh clouds_naive_small_$tex $tex --size "$CL_SMALL" --clouds --cloud-naive
+  fresh clouds_game_big_$tex $tex --size "$CL_BIG" --clouds
+  fresh clouds_naive_big_$tex $tex --size "$CL_BIG" --clouds --cloud-naive
+done
 
 "$BIN" bench --suite gpu $QUICK --no-report --out "$OUTDIR/warm" > "$OUTDIR/warm.log" 2>&1 || {
   echo "gpu_device_bench: the warm bench failed (see $OUTDIR/warm.log)" >&2; tail -5 "$OUTDIR/warm.log" >&2; }
@@ -69,28 +73,29 @@ warm = {}
 try:
     for c in json.load(open(f"{out}/warm/results.json"))["cases"]:
         s = c["settings"]
-        warm[(s["pass"], s["size"], s.get("march", "game"))] = (c["time_ms"]["median_ms"], c["time_ms"].get("gpu_median_ms"),
-                                                               c.get("extra", {}).get("memory"))
+        warm[(s["pass"], s["size"], s.get("march", "game"), s.get("textures", "buffers"))] = (
+            c["time_ms"]["median_ms"], c["time_ms"].get("gpu_median_ms"), c.get("extra", {}).get("memory"))
 except Exception as e:
     print("no warm results:", e)
 device = "?"
-rows = [("sky", sky, "game", "sky", "sky"), ("clouds_game_small", small, "game", "clouds", "clouds"),
-        ("clouds_naive_small", small, "naive", "clouds", "clouds"), ("clouds_game_big", big, "game", "clouds", "clouds"),
-        ("clouds_naive_big", big, "naive", "clouds", "clouds")]
+rows = [("sky", sky, "game", "sky", "buffers")]
+for tex in ("images", "buffers"):
+    rows += [(f"clouds_game_small_{tex}", small, "game", "clouds", tex), (f"clouds_naive_small_{tex}", small, "naive", "clouds", tex),
+             (f"clouds_game_big_{tex}", big, "game", "clouds", tex), (f"clouds_naive_big_{tex}", big, "naive", "clouds", tex)]
 for name, *_ in rows:
     try: device = json.load(open(f"{out}/fresh_{name}_1.json"))["device"]; break
     except Exception: pass
 print(f"\ndevice: {device}")
-print("| case | size | march | fresh process ms (1st / median 2-3) | fresh pass wall ms | fresh pass gpu ms | fresh init ms | warm wall ms | warm gpu ms | memory | fresh/warm (pass wall) |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
-for name, size, march, pass_key, wpass in rows:
+print("| case | size | march | textures | fresh process ms (1st / median 2-3) | fresh pass wall ms | fresh pass gpu ms | fresh init ms | warm wall ms | warm gpu ms | memory | fresh/warm (pass wall) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+for name, size, march, pass_key, tex in rows:
     r = fresh(name, pass_key)
     ok = [x for x in r[1:] if x]
     first = r[0]
     med = lambda k: statistics.median(x[k] for x in ok) if ok else None
-    w = warm.get((wpass, size, march), (None, None, None))
+    w = warm.get((pass_key, size, march, tex), (None, None, None))
     ratio = (med(1) / w[0]) if (ok and w[0]) else None
-    print(f"| {pass_key} | {size} | {march} | {f(first[0] if first else None)} / {f(med(0))} | {f(med(1))} | "
+    print(f"| {pass_key} | {size} | {march} | {tex if pass_key == 'clouds' else '-'} | {f(first[0] if first else None)} / {f(med(0))} | {f(med(1))} | "
           f"{f(med(2))} | {f(med(3))} | {f(w[0])} | {f(w[1])} | {w[2] or '-'} | {f(ratio)} |")
 PY
 echo "files: $OUTDIR"

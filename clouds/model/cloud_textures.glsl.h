@@ -8,6 +8,13 @@
 // texelFetch (the host pads 3-channel textures to 4): one 16-byte load per texel and lane
 // (lavapipe compiles storage-buffer loads at per-lane indices into scalar loops per lane
 // and component, which were ~90% of its render time). Every texture wraps (tiles).
+//
+// The one exception: a shader compiled with CLOUD_HARDWARE_FILTER defines the four readers
+// below itself (sample_volume, sample_base_noise, sample_detail_fbm, sample_image) with
+// textureLod on sampled images, the hardware's linear filter and repeat addressing, as a
+// game samples its noise (clouds_latlong.comp). Same texels, same wrap, same texel-centre
+// convention; the weights carry the device's subTexelPrecisionBits of fraction instead of
+// float's (docs/cloud-model.md, "Sampled images": the parity it keeps with this source).
 
 // Texture sizes (CloudNoise::kBaseSize etc.; the C++ side checks them with static_asserts).
 SC_CONST_INT(CLOUD_BASE_SIZE, 128)
@@ -70,6 +77,7 @@ Texel4 texel4_zero() {
   return t;
 }
 
+#ifndef CLOUD_HARDWARE_FILTER
 // Adds weight x texel number `texel`.
 Texel4 texel4_accumulate(Texel4 acc, int tex, int texel, Scalar weight) {
   Texel4 t = cloud_texel4(tex, texel);
@@ -102,6 +110,7 @@ Texel4 sample_volume(int tex, int n, Scalar u, Scalar v, Scalar w) {
   acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i1), az.f * ay.f * ax.f);
   return acc;
 }
+#endif  // CLOUD_HARDWARE_FILTER
 
 // A trilinear read's texels and weights at texel coordinates (u, v, w) of an n^3 volume:
 // the wrapped indices per axis and the 8 weights in sample_volume's order (z, then y, then
@@ -146,6 +155,7 @@ struct BaseNoise {
   Scalar fbm;
 };
 
+#ifndef CLOUD_HARDWARE_FILTER
 BaseNoise sample_base_noise(Scalar u, Scalar v, Scalar w) {
   int n = CLOUD_BASE_SIZE;
   Trilinear t = trilinear_setup(u, v, w, n);
@@ -206,3 +216,4 @@ Texel4 sample_image(int tex, int width, int height, Scalar u, Scalar v) {
   acc = texel4_accumulate(acc, tex, (ay.i1 * width + ax.i1), ay.f * ax.f);
   return acc;
 }
+#endif  // CLOUD_HARDWARE_FILTER

@@ -9,6 +9,16 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
 // 0: CloudShadeParams in cloud_shade_fields.glsl.h's order, then image width and height.
 layout(std430, set = 0, binding = 0) readonly buffer ParamBuffer { float P[]; };
+#ifdef CLOUD_HARDWARE_FILTER
+// 1-4: the textures as sampled images (vulkan_cloud_renderer.cc: RGBA32F, the RGB ones
+// padded with a zero channel), read through the hardware's linear filter with repeat
+// addressing: the base noise (RGBA) and the detail noise (RGB) 3D, the curl noise and the
+// weather map 2D. The readers are defined below, after cloud_textures.glsl.h's types.
+layout(set = 0, binding = 1) uniform sampler3D base_image;
+layout(set = 0, binding = 2) uniform sampler3D detail_image;
+layout(set = 0, binding = 3) uniform sampler2D curl_image;
+layout(set = 0, binding = 4) uniform sampler2D weather_image;
+#else
 // 1-4: the textures in cloud_textures.h's texel order, one vec4 per texel (the host pads
 // the RGB ones with a zero channel): exact filtering in the shared source, no filtering by
 // a sampler (texelFetch only). Texel buffers, not storage buffers: lavapipe compiles a
@@ -25,14 +35,17 @@ layout(set = 0, binding = 1) uniform samplerBuffer base_noise;
 layout(set = 0, binding = 2) uniform samplerBuffer detail_quads;
 layout(set = 0, binding = 3) uniform samplerBuffer curl_noise;
 layout(set = 0, binding = 4) uniform samplerBuffer weather_map;
+#endif
 // 5: (sin, cos) of latitude per row [0, height), of longitude per column [height, height + width),
 // filled by the host in double (shader sin/cos carry ~1e-6 error).
 layout(std430, set = 0, binding = 5) readonly buffer TrigBuffer { vec2 trig[]; };
 // 6: output, 4 floats per pixel: radiance rgb (cd/m^2), transmittance.
 layout(std430, set = 0, binding = 6) writeonly buffer OutBuffer { float out_rt[]; };
-layout(set = 0, binding = 7) uniform samplerBuffer base_pairs;
 
 #include "glsl_prelude.glsl.h"
+
+#ifndef CLOUD_HARDWARE_FILTER
+layout(set = 0, binding = 7) uniform samplerBuffer base_pairs;
 
 struct Texel4 {
   float r;
@@ -58,7 +71,12 @@ Texel4 cloud_texel4(int texture, int texel) {
 }
 
 #define CLOUD_TEXEL4_DECLARED
+#endif
 #include "cloud_textures.glsl.h"
+#ifdef CLOUD_HARDWARE_FILTER
+#include "cloud_textures_hw.glsl.h"
+#endif
+
 #include "cloud_shade_params.glsl.h"
 #include "cloud_geometry.glsl.h"
 #include "cloud_density.glsl.h"

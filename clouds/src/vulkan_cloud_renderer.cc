@@ -15,23 +15,30 @@
 // holds pixels of similar cost (less lane divergence than 128 pixels spread over 90 deg
 // of azimuth), and 64-pixel workgroups are small enough to balance the 2 cores.
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <iostream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "resolved_clouds.h"
+#include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/cloud_renderer_stats.h"
 #include "skycal/clouds/cloud_noise_packing.h"
 #include "skycal/core/error.h"
 #include "skycal/gpu/compute_pipeline.h"
+#include "skycal/gpu/sampled_image.h"
 #include "skycal/gpu/workgroup_order.h"
 
 namespace skycal::spirv {
 extern const uint32_t clouds_latlong[];
 extern const size_t clouds_latlong_size;
+extern const uint32_t clouds_latlong_images[];
+extern const size_t clouds_latlong_images_size;
 }  // namespace skycal::spirv
 
 namespace skycal::clouds {
@@ -49,20 +56,26 @@ uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
   return h;
 }
 
+std::vector<VkDescriptorType> BindingTypes(bool images) {
+  const VkDescriptorType tex = images ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+  std::vector<VkDescriptorType> types{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, tex, tex, tex, tex,
+                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+  if (!images) types.push_back(VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER);  // kBasePairs
+  return types;
+}
+
 // The device side of the renderer: the pipeline and what has been uploaded to it. One per
-// (validation, memory mode) while a renderer or a KeepCloudDevices holds it: a calibration
+// (validation, memory mode, texture path) while a renderer or a KeepCloudDevices holds it: a calibration
 // makes a renderer per stage (statistics, inversion, refit, the game's image), and each new
 // pipeline would upload the 34 MB of noise (and its packed views) again. Render holds the
 // mutex: renderers on several threads take turns on the one pipeline.
 class CloudDevice {
  public:
-  explicit CloudDevice(bool validation)
-      : ctx_(gpu::VulkanContext::Shared(validation)),
-        pipeline_(ctx_, spirv::clouds_latlong, spirv::clouds_latlong_size,
-                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
-                   VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER,
-                   VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                   VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
+  CloudDevice(std::shared_ptr<gpu::VulkanContext> ctx, bool images)
+      : ctx_(std::move(ctx)),
+        images_(images),
+        pipeline_(ctx_, images ? spirv::clouds_latlong_images : spirv::clouds_latlong,
+                  images ? spirv::clouds_latlong_images_size : spirv::clouds_latlong_size, BindingTypes(images),
                   {kLocalX, kLocalY}) {}
 
   CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) {
@@ -94,15 +107,21 @@ class CloudDevice {
   }
 
   std::string DeviceName() const { return ctx_->device_name(); }
+  bool images() const { return images_; }
   DeviceStats Stats() {
     std::lock_guard<std::mutex> lock(mutex_);
     DeviceStats s;
     s.gpu_ms = pipeline_.last_gpu_ms();
-    for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig, kBasePairs}) {
+    for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig}) {
+      s.resource_uploads += pipeline_.uploads(b);
+      s.resource_upload_bytes += pipeline_.upload_bytes(b);
+    }
+    for (uint32_t b = kBasePairs; !images_ && b == kBasePairs; ++b) {
       s.resource_uploads += pipeline_.uploads(b);
       s.resource_upload_bytes += pipeline_.upload_bytes(b);
     }
     s.staged = pipeline_.staged();
+    s.sampled_images = images_;
     return s;
   }
 
@@ -122,9 +141,11 @@ class CloudDevice {
     pipeline_.Flush(binding);
   }
   // An RGB texture as one vec4 per texel (alpha 0): the shader loads 16 bytes per texel.
-  void UploadPadded(uint32_t binding, const std::vector<float>& rgb) {
+  // `extent`: its shape as an image (image path), ignored for a texel buffer.
+  void UploadPadded(uint32_t binding, const std::vector<float>& rgb, const gpu::ImageExtent& extent) {
     const size_t texels = rgb.size() / 3;
-    float* dst = static_cast<float*>(pipeline_.Map(binding, texels * 4 * sizeof(float)));
+    float* dst = static_cast<float*>(images_ ? pipeline_.MapImage(binding, extent)
+                                             : pipeline_.Map(binding, texels * 4 * sizeof(float)));
     for (size_t i = 0; i < texels; ++i) {
       dst[4 * i] = rgb[3 * i];
       dst[4 * i + 1] = rgb[3 * i + 1];
@@ -137,16 +158,25 @@ class CloudDevice {
     const uint64_t noise_key = noise.sha256.empty() ? Fnv(noise.curl, Fnv(noise.detail, Fnv(noise.base)))
                                                     : Fnv(std::vector<float>{}, std::hash<std::string>{}(noise.sha256));
     if (noise_key != noise_key_ || !noise_uploaded_) {
-      Upload(kBase, noise.base);
-      UploadPacked(kBasePairs, CloudNoise::kBaseSize, [&](int i, float* t) { BasePairTexel(noise.base.data(), i, t); });
-      UploadPacked(kDetailQuads, CloudNoise::kDetailSize, [&](int i, float* t) { DetailQuadTexel(noise.detail.data(), i, t); });
-      UploadPadded(kCurl, noise.curl);
+      constexpr uint32_t b = CloudNoise::kBaseSize, d = CloudNoise::kDetailSize, c = CloudNoise::kCurlSize;
+      if (images_) {
+        // The raw noise: the hardware filters each channel and the shader forms the fbm.
+        std::memcpy(pipeline_.MapImage(kBase, {b, b, b}), noise.base.data(), noise.base.size() * sizeof(float));
+        pipeline_.Flush(kBase);
+        UploadPadded(kDetailQuads, noise.detail, {d, d, d});
+      } else {
+        Upload(kBase, noise.base);
+        UploadPacked(kBasePairs, b, [&](int i, float* t) { BasePairTexel(noise.base.data(), i, t); });
+        UploadPacked(kDetailQuads, d, [&](int i, float* t) { DetailQuadTexel(noise.detail.data(), i, t); });
+      }
+      UploadPadded(kCurl, noise.curl, {c, c, 1});
       noise_key_ = noise_key;
       noise_uploaded_ = true;
     }
     const uint64_t weather_key = Fnv(weather.rgb, static_cast<uint64_t>(weather.width) * 65537u + weather.height);
     if (weather_key != weather_key_ || !weather_uploaded_) {
-      UploadPadded(kWeather, weather.rgb);
+      UploadPadded(kWeather, weather.rgb,
+                   {static_cast<uint32_t>(weather.width), static_cast<uint32_t>(weather.height), 1});
       weather_key_ = weather_key;
       weather_uploaded_ = true;
     }
@@ -173,6 +203,7 @@ class CloudDevice {
 
   std::mutex mutex_;
   std::shared_ptr<gpu::VulkanContext> ctx_;
+  bool images_;  // the textures as sampled images (binding 2: the raw detail), else texel buffers
   gpu::ComputePipeline pipeline_;
   uint64_t noise_key_ = 0, weather_key_ = 0;
   bool noise_uploaded_ = false, weather_uploaded_ = false;
@@ -183,7 +214,7 @@ class CloudDevice {
 // The process's devices, by (validation, memory mode), and those a KeepCloudDevices holds.
 struct DeviceRegistry {
   std::mutex mutex;
-  std::map<std::pair<bool, int>, std::weak_ptr<CloudDevice>> devices;
+  std::map<std::tuple<bool, int, int>, std::weak_ptr<CloudDevice>> devices;  // validation, memory, textures
   int keepers = 0;
   std::vector<std::shared_ptr<CloudDevice>> kept;
 };
@@ -192,13 +223,30 @@ DeviceRegistry& Registry() {
   return *registry;
 }
 
-std::shared_ptr<CloudDevice> SharedCloudDevice(bool validation) {
+// Why the device cannot read the cloud textures as sampled images (empty: it can): the
+// two 3D noise volumes and a 2D image (curl; the weather map is checked when uploaded).
+std::string ImagesUnsupported(const gpu::VulkanContext& ctx) {
+  constexpr uint32_t b = CloudNoise::kBaseSize, d = CloudNoise::kDetailSize, c = CloudNoise::kCurlSize;
+  for (const gpu::ImageExtent& e : {gpu::ImageExtent{b, b, b}, gpu::ImageExtent{d, d, d}, gpu::ImageExtent{c, c, 1}}) {
+    const std::string why = gpu::SampledImage::Unsupported(ctx, e);
+    if (!why.empty()) return why;
+  }
+  return {};
+}
+
+std::shared_ptr<CloudDevice> SharedCloudDevice(bool validation, CloudTextures textures) {
   DeviceRegistry& r = Registry();
-  const std::pair<bool, int> key{validation, static_cast<int>(gpu::MemoryModeFromEnvironment())};
+  if (textures == CloudTextures::kAuto) textures = CloudTexturesFromEnvironment();
+  const std::tuple<bool, int, int> key{validation, static_cast<int>(gpu::MemoryModeFromEnvironment()),
+                                       static_cast<int>(textures)};
   std::lock_guard<std::mutex> lock(r.mutex);
   std::shared_ptr<CloudDevice> device = r.devices[key].lock();
   if (!device) {
-    device = std::make_shared<CloudDevice>(validation);
+    std::shared_ptr<gpu::VulkanContext> ctx = gpu::VulkanContext::Shared(validation);
+    const CloudTextureChoice choice =
+        ChooseCloudTextures(textures, ctx->has_device_only_memory(), ImagesUnsupported(*ctx));
+    if (!choice.note.empty()) std::cerr << "skycal: " << choice.note << "\n";
+    device = std::make_shared<CloudDevice>(std::move(ctx), choice.images);
     r.devices[key] = device;
   }
   if (r.keepers > 0 && std::find(r.kept.begin(), r.kept.end(), device) == r.kept.end()) r.kept.push_back(device);
@@ -207,11 +255,13 @@ std::shared_ptr<CloudDevice> SharedCloudDevice(bool validation) {
 
 class VulkanCloudRenderer final : public CloudRenderer {
  public:
-  explicit VulkanCloudRenderer(bool validation) : device_(SharedCloudDevice(validation)) {}
+  VulkanCloudRenderer(bool validation, CloudTextures textures) : device_(SharedCloudDevice(validation, textures)) {}
   CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
     return device_->Render(scene, request);
   }
-  std::string Describe() const override { return "vulkan clouds (" + device_->DeviceName() + ")"; }
+  std::string Describe() const override {
+    return "vulkan clouds (" + device_->DeviceName() + (device_->images() ? ", sampled images" : "") + ")";
+  }
   DeviceStats Stats() const { return device_->Stats(); }
 
  private:
@@ -219,6 +269,25 @@ class VulkanCloudRenderer final : public CloudRenderer {
 };
 
 }  // namespace
+
+CloudTextures CloudTexturesFromEnvironment() {
+  const char* env = std::getenv("SKYCAL_VULKAN_TEXTURES");
+  const std::string v = env ? env : "";
+  if (v.empty() || v == "auto") return CloudTextures::kAuto;
+  if (v == "buffers") return CloudTextures::kBuffers;
+  if (v == "images") return CloudTextures::kImages;
+  throw Error("SKYCAL_VULKAN_TEXTURES = '" + v + "': expected auto, buffers or images");
+}
+
+CloudTextureChoice ChooseCloudTextures(CloudTextures requested, bool discrete_gpu, const std::string& images_unsupported) {
+  CloudTextureChoice c;
+  const bool want = requested == CloudTextures::kImages || (requested == CloudTextures::kAuto && discrete_gpu);
+  c.images = want && images_unsupported.empty();
+  if (want && !c.images) {
+    c.note = "sampled images unavailable (" + images_unsupported + "): the clouds read their textures from texel buffers";
+  }
+  return c;
+}
 
 DeviceStats RendererDeviceStats(const CloudRenderer& renderer) {
   const auto* vulkan = dynamic_cast<const VulkanCloudRenderer*>(&renderer);
@@ -238,8 +307,8 @@ KeepCloudDevices::~KeepCloudDevices() {
   if (--r.keepers == 0) released.swap(r.kept);
 }
 
-std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation) {
-  return std::make_unique<VulkanCloudRenderer>(validation);
+std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation, CloudTextures textures) {
+  return std::make_unique<VulkanCloudRenderer>(validation, textures);
 }
 
 }  // namespace skycal::clouds

@@ -24,7 +24,9 @@ VkBufferUsageFlags UsageFor(VkDescriptorType type) {
     case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: return VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT;
     case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER: return VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     case VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER: return VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
-    default: throw Error("ComputePipeline: only uniform, storage and uniform texel buffer bindings are supported");
+    case VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: return 0;  // a SampledImage, no buffer
+    default:
+      throw Error("ComputePipeline: only uniform, storage and uniform texel buffer bindings and combined image samplers are supported");
   }
 }
 
@@ -41,6 +43,7 @@ ComputePipeline::ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint3
       requested_(types_.size(), 0),
       uploads_(types_.size(), 0),
       upload_bytes_(types_.size(), 0),
+      images_(types_.size()),
       views_(types_.size(), VK_NULL_HANDLE) {
   for (VkDescriptorType t : types_) UsageFor(t);  // reject other types before creating anything
   if (memory == MemoryMode::kAuto) memory = MemoryModeFromEnvironment();
@@ -67,6 +70,9 @@ void ComputePipeline::Release() {
   }
   for (MappedBuffer& b : buffers_) ctx_->DestroyBuffer(b);
   for (MappedBuffer& b : staging_) ctx_->DestroyBuffer(b);
+  for (auto& image : images_) image.reset();
+  if (sampler_) vkDestroySampler(d, sampler_, nullptr);
+  sampler_ = VK_NULL_HANDLE;
   if (queries_) vkDestroyQueryPool(d, queries_, nullptr);
   queries_ = VK_NULL_HANDLE;
   if (fence_) vkDestroyFence(d, fence_, nullptr);
@@ -93,6 +99,9 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
   CheckVk(vkCreateShaderModule(d, &smci, nullptr, &shader_), "vkCreateShaderModule");
 
   const uint32_t n = static_cast<uint32_t>(types_.size());
+  for (VkDescriptorType t : types_) {
+    if (t == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && !sampler_) sampler_ = CreateLinearRepeatSampler(d);
+  }
   std::vector<VkDescriptorSetLayoutBinding> layout_bindings(n);
   std::vector<VkDescriptorPoolSize> sizes;
   for (uint32_t i = 0; i < n; ++i) {
@@ -165,6 +174,9 @@ void ComputePipeline::CreateObjects(const uint32_t* spirv, size_t spirv_bytes, c
 
 void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
   if (binding >= buffers_.size()) throw Error("ComputePipeline: binding " + std::to_string(binding) + " does not exist");
+  if (types_[binding] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER) {
+    throw Error("ComputePipeline: binding " + std::to_string(binding) + " is an image (MapImage, not Map)");
+  }
   MappedBuffer& b = buffers_[binding];
   if (!b.buffer) readback_[binding] = host_readback;
   if (!b.buffer || b.size < bytes) {
@@ -185,6 +197,21 @@ void* ComputePipeline::Map(uint32_t binding, size_t bytes, bool host_readback) {
   }
   requested_[binding] = bytes;
   return staged_ ? staging_[binding].mapped : b.mapped;
+}
+
+void* ComputePipeline::MapImage(uint32_t binding, const ImageExtent& extent) {
+  if (binding >= types_.size() || types_[binding] != VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER) {
+    throw Error("ComputePipeline: binding " + std::to_string(binding) + " is not an image binding");
+  }
+  std::unique_ptr<SampledImage>& image = images_[binding];
+  if (!image || !(image->extent() == extent)) {
+    if (image) vkDeviceWaitIdle(ctx_->device());
+    image.reset();
+    image = std::make_unique<SampledImage>(*ctx_, extent);
+    descriptors_stale_ = true;
+  }
+  requested_[binding] = image->bytes();
+  return image->staging();
 }
 
 void ComputePipeline::CreateBuffers(uint32_t binding, size_t bytes, bool host_readback) {
@@ -211,6 +238,12 @@ void ComputePipeline::CreateBuffers(uint32_t binding, size_t bytes, bool host_re
 }
 
 void ComputePipeline::Flush(uint32_t binding) {
+  if (images_.at(binding)) {
+    images_[binding]->Flush();
+    ++uploads_[binding];
+    upload_bytes_[binding] += static_cast<long long>(requested_[binding]);
+    return;
+  }
   ctx_->FlushForDevice(staged_ ? staging_.at(binding) : buffers_.at(binding));
   if (staged_) dirty_[binding] = true;
   ++uploads_[binding];
@@ -226,15 +259,22 @@ size_t ComputePipeline::Size(uint32_t binding) const { return static_cast<size_t
 void ComputePipeline::WriteDescriptors() {
   const uint32_t n = static_cast<uint32_t>(types_.size());
   std::vector<VkDescriptorBufferInfo> infos(n);
+  std::vector<VkDescriptorImageInfo> image_infos(n);
   std::vector<VkWriteDescriptorSet> writes(n);
   for (uint32_t i = 0; i < n; ++i) {
-    if (!buffers_[i].buffer) throw Error("ComputePipeline: binding " + std::to_string(i) + " has no buffer (Map it before Dispatch)");
-    infos[i] = {buffers_[i].buffer, 0, VK_WHOLE_SIZE};
     writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
     writes[i].dstSet = set_;
     writes[i].dstBinding = i;
     writes[i].descriptorCount = 1;
     writes[i].descriptorType = types_[i];
+    if (types_[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER) {
+      if (!images_[i]) throw Error("ComputePipeline: binding " + std::to_string(i) + " has no image (MapImage it before Dispatch)");
+      image_infos[i] = {sampler_, images_[i]->view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+      writes[i].pImageInfo = &image_infos[i];
+      continue;
+    }
+    if (!buffers_[i].buffer) throw Error("ComputePipeline: binding " + std::to_string(i) + " has no buffer (Map it before Dispatch)");
+    infos[i] = {buffers_[i].buffer, 0, VK_WHOLE_SIZE};
     if (types_[i] == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
       writes[i].pTexelBufferView = &views_[i];
     } else {
@@ -245,12 +285,16 @@ void ComputePipeline::WriteDescriptors() {
   descriptors_stale_ = false;
 }
 
-// Staged: the Flush()ed bindings' staging buffers copied to their device buffers, then a
+// The Flush()ed images copied from their staging buffers (each with its own layout
+// barriers); staged: the Flush()ed buffers' staging copied to their device buffers, then a
 // barrier that makes the copies visible to the shader's reads.
 void ComputePipeline::RecordUploads() {
+  for (auto& image : images_) {
+    if (image && image->dirty()) image->RecordUpload(cmd_);
+  }
   bool any = false;
-  for (uint32_t i = 0; i < buffers_.size(); ++i) {
-    if (!dirty_[i] || requested_[i] == 0) continue;
+  for (uint32_t i = 0; i < buffers_.size() && staged_; ++i) {
+    if (!dirty_[i] || requested_[i] == 0 || images_[i]) continue;
     const VkBufferCopy region{0, 0, requested_[i]};
     vkCmdCopyBuffer(cmd_, staging_[i].buffer, buffers_[i].buffer, 1, &region);
     any = true;
@@ -293,7 +337,7 @@ void ComputePipeline::Record(uint32_t gx, uint32_t gy, uint32_t gz) {
     vkCmdResetQueryPool(cmd_, queries_, 0, 2);
     vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, queries_, 0);
   }
-  if (staged_) RecordUploads();
+  RecordUploads();
   vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
   vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_layout_, 0, 1, &set_, 0, nullptr);
   vkCmdDispatch(cmd_, gx, gy, gz);

@@ -310,23 +310,27 @@ bool VulkanContext::has_device_only_memory() const {
   return false;
 }
 
+int VulkanContext::DeviceLocalMemoryType(uint32_t type_bits) const {
+  // DEVICE_LOCAL without HOST_VISIBLE first (a discrete GPU's VRAM, not its small BAR
+  // window), then any DEVICE_LOCAL, then anything (unified memory).
+  for (int pass = 0; pass < 3; ++pass) {
+    for (uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+      const VkMemoryPropertyFlags f = memory_.memoryTypes[i].propertyFlags;
+      const bool ok = pass == 0   ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
+                      : pass == 1 ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0
+                                  : true;
+      if ((type_bits & (1u << i)) && ok) return static_cast<int>(i);
+    }
+  }
+  return -1;
+}
+
 MappedBuffer VulkanContext::CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageFlags usage) {
   MappedBuffer b;
   b.size = size;
   VkMemoryRequirements req;
   b.buffer = NewBuffer(device_, size, usage, &req);
-  // DEVICE_LOCAL without HOST_VISIBLE first (a discrete GPU's VRAM, not its small BAR
-  // window), then any DEVICE_LOCAL, then anything (unified memory).
-  int chosen = -1;
-  for (int pass = 0; pass < 3 && chosen < 0; ++pass) {
-    for (uint32_t i = 0; i < memory_.memoryTypeCount && chosen < 0; ++i) {
-      const VkMemoryPropertyFlags f = memory_.memoryTypes[i].propertyFlags;
-      const bool ok = pass == 0   ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
-                      : pass == 1 ? (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0
-                                  : true;
-      if ((req.memoryTypeBits & (1u << i)) && ok) chosen = static_cast<int>(i);
-    }
-  }
+  const int chosen = DeviceLocalMemoryType(req.memoryTypeBits);
   if (chosen < 0) {
     vkDestroyBuffer(device_, b.buffer, nullptr);
     throw Error("Vulkan: no memory type for a device buffer");

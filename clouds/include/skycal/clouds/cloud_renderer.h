@@ -53,10 +53,18 @@ class CloudRenderer {
 
 // CPU: `threads` workers over rows (0: the hardware's count).
 std::unique_ptr<CloudRenderer> CreateCpuCloudRenderer(CloudPrecision precision, int threads = 0);
+// How the Vulkan renderer reads the noise and the weather map: texel buffers filtered
+// exactly by the shared source (clouds/model/cloud_textures.glsl.h), or sampled images
+// (3D for the noise) through the hardware's linear filter with repeat addressing, as a
+// game samples them. kAuto: SKYCAL_VULKAN_TEXTURES (auto, buffers or images), then the
+// device (cloud_renderer_stats.h, ChooseCloudTextures).
+enum class CloudTextures { kAuto, kBuffers, kImages };
 // Vulkan (lavapipe or a GPU); keeps its pipeline and uploaded textures between renders.
-// Renderers alive at the same time (same validation and SKYCAL_VULKAN_MEMORY) share one
-// pipeline and its textures. Throws skycal::Error when no Vulkan device is available.
-std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation = false);
+// Renderers alive at the same time (same validation, SKYCAL_VULKAN_MEMORY and textures)
+// share one pipeline and its textures. Throws skycal::Error when no Vulkan device is
+// available or SKYCAL_VULKAN_TEXTURES is not one of its values.
+std::unique_ptr<CloudRenderer> CreateVulkanCloudRenderer(bool validation = false,
+                                                         CloudTextures textures = CloudTextures::kAuto);
 
 // While one lives, the Vulkan cloud pipelines made in the process outlive their renderers:
 // a controller whose stages each make a renderer (statistics, inversion, refit, the game's

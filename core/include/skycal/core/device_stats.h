@@ -23,6 +23,9 @@ struct DeviceStats {
   // Resources in device-local memory filled through staging buffers (discrete GPUs, or
   // forced by SKYCAL_VULKAN_MEMORY=staged); false: host-visible memory read in place.
   bool staged = false;
+  // The cloud textures sampled as images through the hardware's filter (clouds'
+  // SKYCAL_VULKAN_TEXTURES); false: texel buffers filtered by the shared source.
+  bool sampled_images = false;
 };
 
 // Process-wide sums over every timed submission (for benchmarks: the device time of a

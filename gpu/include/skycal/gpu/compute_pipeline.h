@@ -23,6 +23,7 @@
 #include <optional>
 #include <vector>
 
+#include "skycal/gpu/sampled_image.h"
 #include "skycal/gpu/vulkan_context.h"
 
 namespace skycal::gpu {
@@ -42,7 +43,9 @@ class ComputePipeline {
   // samplerBuffer of kTexelBufferFormat texels, read with texelFetch; on lavapipe a
   // texelFetch of a vec4 gathers one 16-byte texel per lane, where a storage-buffer load
   // runs a bounds-checked scalar loop per lane and component); spec[i]: specialization
-  // constant i (uint32).
+  // constant i (uint32); or VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER: a SampledImage
+  // (sampled_image.h) read through the hardware's linear filter with repeat addressing,
+  // filled through MapImage in either memory mode.
   // Throws skycal::Error on a Vulkan failure or an unsupported descriptor type.
   // `memory`: kAuto resolves SKYCAL_VULKAN_MEMORY, then the device (see above).
   ComputePipeline(std::shared_ptr<VulkanContext> ctx, const uint32_t* spirv, size_t spirv_bytes,
@@ -57,6 +60,11 @@ class ComputePipeline {
   // device's maxTexelBufferElements throws skycal::Error). `host_readback` asks for
   // HOST_CACHED memory: reading a large output from write-combined memory is slow.
   void* Map(uint32_t binding, size_t bytes, bool host_readback = false);
+  // The staging memory of image binding `binding`, `extent` texels of 4 floats (x fastest);
+  // the image is (re)made when the extent changes (waiting for the device). Flush() then
+  // uploads it with the next Dispatch. Throws skycal::Error for a binding that is not an
+  // image, or when the device cannot make the image.
+  void* MapImage(uint32_t binding, const ImageExtent& extent);
   // Makes host writes to `binding` (the first `bytes` Map asked for) visible to the device:
   // flushes non-coherent memory, and when staged schedules the copy to the device buffer
   // for the next Dispatch. Counted as one upload of the binding.
@@ -99,6 +107,8 @@ class ComputePipeline {
   std::vector<long long> uploads_, upload_bytes_;
   VkQueryPool queries_ = VK_NULL_HANDLE;  // two timestamps per Dispatch (none without support)
   std::optional<double> last_gpu_ms_;
+  std::vector<std::unique_ptr<SampledImage>> images_;  // image bindings (nullptr otherwise)
+  VkSampler sampler_ = VK_NULL_HANDLE;                  // made when any binding is an image
   std::vector<VkBufferView> views_;
   uint32_t max_texel_buffer_elements_ = 0;  // per binding: the texel buffer's view (VK_NULL_HANDLE otherwise)
   bool descriptors_stale_ = true;

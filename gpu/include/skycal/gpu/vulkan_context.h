@@ -50,6 +50,9 @@ class VulkanContext {
   // A DEVICE_LOCAL buffer, preferring a type that is not host-visible (a discrete GPU's
   // own memory), not mapped; filled and read by transfer commands.
   MappedBuffer CreateDeviceBuffer(VkDeviceSize size, VkBufferUsageFlags usage);
+  // The memory type CreateDeviceBuffer would choose among `type_bits`
+  // (VkMemoryRequirements::memoryTypeBits), or -1 when none: images use it too.
+  int DeviceLocalMemoryType(uint32_t type_bits) const;
   // True when some memory type is DEVICE_LOCAL and not HOST_VISIBLE (a discrete GPU):
   // resources then go there through staging uploads. False on lavapipe and unified memory,
   // where device-local memory is the host's.
