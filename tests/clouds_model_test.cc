@@ -162,8 +162,8 @@ double HalfCorrelationLag(const std::vector<double>& f, int n, bool along_x) {
 // long along the bands (x) and narrow across them (z). Asserted: the half-correlation
 // length along x at least 3x that across (the bands are stretched 8x; the puffs shorten
 // both), and the width across between 1/64 and 1/8 of the tile (0.5 to 3.75 km: bands a
-// few km wide, puffs below that). Control: the old pattern, one isotropic slice of the base
-// noise (R x G), has a ratio near 1 and fails the first assertion.
+// few km wide, puffs below that). Control: an isotropic slice of the base noise (R x its
+// Worley fbm, unstretched) has a ratio near 1 and fails the first assertion.
 TEST(CloudsModel, CirrusPatternIsBandsNotBlobs) {
   Fixture f;
   f.noise = LoadOrGenerateCloudNoise(1, (std::filesystem::temp_directory_path() / "skycal-clouds-parity-cache").string());
@@ -178,8 +178,8 @@ TEST(CloudsModel, CirrusPatternIsBandsNotBlobs) {
       const double x = s.cirrus_tile * i / n, z = s.cirrus_tile * j / n;
       bands[j * n + i] = m.cirrus_pattern(x, z, s);
       const double k = CloudModelD::CLOUD_BASE_SIZE / s.cirrus_tile;
-      const auto t = m.sample_volume(CloudModelD::CLOUD_TEX_BASE, CloudModelD::CLOUD_BASE_SIZE, x * k, 0.5, z * k);
-      blobs[j * n + i] = t.r * t.g;
+      const auto t = m.sample_base_noise(x * k, 0.5, z * k);
+      blobs[j * n + i] = t.r * t.fbm;
     }
   const double along = HalfCorrelationLag(bands, n, true), across = HalfCorrelationLag(bands, n, false);
   const double old_along = HalfCorrelationLag(blobs, n, true), old_across = HalfCorrelationLag(blobs, n, false);

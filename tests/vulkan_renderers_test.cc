@@ -139,16 +139,16 @@ TEST(VulkanRenderers, UnchangedContentIsNotUploadedAgain) {
     auto cloud = clouds::CreateVulkanCloudRenderer();
     cloud->Render(f.Scene(), SmallCloudRequest(64, 0.4));
     const DeviceStats first = Stats(*cloud);
-    // Noise (4 bindings), weather map, direction table.
-    EXPECT_EQ(first.resource_uploads, 6) << mode;
+    // Noise (3 bindings: base pairs, detail quads, curl), weather map, direction table.
+    EXPECT_EQ(first.resource_uploads, 5) << mode;
     EXPECT_GT(first.resource_upload_bytes, 30'000'000) << mode;  // the noise's texel buffers
     cloud->Render(f.Scene(), SmallCloudRequest(64, 0.7));       // another sun: same textures
-    EXPECT_EQ(Stats(*cloud).resource_uploads, 6) << mode;
+    EXPECT_EQ(Stats(*cloud).resource_uploads, 5) << mode;
     f.weather = testing::PatchyWeather(0.3f, 0.5f);
     cloud->Render(f.Scene(), SmallCloudRequest(64, 0.7));
-    EXPECT_EQ(Stats(*cloud).resource_uploads, 7) << mode;
+    EXPECT_EQ(Stats(*cloud).resource_uploads, 6) << mode;
     cloud->Render(f.Scene(), SmallCloudRequest(128, 0.7));
-    EXPECT_EQ(Stats(*cloud).resource_uploads, 8) << mode;
+    EXPECT_EQ(Stats(*cloud).resource_uploads, 7) << mode;
 
     auto sky = render::CreateRenderer(render::Backend::kVulkan);
     render::RenderRequest req;
@@ -183,24 +183,24 @@ TEST(VulkanRenderers, StagesShareOnePipelineWhileKept) {
     a.reset();
     auto b = clouds::CreateVulkanCloudRenderer();
     render(*b, first_weather);
-    EXPECT_EQ(Stats(*b).resource_uploads, 6);  // a fresh pipeline: noise (4), weather map, directions
+    EXPECT_EQ(Stats(*b).resource_uploads, 5);  // a fresh pipeline: noise (3), weather map, directions
   }
   const clouds::KeepCloudDevices keep;
   auto a = clouds::CreateVulkanCloudRenderer();
   const clouds::CloudImage a_first = render(*a, first_weather);
-  EXPECT_EQ(Stats(*a).resource_uploads, 6);
+  EXPECT_EQ(Stats(*a).resource_uploads, 5);
   auto b = clouds::CreateVulkanCloudRenderer();
   const clouds::CloudImage b_other = render(*b, other_weather);
-  EXPECT_EQ(Stats(*b).resource_uploads, 7);  // one pipeline: the other weather map alone
+  EXPECT_EQ(Stats(*b).resource_uploads, 6);  // one pipeline: the other weather map alone
   const clouds::CloudImage a_again = render(*a, first_weather);
-  EXPECT_EQ(Stats(*a).resource_uploads, 8);  // its weather map back
+  EXPECT_EQ(Stats(*a).resource_uploads, 7);  // its weather map back
   EXPECT_EQ(0, std::memcmp(a_first.transmittance.data(), a_again.transmittance.data(), a_first.transmittance.size() * sizeof(float)));
   EXPECT_NE(0, std::memcmp(a_first.transmittance.data(), b_other.transmittance.data(), a_first.transmittance.size() * sizeof(float)));
   a.reset();
   b.reset();
   auto c = clouds::CreateVulkanCloudRenderer();
   render(*c, first_weather);
-  EXPECT_EQ(Stats(*c).resource_uploads, 8);  // kept: nothing new to upload
+  EXPECT_EQ(Stats(*c).resource_uploads, 7);  // kept: nothing new to upload
 }
 
 // Resident set size in MiB (/proc/self/statm's second field, in pages).

@@ -59,13 +59,15 @@ SC_CONST(CLOUD_CIRRUS_PUFFS, 8.0)     // puff noise tiles per cirrus tile
 Scalar cirrus_pattern(Scalar x, Scalar z, CloudShadeParams p) {
   Scalar u = (x + p.wind_x) / p.cirrus_tile;
   Scalar v = (z + p.wind_z) / p.cirrus_tile;
-  Texel4 bands = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, u * (Scalar(CLOUD_BASE_SIZE) / Scalar(CLOUD_CIRRUS_STRETCH)),
-                               Scalar(0.5), v * Scalar(CLOUD_BASE_SIZE));
+  // The base's R on its first slice (v = 0.5 texels: weight 1 on row 0), read from the packed
+  // pairs the density reads: no texture of the whole base is needed on the device.
+  Scalar bands = sample_base_noise(u * (Scalar(CLOUD_BASE_SIZE) / Scalar(CLOUD_CIRRUS_STRETCH)), Scalar(0.5),
+                                   v * Scalar(CLOUD_BASE_SIZE)).r;
   Scalar puffs_scale = Scalar(CLOUD_CIRRUS_PUFFS) * Scalar(CLOUD_DETAIL_SIZE);
   Scalar puffs = sample_detail_fbm(u * puffs_scale, Scalar(0.5), v * puffs_scale);
   // The puffs erode the bands (as the detail noise erodes the volumetric clouds' edges):
   // a band's core stays whole, its edges break into puffs.
-  return saturate1(remap(bands.r, Scalar(0.5) * puffs, Scalar(1.0), Scalar(0.0), Scalar(1.0)));
+  return saturate1(remap(bands, Scalar(0.5) * puffs, Scalar(1.0), Scalar(0.0), Scalar(1.0)));
 }
 
 CloudResult cirrus_sheet(vec3 view, Scalar one_minus_mu, CloudShadeParams p) {

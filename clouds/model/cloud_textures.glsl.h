@@ -9,8 +9,8 @@
 // (lavapipe compiles storage-buffer loads at per-lane indices into scalar loops per lane
 // and component, which were ~90% of its render time). Every texture wraps (tiles).
 //
-// The one exception: a shader compiled with CLOUD_HARDWARE_FILTER defines the four readers
-// below itself (sample_volume, sample_base_noise, sample_detail_fbm, sample_image) with
+// The one exception: a shader compiled with CLOUD_HARDWARE_FILTER defines the three readers
+// below itself (sample_base_noise, sample_detail_fbm, sample_image) with
 // textureLod on sampled images, the hardware's linear filter and repeat addressing, as a
 // game samples its noise (clouds_latlong.comp). Same texels, same wrap, same texel-centre
 // convention; the weights carry the device's subTexelPrecisionBits of fraction instead of
@@ -68,53 +68,9 @@ WrapAxis wrap_axis(Scalar u, int n) {
   return w;
 }
 
-Texel4 texel4_zero() {
-  Texel4 t;
-  t.r = Scalar(0.0);
-  t.g = Scalar(0.0);
-  t.b = Scalar(0.0);
-  t.a = Scalar(0.0);
-  return t;
-}
-
-#ifndef CLOUD_HARDWARE_FILTER
-// Adds weight x texel number `texel`.
-Texel4 texel4_accumulate(Texel4 acc, int tex, int texel, Scalar weight) {
-  Texel4 t = cloud_texel4(tex, texel);
-  acc.r = acc.r + weight * t.r;
-  acc.g = acc.g + weight * t.g;
-  acc.b = acc.b + weight * t.b;
-  acc.a = acc.a + weight * t.a;
-  return acc;
-}
-
-// Trilinear read of an n^3 volume at texel coordinates (u, v, w) (x, y, z; one unit = one
-// texel).
-Texel4 sample_volume(int tex, int n, Scalar u, Scalar v, Scalar w) {
-  WrapAxis ax = wrap_axis(u, n);
-  WrapAxis ay = wrap_axis(v, n);
-  WrapAxis az = wrap_axis(w, n);
-  Texel4 acc = texel4_zero();
-  Scalar gx0 = Scalar(1.0) - ax.f;
-  Scalar gy0 = Scalar(1.0) - ay.f;
-  Scalar gz0 = Scalar(1.0) - az.f;
-  int z0 = az.i0 * n;
-  int z1 = az.i1 * n;
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i0), gz0 * gy0 * gx0);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i0) * n + ax.i1), gz0 * gy0 * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i0), gz0 * ay.f * gx0);
-  acc = texel4_accumulate(acc, tex, ((z0 + ay.i1) * n + ax.i1), gz0 * ay.f * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i0), az.f * gy0 * gx0);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i0) * n + ax.i1), az.f * gy0 * ax.f);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i0), az.f * ay.f * gx0);
-  acc = texel4_accumulate(acc, tex, ((z1 + ay.i1) * n + ax.i1), az.f * ay.f * ax.f);
-  return acc;
-}
-#endif  // CLOUD_HARDWARE_FILTER
-
 // A trilinear read's texels and weights at texel coordinates (u, v, w) of an n^3 volume:
-// the wrapped indices per axis and the 8 weights in sample_volume's order (z, then y, then
-// x; each weight formed as there: gz gy gx).
+// the wrapped indices per axis and the 8 weights in the order the readers sum them (z, then
+// y, then x; each weight the product gz gy gx).
 struct Trilinear {
   WrapAxis x;
   WrapAxis y;
@@ -148,8 +104,8 @@ Trilinear trilinear_setup(Scalar u, Scalar v, Scalar w, int n) {
   return t;
 }
 
-// The base noise's Perlin-Worley R and Worley fbm, trilinear: the same texels, weights and
-// order of terms as sample_volume (R bit for bit), from 4 loads of BASE_PAIRS.
+// The base noise's Perlin-Worley R and Worley fbm, trilinear (texels, weights and order of
+// terms as Trilinear lays them out), from 4 loads of BASE_PAIRS.
 struct BaseNoise {
   Scalar r;
   Scalar fbm;
@@ -185,8 +141,8 @@ BaseNoise sample_base_noise(Scalar u, Scalar v, Scalar w) {
   return b;
 }
 
-// The detail noise's fbm, trilinear (sample_volume's texels, weights and order of terms),
-// from 2 loads of DETAIL_QUADS.
+// The detail noise's fbm, trilinear (texels, weights and order of terms as above), from 2
+// loads of DETAIL_QUADS.
 Scalar sample_detail_fbm(Scalar u, Scalar v, Scalar w) {
   int n = CLOUD_DETAIL_SIZE;
   Trilinear t = trilinear_setup(u, v, w, n);
@@ -201,6 +157,25 @@ Scalar sample_detail_fbm(Scalar u, Scalar v, Scalar w) {
   f = f + t.w110 * q1.b;
   f = f + t.w111 * q1.a;
   return f;
+}
+
+Texel4 texel4_zero() {
+  Texel4 t;
+  t.r = Scalar(0.0);
+  t.g = Scalar(0.0);
+  t.b = Scalar(0.0);
+  t.a = Scalar(0.0);
+  return t;
+}
+
+// Adds weight x texel number `texel`.
+Texel4 texel4_accumulate(Texel4 acc, int tex, int texel, Scalar weight) {
+  Texel4 t = cloud_texel4(tex, texel);
+  acc.r = acc.r + weight * t.r;
+  acc.g = acc.g + weight * t.g;
+  acc.b = acc.b + weight * t.b;
+  acc.a = acc.a + weight * t.a;
+  return acc;
 }
 
 // Bilinear read of a width x height image at texel coordinates (u, v).

@@ -1,4 +1,4 @@
-// GLSL only: the four texture readers that clouds/model/cloud_textures.glsl.h leaves to a
+// GLSL only: the three texture readers that clouds/model/cloud_textures.glsl.h leaves to a
 // shader compiled with CLOUD_HARDWARE_FILTER, on the sampled images the includer declares
 // (base_image and detail_image: sampler3D; curl_image and weather_image: sampler2D; RGBA32F,
 // RGB padded with a zero channel; linear filter, repeat addressing). Included after
@@ -16,11 +16,6 @@ Texel4 texel4_from(vec4 v) {
   t.b = v.z;
   t.a = v.w;
   return t;
-}
-
-Texel4 sample_volume(int tex, int n, float u, float v, float w) {
-  // Only the base noise is read whole (the cirrus sheet's bands).
-  return texel4_from(textureLod(base_image, vec3(u, v, w) / float(n), 0.0));
 }
 
 BaseNoise sample_base_noise(float u, float v, float w) {

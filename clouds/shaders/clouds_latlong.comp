@@ -28,10 +28,10 @@ layout(set = 0, binding = 4) uniform sampler2D weather_image;
 // texelFetch gathers one 16-byte load per lane and transposes. Same texels (parity maxima
 // unchanged to the digit); default_cloudy at 512x256, game march, one process, loaded 2 cores:
 // 2.8 s -> 0.8-0.95 s per render (perf: ~90% of lavapipe's time was in those loops).
-// The density reads packed views (cloud_textures.glsl.h, cloud_noise_packing.h): binding 7
-// the base's (R, fbm) pairs, binding 2 the detail fbm's 2x2 quads; binding 1 (base RGBA)
-// serves the cirrus sheet.
-layout(set = 0, binding = 1) uniform samplerBuffer base_noise;
+// The density reads packed views (cloud_textures.glsl.h, cloud_noise_packing.h): binding 1
+// the base's (R, fbm) pairs (the cirrus sheet reads its R there too), binding 2 the detail
+// fbm's 2x2 quads.
+layout(set = 0, binding = 1) uniform samplerBuffer base_pairs;
 layout(set = 0, binding = 2) uniform samplerBuffer detail_quads;
 layout(set = 0, binding = 3) uniform samplerBuffer curl_noise;
 layout(set = 0, binding = 4) uniform samplerBuffer weather_map;
@@ -45,8 +45,6 @@ layout(std430, set = 0, binding = 6) writeonly buffer OutBuffer { float out_rt[]
 #include "glsl_prelude.glsl.h"
 
 #ifndef CLOUD_HARDWARE_FILTER
-layout(set = 0, binding = 7) uniform samplerBuffer base_pairs;
-
 struct Texel4 {
   float r;
   float g;
@@ -57,11 +55,10 @@ struct Texel4 {
 Texel4 cloud_texel4(int texture, int texel) {
   vec4 v;
   // `texture` is a constant at every call: the chain folds away.
-  if (texture == 0) v = texelFetch(base_noise, texel);
-  else if (texture == 4) v = texelFetch(base_pairs, texel);
+  if (texture == 4) v = texelFetch(base_pairs, texel);
   else if (texture == 5) v = texelFetch(detail_quads, texel);
   else if (texture == 2) v = texelFetch(curl_noise, texel);
-  else v = texelFetch(weather_map, texel);  // 3 (1, the raw detail, is not read by the shader)
+  else v = texelFetch(weather_map, texel);  // 3 (0 and 1, the raw base and detail, are not read here)
   Texel4 t;
   t.r = v.x;
   t.g = v.y;

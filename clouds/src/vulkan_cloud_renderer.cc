@@ -1,11 +1,11 @@
 // The Vulkan cloud renderer on gpu::ComputePipeline (clouds/shaders/clouds_latlong.comp).
-// The textures are uploaded once per change of noise or weather map (keyed by content),
-// the RGB ones padded to one vec4 per texel, the density's packed views of the noise
-// (cloud_noise_packing.h: base (R, fbm) pairs, detail fbm quads) made here, as uniform
-// texel buffers (read by texelFetch:
-// lavapipe turns storage-buffer loads at per-lane indices into scalar loops, 3x slower
-// overall; clouds_latlong.comp); the base noise is 128^3 = 2M texels (lavapipe allows 2^27;
-// a device below that fails with ComputePipeline's maxTexelBufferElements error);
+// The textures are uploaded once per change of noise or weather map (by content), the RGB
+// ones padded to one vec4 per texel: either the density's packed views of the noise
+// (cloud_noise_packing.h: base (R, fbm) pairs, detail fbm quads; the raw base is not
+// uploaded) as uniform texel buffers read by texelFetch (lavapipe turns storage-buffer loads
+// at per-lane indices into scalar loops, 3x slower overall; the base is 128^3 = 2M texels,
+// lavapipe allows 2^27, a device below that fails with ComputePipeline's
+// maxTexelBufferElements error), or the raw noise as sampled images (CloudTextures);
 // parameters and the direction table per render.
 //
 // Workgroups of 8 x 8 pixels, not the sky's one image row: the march's cost varies by
@@ -45,9 +45,9 @@ namespace skycal::clouds {
 namespace {
 
 constexpr uint32_t kLocalX = 8, kLocalY = 8;
-enum Binding : uint32_t {
-  kParams = 0, kBase = 1, kDetailQuads = 2, kCurl = 3, kWeather = 4, kTrig = 5, kOutput = 6, kBasePairs = 7
-};
+// kBase: the base noise's packed (R, fbm) pairs (texel buffers) or its RGBA image; kDetail:
+// the detail fbm's quads or its RGB image.
+enum Binding : uint32_t { kParams = 0, kBase = 1, kDetail = 2, kCurl = 3, kWeather = 4, kTrig = 5, kOutput = 6 };
 
 // FNV-1a over the bytes: the upload key of a texture without a checksum.
 uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
@@ -58,16 +58,14 @@ uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
 
 std::vector<VkDescriptorType> BindingTypes(bool images) {
   const VkDescriptorType tex = images ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER : VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
-  std::vector<VkDescriptorType> types{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, tex, tex, tex, tex,
-                                      VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-  if (!images) types.push_back(VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER);  // kBasePairs
-  return types;
+  return {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, tex, tex, tex, tex, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+          VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 }
 
 // The device side of the renderer: the pipeline and what has been uploaded to it. One per
 // (validation, memory mode, texture path) while a renderer or a KeepCloudDevices holds it: a calibration
 // makes a renderer per stage (statistics, inversion, refit, the game's image), and each new
-// pipeline would upload the 34 MB of noise (and its packed views) again. Render holds the
+// pipeline would upload the noise (32 MB of base pairs or base image) again. Render holds the
 // mutex: renderers on several threads take turns on the one pipeline.
 class CloudDevice {
  public:
@@ -112,11 +110,7 @@ class CloudDevice {
     std::lock_guard<std::mutex> lock(mutex_);
     DeviceStats s;
     s.gpu_ms = pipeline_.last_gpu_ms();
-    for (uint32_t b : {kBase, kDetailQuads, kCurl, kWeather, kTrig}) {
-      s.resource_uploads += pipeline_.uploads(b);
-      s.resource_upload_bytes += pipeline_.upload_bytes(b);
-    }
-    for (uint32_t b = kBasePairs; !images_ && b == kBasePairs; ++b) {
+    for (uint32_t b : {kBase, kDetail, kCurl, kWeather, kTrig}) {
       s.resource_uploads += pipeline_.uploads(b);
       s.resource_upload_bytes += pipeline_.upload_bytes(b);
     }
@@ -163,21 +157,24 @@ class CloudDevice {
         // The raw noise: the hardware filters each channel and the shader forms the fbm.
         std::memcpy(pipeline_.MapImage(kBase, {b, b, b}), noise.base.data(), noise.base.size() * sizeof(float));
         pipeline_.Flush(kBase);
-        UploadPadded(kDetailQuads, noise.detail, {d, d, d});
+        UploadPadded(kDetail, noise.detail, {d, d, d});
       } else {
-        Upload(kBase, noise.base);
-        UploadPacked(kBasePairs, b, [&](int i, float* t) { BasePairTexel(noise.base.data(), i, t); });
-        UploadPacked(kDetailQuads, d, [&](int i, float* t) { DetailQuadTexel(noise.detail.data(), i, t); });
+        UploadPacked(kBase, b, [&](int i, float* t) { BasePairTexel(noise.base.data(), i, t); });
+        UploadPacked(kDetail, d, [&](int i, float* t) { DetailQuadTexel(noise.detail.data(), i, t); });
       }
       UploadPadded(kCurl, noise.curl, {c, c, 1});
       noise_key_ = noise_key;
       noise_uploaded_ = true;
     }
-    const uint64_t weather_key = Fnv(weather.rgb, static_cast<uint64_t>(weather.width) * 65537u + weather.height);
-    if (weather_key != weather_key_ || !weather_uploaded_) {
+    // The weather map compared with the copy last uploaded, not hashed: a 512^2 map is 3 MB,
+    // which a byte-wise hash reads in several ms per render and a comparison in a fraction.
+    if (!weather_uploaded_ || weather.width != weather_width_ || weather.height != weather_height_ ||
+        weather.rgb != weather_rgb_) {
       UploadPadded(kWeather, weather.rgb,
                    {static_cast<uint32_t>(weather.width), static_cast<uint32_t>(weather.height), 1});
-      weather_key_ = weather_key;
+      weather_rgb_ = weather.rgb;
+      weather_width_ = weather.width;
+      weather_height_ = weather.height;
       weather_uploaded_ = true;
     }
   }
@@ -203,9 +200,11 @@ class CloudDevice {
 
   std::mutex mutex_;
   std::shared_ptr<gpu::VulkanContext> ctx_;
-  bool images_;  // the textures as sampled images (binding 2: the raw detail), else texel buffers
+  bool images_;  // the textures as sampled images (the raw noise), else texel buffers (its packed views)
   gpu::ComputePipeline pipeline_;
-  uint64_t noise_key_ = 0, weather_key_ = 0;
+  uint64_t noise_key_ = 0;
+  std::vector<float> weather_rgb_;  // the weather map last uploaded
+  int weather_width_ = 0, weather_height_ = 0;
   bool noise_uploaded_ = false, weather_uploaded_ = false;
   int trig_width_ = 0, trig_height_ = 0;
   const float* trig_filled_ = nullptr;

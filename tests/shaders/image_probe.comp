@@ -10,8 +10,7 @@ layout(set = 0, binding = 1) uniform sampler3D base_image;
 layout(set = 0, binding = 2) uniform sampler3D detail_image;
 layout(set = 0, binding = 3) uniform sampler2D curl_image;
 layout(set = 0, binding = 4) uniform sampler2D weather_image;
-// 5: 12 floats a point: base R, base fbm, detail fbm, curl rgb, weather rgb, the base's
-// whole texel (sample_volume) rgb.
+// 5: 9 floats a point: base R, base fbm, detail fbm, curl rgb, weather rgb.
 layout(std430, set = 0, binding = 5) writeonly buffer Out { float out_values[]; };
 
 #include "glsl_prelude.glsl.h"
@@ -27,8 +26,6 @@ void main() {
   float detail = sample_detail_fbm(p.x * 0.25, p.y * 0.25, p.z * 0.25);
   Texel4 curl = sample_image(CLOUD_TEX_CURL, CLOUD_CURL_SIZE, CLOUD_CURL_SIZE, p.x, p.z);
   Texel4 weather = sample_image(CLOUD_TEX_WEATHER, ws.x, ws.y, p.x * 0.5, p.z * 0.5);
-  Texel4 whole = sample_volume(CLOUD_TEX_BASE, CLOUD_BASE_SIZE, p.x, p.y, p.z);
-  float o[12] = float[12](b.r, b.fbm, detail, curl.r, curl.g, curl.b, weather.r, weather.g, weather.b,
-                          whole.r, whole.g, whole.b);
-  for (int k = 0; k < 12; ++k) out_values[12 * i + uint(k)] = o[k];
+  float o[9] = float[9](b.r, b.fbm, detail, curl.r, curl.g, curl.b, weather.r, weather.g, weather.b);
+  for (int k = 0; k < 9; ++k) out_values[9 * i + uint(k)] = o[k];
 }
