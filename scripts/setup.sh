@@ -17,6 +17,9 @@ PACKAGES=(
   libopencv-contrib-dev
   # capture's camera RAW brackets: LibRaw (libraw_r); libtiff writes the tests' DNGs.
   libraw-dev libtiff-dev
+  # PNG in and out (core/png_io.h) and JPEG/TIFF brackets (capture/src/camera_image.cc):
+  # the codecs themselves, not OpenCV's imgcodecs (it drags GDAL into every start-up).
+  libpng-dev libjpeg-dev
   # skycal batch --engine slurm and its test (tests/batch_slurm_test.sh): a single-node Slurm
   # cluster and its authentication; python3 for its free ports and JSON checks.
   slurm-wlm munge python3

@@ -3,6 +3,9 @@
 // with masks and metadata; bad input is refused without output.
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <algorithm>
 #include <filesystem>
 

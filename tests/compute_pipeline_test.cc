@@ -110,7 +110,7 @@ TEST(ComputePipeline, TexelBufferReadsEveryChannelAndFollowsGrowth) {
 TEST(ComputePipeline, RefusesBadBindings) {
   auto ctx = VulkanContext::Shared(false);
   EXPECT_THROW(ComputePipeline(ctx, spirv::pipeline_probe, spirv::pipeline_probe_size,
-                               {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}),
+                               {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}),
                Error);
   ComputePipeline p(ctx, spirv::pipeline_probe, spirv::pipeline_probe_size,
                     {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,

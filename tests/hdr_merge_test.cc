@@ -3,6 +3,9 @@
 // the exposure scale, the loader (PNG, JPEG + EXIF through exiv2) and the bad inputs.
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -12,7 +12,6 @@
 //   export   LUTs scaled 1e-8 / 1e8 / both together at several headrooms: half-float
 //            overflow (a clear error) and underflow counts.
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -30,8 +29,10 @@
 #include "skycal/controllers/probe_extract.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/cloud_renderer.h"
+#include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
+#include "skycal/core/png_io.h"
 #include "skycal/fit/reference.h"
 #include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
@@ -324,7 +325,10 @@ void CaptureArea(Runner& run, const SuiteOptions& o) {
   const std::vector<std::string>& good = b.paths;
   auto constant = [&](const std::string& name, int value) {
     const std::string p = dir + "/" + name + ".png";
-    cv::imwrite(p, cv::Mat(kFisheye, kFisheye, CV_8UC3, cv::Scalar(value, value, value)));
+    Raster grey(kFisheye, kFisheye, 3, 8);
+    std::fill(grey.data.begin(), grey.data.end(), static_cast<uint8_t>(value));
+    const std::vector<uint8_t> png = EncodePng(grey, p);
+    WriteFileAtomically(p, std::string(png.begin(), png.end()));
     return p;
   };
   const std::string white = constant("white", 255), black = constant("black", 0);

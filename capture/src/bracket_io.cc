@@ -1,13 +1,11 @@
-// Reading bracket images (OpenCV; camera RAW through LibRaw, raw_decode.h) and their
+// Reading bracket images (JPEG, PNG, TIFF: camera_image.h; camera RAW through LibRaw, raw_decode.h) and their
 // exposure settings (explicit, EXIF, or the RAW file's own metadata).
 #include <chrono>
 #include <cmath>
 #include <optional>
 #include <sstream>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
+#include "camera_image.h"
 #include "parallel_rows.h"
 #include "skycal/capture/exif_exposure.h"
 #include "skycal/capture/hdr_merge.h"
@@ -19,19 +17,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
-
-template <class T>
-void CopyBgrToRgb(const cv::Mat& m, BracketImage* out) {
-  for (int y = 0; y < m.rows; ++y) {
-    const T* row = m.ptr<T>(y);
-    uint16_t* dst = out->rgb.data() + out->index(0, y);
-    for (int x = 0; x < m.cols; ++x) {
-      dst[3 * x + 0] = row[3 * x + 2];
-      dst[3 * x + 1] = row[3 * x + 1];
-      dst[3 * x + 2] = row[3 * x + 0];
-    }
-  }
-}
 
 // The exposure a RAW file's metadata gives, in the EXIF reader's form.
 ExifExposure RawExposure(const RawMetadata& m) {
@@ -46,33 +31,7 @@ ExifExposure RawExposure(const RawMetadata& m) {
 
 }  // namespace
 
-BracketImage ReadBracketImage(const std::string& path) {
-  cv::Mat m;
-  try {
-    m = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {
-    throw Error(path + ": cannot read image (OpenCV: " + e.what() + ")");
-  }
-  if (m.empty()) throw Error(path + ": cannot read image (missing, truncated, or a format OpenCV does not decode)");
-  if (m.channels() != 3) throw Error(path + ": expected a colour image, got " + std::to_string(m.channels()) + " channels");
-  BracketImage img;
-  img.width = m.cols;
-  img.height = m.rows;
-  if (m.depth() == CV_8U) {
-    img.bits = 8;
-  } else if (m.depth() == CV_16U) {
-    img.bits = 16;
-  } else {
-    throw Error(path + ": expected an 8- or 16-bit camera image, got OpenCV depth " + std::to_string(m.depth()) +
-                " (float images are already HDR)");
-  }
-  img.rgb.resize(static_cast<size_t>(img.width) * img.height * 3);
-  if (img.bits == 8)
-    CopyBgrToRgb<uint8_t>(m, &img);
-  else
-    CopyBgrToRgb<uint16_t>(m, &img);
-  return img;
-}
+BracketImage ReadBracketImage(const std::string& path) { return DecodeCameraImage(path); }
 
 std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const std::vector<double>& exposure_times_s,
                                   int threads, nlohmann::json* report) {

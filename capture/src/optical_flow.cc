@@ -6,7 +6,6 @@
 #include <iostream>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -16,6 +15,7 @@
 #include "skycal/core/atomic_output_group.h"
 #include "skycal/core/output_kind.h"
 #include "skycal/core/error.h"
+#include "skycal/core/png_io_opencv.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/file_safety.h"
 #include "skycal/core/luminance.h"
@@ -247,8 +247,7 @@ nlohmann::json FlowSidecar(const FlowOptions& o, const QuantizedFlow& q, int w, 
 // previous three, or none, in place.
 void WriteFlowFiles(const std::string& exr, const std::string& png, const std::string& sidecar, const EncodedFlow& e,
                     const nlohmann::json& meta) {
-  std::vector<uint8_t> png_bytes;
-  if (!cv::imencode(".png", e.codes, png_bytes)) throw Error(png + ": PNG encoding failed");
+  const std::vector<uint8_t> png_bytes = EncodePngFromMat(e.codes, png);
   ExrAttributes attrs;
   attrs.strings["skycalFlow"] = meta.dump();
   RefuseReplacingAPresetLut(exr);

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdio>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/png_io_opencv.h"
 
 namespace skycal::controllers::figure {
 namespace {
@@ -63,8 +63,7 @@ cv::Mat ColourBar(double range) {
 }
 
 void WritePng(const std::string& path, const cv::Mat& m) {
-  std::vector<uint8_t> png;
-  if (!cv::imencode(".png", m, png)) throw Error(path + ": PNG encoding failed");
+  const std::vector<uint8_t> png = EncodePngFromMat(m, path);
   WriteFileAtomically(path, std::string(png.begin(), png.end()));
 }
 

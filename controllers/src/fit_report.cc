@@ -2,7 +2,6 @@
 
 #include "figure_panels.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>

@@ -1,6 +1,5 @@
 #include "sections.h"
 
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include "charts.h"
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/png_io.h"
 #include "skycal/report/html.h"
 #include "skycal/report/plot_devices.h"
 
@@ -62,13 +62,10 @@ struct Frame {
 
 std::string EmbedPng(const std::string& path, const std::string& alt, const std::string& cls, PageCounts* counts) {
   const std::string bytes = ReadFile(path);
-  if (bytes.size() < 8 || bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0) throw Error(path + ": not a PNG file");
-  const cv::Mat decoded = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
-                                       cv::IMREAD_UNCHANGED);
-  if (decoded.empty()) throw Error(path + ": the PNG does not decode (truncated or corrupt)");
+  const Raster decoded = DecodePng(bytes, path);  // names the file when it is not a whole PNG
   ++counts->images;
-  return "<img class=\"" + cls + "\" alt=\"" + E(alt) + "\" width=\"" + std::to_string(decoded.cols) + "\" height=\"" +
-         std::to_string(decoded.rows) + "\" src=\"" + DataUri("image/png", bytes) + "\">";
+  return "<img class=\"" + cls + "\" alt=\"" + E(alt) + "\" width=\"" + std::to_string(decoded.width) + "\" height=\"" +
+         std::to_string(decoded.height) + "\" src=\"" + DataUri("image/png", bytes) + "\">";
 }
 
 namespace {

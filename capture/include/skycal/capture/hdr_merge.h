@@ -194,9 +194,9 @@ struct MergeResult {
 // exposure, f-number / ISO known for some brackets but not others, invalid options.
 MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptions& options);
 
-// Reads an 8- or 16-bit image with OpenCV (imread, IMREAD_ANYDEPTH | IMREAD_COLOR: grey is
-// expanded to RGB, alpha dropped). Throws skycal::Error naming the file when it is
-// unreadable or of another depth (float EXR/TIFF: not a camera bracket).
+// Reads an 8- or 16-bit JPEG, PNG or TIFF (libjpeg, libpng, libtiff: grey expanded to RGB,
+// alpha dropped, the EXIF orientation applied). Throws skycal::Error naming the file when it
+// is unreadable, another format, or of another depth (float TIFF: not a camera bracket).
 BracketImage ReadBracketImage(const std::string& path);
 
 // Reads the brackets and their exposures. `exposure_times_s` empty: every time comes from

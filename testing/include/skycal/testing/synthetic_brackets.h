@@ -13,14 +13,13 @@
 #include <thread>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "skycal/capture/hdr_merge.h"
+#include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
+#include "skycal/core/png_io.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::synthetic {
@@ -203,18 +202,19 @@ inline std::vector<std::string> WriteBracketsPng(const SyntheticBrackets& s, con
   std::vector<std::string> paths;
   for (size_t i = 0; i < s.brackets.size(); ++i) {
     const capture::BracketImage& im = s.brackets[i].image;
-    cv::Mat m(im.height, im.width, im.bits == 16 ? CV_16UC3 : CV_8UC3);
+    Raster r(im.width, im.height, 3, im.bits == 16 ? 16 : 8);
     for (int y = 0; y < im.height; ++y)
       for (int x = 0; x < im.width; ++x)
         for (int c = 0; c < 3; ++c) {
           const uint16_t v = im.rgb[im.index(x, y) + c];
           if (im.bits == 16)
-            m.at<cv::Vec3w>(y, x)[2 - c] = v;
+            r.row16(y)[3 * x + c] = v;
           else
-            m.at<cv::Vec3b>(y, x)[2 - c] = static_cast<uint8_t>(v);
+            r.row(y)[3 * x + c] = static_cast<uint8_t>(v);
         }
     paths.push_back(dir + "/bracket_" + std::to_string(i) + ".png");
-    if (!cv::imwrite(paths.back(), m)) throw Error(paths.back() + ": cannot write PNG");
+    const std::vector<uint8_t> png = EncodePng(r, paths.back());
+    WriteFileAtomically(paths.back(), std::string(png.begin(), png.end()));
   }
   return paths;
 }
