@@ -1,8 +1,9 @@
-// One compute shader with one descriptor set of buffers: the pipeline setup every skycal
-// renderer needs (shader module, set layout, pipeline with specialization constants from
-// the context's pipeline cache, descriptor pool and set, command buffer, fence), written
-// once. Each binding owns a buffer that grows on demand; a dispatch records, submits and
-// waits, and leaves the shader's storage writes readable by the host.
+// One compute shader with one descriptor set of buffers and sampled images: the pipeline
+// setup every skycal renderer needs (shader module, set layout, pipeline with
+// specialization constants from the context's pipeline cache, descriptor pool and set,
+// command buffer, fence), written once. Each buffer binding owns a buffer that grows on
+// demand, each image binding a SampledImage; a dispatch records, submits and waits, and
+// leaves the shader's storage writes readable by the host.
 //
 // Memory, chosen per pipeline (MemoryMode): `direct`, every buffer host-visible and read by
 // the shader in place (lavapipe and unified memory, where device-local memory is the
