@@ -164,6 +164,40 @@ TEST(VulkanRenderers, UnchangedContentIsNotUploadedAgain) {
   }
 }
 
+// RenderEach draws several parameter sets in one submission (one dispatch, a layer each)
+// and gives Render's images bit for bit, on both texture paths. Control: the sets' images
+// differ (the comparison would see a swapped layer).
+TEST(VulkanRenderers, RenderEachIsRenderBitForBitInOneSubmission) {
+  CloudFixture f;
+  clouds::CloudParams brighter = f.params, no_ambient = f.params;
+  brighter.sun_scale = 1.7;
+  no_ambient.ambient_strength = 0.0;
+  const std::vector<const clouds::CloudParams*> sets{&f.params, &brighter, &no_ambient};
+  const clouds::CloudRenderRequest request = SmallCloudRequest(96, 0.4);
+  for (clouds::CloudTextures textures : {clouds::CloudTextures::kBuffers, clouds::CloudTextures::kImages}) {
+    auto cloud = clouds::CreateVulkanCloudRenderer(false, textures);
+    cloud->Render(f.Scene(), request);  // textures uploaded: the batch below submits once
+    const DeviceTimeTotals before = DeviceTimeSoFar();
+    const std::vector<clouds::CloudImage> batch = cloud->RenderEach(f.Scene(), sets, request);
+    const DeviceTimeTotals after = DeviceTimeSoFar();
+    EXPECT_EQ(after.timed_submits + after.untimed_submits - before.timed_submits - before.untimed_submits, 1);
+    ASSERT_EQ(batch.size(), sets.size());
+    for (size_t k = 0; k < sets.size(); ++k) {
+      clouds::CloudScene s = f.Scene();
+      s.params = sets[k];
+      const clouds::CloudImage one = cloud->Render(s, request);
+      EXPECT_EQ(0, std::memcmp(one.radiance.pixels.data(), batch[k].radiance.pixels.data(),
+                               one.radiance.pixels.size() * sizeof(float))) << "set " << k;
+      EXPECT_EQ(0, std::memcmp(one.transmittance.data(), batch[k].transmittance.data(), one.transmittance.size() * sizeof(float)))
+          << "set " << k;
+    }
+    EXPECT_NE(0, std::memcmp(batch[0].radiance.pixels.data(), batch[1].radiance.pixels.data(),
+                             batch[0].radiance.pixels.size() * sizeof(float)));
+    EXPECT_NE(0, std::memcmp(batch[0].radiance.pixels.data(), batch[2].radiance.pixels.data(),
+                             batch[0].radiance.pixels.size() * sizeof(float)));
+  }
+}
+
 // Renderers alive together share one pipeline and what is uploaded to it, and a
 // KeepCloudDevices keeps that pipeline after the last renderer goes: a calibration's stages
 // (statistics, inversion, refit, the game's image) each make a renderer, and the noise goes

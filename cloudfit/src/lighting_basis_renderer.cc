@@ -67,14 +67,14 @@ std::unique_ptr<LightingBasisCloudRenderer::Basis> LightingBasisCloudRenderer::M
   b->params = NonLinearPart(*scene.params);
   b->scene.params = &b->params;
   b->request = request;
-  clouds::CloudParams p = b->params;  // a = 0, k = 0
-  clouds::CloudScene s = scene;
-  s.params = &p;
-  b->c = inner_.Render(s, request);
-  p.scattering_albedo = 1.0;  // a = 1, k = 0: C + D
-  b->d = inner_.Render(s, request);
-  p.ambient_strength = 1.0;  // a = 1, k = 1: C + D + A
-  b->a = inner_.Render(s, request);
+  clouds::CloudParams c = b->params, d = b->params, a = b->params;  // a = 0, k = 0: C
+  d.scattering_albedo = 1.0;                                          // a = 1, k = 0: C + D
+  a.scattering_albedo = 1.0;                                          // a = 1, k = 1: C + D + A
+  a.ambient_strength = 1.0;
+  std::vector<clouds::CloudImage> images = inner_.RenderEach(scene, {&c, &d, &a}, request);  // one submission
+  b->c = std::move(images[0]);
+  b->d = std::move(images[1]);
+  b->a = std::move(images[2]);
   marches_ += 3;
   auto& cp = b->c.radiance.pixels;
   auto& dp = b->d.radiance.pixels;

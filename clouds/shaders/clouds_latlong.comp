@@ -7,7 +7,8 @@
 // Workgroup size: specialization constants 0 and 1 (vulkan_cloud_renderer.cc: 8 x 8 tiles).
 layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 
-// 0: CloudShadeParams in cloud_shade_fields.glsl.h's order, then image width and height.
+// 0: per layer (gl_WorkGroupID.z) a block: CloudShadeParams in cloud_shade_fields.glsl.h's
+// order, then image width, height and the workgroup row stride.
 layout(std430, set = 0, binding = 0) readonly buffer ParamBuffer { float P[]; };
 #ifdef CLOUD_HARDWARE_FILTER
 // 1-4: the textures as sampled images (vulkan_cloud_renderer.cc: RGBA32F, the RGB ones
@@ -39,7 +40,8 @@ layout(set = 0, binding = 4) uniform samplerBuffer weather_map;
 // 5: (sin, cos) of latitude per row [0, height), of longitude per column [height, height + width),
 // filled by the host in double (shader sin/cos carry ~1e-6 error).
 layout(std430, set = 0, binding = 5) readonly buffer TrigBuffer { vec2 trig[]; };
-// 6: output, 4 floats per pixel: radiance rgb (cd/m^2), transmittance.
+// 6: output, 4 floats per pixel, the layers' images one after another: radiance rgb
+// (cd/m^2), transmittance.
 layout(std430, set = 0, binding = 6) writeonly buffer OutBuffer { float out_rt[]; };
 
 #include "glsl_prelude.glsl.h"
@@ -80,12 +82,12 @@ Texel4 cloud_texel4(int texture, int texel) {
 #include "cloud_lighting.glsl.h"
 #include "cloud_march.glsl.h"
 
-CloudShadeParams load_params() {
+CloudShadeParams load_params(int base) {
   CloudShadeParams p;
   int k = 0;
-#define SC_FIELD(name) p.name = P[k]; k += 1;
-#define SC_FIELD_VEC3(name) p.name = vec3(P[k], P[k + 1], P[k + 2]); k += 3;
-#define SC_FIELD_INT(name) p.name = int(P[k]); k += 1;
+#define SC_FIELD(name) p.name = P[base + k]; k += 1;
+#define SC_FIELD_VEC3(name) p.name = vec3(P[base + k], P[base + k + 1], P[base + k + 2]); k += 3;
+#define SC_FIELD_INT(name) p.name = int(P[base + k]); k += 1;
 #include "cloud_shade_fields.glsl.h"
 #undef SC_FIELD
 #undef SC_FIELD_VEC3
@@ -106,19 +108,23 @@ int param_count() {
 }
 
 void main() {
+  // Layer z of a batch (CloudRenderer::RenderEach): its parameter block (the shade, then
+  // width, height and the row stride) and its image; a single render is layer 0.
   int n = param_count();
-  int width = int(P[n]);
-  int height = int(P[n + 1]);
+  int layer = int(gl_WorkGroupID.z);
+  int base = layer * (n + 3);
+  int width = int(P[base + n]);
+  int height = int(P[base + n + 1]);
   // The parameters before any control flow: lavapipe loads a uniform-indexed buffer
   // element once for all lanes only while every lane is known active; after the bounds
   // check's return it loads each of the ~90 fields lane by lane (a scalar loop through the
   // stack per field), which cost ~20% of the render.
-  CloudShadeParams p = load_params();
+  CloudShadeParams p = load_params(base);
   int x = int(gl_GlobalInvocationID.x);
   // Workgroup row r draws tile row (r * stride) mod rows (gpu/workgroup_order.h: lavapipe's
   // threads each take a contiguous block of workgroups; this spreads every block over the
   // sky and the ground alike). uint arithmetic: rows * stride < 2^32 for any image we accept.
-  uint tile_row = (gl_WorkGroupID.y * uint(P[n + 2])) % gl_NumWorkGroups.y;
+  uint tile_row = (gl_WorkGroupID.y * uint(P[base + n + 2])) % gl_NumWorkGroups.y;
   int y = int(tile_row * gl_WorkGroupSize.y + gl_LocalInvocationID.y);
   if (x >= width || y >= height) return;
   vec2 lat = trig[y];
@@ -126,7 +132,7 @@ void main() {
   // The same products as the C++ paths (cpu_cloud_renderer.cc), in the same order.
   vec3 view = vec3(lon.x * lat.y, lat.x, lon.y * lat.y);
   CloudResult r = cloud_march(view, p);
-  int o = (y * width + x) * 4;
+  int o = ((layer * height + y) * width + x) * 4;
   out_rt[o] = r.radiance.x;
   out_rt[o + 1] = r.radiance.y;
   out_rt[o + 2] = r.radiance.z;

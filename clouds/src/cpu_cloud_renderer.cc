@@ -71,6 +71,17 @@ class CpuCloudRenderer final : public CloudRenderer {
 
 }  // namespace
 
+std::vector<CloudImage> CloudRenderer::RenderEach(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                                  const CloudRenderRequest& request) {
+  std::vector<CloudImage> images;
+  for (const CloudParams* p : params) {
+    CloudScene s = scene;
+    s.params = p;
+    images.push_back(Render(s, request));
+  }
+  return images;
+}
+
 std::unique_ptr<CloudRenderer> CreateCpuCloudRenderer(CloudPrecision precision, int threads) {
   return std::make_unique<CpuCloudRenderer>(precision, threads);
 }

@@ -76,32 +76,43 @@ class CloudDevice {
                   images ? spirv::clouds_latlong_images_size : spirv::clouds_latlong_size, BindingTypes(images),
                   {kLocalX, kLocalY}) {}
 
-  CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) {
-    const CloudShadeD shade = ResolveCloudShade(scene, request);
+  // One dispatch of params.size() layers (gl_WorkGroupID.z): layer k reads parameter block
+  // k (the shade, then width, height and the workgroup row stride) and writes image k.
+  std::vector<CloudImage> Render(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                 const CloudRenderRequest& request) {
     const int w = request.width, h = request.height;
-    std::vector<float> params = PackCloudShade(shade);
-    params.push_back(static_cast<float>(w));
-    params.push_back(static_cast<float>(h));
     const uint32_t tile_rows = (h + kLocalY - 1) / kLocalY;
-    params.push_back(static_cast<float>(gpu::WorkgroupRowStride(tile_rows)));  // exact: < 2^24
+    std::vector<float> blocks;
+    for (const CloudParams* p : params) {
+      CloudScene s = scene;
+      s.params = p;
+      std::vector<float> block = PackCloudShade(ResolveCloudShade(s, request));
+      block.push_back(static_cast<float>(w));
+      block.push_back(static_cast<float>(h));
+      block.push_back(static_cast<float>(gpu::WorkgroupRowStride(tile_rows)));  // exact: < 2^24
+      blocks.insert(blocks.end(), block.begin(), block.end());
+    }
+    const size_t pixels = static_cast<size_t>(w) * h;
     std::lock_guard<std::mutex> lock(mutex_);
-    Upload(kParams, params);
+    Upload(kParams, blocks);
     UploadTextures(*scene.noise, *scene.weather);
     UploadTrig(w, h);
-    pipeline_.Map(kOutput, static_cast<size_t>(w) * h * 4 * sizeof(float), /*host_readback=*/true);
-    pipeline_.Dispatch((w + kLocalX - 1) / kLocalX, tile_rows, 1);
-
-    const float* out = static_cast<const float*>(pipeline_.Read(kOutput));
-    CloudImage image;
-    image.radiance = ImageRGB(w, h);
-    image.transmittance.resize(static_cast<size_t>(w) * h);
-    for (size_t i = 0; i < image.transmittance.size(); ++i) {
-      image.radiance.pixels[3 * i] = out[4 * i];
-      image.radiance.pixels[3 * i + 1] = out[4 * i + 1];
-      image.radiance.pixels[3 * i + 2] = out[4 * i + 2];
-      image.transmittance[i] = out[4 * i + 3];
+    pipeline_.Map(kOutput, params.size() * pixels * 4 * sizeof(float), /*host_readback=*/true);
+    pipeline_.Dispatch((w + kLocalX - 1) / kLocalX, tile_rows, static_cast<uint32_t>(params.size()));
+    std::vector<CloudImage> images(params.size());
+    for (size_t k = 0; k < params.size(); ++k) {
+      const float* out = static_cast<const float*>(pipeline_.Read(kOutput)) + k * pixels * 4;
+      CloudImage& image = images[k];
+      image.radiance = ImageRGB(w, h);
+      image.transmittance.resize(pixels);
+      for (size_t i = 0; i < pixels; ++i) {
+        image.radiance.pixels[3 * i] = out[4 * i];
+        image.radiance.pixels[3 * i + 1] = out[4 * i + 1];
+        image.radiance.pixels[3 * i + 2] = out[4 * i + 2];
+        image.transmittance[i] = out[4 * i + 3];
+      }
     }
-    return image;
+    return images;
   }
 
   std::string DeviceName() const { return ctx_->device_name(); }
@@ -256,7 +267,12 @@ class VulkanCloudRenderer final : public CloudRenderer {
  public:
   VulkanCloudRenderer(bool validation, CloudTextures textures) : device_(SharedCloudDevice(validation, textures)) {}
   CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) override {
-    return device_->Render(scene, request);
+    return std::move(device_->Render(scene, {scene.params}, request).front());
+  }
+  std::vector<CloudImage> RenderEach(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                     const CloudRenderRequest& request) override {
+    if (params.empty()) return {};
+    return device_->Render(scene, params, request);
   }
   std::string Describe() const override {
     return "vulkan clouds (" + device_->DeviceName() + (device_->images() ? ", sampled images" : "") + ")";

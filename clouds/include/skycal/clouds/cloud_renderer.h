@@ -48,6 +48,13 @@ class CloudRenderer {
   virtual ~CloudRenderer() = default;
   // Throws skycal::Error on invalid parameters, textures or request, or a backend failure.
   virtual CloudImage Render(const CloudScene& scene, const CloudRenderRequest& request) = 0;
+  // One image per parameter set over the scene's preset, textures and request, in order
+  // (scene.params is not read): what a fit renders at one point of its other parameters.
+  // The Vulkan backend draws them in one submission (one dispatch, a layer per set: the
+  // device's per-submission cost and the readback once, not per image); others, and this
+  // default, render them one by one. The images are Render's, bit for bit. Throws as Render.
+  virtual std::vector<CloudImage> RenderEach(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                             const CloudRenderRequest& request);
   virtual std::string Describe() const = 0;
 };
 
