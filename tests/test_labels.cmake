@@ -46,7 +46,8 @@ set(SKYCAL_SLOW_TESTS_MEASURED
   VulkanRenderers.DeviceTimeWithinWallTime                                      # 4171 (load 9)
   VulkanRenderers.StagedAndDirectAreBitIdentical                                # 6100 (load 9)
   VulkanRenderers.UnchangedContentIsNotUploadedAgain                            # 5762 (load 9)
-  VulkanRenderers.ManyCloudRendersKeepMemoryFlat                                # 17373 (load 9)
+  VulkanRenderers.ManyCloudRendersKeepMemoryFlat                                # 17373 (load 9; 1,000 renders since 2026-11-29)
+  VulkanRenderers.ManyCloudRendersOnSampledImagesKeepMemoryFlat                 # 1,000 renders, as the one above
   VulkanRenderers.RenderersMadeAndDroppedReturnTheirMemory                      # 17347 (load 9)
 )
 

@@ -49,10 +49,23 @@ constexpr uint32_t kLocalX = 8, kLocalY = 8;
 // the detail fbm's quads or its RGB image.
 enum Binding : uint32_t { kParams = 0, kBase = 1, kDetail = 2, kCurl = 3, kWeather = 4, kTrig = 5, kOutput = 6 };
 
-// FNV-1a over the bytes: the upload key of a texture without a checksum.
+// The upload key of noise made by hand (no checksum): FNV-1a's step over 8-byte words, not
+// bytes (34 MB of noise: ~3 ms a render instead of ~35). Each step is a bijection of the
+// running value for a given word and of the word for a given value, so content that
+// differs in one word always gives another key.
 uint64_t Fnv(const std::vector<float>& v, uint64_t h = 1469598103934665603ull) {
-  const auto* b = reinterpret_cast<const unsigned char*>(v.data());
-  for (size_t i = 0; i < v.size() * sizeof(float); ++i) h = (h ^ b[i]) * 1099511628211ull;
+  const size_t words = v.size() / 2;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(v.data());
+  for (size_t i = 0; i < words; ++i) {
+    uint64_t w;
+    std::memcpy(&w, bytes + 8 * i, 8);
+    h = (h ^ w) * 1099511628211ull;
+  }
+  if (v.size() % 2) {
+    uint32_t w;
+    std::memcpy(&w, bytes + 8 * words, 4);
+    h = (h ^ w) * 1099511628211ull;
+  }
   return h;
 }
 
