@@ -58,6 +58,12 @@ double Spread(Value value, int n, int dims, double u, double v, double w) {
   return hi - lo;
 }
 
+// image_probe.comp's bindings: the points, the four textures as images, the values.
+std::vector<VkDescriptorType> ProbeBindings() {
+  const VkDescriptorType img = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  return {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, img, img, img, img, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+}
+
 struct Probe {
   std::vector<float> points;  // 4 per point
   std::vector<float> gpu;     // kValues per point
@@ -66,9 +72,7 @@ struct Probe {
 // Uploads the textures as the renderer's image path does and reads back the probe.
 Probe RunProbe(std::shared_ptr<gpu::VulkanContext> ctx, const CloudNoise& noise, const WeatherMap& weather,
                std::vector<float> points) {
-  const VkDescriptorType img = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  gpu::ComputePipeline p(ctx, spirv::image_probe, spirv::image_probe_size,
-                         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, img, img, img, img, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
+  gpu::ComputePipeline p(ctx, spirv::image_probe, spirv::image_probe_size, ProbeBindings());
   constexpr uint32_t b = CloudNoise::kBaseSize, d = CloudNoise::kDetailSize, c = CloudNoise::kCurlSize;
   std::memcpy(p.MapImage(1, {b, b, b}), noise.base.data(), noise.base.size() * sizeof(float));
   p.Flush(1);
@@ -221,9 +225,7 @@ TEST(SampledImages, ImageAndBufferBindingsAreNotConfused) {
   } catch (const std::exception& e) {
     GTEST_SKIP() << "no Vulkan device: " << e.what();
   }
-  const VkDescriptorType img = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  gpu::ComputePipeline p(ctx, spirv::image_probe, spirv::image_probe_size,
-                         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, img, img, img, img, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER});
+  gpu::ComputePipeline p(ctx, spirv::image_probe, spirv::image_probe_size, ProbeBindings());
   auto message = [](auto f) {
     try {
       f();

@@ -14,6 +14,7 @@
 #include <iterator>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 // jpeglib.h needs size_t and FILE declared before it.
@@ -28,10 +29,15 @@
 namespace skycal::capture {
 namespace {
 
-std::string ReadBytes(const std::string& path) {
+// The file's first `n` bytes (fewer when it is shorter), or all of it (n = 0).
+std::string ReadBytes(const std::string& path, size_t n = 0) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path + ": cannot read image (no such file, or not readable)");
-  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+  if (n == 0) return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+  std::string head(n, '\0');
+  f.read(head.data(), static_cast<std::streamsize>(n));
+  head.resize(static_cast<size_t>(f.gcount()));
+  return head;
 }
 
 BracketImage Sized(int width, int height, int bits) {
@@ -241,8 +247,8 @@ int ExifOrientation(const std::string& path) {
 
 // The image as it is meant to be seen: EXIF orientation o (TIFF 6.0's numbering: where the
 // stored rows and columns go) undone. 5-8 swap width and height.
-BracketImage Oriented(const BracketImage& in, int o) {
-  if (o <= 1) return in;
+BracketImage Oriented(BracketImage in, int o) {
+  if (o <= 1) return in;  // the common case: no copy
   const bool swap = o >= 5;
   BracketImage out = Sized(swap ? in.height : in.width, swap ? in.width : in.height, in.bits);
   const int W = in.width, H = in.height;
@@ -266,13 +272,15 @@ BracketImage Oriented(const BracketImage& in, int o) {
 }  // namespace
 
 BracketImage DecodeCameraImage(const std::string& path) {
-  const std::string bytes = ReadBytes(path);
-  auto starts = [&](const char* magic, size_t n) { return bytes.size() >= n && std::memcmp(bytes.data(), magic, n) == 0; };
+  // The signature decides; a TIFF (16-bit developer output runs to 100 MB) is read by
+  // libtiff from the file, JPEG and PNG from memory.
+  const std::string head = ReadBytes(path, 8);
+  auto starts = [&](const char* magic, size_t n) { return head.size() >= n && std::memcmp(head.data(), magic, n) == 0; };
   BracketImage img;
   if (starts("\xFF\xD8\xFF", 3)) {
-    img = ReadJpeg(path, bytes);
+    img = ReadJpeg(path, ReadBytes(path));
   } else if (starts("\x89PNG\r\n\x1a\n", 8)) {
-    img = ReadPng(path, bytes);
+    img = ReadPng(path, ReadBytes(path));
   } else if (starts("II*\0", 4) || starts("MM\0*", 4)) {
     img = ReadTiff(path);
   } else {
@@ -280,7 +288,7 @@ BracketImage DecodeCameraImage(const std::string& path) {
                 "extension, and float images are already HDR)");
   }
   if (img.empty()) throw Error(path + ": cannot read image (it has no pixels)");
-  return Oriented(img, ExifOrientation(path));
+  return Oriented(std::move(img), ExifOrientation(path));
 }
 
 }  // namespace skycal::capture

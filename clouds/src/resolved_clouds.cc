@@ -137,27 +137,39 @@ void ShadeFromParams(const CloudParams& c, double time_s, CloudShadeD& s) {
   s.atmosphere_blend = c.atmosphere_blend_m;
 }
 
-// The light the atmosphere already models, into s: direct sun, the clear sky's SH-9 and
-// its irradiance on an upward face, the lit ground's radiance.
-void ShadeFromAtmosphere(const render::Preset& preset, const std::array<double, 3>& sun, double sun_scale, CloudShadeD& s) {
-  // Direct sun at the ground, the clear sky's SH-9 (no disc: the sun is the direct term)
-  // and the lit ground below.
-  // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
-  // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
-  // at dusk has no sunlit clouds rather than ones lit through the ground).
-  render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
-  for (double& e : e_sun) e *= sun_scale;  // CloudParams::sun_scale: the clouds' sun (and their ground's)
-  s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
+// The clear sky's SH-9 (no disc: the sun is the direct term) and its irradiance on an
+// upward face: a CPU render of the preset at kShWidth x kShHeight, the costly part of the
+// light, which depends on the preset and the sun alone.
+struct ClearSkyLight {
+  render::ShCoefficients sh;
+  render::Rgb e_up;
+};
+ClearSkyLight SkyLight(const render::Preset& preset, const std::array<double, 3>& sun) {
   render::RenderRequest sky_request;
   sky_request.sun_dir = sun;
   sky_request.width = kShWidth;
   sky_request.height = kShHeight;
   sky_request.sun_disc = false;
   const ImageRGB sky = render::CreateRenderer(render::Backend::kCpu)->Render(preset, sky_request);
-  const render::ShCoefficients sh = render::ProjectSh9(sky);
+  ClearSkyLight light;
+  light.sh = render::ProjectSh9(sky);
+  light.e_up = render::ShIrradiance(light.sh, {0.0, 1.0, 0.0});
+  return light;
+}
+
+// The light the atmosphere already models, into s: direct sun, the clear sky's SH-9 and
+// its irradiance on an upward face, the lit ground's radiance.
+void ShadeFromAtmosphere(const render::Preset& preset, const std::array<double, 3>& sun, double sun_scale,
+                         const ClearSkyLight& sky, CloudShadeD& s) {
+  // The sun below the horizon lights the clouds by the sky's ambient alone: no direct term
+  // (the LUT's rows below the horizon interpolate toward 0 but not to it; a still render
+  // at dusk has no sunlit clouds rather than ones lit through the ground).
+  render::Rgb e_sun = sun[1] > 0.0 ? render::SunIlluminanceAtGround(preset, sun) : render::Rgb{0.0, 0.0, 0.0};
+  for (double& e : e_sun) e *= sun_scale;  // CloudParams::sun_scale: the clouds' sun (and their ground's)
+  s.sun_illuminance = glsl::Vec3<double>(e_sun[0], e_sun[1], e_sun[2]);
   glsl::Vec3<double>* shs[9] = {&s.sh0, &s.sh1, &s.sh2, &s.sh3, &s.sh4, &s.sh5, &s.sh6, &s.sh7, &s.sh8};
-  for (int k = 0; k < 9; ++k) *shs[k] = glsl::Vec3<double>(sh[k][0], sh[k][1], sh[k][2]);
-  const render::Rgb e_up = render::ShIrradiance(sh, {0.0, 1.0, 0.0});
+  for (int k = 0; k < 9; ++k) *shs[k] = glsl::Vec3<double>(sky.sh[k][0], sky.sh[k][1], sky.sh[k][2]);
+  const render::Rgb& e_up = sky.e_up;
   s.sky_irradiance_up = glsl::Vec3<double>(std::max(e_up[0], 0.0), std::max(e_up[1], 0.0), std::max(e_up[2], 0.0));
   const double k = preset.ground_albedo / kPi, cos_sun = std::max(sun[1], 0.0);
   s.ground_radiance = glsl::Vec3<double>(k * (e_sun[0] * cos_sun + s.sky_irradiance_up.x),
@@ -186,27 +198,37 @@ void ShadeFromMarch(const MarchOptions& m, CloudShadeD& s) {
 
 }  // namespace
 
-CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request) {
-  if (!scene.preset || !scene.params || !scene.noise || !scene.weather) throw Error("cloud render: incomplete scene");
+std::vector<CloudShadeD> ResolveCloudShades(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                            const CloudRenderRequest& request) {
+  if (!scene.preset || !scene.noise || !scene.weather) throw Error("cloud render: incomplete scene");
+  for (const CloudParams* c : params)
+    if (!c) throw Error("cloud render: incomplete scene");
   std::string why;
   if (!request.IsValid(&why)) throw Error("cloud render request: " + why);
-  const CloudParams& c = *scene.params;
-  ValidateCloudParams(c, "cloud parameters");
+  for (const CloudParams* c : params) ValidateCloudParams(*c, "cloud parameters");
   ValidateCloudTextures(*scene.noise, *scene.weather, "cloud textures");
   const render::Preset& preset = *scene.preset;
   const auto sun = latlong::Normalized(request.sun_dir, "sun direction");
+  const ClearSkyLight sky = SkyLight(preset, sun);  // once for every parameter set
 
-  CloudShadeD s{};
-  ShadeFromParams(c, request.time_s, s);
-  s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
-  ShadeFromAtmosphere(preset, sun, c.sun_scale, s);
-  s.weather_width = scene.weather->width;
-  s.weather_height = scene.weather->height;
-  s.ms_octaves = static_cast<int>(c.ms_octaves);
-  s.integration = static_cast<int>(c.integration);
+  std::vector<CloudShadeD> shades;
+  for (const CloudParams* c : params) {
+    CloudShadeD s{};
+    ShadeFromParams(*c, request.time_s, s);
+    s.sun_dir = glsl::Vec3<double>(sun[0], sun[1], sun[2]);
+    ShadeFromAtmosphere(preset, sun, c->sun_scale, sky, s);
+    s.weather_width = scene.weather->width;
+    s.weather_height = scene.weather->height;
+    s.ms_octaves = static_cast<int>(c->ms_octaves);
+    s.integration = static_cast<int>(c->integration);
+    ShadeFromMarch(request.march, s);
+    shades.push_back(s);
+  }
+  return shades;
+}
 
-  ShadeFromMarch(request.march, s);
-  return s;
+CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request) {
+  return ResolveCloudShades(scene, {scene.params}, request).front();
 }
 
 std::vector<float> PackCloudShade(const CloudShadeD& d) {

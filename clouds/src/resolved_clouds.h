@@ -18,6 +18,10 @@ using CloudShadeF = CloudModelF::CloudShadeParams;
 
 // Validates everything (throws skycal::Error naming the field) and resolves.
 CloudShadeD ResolveCloudShade(const CloudScene& scene, const CloudRenderRequest& request);
+// The same for several parameter sets over one scene (scene.params not read): the clear
+// sky's SH-9, which depends on the preset and the sun alone, rendered once for all.
+std::vector<CloudShadeD> ResolveCloudShades(const CloudScene& scene, const std::vector<const CloudParams*>& params,
+                                            const CloudRenderRequest& request);
 
 // Field by field conversion to another scalar type (float: what the shader reads;
 // ceres::Jet: the lighting fit), generated from the field list.

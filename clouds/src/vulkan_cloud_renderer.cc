@@ -96,10 +96,8 @@ class CloudDevice {
     const int w = request.width, h = request.height;
     const uint32_t tile_rows = (h + kLocalY - 1) / kLocalY;
     std::vector<float> blocks;
-    for (const CloudParams* p : params) {
-      CloudScene s = scene;
-      s.params = p;
-      std::vector<float> block = PackCloudShade(ResolveCloudShade(s, request));
+    for (const CloudShadeD& shade : ResolveCloudShades(scene, params, request)) {
+      std::vector<float> block = PackCloudShade(shade);
       block.push_back(static_cast<float>(w));
       block.push_back(static_cast<float>(h));
       block.push_back(static_cast<float>(gpu::WorkgroupRowStride(tile_rows)));  // exact: < 2^24
@@ -299,12 +297,8 @@ class VulkanCloudRenderer final : public CloudRenderer {
 }  // namespace
 
 CloudTextures CloudTexturesFromEnvironment() {
-  const char* env = std::getenv("SKYCAL_VULKAN_TEXTURES");
-  const std::string v = env ? env : "";
-  if (v.empty() || v == "auto") return CloudTextures::kAuto;
-  if (v == "buffers") return CloudTextures::kBuffers;
-  if (v == "images") return CloudTextures::kImages;
-  throw Error("SKYCAL_VULKAN_TEXTURES = '" + v + "': expected auto, buffers or images");
+  // The values in the enum's order.
+  return static_cast<CloudTextures>(gpu::EnvironmentChoice("SKYCAL_VULKAN_TEXTURES", {"auto", "buffers", "images"}));
 }
 
 CloudTextureChoice ChooseCloudTextures(CloudTextures requested, bool discrete_gpu, const std::string& images_unsupported) {

@@ -2,6 +2,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <utility>
 
 #include "skycal/color/preview.h"
 #include "skycal/core/atomic_file.h"
@@ -14,9 +15,12 @@ namespace {
 
 // PNG bytes for an interleaved 8-bit RGB buffer. Compression level 6: zlib's default
 // balance; previews are written once, read often.
-std::vector<uint8_t> EncodePng(const std::vector<uint8_t>& rgb, int width, int height, const std::string& path) {
-  Raster r(width, height, 3, 8);
-  r.data = rgb;
+std::vector<uint8_t> EncodePng(std::vector<uint8_t> rgb, int width, int height, const std::string& path) {
+  Raster r;
+  r.width = width;
+  r.height = height;
+  r.channels = 3;
+  r.data = std::move(rgb);
   return skycal::EncodePng(r, path, 6);
 }
 
@@ -29,8 +33,7 @@ PreviewReport WritePreviewPng(const ImageRGB& linear, const std::string& png_pat
   PreviewReport report;
   std::vector<uint8_t> png;
   try {
-    const std::vector<uint8_t> rgb = ToDisplay8(linear, options, &report);
-    png = EncodePng(rgb, linear.width, linear.height, png_path);
+    png = EncodePng(ToDisplay8(linear, options, &report), linear.width, linear.height, png_path);
   } catch (const Error& e) {
     throw Error(png_path + ": " + e.what());
   }

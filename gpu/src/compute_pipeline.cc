@@ -8,13 +8,22 @@
 
 namespace skycal::gpu {
 
-MemoryMode MemoryModeFromEnvironment() {
-  const char* env = std::getenv("SKYCAL_VULKAN_MEMORY");
+int EnvironmentChoice(const char* variable, std::initializer_list<const char*> values) {
+  const char* env = std::getenv(variable);
   const std::string v = env ? env : "";
-  if (v.empty() || v == "auto") return MemoryMode::kAuto;
-  if (v == "direct") return MemoryMode::kDirect;
-  if (v == "staged") return MemoryMode::kStaged;
-  throw Error("SKYCAL_VULKAN_MEMORY = '" + v + "': expected auto, direct or staged");
+  if (v.empty()) return 0;
+  std::string expected;
+  int i = 0;
+  for (const char* option : values) {
+    if (v == option) return i;
+    expected += (i == 0 ? "" : (i + 1 == static_cast<int>(values.size()) ? " or " : ", ")) + std::string(option);
+    ++i;
+  }
+  throw Error(std::string(variable) + " = '" + v + "': expected " + expected);
+}
+
+MemoryMode MemoryModeFromEnvironment() {
+  return static_cast<MemoryMode>(EnvironmentChoice("SKYCAL_VULKAN_MEMORY", {"auto", "direct", "staged"}));  // enum order
 }
 
 namespace {

@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -28,6 +29,11 @@
 #include "skycal/gpu/vulkan_context.h"
 
 namespace skycal::gpu {
+
+// Which of `values` the environment variable names: its index, 0 when it is unset or
+// empty. Throws skycal::Error "<variable> = '<value>': expected a, b or c" otherwise. The
+// one parser of skycal's SKYCAL_VULKAN_* choices.
+int EnvironmentChoice(const char* variable, std::initializer_list<const char*> values);
 
 enum class MemoryMode { kAuto, kDirect, kStaged };
 // SKYCAL_VULKAN_MEMORY (unset or empty: kAuto); throws skycal::Error naming the variable and
