@@ -118,14 +118,14 @@ TEST(WeatherInversion, CarvingCapsTheColumnsTheClearSkyCrosses) {
   EXPECT_EQ(cloudfit::CloudTypeForTop(0.6), 0.5);
 }
 
-// Refinement: a render that matches moves nothing; one too opaque everywhere thins every
-// texel a ray crosses below its cloud top by gain x the excess; one too clear thickens only
-// the first texel along each ray that may hold cloud there (the one the march would show).
-TEST(WeatherInversion, RefinementMovesTheTexelsTheMarchWouldShow) {
+// Refinement: a render that matches moves nothing; one too opaque (or too clear) everywhere
+// thins (thickens) every texel a ray crosses below its cloud top by gain x the error; where
+// the rays crossing a texel disagree it moves by gain x their mean, so clear rays hold down a
+// texel that cloudy rays behind it ask for.
+TEST(WeatherInversion, RefinementMovesTheTexelsBelowTheirTopsByTheMeanOfTheirRays) {
   clouds::CloudParams p;
   const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
-  clouds::WeatherMap map = clouds::UniformWeatherMap(0.5, 0.0, 0.5, p.weather_extent_m);
-  map = clouds::NoiseWeatherMap(1, kMap, p.weather_extent_m, {});
+  clouds::WeatherMap map = clouds::NoiseWeatherMap(1, kMap, p.weather_extent_m, {});
   for (size_t t = 0; t < map.rgb.size() / 3; ++t) {
     map.rgb[3 * t] = 0.5f;
     map.rgb[3 * t + 2] = (t % 3 == 0) ? 0.0f : 0.5f;  // some stratus (top 0.3), the rest cumulus (top 0.6)
@@ -134,33 +134,35 @@ TEST(WeatherInversion, RefinementMovesTheTexelsTheMarchWouldShow) {
   std::vector<float> photo(static_cast<size_t>(kW) * kH, 0.5f);
   EXPECT_EQ(cloudfit::RefineCoverage(v, photo, photo, 0.5, &map), 0.0);
   EXPECT_EQ(map.rgb, start.rgb);
-  // Which texels each rule reaches, from the rays themselves.
-  std::vector<char> below_top(map.rgb.size() / 3, 0), first(map.rgb.size() / 3, 0);
-  for (size_t b = 0; b < v.rays.size();) {
-    size_t e = b;
-    bool found = false;
-    for (; e < v.rays.size() && v.rays[e].pixel == v.rays[b].pixel; ++e) {
-      const size_t t = static_cast<size_t>(v.rays[e].texel);
-      if (v.rays[e].fraction > (start.rgb[3 * t + 2] > 0.25f ? 0.6f : 0.3f)) continue;
-      below_top[t] = 1;
-      if (!found) first[t] = 1;
-      found = true;
-    }
-    b = e;
+  // Per texel, the links below its top, and the mean of a checkerboard of errors over them.
+  std::vector<double> links(map.rgb.size() / 3, 0.0), checker(map.rgb.size() / 3, 0.0);
+  for (const auto& s : v.rays) {
+    const size_t t = static_cast<size_t>(s.texel);
+    if (s.fraction > (start.rgb[3 * t + 2] > 0.25f ? 0.6f : 0.3f)) continue;
+    links[t] += 1.0;
+    checker[t] += (s.pixel % 2 == 0) ? 0.2 : -0.2;
   }
-  std::vector<float> thicker(photo), thinner(photo);
+  std::vector<float> thicker(photo), thinner(photo), mixed(photo);
   for (float& o : thicker) o += 0.2f;
   for (float& o : thinner) o -= 0.2f;
+  for (size_t i = 0; i < mixed.size(); ++i) mixed[i] += (i % 2 == 0) ? 0.2f : -0.2f;
   EXPECT_NEAR(cloudfit::RefineCoverage(v, photo, thicker, 0.5, &map), 0.2, 1e-6);
-  for (size_t t = 0; t < below_top.size(); ++t) EXPECT_NEAR(map.rgb[3 * t], below_top[t] ? 0.4f : 0.5f, 1e-6) << t;
+  int reached = 0;
+  for (size_t t = 0; t < links.size(); ++t) EXPECT_NEAR(map.rgb[3 * t], links[t] > 0 ? 0.4f : 0.5f, 1e-6) << t;
+  for (double l : links) reached += l > 0;
+  EXPECT_GT(reached, 1000);
   map = start;
   EXPECT_NEAR(cloudfit::RefineCoverage(v, photo, thinner, 0.5, &map), 0.2, 1e-6);
-  int thickened = 0;
-  for (size_t t = 0; t < first.size(); ++t) {
-    EXPECT_NEAR(map.rgb[3 * t], first[t] ? 0.6f : 0.5f, 1e-6) << t;
-    thickened += first[t];
+  for (size_t t = 0; t < links.size(); ++t) EXPECT_NEAR(map.rgb[3 * t], links[t] > 0 ? 0.6f : 0.5f, 1e-6) << t;
+  map = start;
+  EXPECT_NEAR(cloudfit::RefineCoverage(v, photo, mixed, 0.5, &map), 0.2, 1e-6);
+  int disagreeing = 0;
+  for (size_t t = 0; t < links.size(); ++t) {
+    const double want = links[t] > 0 ? 0.5 - 0.5 * checker[t] / links[t] : 0.5;
+    EXPECT_NEAR(map.rgb[3 * t], want, 1e-6) << t;
+    disagreeing += links[t] > 0 && std::abs(want - 0.5) < 0.099;  // crossed by clear and cloudy rays
   }
-  EXPECT_LT(thickened, std::count(below_top.begin(), below_top.end(), 1));  // the texels behind stay
+  EXPECT_GT(disagreeing, 100);
 }
 
 // Resolution by distance: a map of one value stays one value; a lone far texel spreads over

@@ -162,7 +162,6 @@ double RefineCoverage(const WeatherTexelView& v, const std::vector<float>& photo
       if (v.rays[i].fraction > TopForType(map->rgb[3 * t + 2])) continue;  // above the texel's cloud top
       sum[t] -= r;
       count[t] += 1.0;
-      if (r < 0.0) break;  // too clear: only the first texel that may hold cloud here
     }
     b = e;
   }

@@ -23,9 +23,12 @@
 //
 // The march's coverage -> opacity relation is monotone (what the base noise keeps above
 // 1 - coverage grows with coverage), so the map is then refined with renders: a pixel
-// rendered too opaque thins every texel its ray crosses below the texel's cloud top; a pixel
-// rendered too clear thickens the first texel its ray meets that may hold cloud there (the
-// one the march would show); each texel moves by gain x the mean of what its pixels ask.
+// rendered too opaque thins, and one rendered too clear thickens, every texel its ray crosses
+// below the texel's cloud top; each texel moves by gain x the mean of what its pixels ask, so
+// where the rays that cross a texel disagree the clear ones hold it down. (Thickening only the
+// first texel a too-clear ray meets, the one the march would show, pulled cloud toward the
+// camera: opacity RMS and IoU worse on every map of `skycal bench --suite weather-inversion`,
+// bench/results/weather_inversion.md.)
 #pragma once
 #include <functional>
 #include <vector>
