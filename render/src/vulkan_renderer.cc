@@ -29,7 +29,7 @@ constexpr uint32_t kLocalX = 128, kLocalY = 1;
 // Bindings of sky_latlong.comp.
 enum Binding : uint32_t { kUniforms = 0, kLuts = 1, kOutput = 2, kTrig = 3 };
 constexpr VkDescriptorType kBindingTypes[] = {
-    VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+    VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
     VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
 
 class VulkanSkyRenderer final : public SkyRenderer {
