@@ -55,11 +55,16 @@ TEST(WeatherInversion, LinksFollowTheMarchGeometry) {
   const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
   ASSERT_GT(v.constrained, 0);
   int wrapped = 0;
-  for (const auto& [texel, pix] : v.links) {
+  std::vector<char> linked(static_cast<size_t>(kMap) * kMap, 0);
+  for (const auto& s : v.rays) {
     bool w = false;
-    EXPECT_TRUE(LinkFollowsTheGeometry(p, texel, pix, &w)) << "texel " << texel % kMap << "," << texel / kMap << ", pixel " << pix;
+    EXPECT_TRUE(LinkFollowsTheGeometry(p, s.texel, s.pixel, &w))
+        << "texel " << s.texel % kMap << "," << s.texel / kMap << ", pixel " << s.pixel;
     wrapped += w;
+    linked[static_cast<size_t>(s.texel)] = 1;
   }
+  EXPECT_EQ(linked, v.linked);
+  EXPECT_EQ(v.constrained, std::count(linked.begin(), linked.end(), 1));
   // The corners of a 60 km map lie beyond the 35 km draw distance: only their copies are seen.
   EXPECT_GT(std::hypot(0.5 * p.weather_extent_m, 0.5 * p.weather_extent_m), p.draw_distance_m);
   EXPECT_GT(wrapped, 0);
@@ -105,7 +110,7 @@ TEST(WeatherInversion, CarvingCapsTheColumnsTheClearSkyCrosses) {
   EXPECT_FLOAT_EQ(map.rgb[3 * cumulus + 2], 0.5f);
   EXPECT_FLOAT_EQ(map.rgb[3 * clear], 0.0f);
   std::vector<char> seen(map.rgb.size() / 3, 0);
-  for (const auto& l : v.links) seen[static_cast<size_t>(l.first)] = 1;
+  for (const auto& s : v.rays) seen[static_cast<size_t>(s.texel)] = 1;
   ASSERT_GT(std::count(seen.begin(), seen.end(), 0), 0);  // the corners beyond the draw distance
   for (size_t t = 0; t < seen.size(); ++t) {
     if (seen[t]) {

@@ -1,10 +1,10 @@
 // Suite `weather-inversion`: the weather map inverted from a reference's cloud opacity
-// (cloudfit/weather_inversion.h, what `calibrate` runs on a partly cloudy photo: 256x128
+// (cloudfit/weather_inversion.h, what `calibrate` runs on a partly cloudy 512x256 photo: 512x256
 // renders, the statistics fit's 256-texel map over 60 km resampled to kInvertedMapSize)
 // against the map that made the reference (256 texels; the correlation on its grid). Truths: procedural noise (the scattered cumulus of the
 // calibrate tests), and three painted maps that are not noise: cumulus blobs, cloud streets
 // (bands), a front (a stratus sheet behind a soft edge). Each reference is the game's march
-// (CPU float, the game's steps) at 256x128, transmittance only, sun irrelevant; the inversion
+// (CPU float, the game's steps) at 512x256, transmittance only, sun irrelevant; the inversion
 // starts from a noise map of mean coverage 0.2 (what the statistics fit leaves) and renders
 // as calibrate does. Measured: IoU of the opacity masks (>= 0.5) and the opacity RMS over the
 // upper hemisphere, start -> inverted; the coverage correlation with the truth over the texels
@@ -34,7 +34,7 @@ namespace {
 
 // As calibrate: its renders, the statistics fit's map (the truths and the start), the map it
 // inverts (the start resampled).
-constexpr int kW = 256, kH = 128, kMap = 256, kInverted = cloudfit::kInvertedMapSize;
+constexpr int kW = 512, kH = 256, kMap = 256, kInverted = cloudfit::kInvertedMapSize;
 
 // A painted map: coverage c(x, z) in metres about the camera, one cloud type, no rain.
 template <typename F>
@@ -289,7 +289,7 @@ void RunCase(Scene& scene, CaseResult& c) {
 std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
   std::string md =
       "\n## The game's image of the inverted shapes\n\nThe reference lit: the default clear sky at the sun "
-      "(40 deg up) times the truth's transmittance plus its clouds (the game's march, 6 light samples), 256x128. "
+      "(40 deg up) times the truth's transmittance plus its clouds (the game's march, 6 light samples), 512x256. "
       "Per-pixel log RMSE and appearance error (core/appearance.h) over the upper hemisphere of the inverted shapes' "
       "image: under the truth's lighting, then under the lighting refitted on them as calibrate refits it "
       "(extinction and albedo held, the clouds' sun scale free; the free set: the conditioning's at the truth; start " +
@@ -316,7 +316,7 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
   std::string md =
       "# The weather map inverted from a reference's opacity, against its truth\n\n"
       "`skycal bench --suite weather-inversion` (bench/src/weather_inversion_suite.cc; cloudfit/weather_inversion.h). "
-      "References: the game's march (CPU float) at 256x128 over each truth map; the inversion starts from noise of "
+      "References: the game's march (CPU float) at 512x256 over each truth map; the inversion starts from noise of "
       "mean coverage 0.2 on a 256-texel map resampled to " + std::to_string(kInverted) + " and renders as `calibrate` does. IoU of the opacity masks (>= 0.5) and opacity RMS over the "
       "upper hemisphere; coverage correlation with the truth within 8 and 20 km of the camera. The issue's target: "
       "correlation >= 0.9.\n\n| map | IoU start -> inverted | opacity RMS start -> inverted | correlation <= 8 km "
@@ -348,7 +348,7 @@ Suite WeatherInversionSuite() {
   s.name = "weather-inversion";
   s.summary = "the weather map inverted from a reference's opacity (noise, painted blobs, bands, a front; --quick: blobs) "
               "against its truth: IoU, opacity RMS, coverage correlation";
-  s.error_metric = "opacity RMS of the inverted map's render against the reference, upper hemisphere, 256x128";
+  s.error_metric = "opacity RMS of the inverted map's render against the reference, upper hemisphere, 512x256";
   s.error_axis = "opacity RMS";
   s.pareto = false;
   s.markdown = Markdown;

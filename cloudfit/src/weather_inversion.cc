@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <numeric>
+#include <thread>
 #include <utility>
 
 #include "skycal/core/error.h"
@@ -41,8 +44,9 @@ int TexelOf(double x, double z, const clouds::CloudParams& p, int map_width, int
   return ((j % map_height + map_height) % map_height) * map_width + ((i % map_width + map_width) % map_width);
 }
 
-// Each texel's centre at the layer's mid altitude, to the pixel that sees it.
-void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v) {
+// Each texel's centre at the layer's mid altitude, to the pixel that sees it (into `centres`).
+void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v,
+                      std::vector<WeatherTexelView::RaySample>* centres) {
   const double R = p.planet_radius_m, hc = p.camera_height_m;
   const double r_mid = R + 0.5 * (p.layer_bottom_m + p.layer_top_m);
   for (int j = 0; j < v->map_height; ++j)
@@ -52,9 +56,7 @@ void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sk
       if (x * x + z * z >= r_mid * r_mid) continue;
       const double y = std::sqrt(r_mid * r_mid - x * x - z * z) - (R + hc);
       const int pix = PixelOf(x, y, z, p, v->width, v->height, sky);
-      if (pix < 0) continue;
-      v->links.emplace_back(j * v->map_width + i, pix);
-      v->rays.push_back({pix, j * v->map_width + i, 0.5f});
+      if (pix >= 0) centres->push_back({pix, j * v->map_width + i, 0.5f});
     }
 }
 
@@ -66,15 +68,14 @@ double DistanceToAltitude(const clouds::CloudParams& p, const latlong::Vec3d& d,
   return -b + std::sqrt(b * b + c);
 }
 
-// Each sky pixel's ray through the layer, front to back, to every texel under it (steps of
-// half a texel across and an eighth of the layer up; the map wraps as the march's sampler does).
-void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v) {
+void LinkPixelRows(const clouds::CloudParams& p, const std::vector<float>& sky, const WeatherTexelView& v, int row0,
+                   int row1, std::vector<WeatherTexelView::RaySample>* out) {
   const double R = p.planet_radius_m, hc = p.camera_height_m, thick = p.layer_top_m - p.layer_bottom_m;
-  const double texel_m = p.weather_extent_m / v->map_width;
-  for (int py = 0; py < v->height; ++py)
-    for (int px = 0; px < v->width; ++px) {
-      const int pix = py * v->width + px;
-      const latlong::Vec3d d = latlong::PixelDirection(px, py, v->width, v->height);
+  const double texel_m = p.weather_extent_m / v.map_width;
+  for (int py = row0; py < row1; ++py)
+    for (int px = 0; px < v.width; ++px) {
+      const int pix = py * v.width + px;
+      const latlong::Vec3d d = latlong::PixelDirection(px, py, v.width, v.height);
       if (d[1] <= 0.0 || (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f))) continue;
       const double t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
       const double t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
@@ -82,15 +83,52 @@ void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, 
       const double step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
       int last = -1;
       for (double t = t0; t <= t1; t += step) {
-        const int texel = TexelOf(t * d[0], t * d[2], p, v->map_width, v->map_height);
+        const int texel = TexelOf(t * d[0], t * d[2], p, v.map_width, v.map_height);
         if (texel == last) continue;
         last = texel;
         const double x = t * d[0], y = R + hc + t * d[1], z = t * d[2];
         const double f = (std::sqrt(x * x + y * y + z * z) - R - p.layer_bottom_m) / thick;
-        v->links.emplace_back(texel, pix);
-        v->rays.push_back({pix, texel, static_cast<float>(f)});
+        out->push_back({pix, texel, static_cast<float>(f)});
       }
     }
+}
+
+// The row splitting the rays' samples in two about equal halves (a row's rays all have its
+// elevation: their samples along the layer grow toward the horizon).
+int MiddleRow(const clouds::CloudParams& p, const WeatherTexelView& v, int rows, double* samples) {
+  const double thick = p.layer_top_m - p.layer_bottom_m, texel_m = p.weather_extent_m / v.map_width;
+  std::vector<double> cost(static_cast<size_t>(rows), 0.0);
+  for (int py = 0; py < rows; ++py) {
+    const latlong::Vec3d d = latlong::PixelDirection(0, py, v.width, v.height);
+    if (d[1] <= 0.0) continue;
+    const double t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
+    const double t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
+    const double cos_el = std::sqrt(std::max(0.0, 1.0 - d[1] * d[1]));
+    const double step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
+    cost[static_cast<size_t>(py)] = std::max(0.0, t1 - t0) / step + 1.0;
+  }
+  const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
+  *samples = total * v.width;  // an upper bound: repeated texels are skipped
+  double sum = 0.0;
+  for (int py = 0; py < rows; ++py)
+    if ((sum += cost[static_cast<size_t>(py)]) >= 0.5 * total) return py + 1;
+  return rows;
+}
+
+// Each sky pixel's ray through the layer, front to back, to every texel under it (steps of
+// half a texel across and an eighth of the layer up; the map wraps as the march's sampler
+// does), in pixel order: two threads take the rows of the upper hemisphere in two halves of
+// about equal work.
+void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, WeatherTexelView* v) {
+  double samples = 0.0;
+  const int upper = (v->height + 1) / 2, mid = MiddleRow(p, *v, upper, &samples);
+  std::vector<WeatherTexelView::RaySample> second;
+  second.reserve(static_cast<size_t>(0.5 * samples));
+  v->rays.reserve(static_cast<size_t>(samples) + static_cast<size_t>(v->map_width) * v->map_height);
+  std::thread worker([&] { LinkPixelRows(p, sky, *v, mid, upper, &second); });
+  LinkPixelRows(p, sky, *v, 0, mid, &v->rays);
+  worker.join();
+  v->rays.insert(v->rays.end(), second.begin(), second.end());
 }
 
 }  // namespace
@@ -100,15 +138,23 @@ WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_widt
   if (!sky.empty() && sky.size() != static_cast<size_t>(width) * height)
     throw Error("weather inversion: the sky mask has " + std::to_string(sky.size()) + " values, the photo " +
                 std::to_string(static_cast<size_t>(width) * height) + " pixels");
-  WeatherTexelView v{map_width, map_height, width, height, {}, 0};
-  LinkTexelCentres(p, sky, &v);
+  WeatherTexelView v{map_width, map_height, width, height, {}, 0, {}};
+  // The rays come out grouped by pixel in order, each front to back (the height rises along
+  // a ray); the centre links are sorted alone and merged in (a sort of the millions of
+  // samples at 512 pixels cost more than the renders).
+  std::vector<WeatherTexelView::RaySample> centres, rays;
+  LinkTexelCentres(p, sky, &v, &centres);
   LinkPixelRays(p, sky, &v);
-  std::sort(v.rays.begin(), v.rays.end(), [](const auto& a, const auto& b) {
+  const auto order = [](const auto& a, const auto& b) {
     return a.pixel != b.pixel ? a.pixel < b.pixel : a.fraction < b.fraction;
-  });
-  std::sort(v.links.begin(), v.links.end());
-  v.links.erase(std::unique(v.links.begin(), v.links.end()), v.links.end());
-  for (size_t i = 0; i < v.links.size(); ++i) v.constrained += (i == 0 || v.links[i].first != v.links[i - 1].first);
+  };
+  std::sort(centres.begin(), centres.end(), order);
+  rays.reserve(v.rays.size() + centres.size());
+  std::merge(v.rays.begin(), v.rays.end(), centres.begin(), centres.end(), std::back_inserter(rays), order);
+  v.rays = std::move(rays);
+  v.linked.assign(static_cast<size_t>(map_width) * map_height, 0);
+  for (const auto& s : v.rays) v.linked[static_cast<size_t>(s.texel)] = 1;
+  v.constrained = static_cast<int>(std::count(v.linked.begin(), v.linked.end(), 1));
   return v;
 }
 
@@ -126,8 +172,7 @@ void CarveCoverage(const WeatherTexelView& v, const std::vector<float>& opacity,
   const size_t n = static_cast<size_t>(v.map_width) * v.map_height;
   std::vector<double> lowest(n, std::numeric_limits<double>::infinity()), top(n, o.cumulus_top);
   std::vector<double> lowest_high(n, std::numeric_limits<double>::infinity());  // below fallback_top
-  std::vector<char> seen(n, 0);
-  for (const auto& [texel, pix] : v.links) seen[static_cast<size_t>(texel)] = 1;
+  const std::vector<char>& seen = v.linked;
   for (const auto& s : v.rays) {
     const size_t t = static_cast<size_t>(s.texel);
     const double op = opacity[static_cast<size_t>(s.pixel)];
@@ -172,8 +217,7 @@ double RefineCoverage(const WeatherTexelView& v, const std::vector<float>& photo
 
 void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, clouds::WeatherMap* map) {
   const int W = v.map_width, H = v.map_height;
-  std::vector<char> constrained(static_cast<size_t>(W) * H, 0);
-  for (const auto& l : v.links) constrained[static_cast<size_t>(l.first)] = 1;
+  const std::vector<char>& constrained = v.linked;
   const double texel_m = extent_m / W, pixel_rad = 2.0 * kPi / v.width;
   std::vector<float> out(map->rgb);
   for (int j = 0; j < H; ++j)

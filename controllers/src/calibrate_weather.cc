@@ -23,7 +23,16 @@
 namespace skycal::controllers {
 namespace {
 
-constexpr int kRenderWidth = 256;   // the refinement renders (pixels): a texel near the zenith is ~1 pixel at 512
+// The refinement renders' width (pixels): 512 where the photo divides into it (a texel near
+// the zenith is about a pixel there), else 256. At 256 for a 512-wide photo every other column
+// of the game's image fell between the rays the refinement followed, and the clouds near the
+// horizon hung in vertical streaks (bench/results/calibrate.md).
+constexpr int kRenderWidths[] = {512, 256};
+int RefinementWidth(int w, int h) {
+  for (int rw : kRenderWidths)
+    if (w % rw == 0 && h % (rw / 2) == 0) return rw;
+  return 0;
+}
 // The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
 // inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
 constexpr int kRefitIterations = 10;
@@ -47,8 +56,8 @@ void TurnOffHorizonRule(const std::filesystem::path& preset_json) {
 // on the map's grid (EXR row 0 is map row 0, as the weather map).
 void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::filesystem::path& path) {
   ImageRGB image(v.map_width, v.map_height);
-  for (const auto& l : v.links)
-    for (int c = 0; c < 3; ++c) image.pixels[3 * static_cast<size_t>(l.first) + c] = 1.0f;
+  for (size_t t = 0; t < v.linked.size(); ++t)
+    for (int c = 0; c < 3; ++c) image.pixels[3 * t + c] = v.linked[t] ? 1.0f : 0.0f;
   ExrAttributes attributes;
   attributes.strings["skycalContent"] = "weather-map texels the photo constrained (1) or left to the statistics (0)";
   WriteExrRGB(path.string(), image, attributes, ExrPixelType::kHalf);
@@ -130,14 +139,14 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   WeatherInversionRecord r;
   const render::Preset preset = render::LoadPreset(out / "preset.json");
   const int w = a.frame.radiance.width, h = a.frame.radiance.height;
-  const int factor = w / kRenderWidth;
+  const int rw = RefinementWidth(w, h), rh = rw / 2;
   if (preset.clouds_json.empty() || a.cloud_probability.empty() || !std::filesystem::exists(out / "preset.weather.exr")) {
     r.why_not = "no fitted clouds section, cloud probability or weather map to invert";
     return r;
   }
-  if (factor < 1 || w % kRenderWidth != 0 || h % (kRenderWidth / 2) != 0) {
-    r.why_not = "the photo's size " + std::to_string(w) + "x" + std::to_string(h) + " is not a multiple of " +
-                std::to_string(kRenderWidth) + "x" + std::to_string(kRenderWidth / 2) + " (the refinement renders')";
+  if (rw == 0) {
+    r.why_not = "the photo's size " + std::to_string(w) + "x" + std::to_string(h) +
+                " is not a multiple of 256x128 (the refinement renders')";
     return r;
   }
   clouds::CloudParams params = clouds::ParseCloudSectionText(preset.clouds_json, out / "preset.json");
@@ -150,7 +159,6 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
   std::vector<float> photo(a.cloud_probability.size());
   for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
-  const int rw = kRenderWidth, rh = kRenderWidth / 2;
   std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
   const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
   FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);

@@ -40,11 +40,11 @@ namespace skycal::cloudfit {
 
 // The links between the texels of the map (row-major) and the pixels of a `width` x `height`
 // lat-long (core/latlong.h): the sparse pattern of the Jacobian of pixel opacity by texel
-// coverage.
+// coverage, as each pixel's samples (`rays`: a (pixel, texel) pair per sample).
 struct WeatherTexelView {
   int map_width = 0, map_height = 0, width = 0, height = 0;
-  std::vector<std::pair<int, int>> links;  // (texel, pixel)
-  int constrained = 0;                     // texels with at least one link
+  std::vector<char> linked;  // per texel (row-major): 1 when some pixel's ray or centre link reaches it
+  int constrained = 0;       // texels linked
   // Each sky pixel's ray through the layer, front to back: the texel under each sample and
   // the sample's height fraction in the layer (0 base, 1 top).
   struct RaySample {
@@ -115,7 +115,9 @@ inline constexpr int kInvertedMapSize = 512;
 // and smooth. Returns the RMS of rendered - photo opacity of each render.
 struct InversionOptions {
   CarveOptions carve;
-  int refinements = 8;  // the opacity RMS flattens by about the eighth (bench/results/calibrate.md)
+  // The opacity RMS flattens by about the sixth at 512 pixels wide (on `sky` after 4, 6 and 8
+  // renders: 0.161, 0.153, 0.148; bench/results/calibrate.md).
+  int refinements = 6;
   // Coverage per unit opacity error: the march's opacity grows about twice as fast as the
   // mean coverage at partly cloudy coverages (the statistics fit's matched coverage steps).
   double step = 0.5;
