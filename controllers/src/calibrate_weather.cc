@@ -26,7 +26,7 @@ namespace {
 // The refinement renders' width (pixels): 512 where the photo divides into it (a texel near
 // the zenith is about a pixel there), else 256. At 256 for a 512-wide photo every other column
 // of the game's image fell between the rays the refinement followed, and the clouds near the
-// horizon hung in vertical streaks (bench/results/calibrate.md).
+// horizon hung in vertical streaks (bench/results/weather_inversion.md).
 constexpr int kRenderWidths[] = {512, 256};
 int RefinementWidth(int w, int h) {
   for (int rw : kRenderWidths)

@@ -11,8 +11,8 @@ layout(local_size_x_id = 0, local_size_y_id = 1, local_size_z = 1) in;
 #define SC_UNIFORM_IVEC4(name) ivec4 name;
 // The per-render parameters: a read-only storage buffer (vec4/ivec4 members: std430 is
 // std140 here), not a uniform block. On lavapipe (Mesa 22.3) this block as a uniform buffer
-// rewritten every render grew the driver's heap by ~150 KiB a dispatch and cost ~1 ms a
-// dispatch at small sizes; as storage it stays flat (tests/vulkan_renderers_test.cc,
+// rewritten every render grew the driver's heap at every dispatch and made small renders
+// slower; as storage it stays flat (tests/vulkan_renderers_test.cc; the numbers in
 // bench/results/gpu_lavapipe.md). All of a workgroup reads the same words either way.
 layout(std430, set = 0, binding = 0) readonly buffer SkyUniformBlock {
 #include "sky_uniforms.glsl.h"

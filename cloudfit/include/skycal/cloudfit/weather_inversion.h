@@ -115,8 +115,8 @@ inline constexpr int kInvertedMapSize = 512;
 // and smooth. Returns the RMS of rendered - photo opacity of each render.
 struct InversionOptions {
   CarveOptions carve;
-  // The opacity RMS flattens by about the sixth at 512 pixels wide (on `sky` after 4, 6 and 8
-  // renders: 0.161, 0.153, 0.148; bench/results/calibrate.md).
+  // The opacity RMS flattens by about the sixth render at 512 pixels wide
+  // (bench/results/weather_inversion.md).
   int refinements = 6;
   // Coverage per unit opacity error: the march's opacity grows about twice as fast as the
   // mean coverage at partly cloudy coverages (the statistics fit's matched coverage steps).
