@@ -26,6 +26,7 @@
 #include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
@@ -370,7 +371,7 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
 double ColumnAlternation(const ImageRGB& img, const ImageRGB& mask) {
   const auto ln_y = [&](int x, int y) {
     x = (x + img.width) % img.width;
-    return std::log(std::max(1e-12, 0.2126 * img.at(x, y, 0) + 0.7152 * img.at(x, y, 1) + 0.0722 * img.at(x, y, 2)));
+    return std::log(std::max(1e-12, Rec709Luminance<double>(img.at(x, y, 0), img.at(x, y, 1), img.at(x, y, 2))));
   };
   double sum = 0.0, n = 0.0;
   for (int y = 0; y < img.height / 2; ++y) {

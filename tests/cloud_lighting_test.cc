@@ -15,6 +15,7 @@
 #include "skycal/cloudfit/cloud_lighting_fit.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/testing/lighting_start.h"
 #include "skycal/render/renderer.h"
 
 namespace skycal::cloudfit {
@@ -308,21 +309,13 @@ Recovery Recover(double noise, uint32_t seed, bool values_from_renderer = true) 
   CloudLightingOptions co = o;
   co.max_iterations = 1;
   const CloudLightingReport at_truth = FitCloudLightingKnownSky(ref, s.sun, s.sky, sky, 1.0, probe, co, vulkan.get());
-  CloudLighting start = truth;
   o.auto_hold = false;
-  int sign = 1;
+  std::vector<int> free;
   for (int k = 0; k < kCloudLightingParameters; ++k) {
-    if (at_truth.parameters[k].held) {
-      o.hold.push_back(CloudLightingNames()[k]);
-      continue;
-    }
-    const auto& spec = CloudLightingSpec(k);
-    const int sk = (k == CloudLightingIndex("phase_g1") || k == CloudLightingIndex("phase_g2")) ? -1 : sign;
-    double v = truth[k] * (1.0 + 0.3 * sk);
-    if (v > spec.max || v < spec.min) v = truth[k] * (1.0 - 0.3 * sk);
-    start[k] = v;
-    sign = -sign;
+    if (at_truth.parameters[k].held) o.hold.push_back(CloudLightingNames()[k]);
+    else free.push_back(k);
   }
+  const CloudLighting start = synthetic::LightingOffTheTruth(truth, free, 0.3);
   KnownCloudShapes shapes = s.shapes;
   SetCloudLighting(start, &shapes.params);
   Recovery r;

@@ -68,21 +68,32 @@ double DistanceToAltitude(const clouds::CloudParams& p, const latlong::Vec3d& d,
   return -b + std::sqrt(b * b + c);
 }
 
+// Where a ray (unit direction d, upward) samples the layer: from kBaseFraction of it to its
+// top or the draw distance, in steps of half a texel across and an eighth of the layer up.
+struct RaySpan {
+  double t0 = 0.0, t1 = 0.0, step = 1.0;  // m along the ray
+};
+RaySpan SpanThroughLayer(const clouds::CloudParams& p, const WeatherTexelView& v, const latlong::Vec3d& d) {
+  const double thick = p.layer_top_m - p.layer_bottom_m, texel_m = p.weather_extent_m / v.map_width;
+  RaySpan s;
+  s.t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
+  s.t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
+  const double cos_el = std::sqrt(std::max(0.0, 1.0 - d[1] * d[1]));
+  s.step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
+  return s;
+}
+
 void LinkPixelRows(const clouds::CloudParams& p, const std::vector<float>& sky, const WeatherTexelView& v, int row0,
                    int row1, std::vector<WeatherTexelView::RaySample>* out) {
   const double R = p.planet_radius_m, hc = p.camera_height_m, thick = p.layer_top_m - p.layer_bottom_m;
-  const double texel_m = p.weather_extent_m / v.map_width;
   for (int py = row0; py < row1; ++py)
     for (int px = 0; px < v.width; ++px) {
       const int pix = py * v.width + px;
       const latlong::Vec3d d = latlong::PixelDirection(px, py, v.width, v.height);
       if (d[1] <= 0.0 || (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f))) continue;
-      const double t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
-      const double t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
-      const double cos_el = std::sqrt(std::max(0.0, 1.0 - d[1] * d[1]));
-      const double step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
+      const RaySpan span = SpanThroughLayer(p, v, d);
       int last = -1;
-      for (double t = t0; t <= t1; t += step) {
+      for (double t = span.t0; t <= span.t1; t += span.step) {
         const int texel = TexelOf(t * d[0], t * d[2], p, v.map_width, v.map_height);
         if (texel == last) continue;
         last = texel;
@@ -96,16 +107,12 @@ void LinkPixelRows(const clouds::CloudParams& p, const std::vector<float>& sky, 
 // The row splitting the rays' samples in two about equal halves (a row's rays all have its
 // elevation: their samples along the layer grow toward the horizon).
 int MiddleRow(const clouds::CloudParams& p, const WeatherTexelView& v, int rows, double* samples) {
-  const double thick = p.layer_top_m - p.layer_bottom_m, texel_m = p.weather_extent_m / v.map_width;
   std::vector<double> cost(static_cast<size_t>(rows), 0.0);
   for (int py = 0; py < rows; ++py) {
     const latlong::Vec3d d = latlong::PixelDirection(0, py, v.width, v.height);
     if (d[1] <= 0.0) continue;
-    const double t0 = DistanceToAltitude(p, d, p.layer_bottom_m + kBaseFraction * thick);
-    const double t1 = std::min(DistanceToAltitude(p, d, p.layer_top_m), p.draw_distance_m);
-    const double cos_el = std::sqrt(std::max(0.0, 1.0 - d[1] * d[1]));
-    const double step = std::min(0.5 * texel_m / std::max(cos_el, 1e-3), thick / 8.0 / std::max(d[1], 1e-3));
-    cost[static_cast<size_t>(py)] = std::max(0.0, t1 - t0) / step + 1.0;
+    const RaySpan span = SpanThroughLayer(p, v, d);
+    cost[static_cast<size_t>(py)] = std::max(0.0, span.t1 - span.t0) / span.step + 1.0;
   }
   const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
   *samples = total * v.width;  // an upper bound: repeated texels are skipped
