@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "camera_image.h"
-#include "parallel_rows.h"
+#include "skycal/core/parallel_chunks.h"
 #include "skycal/capture/exif_exposure.h"
 #include "skycal/capture/hdr_merge.h"
 #include "skycal/capture/raw_decode.h"
@@ -43,8 +43,8 @@ std::vector<Bracket> LoadBrackets(const std::vector<std::string>& paths, const s
   // RAW files carry their exposure in LibRaw's metadata (read while decoding).
   std::vector<std::optional<RawMetadata>> raw(paths.size());
   // Decoding dominates loading (PNG/JPEG inflate, RAW demosaic); one image per worker at a time.
-  const int workers = detail::ResolveThreads(threads);
-  detail::ParallelChunks(static_cast<int>(paths.size()), workers, [&](int b, int e, int) {
+  const int workers = ResolveThreads(threads);
+  ParallelChunks(static_cast<int>(paths.size()), workers, [&](int b, int e, int) {
     for (int i = b; i < e; ++i) {
       brackets[i].path = paths[i];
       if (IsRawPath(paths[i])) {

@@ -10,7 +10,7 @@
 #include <opencv2/photo.hpp>
 
 #include "emor_prior.h"
-#include "parallel_rows.h"
+#include "skycal/core/parallel_chunks.h"
 #include "skycal/core/error.h"
 
 namespace skycal::capture::detail {

@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "camera_response.h"
-#include "parallel_rows.h"
+#include "skycal/core/parallel_chunks.h"
 #include "skycal/core/error.h"
 
 namespace skycal::capture {
@@ -365,7 +365,7 @@ std::pair<std::vector<long long>, std::vector<long long>> MergePixels(const Merg
   r.flags.assign(static_cast<size_t>(w) * h, 0);
   std::vector<Tally> tallies(threads);  // fewer rows than threads: the unused ones stay zero
   for (auto& t : tallies) t.good_samples.assign(n, 0), t.clipped_samples.assign(n, 0);
-  detail::ParallelChunks(h, threads, [&](int y0, int y1, int worker) {
+  ParallelChunks(h, threads, [&](int y0, int y1, int worker) {
     // Counters live on this worker's stack and are stored once at the end: adjacent Tally
     // objects share cache lines, and per-pixel writes to them would serialise the workers.
     Tally t;
@@ -466,7 +466,7 @@ MergeResult MergeBrackets(const std::vector<Bracket>& brackets, const MergeOptio
   const auto t_tables = Clock::now();
 
   const int w = first.width, h = first.height;
-  const int threads = detail::ResolveThreads(options.threads);
+  const int threads = ResolveThreads(options.threads);
   const auto [good, clipped] = MergePixels(tb, n, w, h, threads, r);
   const auto t_merged = Clock::now();
   const long long total = static_cast<long long>(w) * h;

@@ -14,7 +14,7 @@
 #include <lensfun.h>
 
 #include "exiv2_read.h"
-#include "parallel_rows.h"
+#include "skycal/core/parallel_chunks.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 
@@ -397,7 +397,7 @@ Modifier MakeModifier(const LensProfile& p, int width, int height, int flags) {
 
 void Devignette(const lfModifier& mod, ImageRGB* img, int threads) {
   const int w = img->width;
-  detail::ParallelChunks(img->height, detail::ResolveThreads(threads), [&](int y0, int y1, int) {
+  ParallelChunks(img->height, ResolveThreads(threads), [&](int y0, int y1, int) {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; x += kChunk)
         mod.ApplyColorModification(&img->pixels[img->index(x, y)], static_cast<float>(x), static_cast<float>(y),
@@ -423,7 +423,7 @@ void RemapChannels(const lfModifier& mod, ImageRGB* img, int threads) {
     const float top = p[0] + ax * (p[3] - p[0]), bottom = p[stride] + ax * (p[stride + 3] - p[stride]);
     return top + ay * (bottom - top);
   };
-  detail::ParallelChunks(h, detail::ResolveThreads(threads), [&](int y0, int y1, int) {
+  ParallelChunks(h, ResolveThreads(threads), [&](int y0, int y1, int) {
     std::vector<float> coords(static_cast<size_t>(kChunk) * 6);
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < w; x += kChunk) {

@@ -14,6 +14,7 @@
 #include "skycal/clouds/composite.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/parallel_chunks.h"
 
 namespace skycal::cloudfit {
 namespace {
@@ -212,6 +213,43 @@ CloudStatistics ComputeCloudStatistics(const ImageRGB& img, const std::vector<fl
                                 sun, o);
 }
 
+namespace {
+
+// Per (bin, channel): each cloud pixel's (ln radiance, solid angle x opacity-class weight).
+using BinSamples = std::vector<std::vector<std::pair<double, double>>>;
+
+// One row's cloud pixels into `samples`, in the order of the serial loop over x.
+void GatherRow(const ImageRGB& img, const std::vector<float>& opacity, const std::vector<float>& sky,
+               const StatsGeometry& geometry, int y, const CloudStatsOptions& o, const CloudStatistics& s,
+               BinSamples* samples) {
+  const int eb = geometry.elevation_bin[y];
+  for (int x = 0; x < img.width; ++x) {
+    const size_t i = static_cast<size_t>(y) * img.width + x;
+    if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
+    double thin = 0.0, thick = 0.0;
+    OpacityClassWeights(o, opacity[i], &thin, &thick);
+    if (thick <= 0.0 && thin <= 0.0) continue;
+    const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
+    if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
+    const int sb = geometry.sun_bin[i];
+    if (sb < 0) continue;
+    const double class_weight[2] = {thin, thick};
+    for (int k = 0; k < 2; ++k) {
+      if (class_weight[k] <= 0.0) continue;
+      const int bin = s.Bin(sb, eb, k);
+      const double w = geometry.omega[i] * class_weight[k];
+      for (int ch = 0; ch < 3; ++ch)
+        (*samples)[static_cast<size_t>(bin) * 3 + ch].emplace_back(std::log(img.pixels[3 * i + ch]), w);
+    }
+  }
+}
+
+// A statistics fit computes these for every evaluation (hundreds of times over a few renders),
+// the GPU idle meanwhile: rows are gathered and bins sorted on up to this many threads.
+constexpr int kStatsThreads = 4;
+
+}  // namespace
+
 CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& images,
                                        const std::vector<const std::vector<float>*>& opacities,
                                        const std::vector<float>& sky, const std::array<double, 3>& sun,
@@ -225,56 +263,49 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
   s.weight.assign(bins, 0.0);
   s.log_quantile.assign(static_cast<size_t>(bins) * 3 * nq, 0.0);
   s.thick_share.assign(static_cast<size_t>(s.sun_bins) * s.elevation_bins, 0.0);
-  std::vector<std::vector<std::pair<double, double>>> samples(static_cast<size_t>(bins) * 3);
+  std::vector<std::shared_ptr<const StatsGeometry>> geometry;
+  std::vector<std::pair<size_t, int>> rows;  // (image, row) in the serial loop's order
   for (size_t image = 0; image < images.size(); ++image) {
     const ImageRGB& img = *images[image];
-    const std::vector<float>& opacity = *opacities[image];
     const size_t n = static_cast<size_t>(img.width) * img.height;
-    if (opacity.size() != n || (!sky.empty() && sky.size() != n))
-      throw Error("cloud stats: the opacity (" + std::to_string(opacity.size()) + ") and sky mask (" +
+    if (opacities[image]->size() != n || (!sky.empty() && sky.size() != n))
+      throw Error("cloud stats: the opacity (" + std::to_string(opacities[image]->size()) + ") and sky mask (" +
                   std::to_string(sky.size()) + ") must have one value per pixel of the " + std::to_string(img.width) +
                   "x" + std::to_string(img.height) + " image");
-    const std::shared_ptr<const StatsGeometry> geometry = StatsGeometryFor(img.width, img.height, sun, o);
-    for (int y = 0; y < img.height; ++y) {
-      const int eb = geometry->elevation_bin[y];
-      if (eb < 0) continue;
-      for (int x = 0; x < img.width; ++x) {
-        const size_t i = static_cast<size_t>(y) * img.width + x;
-        if (!sky.empty() && !(sky[i] >= 0.5f)) continue;
-        double thin = 0.0, thick = 0.0;
-        OpacityClassWeights(o, opacity[i], &thin, &thick);
-        if (thick <= 0.0 && thin <= 0.0) continue;
-        const float r = img.pixels[3 * i], g = img.pixels[3 * i + 1], b = img.pixels[3 * i + 2];
-        if (!(r > 0.0f && g > 0.0f && b > 0.0f && std::isfinite(r) && std::isfinite(g) && std::isfinite(b))) continue;
-        const int sb = geometry->sun_bin[i];
-        if (sb < 0) continue;
-        const double omega = geometry->omega[i];
-        const double class_weight[2] = {thin, thick};
-        for (int k = 0; k < 2; ++k) {
-          if (class_weight[k] <= 0.0) continue;
-          const int bin = s.Bin(sb, eb, k);
-          const double w = omega * class_weight[k];
-          s.weight[bin] += w;
-          for (int ch = 0; ch < 3; ++ch) samples[static_cast<size_t>(bin) * 3 + ch].emplace_back(std::log(img.pixels[3 * i + ch]), w);
-        }
-      }
-    }
+    geometry.push_back(StatsGeometryFor(img.width, img.height, sun, o));
+    for (int y = 0; y < img.height; ++y)
+      if (geometry.back()->elevation_bin[y] >= 0) rows.emplace_back(image, y);
   }
+  // Each worker gathers a contiguous run of rows; concatenated in worker order, every bin's
+  // samples (and so the weights summed from them) are the serial loop's, bit for bit.
+  const int workers = std::max(1, std::min({ResolveThreads(0), kStatsThreads, static_cast<int>(rows.size())}));
+  std::vector<BinSamples> parts(workers, BinSamples(static_cast<size_t>(bins) * 3));
+  ParallelChunks(static_cast<int>(rows.size()), workers, [&](int begin, int end, int w) {
+    for (int r = begin; r < end; ++r) {
+      const auto [image, y] = rows[r];
+      GatherRow(*images[image], *opacities[image], sky, *geometry[image], y, o, s, &parts[w]);
+    }
+  });
+  BinSamples samples = std::move(parts[0]);
+  for (int w = 1; w < workers; ++w)
+    for (size_t k = 0; k < samples.size(); ++k) samples[k].insert(samples[k].end(), parts[w][k].begin(), parts[w][k].end());
+  for (int bin = 0; bin < bins; ++bin)
+    for (const auto& p : samples[static_cast<size_t>(bin) * 3]) s.weight[bin] += p.second;
   for (int sb = 0; sb < s.sun_bins; ++sb)
     for (int eb = 0; eb < s.elevation_bins; ++eb) {
       const double thin = s.weight[s.Bin(sb, eb, 0)], thick = s.weight[s.Bin(sb, eb, 1)];
       s.thick_share[static_cast<size_t>(sb) * s.elevation_bins + eb] = thin + thick > 0.0 ? thick / (thin + thick) : 0.0;
     }
-  for (int bin = 0; bin < bins; ++bin)
-    for (int ch = 0; ch < 3; ++ch) {
-      auto& vw = samples[static_cast<size_t>(bin) * 3 + ch];
+  ParallelChunks(bins * 3, workers, [&](int begin, int end, int) {
+    for (int k = begin; k < end; ++k) {
+      auto& vw = samples[k];
       if (vw.empty()) continue;
       std::sort(vw.begin(), vw.end());
       double total = 0.0;
       for (const auto& p : vw) total += p.second;
-      for (int q = 0; q < nq; ++q)
-        s.log_quantile[(static_cast<size_t>(bin) * 3 + ch) * nq + q] = WeightedQuantileOfSorted(vw, total, o.quantiles[q]);
+      for (int q = 0; q < nq; ++q) s.log_quantile[static_cast<size_t>(k) * nq + q] = WeightedQuantileOfSorted(vw, total, o.quantiles[q]);
     }
+  });
   return s;
 }
 

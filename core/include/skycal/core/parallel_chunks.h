@@ -1,14 +1,16 @@
 // Splits [0, n) into one contiguous chunk per worker and runs fn(begin, end, worker) on
 // std::threads (the calling thread takes the first chunk). Exceptions from any worker are
-// rethrown on the caller, the lowest worker's first.
+// rethrown on the caller, the lowest worker's first. Chunks are in worker order, so results
+// gathered per worker and concatenated in that order are the serial loop's.
 #pragma once
 #include <algorithm>
 #include <exception>
 #include <thread>
 #include <vector>
 
-namespace skycal::capture::detail {
+namespace skycal {
 
+// `requested` threads, or the machine's when <= 0.
 inline int ResolveThreads(int requested) {
   if (requested > 0) return requested;
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -36,4 +38,4 @@ void ParallelChunks(int n, int workers, Fn&& fn) {
     if (e) std::rethrow_exception(e);
 }
 
-}  // namespace skycal::capture::detail
+}  // namespace skycal
