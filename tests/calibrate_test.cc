@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <sstream>
@@ -254,6 +255,25 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
   EXPECT_EQ(manifest["presets"].size(), 2u) << manifest.dump();
 }
 
+// Every image a fit record names (a relative *.png or *.exr under "images") exists beside it;
+// returns how many it names.
+int ExpectNamedImagesExist(const std::filesystem::path& record) {
+  int named = 0;
+  std::function<void(const nlohmann::json&, bool)> walk = [&](const nlohmann::json& j, bool images) {
+    if (j.is_object()) {
+      for (auto it = j.begin(); it != j.end(); ++it) walk(it.value(), images || it.key() == "images");
+    } else if (j.is_array()) {
+      for (const auto& v : j) walk(v, images);
+    } else if (images && j.is_string()) {
+      ++named;
+      EXPECT_TRUE(std::filesystem::exists(record.parent_path() / j.get<std::string>()))
+          << record << " names " << j.get<std::string>() << ", which is not there";
+    }
+  };
+  walk(ReadJsonFile(record.string()), false);
+  return named;
+}
+
 // A partly cloudy sky whose clouds are known (the game's own march over a procedural weather
 // map): with the weather map inverted from the photo and the lighting refitted on it, the
 // game's image is nearer the photo than with the statistics fit's map and lighting, and each
@@ -328,6 +348,11 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   for (const fit::FitDecision& d : inv.decisions) refitted |= d.what.starts_with("cloud lighting refitted");
   EXPECT_TRUE(refitted);
   EXPECT_TRUE(std::filesystem::exists(s / "inverted/scattered/fit.statistics.json"));
+  // The records name only images that are there: the refit's previews in fit.json; the
+  // statistics fit, whose outputs the refit replaces, drew none (it used to name six, three of
+  // them deleted with its fit/ and three the refit's under its names).
+  EXPECT_EQ(ExpectNamedImagesExist(s / "inverted/scattered/fit.json"), 3);
+  EXPECT_EQ(ExpectNamedImagesExist(s / "inverted/scattered/fit.statistics.json"), 0);
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/refit"));
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/inverted_shapes"));
 

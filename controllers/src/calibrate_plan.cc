@@ -1,5 +1,7 @@
 #include "calibrate_plan.h"
 
+#include "calibrate_weather.h"
+
 #include "skycal/capture/solar_position.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
@@ -97,6 +99,10 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     p.fit.cloud_stats.width = StatsWidth(a.frame.radiance.width);
     p.fit.clouds.mode = "off";
     p.draw_clouds = true;
+    // The refit on the placed clouds (calibrate_weather.h) replaces the statistics fit's
+    // outputs: its previews would be drawn and deleted.
+    const int w = a.frame.radiance.width, h = a.frame.radiance.height;
+    p.fit.previews = o.weather_map.empty() && !(o.invert_weather && InversionRenderWidth(w, h) != 0);
     p.decisions.push_back(Decision("clouds: clear pixels fit the atmosphere, cloud pixels the cloud lighting (statistics)",
                                    KindWhy(a)));
   } else {

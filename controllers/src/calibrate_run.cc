@@ -140,6 +140,7 @@ void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* 
     Log(o, std::string("the cloud statistics failed (") + e.what() + "): fitting the atmosphere alone");
     plan->fit.cloud_stats.enabled = false;
     plan->fit.cloud_mask = false;
+    plan->fit.previews = true;
     plan->draw_clouds = false;
     fit::FitDecision d;
     d.what = "no cloud layer: the cloud statistics found nothing to fit";

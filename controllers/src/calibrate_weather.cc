@@ -23,16 +23,6 @@
 namespace skycal::controllers {
 namespace {
 
-// The refinement renders' width (pixels): 512 where the photo divides into it (a texel near
-// the zenith is about a pixel there), else 256. At 256 for a 512-wide photo every other column
-// of the game's image fell between the rays the refinement followed, and the clouds near the
-// horizon hung in vertical streaks (bench/results/weather_inversion.md).
-constexpr int kRenderWidths[] = {512, 256};
-int RefinementWidth(int w, int h) {
-  for (int rw : kRenderWidths)
-    if (w % rw == 0 && h % (rw / 2) == 0) return rw;
-  return 0;
-}
 // The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
 // inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
 constexpr int kRefitIterations = 10;
@@ -88,6 +78,17 @@ void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, in
 
 }  // namespace
 
+// 512 where the photo divides into it (a texel near the zenith is about a pixel there), else
+// 256. At 256 for a 512-wide photo every other column of the game's image fell between the
+// rays the refinement followed, and the clouds near the horizon hung in vertical streaks
+// (bench/results/weather_inversion.md).
+int InversionRenderWidth(int width, int height) {
+  constexpr int kRenderWidths[] = {512, 256};
+  for (int rw : kRenderWidths)
+    if (width % rw == 0 && height % (rw / 2) == 0) return rw;
+  return 0;
+}
+
 fit::FitDecision WeatherInversionRecord::Decision() const {
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
@@ -139,7 +140,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   WeatherInversionRecord r;
   const render::Preset preset = render::LoadPreset(out / "preset.json");
   const int w = a.frame.radiance.width, h = a.frame.radiance.height;
-  const int rw = RefinementWidth(w, h), rh = rw / 2;
+  const int rw = InversionRenderWidth(w, h), rh = rw / 2;
   if (preset.clouds_json.empty() || a.cloud_probability.empty() || !std::filesystem::exists(out / "preset.weather.exr")) {
     r.why_not = "no fitted clouds section, cloud probability or weather map to invert";
     return r;
@@ -233,6 +234,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.out_dir = final_dir;
     k.cloud_stats.enabled = false;
     k.cloud_mask = false;
+    k.previews = true;  // its outputs are the ones kept
     k.clouds.mode = "on";
     k.clouds.preset = (shapes / "preset.json").string();
     k.clouds.hold.push_back("extinction");
@@ -266,7 +268,8 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
             "; the statistics fit's record: fit.statistics.json";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
     d.what = "cloud lighting: the statistics fit's kept";
-    d.why = std::string("the known-shapes refit failed: ") + e.what();
+    d.why = std::string("the known-shapes refit failed: ") + e.what() +
+            " (the statistics fit wrote no previews, report.png and fit/*.png, expecting the refit's)";
   }
   std::error_code ec;
   fs::remove_all(shapes, ec);

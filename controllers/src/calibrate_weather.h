@@ -28,6 +28,10 @@ struct WeatherInversionRecord {
   fit::FitDecision Decision() const;
 };
 
+// The inversion's refinement renders' width (pixels) for a width x height photo; 0: the photo
+// is no multiple of 256x128, and its map is not inverted.
+int InversionRenderWidth(int width, int height);
+
 // The march the inversion and the day's predictions render: the game's (its noise, steps and
 // optimisations) on `backend` (Vulkan, else the float CPU twin), its transmittance only (no
 // light toward the sun, which the opacity does not read).

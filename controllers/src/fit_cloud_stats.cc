@@ -120,9 +120,12 @@ nlohmann::json RunCloudStatsOnPhotos(const FitCloudStatsOptions& o, const std::v
   if (!o.IsValid(&why)) throw Error(why);
   const cloudfit::PhotoCloudStatsOptions po = PhotoCloudStatsOptionsFor(o);
   const cloudfit::PhotoCloudStatsResult result = cloudfit::FitPhotoCloudStats(po, photos, sky);
-  WriteCloudStatsPanels(fit_dir, photos, sky, result);
+  if (!fit_dir.empty()) WriteCloudStatsPanels(fit_dir, photos, sky, result);
   if (update) *update = result.update;
-  return cloudfit::PhotoCloudStatsJson(po, result);
+  nlohmann::json j = cloudfit::PhotoCloudStatsJson(po, result);
+  if (fit_dir.empty())
+    for (nlohmann::json& r : j["references"]) r.erase("images");
+  return j;
 }
 
 nlohmann::json AttachCloudStats(const cloudfit::CloudStatsPresetUpdate& update, const fs::path& preset_json,

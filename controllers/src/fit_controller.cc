@@ -300,8 +300,9 @@ void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Refer
 
 // The cloud statistics stage: the cloud lighting by statistics of the cloud pixels, into fit.json's
 // cloud_stats and the preset's clouds section.
-void RunCloudStatsStage(const FitCloudStatsOptions& cs, const LoadedReferences& l, const nlohmann::json& sky_refit,
-                        const StagedDirectory& out, fit::FitResult* result, fit::FitResultFile* file) {
+void RunCloudStatsStage(const FitCloudStatsOptions& cs, bool panels, const LoadedReferences& l,
+                        const nlohmann::json& sky_refit, const StagedDirectory& out, fit::FitResult* result,
+                        fit::FitResultFile* file) {
   std::vector<cloudfit::CloudStatsPhoto> photos;
   for (size_t r = 0; r < l.refs.size(); ++r) {
     const nlohmann::json& rr = sky_refit.contains("references") ? sky_refit["references"][r] : nlohmann::json();
@@ -311,21 +312,23 @@ void RunCloudStatsStage(const FitCloudStatsOptions& cs, const LoadedReferences& 
   file->clouds["decision"] = "--clouds stats: the atmosphere on the clear pixels, the cloud lighting by "
                              "statistics of the cloud pixels (fit.json's cloud_stats)";
   cloudfit::CloudStatsPresetUpdate update;
-  file->cloud_stats = RunCloudStatsOnPhotos(cs, photos, *result, out.staging() / "fit", &update);
+  file->cloud_stats = RunCloudStatsOnPhotos(cs, photos, *result, panels ? out.staging() / "fit" : fs::path(), &update);
   file->cloud_stats["preset"] = AttachCloudStats(update, out / "preset.json", &result->preset);
   file->cloud_stats["sky_refit"] = sky_refit;
 }
 
-// The previews are optional: an OCIO config that cannot be read ($OCIO naming a missing
-// file) leaves them out, never the fit. Then what the report reads beside the errors: the
+// The previews are optional (FitControllerOptions::previews): an OCIO config that cannot be
+// read ($OCIO naming a missing file) leaves them out, never the fit. Then what the report reads beside the errors: the
 // images, the fitted sun at the ground (model units: lux with FitOptions::absolute), the cloud mask.
 void WritePreviewsAndReportFields(const StagedDirectory& out, const FitControllerOptions& o, const LoadedReferences& l,
                                   const fit::FitResult& result, fit::FitResultFile* file) {
   const std::vector<fit::Reference>& refs = l.refs;
-  bool previews = true;
+  bool previews = o.previews;
   try {
-    WriteFitReport(out / "report.png", refs, result);
-    WriteFitPanels(out / "fit", refs, result);
+    if (previews) {
+      WriteFitReport(out / "report.png", refs, result);
+      WriteFitPanels(out / "fit", refs, result);
+    }
   } catch (const Error& e) {
     previews = false;
     FitLog(std::string("previews skipped (report.png, fit/*.png): ") + e.what() + "; the fit is complete");
@@ -418,7 +421,7 @@ fit::FitResultFile WriteFitOutputs(const FitControllerOptions& o, const StagedDi
   for (const auto& w : result.warnings) file.warnings.push_back(w);
   file.options = ResolvedFitOptionsJson(s->fo);
   file.clouds = CloudReportJson(o.clouds, s->joint);
-  if (o.cloud_stats.enabled) RunCloudStatsStage(o.cloud_stats, l, s->sky_refit, out, &result, &file);
+  if (o.cloud_stats.enabled) RunCloudStatsStage(o.cloud_stats, o.previews, l, s->sky_refit, out, &result, &file);
   if (shapes) AttachFittedClouds(s->joint, *shapes, out / "preset.json", &result.preset);
   SavePresetWithProvenance(out, result.preset, init_path, inputs, file);
   WritePreviewsAndReportFields(out, o, l, result, &file);

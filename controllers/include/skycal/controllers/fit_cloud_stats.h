@@ -47,7 +47,8 @@ nlohmann::json RefineCloudMaskAndRefitSky(const FitCloudStatsOptions& o, bool us
                                           const std::function<void()>& refit);
 
 // Runs the statistics fit over `photos` (one lighting for all of them) with the sky fit's
-// preset and exposures; writes the panels into `fit_dir`; returns fit.json's `cloud_stats`
+// preset and exposures; writes the panels into `fit_dir` (empty: none, and the record names
+// no image); returns fit.json's `cloud_stats`
 // and, when `update` is given, what the fitted preset takes from it. Throws skycal::Error
 // naming the reference when its size is not a multiple of PhotoCloudStatsOptions::width or it
 // has no cloud to fit.

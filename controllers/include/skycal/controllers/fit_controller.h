@@ -28,6 +28,10 @@ struct FitControllerOptions {
   fit::FitOptions fit;
   bool cloud_mask = false;  // leave pixels of cloud probability >= 0.5 out (fit_cloud_mask.h)
   bool report = true;       // write report.html (skycal_report) over the output directory
+  // Write report.png, fit/<ref>.{reference,fit,error}.png and the cloud statistics' panels
+  // (fit/<ref>.clouds.*.png). Off for a fit whose outputs the caller replaces: calibrate's
+  // statistics fit, when the refit on the placed clouds follows and writes its own.
+  bool previews = true;
   // Where the fit's progress lines go, one line each without a prefix (a controller that runs
   // the fit as one of its steps: calibrate); empty: stderr as "[fit] LINE", as `skycal fit`.
   std::function<void(const std::string&)> log;
