@@ -9,6 +9,7 @@
 #include "calibrate_figure.h"
 #include "calibrate_plan.h"
 #include "calibrate_weather.h"
+#include "cloud_warmup.h"
 #include "skycal/clouds/cloud_params.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/clouds/weather_map.h"
@@ -181,7 +182,10 @@ void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const st
 
 }  // namespace
 
-PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions& o) {
+namespace {
+
+// CalibratePhoto, `warmup` joined before the fit (null: none).
+PhotoCalibration CalibrateOnePhoto(const std::string& photo, const CalibrateOptions& o, CloudDeviceWarmup* warmup) {
   const auto t0 = std::chrono::steady_clock::now();
   Log(o, "reading " + photo);
   const PhotoAnalysis a = AnalysePhoto(photo, o);
@@ -200,6 +204,7 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
   FitPlan plan = PlanFit(a, out, final_dir, o);
   for (const fit::FitDecision& d : plan.decisions) Log(o, "  " + d.what);
   Log(o, "fitting" + std::string(plan.fit.cloud_stats.enabled ? " (atmosphere, then the clouds' lighting)" : " (atmosphere)"));
+  if (warmup) warmup->Join();
   RunThePlan(out, o, &plan);
   PlaceTheClouds(a, out, final_dir, o, &plan);
   fit::FitResultFile f = fit::ReadFitResultFile(out / "fit.json");
@@ -230,6 +235,12 @@ PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions
              Round(c.comparison.per_pixel_log_rmse) + ", appearance error " + Round(c.comparison.appearance_error) +
              (c.cloud_iou ? ", clouds' IoU " + Round(*c.cloud_iou) : std::string()) + " (" + Round(r.seconds, 0.1) + " s)");
   return r;
+}
+
+}  // namespace
+
+PhotoCalibration CalibratePhoto(const std::string& photo, const CalibrateOptions& o) {
+  return CalibrateOnePhoto(photo, o, nullptr);
 }
 
 int CalibrateResult::calibrated() const {
@@ -301,11 +312,12 @@ CalibrateResult RunCalibrate(const CalibrateOptions& o) {
   const bool dir_existed = fs::exists(st);
   if (!o.weather_map.empty()) clouds::LoadWeatherMap(o.weather_map, clouds::CloudParams{}.weather_extent_m);  // names the file
   const clouds::KeepCloudDevices keep;  // every stage's clouds on one pipeline: the noise uploaded once
+  CloudDeviceWarmup warmup(o.backend);  // while the first photo is analysed
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));
     try {
-      r.photos.push_back(CalibratePhoto(o.photos[i], o));
+      r.photos.push_back(CalibrateOnePhoto(o.photos[i], o, &warmup));
     } catch (const Error& e) {
       PhotoCalibration p;
       p.photo = o.photos[i];
