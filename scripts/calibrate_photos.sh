@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `skycal calibrate` as a user runs it, with no flag, on photographs: the bundled frames (the
 # ones the method was developed on) and a held-out set nobody tuned anything on (the other
-# Poly Haven HDRIs of npm @pmndrs/assets: parks, streets, bridges, interiors), reported apart.
+# Poly Haven HDRIs of npm @pmndrs/assets: parks, streets, bridges, interiors; and the three
+# worlds of Debian's blender-data the bundled set does not use), reported apart.
 # Per photo: what kind of sky it was called and why, where the sun came from, the game's
 # image against the photo (per-pixel log RMSE and appearance error, `fit.json`'s
 # `calibration`), and the seconds. For the two clear frames with hand masks, the game's image
@@ -10,8 +11,8 @@
 #
 #   scripts/calibrate_photos.sh [--build DIR] [--work DIR] [--results FILE]
 #
-# Needs datasets/real and the npm tarball in datasets/cache (datasets/fetch_real_skies.sh
-# --with-npm). Writes bench/results/calibrate.md (or --results); keeps every output in --work.
+# Needs datasets/real, the npm tarball and the blender-data package in datasets/cache
+# (datasets/fetch_real_skies.sh --with-npm). Writes bench/results/calibrate.md (or --results); keeps every output in --work.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=build
@@ -29,12 +30,16 @@ done
 SKYCAL=$BUILD/skycal
 REAL=datasets/real
 TGZ=datasets/cache/pmndrs-assets-1.7.0.tgz
+DEB=datasets/cache/blender-data_3.4.1+dfsg-2_all.deb
+DEB_WORLD_DIR=usr/share/blender/datafiles/studiolights/world
 BUNDLED=(sunrise sunset dawn city sky forest night)
 [ -x "$SKYCAL" ] || { echo "no $SKYCAL: build first" >&2; exit 2; }
 for f in "${BUNDLED[@]}"; do
   [ -f "$REAL/$f.exr" ] || { echo "no $REAL/$f.exr: run datasets/fetch_real_skies.sh --with-npm" >&2; exit 2; }
 done
-[ -f "$TGZ" ] || { echo "no $TGZ: run datasets/fetch_real_skies.sh --with-npm" >&2; exit 2; }
+for f in "$TGZ" "$DEB"; do
+  [ -f "$f" ] || { echo "no $f: run datasets/fetch_real_skies.sh --with-npm" >&2; exit 2; }
+done
 log() { echo "[calibrate_photos] $*" >&2; }
 rm -rf "$WORK"
 mkdir -p "$WORK/heldout_photos"
@@ -48,6 +53,12 @@ for js in $(tar tzf "$TGZ" | grep -E '^package/hdri/[a-z]+\.exr\.js$'); do
   tar -xzOf "$TGZ" "$js" | sed -e "s/^export default '[^,]*,//" -e "s/'[;[:space:]]*\$//" | base64 -d \
     >"$WORK/heldout_photos/$name.exr"
   HELDOUT+=("$name")
+done
+# And the worlds of Blender's package that the bundled set does not use (1024x512, the same
+# convention), named blender-* apart from the package's namesakes.
+for name in courtyard interior studio; do
+  dpkg-deb --fsys-tarfile "$DEB" | tar -xO "./$DEB_WORLD_DIR/$name.exr" >"$WORK/heldout_photos/blender-$name.exr"
+  HELDOUT+=("blender-$name")
 done
 
 # run SET PHOTO...: one calibrate command over the photos; its JSON and wall time kept.

@@ -54,7 +54,7 @@ print("Cloud IoU: the game's clouds (transmittance < 0.5) against the photo's (c
 header = ("| photo | kind (why) | sun | per-pixel log RMSE | appearance error | cloud IoU | before | s |\n"
           "|---|---|---|---|---|---|---|---|")
 for set_name, title, with_before in (("bundled", "Bundled frames (the method was developed on these)", True),
-                                     ("heldout", "Held out: the package's other 16 HDRIs (not used to set any threshold; their first run, and the three changes it prompted, in bench/results/calibrate_heldout_first_run.md)", False)):
+                                     ("heldout", "Held out: the package's other 16 HDRIs and Blender's 3 worlds the bundled set does not use (blender-*) (not used to set any threshold; the package's first run, and the three changes it prompted, in bench/results/calibrate_heldout_first_run.md; Blender's first run is this one)", False)):
     r, seconds, n = rows(set_name, with_before)
     print("## %s\n" % title)
     print("Whole command: %s s for %d photos.\n" % (seconds, n))
