@@ -391,6 +391,36 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_FALSE(std::filesystem::exists(s / "none"));
 }
 
+// A partly cloudy photo wider than the inversion's renders (1024x512): the refit reads it
+// box-averaged to 512 (its lighting and LUT need no more pixels; at 2048x1024 the full-size
+// refit was most of the command), while the game's image is rendered and judged at the photo's
+// own size, about as near the photo as the same sky's at 512.
+TEST(Calibrate, AWidePhotoIsRefittedAtTheInversionsWidthAndJudgedAtItsOwn) {
+  testing::ScratchDir s("calibrate-wide");
+  ASSERT_EQ(Skycal("weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 "
+                   "--mean-precipitation 0 --out " + s / "w.exr").rc, 0);
+  for (const char* size : {"512x256", "1024x512"}) {
+    const auto rr = Skycal("render --preset " + kRoot + "/datasets/presets/default_cloudy.json --clouds --weather-map " +
+                           s / "w.exr" + " --sun-elevation 40 --sun-azimuth 60 --size " + size + " --out " + s / (std::string("p") + size + ".exr"));
+    ASSERT_EQ(rr.rc, 0) << rr.err;
+    const auto c = Skycal("calibrate --photo " + s / (std::string("p") + size + ".exr") + " --out " + s / "out --no-report --no-export");
+    ASSERT_EQ(c.rc, 0) << c.err;
+  }
+  const fit::FitResultFile narrow = fit::ReadFitResultFile(s / "out/p512x256/fit.json");
+  const fit::FitResultFile wide = fit::ReadFitResultFile(s / "out/p1024x512/fit.json");
+  ASSERT_TRUE(narrow.calibration && wide.calibration);
+  bool refitted = false;
+  for (const fit::FitDecision& d : wide.decisions) refitted |= d.what.starts_with("cloud lighting refitted");
+  EXPECT_TRUE(refitted);
+  EXPECT_EQ(ReadExrRGB(s / "out/p1024x512/render.exr").image.width, 1024);
+  EXPECT_EQ(ReadExrRGB(s / "out/p1024x512/fit/photo.exr").image.width, 512);  // the refit's own image
+  std::cout << "[calibrate] 512 wide: per-pixel " << narrow.calibration->game_per_pixel_log_rmse << ", appearance "
+            << narrow.calibration->game_appearance_error << "; 1024 wide: " << wide.calibration->game_per_pixel_log_rmse
+            << ", " << wide.calibration->game_appearance_error << "\n";
+  EXPECT_LT(wide.calibration->game_per_pixel_log_rmse, 1.15 * narrow.calibration->game_per_pixel_log_rmse);
+  EXPECT_LT(wide.calibration->game_appearance_error, 1.15 * narrow.calibration->game_appearance_error + 0.01);
+}
+
 // How much a lat-long alternates from column to column between 5 and 25 degrees up, over the
 // sky pixels: the mean |second difference| of ln luminance across three neighbouring columns.
 double ColumnAlternation(const ImageRGB& img, const ImageRGB& mask) {

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "skycal/capture/latlong_frame.h"
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/cloud_params.h"
@@ -215,6 +216,36 @@ void MoveUp(const fs::path& from, const fs::path& to) {
   }
 }
 
+// The refit reads the photo and its sky mask box-averaged to the inversion's width (when the
+// photo is wider): a handful of lighting parameters and the sky's LUT need no more pixels,
+// and the known-shapes fit prepares and composites every cloud pixel at the references' size
+// (at 2048x1024 that was most of the command). The game's image is still rendered and judged
+// at the photo's size. Returns the (photo, mask) the refit reads.
+std::pair<fs::path, fs::path> RefitInputs(const StagedDirectory& out, const fs::path& dir) {
+  const fs::path photo = out / "photo.exr", mask = out / "mask.exr";
+  capture::LatLongFrame f = capture::ReadLatLongFrame(photo.string());
+  const int w = f.radiance.width, h = f.radiance.height, rw = InversionRenderWidth(w, h);
+  if (rw == 0 || rw >= w) return {photo, mask};
+  const int rh = rw / 2;
+  fs::create_directories(dir);
+  ImageRGB small(rw, rh);
+  std::vector<float> channel(static_cast<size_t>(w) * h);
+  for (int c = 0; c < 3; ++c) {
+    for (size_t i = 0; i < channel.size(); ++i) channel[i] = f.radiance.pixels[3 * i + c];
+    const std::vector<float> s = cloudfit::DownsampleLatLong(channel, w, h, rw, rh);
+    for (size_t i = 0; i < s.size(); ++i) small.pixels[3 * i + c] = s[i];
+  }
+  f.radiance = std::move(small);
+  capture::WriteLatLongFrame((dir / "photo.exr").string(), f);
+  const ExrRGB m = ReadExrRGB(mask.string());
+  for (size_t i = 0; i < channel.size(); ++i) channel[i] = m.image.pixels[3 * i];
+  const std::vector<float> sky = cloudfit::DownsampleLatLong(channel, w, h, rw, rh);
+  ImageRGB sky_rgb(rw, rh);
+  for (size_t i = 0; i < sky.size(); ++i) sky_rgb.pixels[3 * i] = sky_rgb.pixels[3 * i + 1] = sky_rgb.pixels[3 * i + 2] = sky[i];
+  WriteExrRGB((dir / "mask.exr").string(), sky_rgb, m.attributes, ExrPixelType::kHalf);
+  return {dir / "photo.exr", dir / "mask.exr"};
+}
+
 std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
   const auto c = clouds.is_object() ? clouds.find("cloud_pixels") : clouds.end();
   if (c == clouds.end() || !c->contains(when) || !(*c)[when].contains("log_rmse")) return "?";
@@ -224,12 +255,16 @@ std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
 }  // namespace
 
 fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir) {
-  const fs::path shapes = out.staging() / "inverted_shapes", refit_dir = out.staging() / "refit";
+  const fs::path shapes = out.staging() / "inverted_shapes", refit_dir = out.staging() / "refit",
+                 inputs = out.staging() / "refit_inputs";
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
   try {
     CopyPresetFiles(out.staging(), shapes);
     FitControllerOptions k = plan.fit;
+    const auto [photo, mask] = RefitInputs(out, inputs);
+    k.references = {photo.string()};
+    k.fit.mask_path = mask.string();
     k.init_preset = (shapes / "preset.json").string();
     k.out_dir = final_dir;
     k.cloud_stats.enabled = false;
@@ -274,6 +309,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
   std::error_code ec;
   fs::remove_all(shapes, ec);
   fs::remove_all(refit_dir, ec);
+  fs::remove_all(inputs, ec);
   return d;
 }
 
