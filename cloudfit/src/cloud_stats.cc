@@ -15,6 +15,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/parallel_chunks.h"
+#include "skycal/core/sort_pairs.h"
 
 namespace skycal::cloudfit {
 namespace {
@@ -300,7 +301,7 @@ CloudStatistics ComputeCloudStatistics(const std::vector<const ImageRGB*>& image
     for (int k = begin; k < end; ++k) {
       auto& vw = samples[k];
       if (vw.empty()) continue;
-      std::sort(vw.begin(), vw.end());
+      SortPairs(&vw);
       double total = 0.0;
       for (const auto& p : vw) total += p.second;
       for (int q = 0; q < nq; ++q) s.log_quantile[static_cast<size_t>(k) * nq + q] = WeightedQuantileOfSorted(vw, total, o.quantiles[q]);
