@@ -318,8 +318,9 @@ void RunCloudStatsStage(const FitCloudStatsOptions& cs, bool panels, const Loade
 }
 
 // The previews are optional (FitControllerOptions::previews): an OCIO config that cannot be
-// read ($OCIO naming a missing file) leaves them out, never the fit. Then what the report reads beside the errors: the
-// images, the fitted sun at the ground (model units: lux with FitOptions::absolute), the cloud mask.
+// read ($OCIO naming a missing file) leaves them out, never the fit. Then what the report
+// reads beside the errors: the images, the fitted sun at the ground (model units: lux with
+// FitOptions::absolute), the cloud mask.
 void WritePreviewsAndReportFields(const StagedDirectory& out, const FitControllerOptions& o, const LoadedReferences& l,
                                   const fit::FitResult& result, fit::FitResultFile* file) {
   const std::vector<fit::Reference>& refs = l.refs;
