@@ -143,7 +143,7 @@ void RegisterFitCloudArgs(VerbCommandLine& cl, FitCommandLine* c) {
   cl.Repeatable("--cloud-hold", &c->clouds.hold, "NAME", "hold a cloud lighting parameter at the preset's value (repeatable)");
   cl.Integer("--cloud-stats-width", &c->cloud_stats.width, 16, 1024, "expected pixels in [16, 1024]", "PX",
              "--clouds stats: width of the statistics' lat-long renders (default 128; the\n"
-             "frame's width must be a multiple)");
+             "frame, at least as wide, is averaged down to it)");
   cl.Integer("--cloud-stats-maps", &c->cloud_stats.maps, 1, 16, "expected an integer in [1, 16]", "N",
              "--clouds stats: weather maps (shape draws) the model pools (default 4; 2 renders each)");
   cl.Integer("--cloud-stats-iterations", &c->cloud_stats.max_iterations, 0, 200, "expected an integer in [0, 200]", "N",

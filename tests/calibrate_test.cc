@@ -394,12 +394,13 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
 // A partly cloudy photo wider than the inversion's renders (1024x512): the refit reads it
 // box-averaged to 512 (its lighting and LUT need no more pixels; at 2048x1024 the full-size
 // refit was most of the command), while the game's image is rendered and judged at the photo's
-// own size, about as near the photo as the same sky's at 512.
+// own size, about as near the photo as the same sky's at 512; and one of a size that divides
+// into none of the working widths (600x300).
 TEST(Calibrate, AWidePhotoIsRefittedAtTheInversionsWidthAndJudgedAtItsOwn) {
   testing::ScratchDir s("calibrate-wide");
   ASSERT_EQ(Skycal("weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 "
                    "--mean-precipitation 0 --out " + s / "w.exr").rc, 0);
-  for (const char* size : {"512x256", "1024x512"}) {
+  for (const char* size : {"512x256", "1024x512", "600x300"}) {
     const auto rr = Skycal("render --preset " + kRoot + "/datasets/presets/default_cloudy.json --clouds --weather-map " +
                            s / "w.exr" + " --sun-elevation 40 --sun-azimuth 60 --size " + size + " --out " + s / (std::string("p") + size + ".exr"));
     ASSERT_EQ(rr.rc, 0) << rr.err;
@@ -419,6 +420,19 @@ TEST(Calibrate, AWidePhotoIsRefittedAtTheInversionsWidthAndJudgedAtItsOwn) {
             << ", " << wide.calibration->game_appearance_error << "\n";
   EXPECT_LT(wide.calibration->game_per_pixel_log_rmse, 1.15 * narrow.calibration->game_per_pixel_log_rmse);
   EXPECT_LT(wide.calibration->game_appearance_error, 1.15 * narrow.calibration->game_appearance_error + 0.01);
+  // A size that is no multiple of the statistics' or the inversion's widths (600x300) is
+  // averaged down by area: its clouds are fitted and placed (it used to get no cloud layer,
+  // "too small for the cloud statistics"), and judged at 600x300.
+  const fit::FitResultFile odd = fit::ReadFitResultFile(s / "out/p600x300/fit.json");
+  ASSERT_TRUE(odd.calibration);
+  bool inverted = false;
+  for (const fit::FitDecision& d : odd.decisions) inverted |= d.what.starts_with("weather map inverted");
+  EXPECT_TRUE(inverted);
+  EXPECT_EQ(ReadExrRGB(s / "out/p600x300/render.exr").image.width, 600);
+  std::cout << "[calibrate] 600 wide: per-pixel " << odd.calibration->game_per_pixel_log_rmse << ", appearance "
+            << odd.calibration->game_appearance_error << "\n";
+  EXPECT_LT(odd.calibration->game_per_pixel_log_rmse, 1.15 * narrow.calibration->game_per_pixel_log_rmse);
+  EXPECT_LT(odd.calibration->game_appearance_error, 1.15 * narrow.calibration->game_appearance_error + 0.01);
 }
 
 // How much a lat-long alternates from column to column between 5 and 25 degrees up, over the

@@ -11,6 +11,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/latlong_resample.h"
 #include "skycal/render/irradiance.h"
 
 namespace skycal::cloudfit {
@@ -121,10 +122,18 @@ void MakeStatsReference(const PhotoCloudStatsOptions& o, const CloudStatsOptions
   const int w = ref.radiance.width, h = ref.radiance.height, f = w / o.width;
   CloudStatsReference& sr = d->stats_ref;
   sr.name = ref.name;
-  sr.radiance = BoxDown(ref.radiance, f);
+  if (w % o.width == 0) {
+    sr.radiance = BoxDown(ref.radiance, f);
+    sr.opacity = BoxDown(d->probability, w, h, f);
+    sr.sky = BoxDown(skymask, w, h, f);
+  } else {  // a photo of any size: area weights (core/latlong_resample.h)
+    const int ow = o.width, oh = o.width / 2;
+    sr.radiance = ImageRGB(ow, oh);
+    sr.radiance.pixels = AreaDownsampleLatLong(ref.radiance.pixels, w, h, 3, ow, oh);
+    sr.opacity = AreaDownsampleLatLong(d->probability, w, h, 1, ow, oh);
+    sr.sky = AreaDownsampleLatLong(skymask, w, h, 1, ow, oh);
+  }
   for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
-  sr.opacity = BoxDown(d->probability, w, h, f);
-  sr.sky = BoxDown(skymask, w, h, f);
   for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
   sr.sun_dir = ref.sun_dir;
   const CloudStatistics st = ComputeCloudStatistics(sr.radiance, sr.opacity, sr.sky, sr.sun_dir, so);
@@ -191,9 +200,9 @@ PreparedPhoto PreparePhoto(const PhotoCloudStatsOptions& o, const CloudStatsOpti
                            const fit::ReferenceFit& sky_fit, const render::Preset& preset, render::SkyRenderer& sky_renderer) {
   const fit::Reference& ref = *photo.ref;
   const int w = ref.radiance.width;
-  if (w % o.width != 0 || w / o.width < 1)
-    throw Error(ref.path + ": FitPhotoCloudStats: the frame is " + std::to_string(w) + " wide, not a multiple of " +
-                "PhotoCloudStatsOptions::width = " + std::to_string(o.width));
+  if (w < o.width)
+    throw Error(ref.path + ": FitPhotoCloudStats: the frame is " + std::to_string(w) + " wide, narrower than " +
+                "PhotoCloudStatsOptions::width = " + std::to_string(o.width) + " (the statistics average the photo down to it)");
   PreparedPhoto d;
   d.sun_check = CheckPhotoSun(ref, preset, sky_fit.exposure);
   ChooseProbability(o, photo, sky_fit, &d);

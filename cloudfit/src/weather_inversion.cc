@@ -8,6 +8,7 @@
 #include <thread>
 #include <utility>
 
+#include "skycal/core/latlong_resample.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/math_constants.h"
@@ -260,8 +261,7 @@ std::vector<double> InvertWeatherMap(const WeatherTexelView& view, double extent
 
 std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height) {
   if (out_width <= 0 || out_height <= 0 || width % out_width != 0 || height % out_height != 0)
-    throw Error("weather inversion: cannot box-average " + std::to_string(width) + "x" + std::to_string(height) + " to " +
-                std::to_string(out_width) + "x" + std::to_string(out_height));
+    return AreaDownsampleLatLong(values, width, height, 1, out_width, out_height);
   const int fx = width / out_width, fy = height / out_height;
   std::vector<float> out(static_cast<size_t>(out_width) * out_height, 0.0f);
   for (int y = 0; y < height; ++y)

@@ -24,11 +24,11 @@ fit::FitDecision Decision(const std::string& what, const std::string& why) {
   return d;
 }
 
-// The cloud statistics' render width (pixels): the default 128, halved down to 32 until it
-// divides the photo's width (the statistics average whole blocks of photo pixels); 0: none does.
+// The cloud statistics' render width (pixels): the default 128, halved down to 32 until the
+// photo is at least as wide (the statistics average the photo down to it); 0: it is narrower.
 int StatsWidth(int photo_width) {
   for (int w = FitCloudStatsOptions{}.width; w >= 32; w /= 2)
-    if (photo_width % w == 0) return w;
+    if (photo_width >= w) return w;
   return 0;
 }
 
@@ -92,7 +92,7 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     p.fit.clouds.mode = "off";
     p.decisions.push_back(Decision("no cloud layer: the photo is too small for the cloud statistics",
                                    KindWhy(a) + "; its width " + std::to_string(a.frame.radiance.width) +
-                                       " px has no divisor among 128, 64, 32 (PhotoCloudStatsOptions::width)"));
+                                       " px is under the statistics' smallest width, 32 (PhotoCloudStatsOptions::width)"));
   } else if (cloudy) {
     p.fit.cloud_mask = true;
     p.fit.cloud_stats.enabled = true;

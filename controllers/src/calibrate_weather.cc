@@ -79,14 +79,15 @@ void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, in
 
 }  // namespace
 
-// 512 where the photo divides into it (a texel near the zenith is about a pixel there), else
-// 256. At 256 for a 512-wide photo every other column of the game's image fell between the
-// rays the refinement followed, and the clouds near the horizon hung in vertical streaks
+// 512 for a photo at least that wide (a texel near the zenith is about a pixel there), else
+// 256; the photo averaged down to it (core/latlong_resample.h for a size that is no multiple).
+// At 256 for a 512-wide photo every other column of the game's image fell between the rays the
+// refinement followed, and the clouds near the horizon hung in vertical streaks
 // (bench/results/weather_inversion.md).
 int InversionRenderWidth(int width, int height) {
   constexpr int kRenderWidths[] = {512, 256};
   for (int rw : kRenderWidths)
-    if (width % rw == 0 && height % (rw / 2) == 0) return rw;
+    if (width >= rw && height >= rw / 2) return rw;
   return 0;
 }
 
@@ -148,7 +149,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   }
   if (rw == 0) {
     r.why_not = "the photo's size " + std::to_string(w) + "x" + std::to_string(h) +
-                " is not a multiple of 256x128 (the refinement renders')";
+                " is smaller than 256x128 (the refinement renders')";
     return r;
   }
   clouds::CloudParams params = clouds::ParseCloudSectionText(preset.clouds_json, out / "preset.json");

@@ -29,7 +29,7 @@ struct WeatherInversionRecord {
 };
 
 // The inversion's refinement renders' width (pixels) for a width x height photo; 0: the photo
-// is no multiple of 256x128, and its map is not inverted.
+// is smaller than 256x128, and its map is not inverted.
 int InversionRenderWidth(int width, int height);
 
 // The march the inversion and the day's predictions render: the game's (its noise, steps and

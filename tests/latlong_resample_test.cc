@@ -1,0 +1,66 @@
+// core/latlong_resample.h: identities, the block mean, the mean kept at any factor, bad sizes.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "skycal/core/error.h"
+#include "skycal/core/latlong_resample.h"
+
+namespace skycal {
+namespace {
+
+std::vector<float> Ramp(int w, int h, int channels) {
+  std::vector<float> v(static_cast<size_t>(w) * h * channels);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>((i * 37) % 101) / 7.0f;
+  return v;
+}
+
+TEST(AreaDownsampleLatLong, TheSameSizeIsTheInput) {
+  const auto v = Ramp(10, 5, 3);
+  EXPECT_EQ(AreaDownsampleLatLong(v, 10, 5, 3, 10, 5), v);
+}
+
+TEST(AreaDownsampleLatLong, AnIntegerFactorIsTheBlockMean) {
+  const auto v = Ramp(8, 4, 1);
+  const auto d = AreaDownsampleLatLong(v, 8, 4, 1, 4, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const float want = (v[(2 * y) * 8 + 2 * x] + v[(2 * y) * 8 + 2 * x + 1] + v[(2 * y + 1) * 8 + 2 * x] +
+                          v[(2 * y + 1) * 8 + 2 * x + 1]) / 4.0f;
+      EXPECT_NEAR(d[y * 4 + x], want, 1e-5) << x << "," << y;
+    }
+}
+
+// Every input pixel is shared out whole (its overlaps sum to 1), so the mean over the image
+// is kept at any factor, per channel; a constant stays constant.
+TEST(AreaDownsampleLatLong, AnyFactorKeepsTheMean) {
+  const int w = 1000, h = 500;
+  const auto v = Ramp(w, h, 3);
+  for (auto [ow, oh] : {std::pair{512, 256}, std::pair{333, 111}, std::pair{7, 3}}) {
+    const auto d = AreaDownsampleLatLong(v, w, h, 3, ow, oh);
+    for (int c = 0; c < 3; ++c) {
+      double in = 0.0, out = 0.0;
+      for (size_t i = c; i < v.size(); i += 3) in += v[i];
+      for (size_t i = c; i < d.size(); i += 3) out += d[i];
+      EXPECT_NEAR(out / (static_cast<double>(ow) * oh), in / (static_cast<double>(w) * h), 1e-4) << ow << " channel " << c;
+    }
+  }
+  const std::vector<float> flat(600 * 300, 2.5f);
+  for (float x : AreaDownsampleLatLong(flat, 600, 300, 1, 512, 256)) EXPECT_NEAR(x, 2.5f, 1e-6);
+}
+
+TEST(AreaDownsampleLatLong, BadSizesAreNamed) {
+  const auto v = Ramp(8, 4, 1);
+  for (auto [ow, oh] : {std::pair{16, 8}, std::pair{0, 2}, std::pair{4, 0}}) {
+    try {
+      AreaDownsampleLatLong(v, 8, 4, 1, ow, oh);
+      ADD_FAILURE() << ow << "x" << oh;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("8x4 to " + std::to_string(ow) + "x" + std::to_string(oh)), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(AreaDownsampleLatLong(v, 8, 4, 3, 4, 2), Error);  // 32 values are not 8x4x3
+}
+
+}  // namespace
+}  // namespace skycal
