@@ -108,11 +108,11 @@ done
 rm -rf "$WORK/fresh"
 
 # Larger photos, as users bring them (1K and 2K lat-longs): a partly cloudy sky the game's own
-# march draws (a procedural weather map, sun 40 deg up) at three sizes, one fresh calibrate
-# each; wall seconds and the game's image against it.
+# march draws (a procedural weather map, sun 40 deg up) at four sizes (1000x500: no multiple of
+# the working widths), one fresh calibrate each; wall seconds and the game's image against it.
 "$SKYCAL" weather --seed 5 --size 256 --mean-coverage 0.25 --coverage-contrast 3 --coverage-cells 8 \
   --mean-precipitation 0 --out "$WORK/sizes_weather.exr" >/dev/null 2>&1
-for size in 512x256 1024x512 2048x1024; do
+for size in 512x256 1000x500 1024x512 2048x1024; do
   "$SKYCAL" render --preset datasets/presets/default_cloudy.json --clouds --weather-map "$WORK/sizes_weather.exr" \
     --sun-elevation 40 --sun-azimuth 60 --size "$size" --out "$WORK/sizes_$size.exr" >/dev/null 2>&1
   t0=$(date +%s.%N)
