@@ -49,6 +49,21 @@ TEST(AreaDownsampleLatLong, AnyFactorKeepsTheMean) {
   for (float x : AreaDownsampleLatLong(flat, 600, 300, 1, 512, 256)) EXPECT_NEAR(x, 2.5f, 1e-6);
 }
 
+TEST(AreaDownsampleLatLong, BlocksAndFractionsByHand) {
+  std::vector<float> v(8 * 4);
+  for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(i);
+  const auto d = AreaDownsampleLatLong(v, 8, 4, 1, 4, 2);
+  ASSERT_EQ(d.size(), 8u);
+  EXPECT_FLOAT_EQ(d[0], (0.0f + 1 + 8 + 9) / 4);
+  EXPECT_FLOAT_EQ(d[7], (22.0f + 23 + 30 + 31) / 4);
+  // A size that is no multiple: output pixel 0 covers columns 0, 1 and 2/3 of column 2, rows 0
+  // and 1: (0 + 1 + 2 x 2/3 + 8 + 9 + 10 x 2/3) / (2 x 8/3).
+  const auto a = AreaDownsampleLatLong(v, 8, 4, 1, 3, 2);
+  ASSERT_EQ(a.size(), 6u);
+  EXPECT_NEAR(a[0], 26.0 / (16.0 / 3.0), 1e-5);
+  EXPECT_THROW(AreaDownsampleLatLong(v, 8, 4, 1, 16, 8), Error);  // larger: refused
+}
+
 TEST(AreaDownsampleLatLong, BadSizesAreNamed) {
   const auto v = Ramp(8, 4, 1);
   for (auto [ow, oh] : {std::pair{16, 8}, std::pair{0, 2}, std::pair{4, 0}}) {

@@ -191,20 +191,5 @@ TEST(WeatherInversion, SmoothingFollowsThePixelFootprint) {
   EXPECT_NEAR(map.rgb[3 * (far + 1)], 0.25f + 0.75f / 25.0f, 1e-6);
 }
 
-TEST(WeatherInversion, DownsampleAveragesBlocks) {
-  std::vector<float> v(8 * 4);
-  for (size_t i = 0; i < v.size(); ++i) v[i] = static_cast<float>(i);
-  const auto d = cloudfit::DownsampleLatLong(v, 8, 4, 4, 2);
-  ASSERT_EQ(d.size(), 8u);
-  EXPECT_FLOAT_EQ(d[0], (0.0f + 1 + 8 + 9) / 4);
-  EXPECT_FLOAT_EQ(d[7], (22.0f + 23 + 30 + 31) / 4);
-  // A size that is no multiple: area weights (core/latlong_resample.h). Output pixel 0 covers
-  // columns 0, 1 and 2/3 of column 2, rows 0 and 1: (0 + 1 + 2 x 2/3 + 8 + 9 + 10 x 2/3) / (2 x 8/3).
-  const auto a = cloudfit::DownsampleLatLong(v, 8, 4, 3, 2);
-  ASSERT_EQ(a.size(), 6u);
-  EXPECT_NEAR(a[0], 26.0 / (16.0 / 3.0), 1e-5);
-  EXPECT_THROW(cloudfit::DownsampleLatLong(v, 8, 4, 16, 8), Error);  // larger: refused
-}
-
 }  // namespace
 }  // namespace skycal

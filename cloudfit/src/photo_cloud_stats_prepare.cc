@@ -17,31 +17,6 @@
 namespace skycal::cloudfit {
 namespace {
 
-// Box average by an integer factor (a lat-long keeps its 2:1 shape and pixel centres).
-ImageRGB BoxDown(const ImageRGB& in, int f) {
-  ImageRGB out(in.width / f, in.height / f);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < 3; ++c) {
-        double s = 0.0;
-        for (int j = 0; j < f; ++j)
-          for (int i = 0; i < f; ++i) s += in.at(x * f + i, y * f + j, c);
-        out.at(x, y, c) = static_cast<float>(s / (f * f));
-      }
-  return out;
-}
-std::vector<float> BoxDown(const std::vector<float>& in, int w, int h, int f) {
-  std::vector<float> out(static_cast<size_t>(w / f) * (h / f));
-  for (int y = 0; y < h / f; ++y)
-    for (int x = 0; x < w / f; ++x) {
-      double s = 0.0;
-      for (int j = 0; j < f; ++j)
-        for (int i = 0; i < f; ++i) s += in[static_cast<size_t>(y * f + j) * w + x * f + i];
-      out[static_cast<size_t>(y) * (w / f) + x] = static_cast<float>(s / (f * f));
-    }
-  return out;
-}
-
 // The photo's sun against the model's, in model units (the photo divided by the sky fit's
 // exposure): the clouds' direct light is the model's sun x transmittance, and a sky fit
 // without the disc does not pin it (the exposure x LUT gauge keeps the initial preset's
@@ -119,20 +94,14 @@ std::vector<float> ClassifyPixels(const fit::Reference& ref, PreparedPhoto* d) {
 // here, naming the file.
 void MakeStatsReference(const PhotoCloudStatsOptions& o, const CloudStatsOptions& so, const fit::Reference& ref,
                         double exposure, const std::vector<float>& skymask, PreparedPhoto* d) {
-  const int w = ref.radiance.width, h = ref.radiance.height, f = w / o.width;
+  // Averaged down to o.width (block means for a multiple, area weights for any other size).
+  const int w = ref.radiance.width, h = ref.radiance.height, ow = o.width, oh = o.width / 2;
   CloudStatsReference& sr = d->stats_ref;
   sr.name = ref.name;
-  if (w % o.width == 0) {
-    sr.radiance = BoxDown(ref.radiance, f);
-    sr.opacity = BoxDown(d->probability, w, h, f);
-    sr.sky = BoxDown(skymask, w, h, f);
-  } else {  // a photo of any size: area weights (core/latlong_resample.h)
-    const int ow = o.width, oh = o.width / 2;
-    sr.radiance = ImageRGB(ow, oh);
-    sr.radiance.pixels = AreaDownsampleLatLong(ref.radiance.pixels, w, h, 3, ow, oh);
-    sr.opacity = AreaDownsampleLatLong(d->probability, w, h, 1, ow, oh);
-    sr.sky = AreaDownsampleLatLong(skymask, w, h, 1, ow, oh);
-  }
+  sr.radiance = ImageRGB(ow, oh);
+  sr.radiance.pixels = AreaDownsampleLatLong(ref.radiance.pixels, w, h, 3, ow, oh);
+  sr.opacity = AreaDownsampleLatLong(d->probability, w, h, 1, ow, oh);
+  sr.sky = AreaDownsampleLatLong(skymask, w, h, 1, ow, oh);
   for (float& v : sr.radiance.pixels) v = static_cast<float>(v / exposure);  // model units
   for (float& v : sr.sky) v = v >= 0.99f ? 1.0f : 0.0f;  // a mixed pixel is not a cloud sample
   sr.sun_dir = ref.sun_dir;

@@ -8,7 +8,6 @@
 #include <thread>
 #include <utility>
 
-#include "skycal/core/latlong_resample.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/math_constants.h"
@@ -257,18 +256,6 @@ std::vector<double> InvertWeatherMap(const WeatherTexelView& view, double extent
     SmoothCoverageByFootprint(view, extent_m, map);
   }
   return rms;
-}
-
-std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height) {
-  if (out_width <= 0 || out_height <= 0 || width % out_width != 0 || height % out_height != 0)
-    return AreaDownsampleLatLong(values, width, height, 1, out_width, out_height);
-  const int fx = width / out_width, fy = height / out_height;
-  std::vector<float> out(static_cast<size_t>(out_width) * out_height, 0.0f);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      out[static_cast<size_t>(y / fy) * out_width + x / fx] += values[static_cast<size_t>(y) * width + x];
-  for (float& o : out) o /= static_cast<float>(fx * fy);
-  return out;
 }
 
 }  // namespace skycal::cloudfit

@@ -26,6 +26,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/latlong_resample.h"
 #include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
@@ -140,7 +141,7 @@ PhotoClouds PhotoCloudsOf(const DayFrame& f) {
   int mw = 0, mh = 0;
   const std::vector<float> mask = ReadExrChannel((fs::path(f.dir) / "mask.exr").string(), "R", &mw, &mh);
   const std::vector<float> p = EstimatedCloudProbability(photo.radiance, *photo.sun_direction, DefaultPresetPath());
-  PhotoClouds c{cloudfit::DownsampleLatLong(p, w, h, kWidth, kHeight), cloudfit::DownsampleLatLong(mask, w, h, kWidth, kHeight)};
+  PhotoClouds c{AreaDownsampleLatLong(p, w, h, 1, kWidth, kHeight), AreaDownsampleLatLong(mask, w, h, 1, kWidth, kHeight)};
   for (int y = 0; y < kHeight; ++y)
     if (latlong::Latitude(y, kHeight) <= 0.0)
       for (int x = 0; x < kWidth; ++x) c.sky[static_cast<size_t>(y) * kWidth + x] = 0.0f;

@@ -17,6 +17,7 @@
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/latlong_resample.h"
 #include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
@@ -162,8 +163,8 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
   std::vector<float> photo(a.cloud_probability.size());
   for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
-  std::vector<float> photo_small = cloudfit::DownsampleLatLong(photo, w, h, rw, rh);
-  const std::vector<float> sky_small = cloudfit::DownsampleLatLong(a.mask.sky, w, h, rw, rh);
+  std::vector<float> photo_small = AreaDownsampleLatLong(photo, w, h, 1, rw, rh);
+  const std::vector<float> sky_small = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
   FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
   // The march's transmittance through the map being refined.
@@ -229,21 +230,15 @@ std::pair<fs::path, fs::path> RefitInputs(const StagedDirectory& out, const fs::
   if (rw == 0 || rw >= w) return {photo, mask};
   const int rh = rw / 2;
   fs::create_directories(dir);
-  ImageRGB small(rw, rh);
-  std::vector<float> channel(static_cast<size_t>(w) * h);
-  for (int c = 0; c < 3; ++c) {
-    for (size_t i = 0; i < channel.size(); ++i) channel[i] = f.radiance.pixels[3 * i + c];
-    const std::vector<float> s = cloudfit::DownsampleLatLong(channel, w, h, rw, rh);
-    for (size_t i = 0; i < s.size(); ++i) small.pixels[3 * i + c] = s[i];
-  }
-  f.radiance = std::move(small);
+  const auto small = [&](const ImageRGB& im) {
+    ImageRGB s(rw, rh);
+    s.pixels = AreaDownsampleLatLong(im.pixels, w, h, 3, rw, rh);
+    return s;
+  };
+  f.radiance = small(f.radiance);
   capture::WriteLatLongFrame((dir / "photo.exr").string(), f);
   const ExrRGB m = ReadExrRGB(mask.string());
-  for (size_t i = 0; i < channel.size(); ++i) channel[i] = m.image.pixels[3 * i];
-  const std::vector<float> sky = cloudfit::DownsampleLatLong(channel, w, h, rw, rh);
-  ImageRGB sky_rgb(rw, rh);
-  for (size_t i = 0; i < sky.size(); ++i) sky_rgb.pixels[3 * i] = sky_rgb.pixels[3 * i + 1] = sky_rgb.pixels[3 * i + 2] = sky[i];
-  WriteExrRGB((dir / "mask.exr").string(), sky_rgb, m.attributes, ExrPixelType::kHalf);
+  WriteExrRGB((dir / "mask.exr").string(), small(m.image), m.attributes, ExrPixelType::kHalf);
   return {dir / "photo.exr", dir / "mask.exr"};
 }
 

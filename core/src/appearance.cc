@@ -10,6 +10,7 @@
 #include "skycal/core/luminance.h"
 #include "skycal/core/math_constants.h"
 #include "skycal/core/parallel_chunks.h"
+#include "skycal/core/sort_pairs.h"
 
 namespace skycal::appearance {
 namespace {
@@ -35,7 +36,7 @@ double WeightedQuantileOfSorted(const Weighted& v, double q) {
 void SortEach(std::vector<Weighted*>& populations) {
   const int n = static_cast<int>(populations.size());
   ParallelChunks(n, std::min(ResolveThreads(0), 4), [&](int begin, int end, int) {
-    for (int k = begin; k < end; ++k) std::sort(populations[k]->begin(), populations[k]->end());
+    for (int k = begin; k < end; ++k) SortPairs(populations[k]);
   });
 }
 

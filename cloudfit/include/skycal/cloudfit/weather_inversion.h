@@ -127,8 +127,4 @@ std::vector<double> InvertWeatherMap(const WeatherTexelView& view, double weathe
                                      const std::function<std::vector<float>(const clouds::WeatherMap&)>& render_opacity,
                                      const InversionOptions& options, clouds::WeatherMap* map);
 
-// A lat-long of width x height box-averaged to out_width x out_height (no larger): the block
-// mean for integer factors, else core/latlong_resample.h's area weights.
-std::vector<float> DownsampleLatLong(const std::vector<float>& values, int width, int height, int out_width, int out_height);
-
 }  // namespace skycal::cloudfit
