@@ -274,6 +274,31 @@ int ExpectNamedImagesExist(const std::filesystem::path& record) {
   return named;
 }
 
+// Every file a record names as read (a reference's path, a mask, the starting preset; relative:
+// beside the record) is where the record says once calibrate has committed (they were read from its staging directory,
+// which is gone by then), or the record says it was an intermediate not kept; returns how many.
+int ExpectRecordedPathsResolve(const std::filesystem::path& record) {
+  int named = 0;
+  std::function<void(const nlohmann::json&, bool)> walk = [&](const nlohmann::json& j, bool path) {
+    if (j.is_object()) {
+      for (auto it = j.begin(); it != j.end(); ++it)
+        walk(it.value(), it.key() == "path" || it.key() == "mask" || it.key() == "masks" || it.key() == "cloud_preset");
+    } else if (j.is_array()) {
+      for (const auto& v : j) walk(v, path);
+    } else if (path && j.is_string()) {
+      const std::string p = j.get<std::string>();
+      if (p.empty()) return;  // none given
+      ++named;
+      EXPECT_EQ(p.find(".tmp-"), std::string::npos) << record << " names the staging path " << p;
+      const std::filesystem::path at = std::filesystem::path(p).is_absolute() ? std::filesystem::path(p) : record.parent_path() / p;
+      EXPECT_TRUE(std::filesystem::exists(at) || p.ends_with("(an intermediate of the refit, not kept)"))
+          << record << " names " << p << ", which is not there";
+    }
+  };
+  walk(ReadJsonFile(record.string()), false);
+  return named;
+}
+
 // A partly cloudy sky whose clouds are known (the game's own march over a procedural weather
 // map): with the weather map inverted from the photo and the lighting refitted on it, the
 // game's image is nearer the photo than with the statistics fit's map and lighting, and each
@@ -354,6 +379,10 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_EQ(ExpectNamedImagesExist(s / "inverted/scattered/fit.json"), 3);
   EXPECT_EQ(ExpectNamedImagesExist(s / "inverted/scattered/fit.statistics.json"), 0);
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/refit"));
+  // The records name the committed photo and mask (and the refit's starting preset as not kept).
+  EXPECT_EQ(ExpectRecordedPathsResolve(s / "inverted/scattered/fit.json"), 4);
+  EXPECT_EQ(ExpectRecordedPathsResolve(s / "inverted/scattered/fit.statistics.json"), 2);
+  EXPECT_EQ(ExpectRecordedPathsResolve(s / "inverted/scattered/preset.json"), 4);
   EXPECT_FALSE(std::filesystem::exists(s / "inverted/scattered/inverted_shapes"));
 
   // The true map given and held: the preset carries it texel for texel, nothing is inverted,
@@ -415,6 +444,9 @@ TEST(Calibrate, AWidePhotoIsRefittedAtTheInversionsWidthAndJudgedAtItsOwn) {
   EXPECT_TRUE(refitted);
   EXPECT_EQ(ReadExrRGB(s / "out/p1024x512/render.exr").image.width, 1024);
   EXPECT_EQ(ReadExrRGB(s / "out/p1024x512/fit/photo.exr").image.width, 512);  // the refit's own image
+  EXPECT_EQ(ReadExrRGB(s / "out/p1024x512/fit/photo.exr").attributes.strings.at("skycalReference"),
+            "refit_inputs/photo.exr (an intermediate of the refit, not kept)");
+  EXPECT_EQ(ExpectRecordedPathsResolve(s / "out/p1024x512/fit.json"), 4);
   std::cout << "[calibrate] 512 wide: per-pixel " << narrow.calibration->game_per_pixel_log_rmse << ", appearance "
             << narrow.calibration->game_appearance_error << "; 1024 wide: " << wide.calibration->game_per_pixel_log_rmse
             << ", " << wide.calibration->game_appearance_error << "\n";

@@ -2,6 +2,9 @@
 
 #include "calibrate_weather.h"
 
+#include <filesystem>
+#include <functional>
+
 #include "skycal/capture/solar_position.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
@@ -49,8 +52,25 @@ void RefuseWhatCannotBeCalibrated(const std::string& path, const PhotoAnalysis& 
                 "sun_azimuth_deg)");
 }
 
+namespace fs = std::filesystem;
+
+// The records' name for a file the fits read from the staging directory: where it will be once
+// committed, or, for the refit's inputs that are not kept (the inverted shapes' preset, the photo
+// averaged to the inversion's width), its name in the directory and that it was not kept.
+std::function<std::string(const std::string&)> FinalPaths(const StagedDirectory& out, const std::string& final_dir) {
+  return [staging = out.staging().lexically_normal(), final_dir](const std::string& path) {
+    const fs::path rel = fs::path(path).lexically_normal().lexically_relative(staging);
+    if (rel.empty() || *rel.begin() == "..") return path;
+    const std::string first = rel.begin()->string();
+    if (first == kInvertedShapesDir || first == kRefitInputsDir)
+      return rel.generic_string() + " (an intermediate of the refit, not kept)";
+    return (fs::path(final_dir) / rel).string();
+  };
+}
+
 FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir, const CalibrateOptions& o) {
   FitPlan p;
+  p.fit.record_path = FinalPaths(out, final_dir);
   p.fit.references = {out / "photo.exr"};
   p.fit.out_dir = final_dir;
   p.fit.fit.mask_path = out / "mask.exr";

@@ -50,6 +50,10 @@ struct FitPlan {
 // kind of sky asks for. An overcast sky writes its start preset (the CIE overcast term
 // carrying the sky) into `out` too.
 // `final_dir`: where `out` will be committed (the fitted preset takes its name).
+// The refit's staged inputs (calibrate_weather.cc), removed before the commit.
+inline constexpr const char* kInvertedShapesDir = "inverted_shapes";
+inline constexpr const char* kRefitInputsDir = "refit_inputs";
+
 FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir, const CalibrateOptions& o);
 
 }  // namespace skycal::controllers

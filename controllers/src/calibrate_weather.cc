@@ -251,8 +251,8 @@ std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
 }  // namespace
 
 fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir) {
-  const fs::path shapes = out.staging() / "inverted_shapes", refit_dir = out.staging() / "refit",
-                 inputs = out.staging() / "refit_inputs";
+  const fs::path shapes = out.staging() / kInvertedShapesDir, refit_dir = out.staging() / "refit",
+                 inputs = out.staging() / kRefitInputsDir;
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
   try {

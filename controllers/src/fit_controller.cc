@@ -264,9 +264,20 @@ void ApplyProbeSunTint(const std::vector<fit::Reference>& refs, ProbeSuns* ps, r
   }
 }
 
+std::string RecordedPath(const FitControllerOptions& o, const std::string& path) {
+  return o.record_path && !path.empty() ? o.record_path(path) : path;
+}
+
+// The options' mask paths as the records name them.
+void RecordPathsOfOptions(const FitControllerOptions& o, nlohmann::json* options) {
+  if ((*options)["mask"].is_string()) (*options)["mask"] = RecordedPath(o, (*options)["mask"].get<std::string>());
+  if (options->contains("masks"))
+    for (auto& m : (*options)["masks"]) m = RecordedPath(o, m.get<std::string>());
+}
+
 // fit/<name>.exr per reference, and its entries of fit.json (references, warnings) and of
 // preset.json's provenance (inputs).
-void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Reference>& refs,
+void WriteReferenceFits(const FitControllerOptions& o, const StagedDirectory& out, const std::vector<fit::Reference>& refs,
                         const fit::FitResult& result, const ProbeSuns& ps, fit::FitResultFile* file,
                         nlohmann::json* inputs) {
   for (size_t r = 0; r < refs.size(); ++r) {
@@ -276,12 +287,13 @@ void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Refer
     frame.radiance = rf.rendered;
     frame.sun_direction = ref.sun_dir;
     frame.row_mapping = ref.row_mapping;  // the fit image has the reference's rows
-    frame.extra.strings["skycalReference"] = ref.path;
+    const std::string path = RecordedPath(o, ref.path);
+    frame.extra.strings["skycalReference"] = path;
     frame.extra.floats["skycalExposure"] = static_cast<float>(rf.exposure);
     capture::WriteLatLongFrame(out / ("fit/" + ref.name + ".exr"), frame);
     fit::FitReferenceEntry e;
     e.name = ref.name;
-    e.path = ref.path;
+    e.path = path;
     e.rel_rmse = rf.errors.rel_rmse;
     e.log_rmse = rf.errors.log_rmse;
     e.exposure = rf.exposure;
@@ -293,7 +305,7 @@ void WriteReferenceFits(const StagedDirectory& out, const std::vector<fit::Refer
     e.pixels = ref.counts;
     e.sun = ps.entries[r];
     file->references.push_back(std::move(e));
-    inputs->push_back({{"path", ref.path}, {"sha256", ref.sha256}});
+    inputs->push_back({{"path", path}, {"sha256", ref.sha256}});
     for (const auto& w : ref.warnings) file->warnings.push_back(w);
   }
 }
@@ -378,12 +390,13 @@ SolvedFit SolveSkyAndClouds(const FitControllerOptions& o, const render::Preset&
 // preset.json with its provenance: the tool, the starting preset, the references, the
 // options and each reference's errors before the previews.
 void SavePresetWithProvenance(const StagedDirectory& out, const render::Preset& preset, const std::string& init_path,
-                              const nlohmann::json& inputs, const fit::FitResultFile& file) {
+                              const std::string& init_record, const nlohmann::json& inputs,
+                              const fit::FitResultFile& file) {
   nlohmann::json final_errors = nlohmann::json::array();
   for (const fit::FitReferenceEntry& e : file.references) final_errors.push_back(fit::FitReferenceEntryJson(e));
   const nlohmann::json provenance = {{"provenance",
                                       {{"tool", std::string("skycal ") + kSkycalVersion},
-                                       {"init_preset", {{"path", init_path}, {"sha256", Sha256OfFile(init_path)}}},
+                                       {"init_preset", {{"path", init_record}, {"sha256", Sha256OfFile(init_path)}}},
                                        {"inputs", inputs},
                                        {"options", file.options},
                                        {"final_errors", final_errors}}}};
@@ -418,13 +431,16 @@ fit::FitResultFile WriteFitOutputs(const FitControllerOptions& o, const StagedDi
   nlohmann::json inputs = nlohmann::json::array();
   ProbeSuns ps = CollectProbeSuns(l.refs, result, probes, o.require_probe, s->fo.absolute, &file.warnings);
   ApplyProbeSunTint(l.refs, &ps, &result.preset, &file.warnings);
-  WriteReferenceFits(out, l.refs, result, ps, &file, &inputs);
+  WriteReferenceFits(o, out, l.refs, result, ps, &file, &inputs);
   for (const auto& w : result.warnings) file.warnings.push_back(w);
   file.options = ResolvedFitOptionsJson(s->fo);
+  RecordPathsOfOptions(o, &file.options);
   file.clouds = CloudReportJson(o.clouds, s->joint);
+  if (file.clouds.is_object() && file.clouds.contains("cloud_preset") && file.clouds["cloud_preset"].is_string())
+    file.clouds["cloud_preset"] = RecordedPath(o, file.clouds["cloud_preset"].get<std::string>());
   if (o.cloud_stats.enabled) RunCloudStatsStage(o.cloud_stats, o.previews, l, s->sky_refit, out, &result, &file);
   if (shapes) AttachFittedClouds(s->joint, *shapes, out / "preset.json", &result.preset);
-  SavePresetWithProvenance(out, result.preset, init_path, inputs, file);
+  SavePresetWithProvenance(out, result.preset, init_path, RecordedPath(o, init_path), inputs, file);
   WritePreviewsAndReportFields(out, o, l, result, &file);
   file.time_of_day_h = s->fo.time_of_day_h;
   file.out = o.out_dir;

@@ -35,6 +35,10 @@ struct FitControllerOptions {
   // Where the fit's progress lines go, one line each without a prefix (a controller that runs
   // the fit as one of its steps: calibrate); empty: stderr as "[fit] LINE", as `skycal fit`.
   std::function<void(const std::string&)> log;
+  // How the records (fit.json, the preset's provenance, fit/<ref>.exr) name a file the fit
+  // read: a controller that stages the fit's inputs beside its outputs maps the staging
+  // paths to where the files will be once it commits (calibrate); empty: as given.
+  std::function<std::string(const std::string&)> record_path;
   // Probe samples (skycal probe-extract) per reference, "REF_STEM=SAMPLES.json"; a reference
   // named in none takes <reference without .exr>.probe.json when that file exists.
   std::vector<std::string> probes;
