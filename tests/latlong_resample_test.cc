@@ -1,6 +1,7 @@
 // core/latlong_resample.h: identities, the block mean, the mean kept at any factor, bad sizes.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <vector>
 
 #include "skycal/core/error.h"
@@ -62,6 +63,30 @@ TEST(AreaDownsampleLatLong, BlocksAndFractionsByHand) {
   ASSERT_EQ(a.size(), 6u);
   EXPECT_NEAR(a[0], 26.0 / (16.0 / 3.0), 1e-5);
   EXPECT_THROW(AreaDownsampleLatLong(v, 8, 4, 1, 16, 8), Error);  // larger: refused
+}
+
+// Over the positive pixels only: a zeroed (or negative, or NaN) pixel leaves its block's mean
+// to the others; a block of none is 0. Control: the plain mean, darkened by the zero.
+TEST(AreaDownsampleLatLong, OfPositiveLeavesBadPixelsOut) {
+  std::vector<float> v(8 * 4 * 3, 2.0f);
+  for (int c = 0; c < 3; ++c) {
+    v[3 * 0 + c] = 0.0f;                            // block (0, 0): one of four zeroed
+    v[3 * 1 + c] = 6.0f;                            // ... and one brighter: mean of 6, 2, 2 = 10/3
+    for (int p : {2, 3, 10, 11}) v[3 * p + c] = 0.0f;  // block (1, 0): all four zeroed
+  }
+  v[3 * 12 + 1] = std::numeric_limits<float>::quiet_NaN();  // block (2, 1): one NaN channel
+  v[3 * 21 + 2] = -1.0f;                                    // block (2, 1): one negative channel
+  const auto d = AreaDownsampleLatLongOfPositive(v, 8, 4, 3, 4, 2);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(d[3 * 0 + c], 10.0f / 3.0f, 1e-5);
+    EXPECT_EQ(d[3 * 1 + c], 0.0f);
+    EXPECT_NEAR(d[3 * 2 + c], 2.0f, 1e-6);
+    EXPECT_NEAR(d[3 * (4 + 2) + c], 2.0f, 1e-6);  // the two bad pixels of four left out
+    EXPECT_NEAR(d[3 * 3 + c], 2.0f, 1e-6);
+  }
+  const auto plain = AreaDownsampleLatLong(v, 8, 4, 3, 4, 2);
+  EXPECT_NEAR(plain[0], 2.5f, 1e-5);  // (0 + 6 + 2 + 2) / 4
+  EXPECT_THROW(AreaDownsampleLatLongOfPositive(v, 8, 4, 3, 9, 2), Error);
 }
 
 TEST(AreaDownsampleLatLong, BadSizesAreNamed) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <utility>
 
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/cloudfit/weather_inversion.h"
@@ -222,7 +223,8 @@ void MoveUp(const fs::path& from, const fs::path& to) {
 // photo is wider): a handful of lighting parameters and the sky's LUT need no more pixels,
 // and the known-shapes fit prepares and composites every cloud pixel at the references' size
 // (at 2048x1024 that was most of the command). The game's image is still rendered and judged
-// at the photo's size. Returns the (photo, mask) the refit reads.
+// at the photo's size. The photo is averaged over its positive pixels (import zeroes the
+// non-finite ones; the fit reads positive radiance). Returns the (photo, mask) the refit reads.
 std::pair<fs::path, fs::path> RefitInputs(const StagedDirectory& out, const fs::path& dir) {
   const fs::path photo = out / "photo.exr", mask = out / "mask.exr";
   capture::LatLongFrame f = capture::ReadLatLongFrame(photo.string());
@@ -235,7 +237,9 @@ std::pair<fs::path, fs::path> RefitInputs(const StagedDirectory& out, const fs::
     s.pixels = AreaDownsampleLatLong(im.pixels, w, h, 3, rw, rh);
     return s;
   };
-  f.radiance = small(f.radiance);
+  ImageRGB radiance(rw, rh);  // over the positive pixels: import zeroes the non-finite ones
+  radiance.pixels = AreaDownsampleLatLongOfPositive(f.radiance.pixels, w, h, 3, rw, rh);
+  f.radiance = std::move(radiance);
   capture::WriteLatLongFrame((dir / "photo.exr").string(), f);
   const ExrRGB m = ReadExrRGB(mask.string());
   WriteExrRGB((dir / "mask.exr").string(), small(m.image), m.attributes, ExrPixelType::kHalf);

@@ -29,8 +29,17 @@ std::vector<Span> Spans(int n, int out_n) {
 
 }  // namespace
 
-std::vector<float> AreaDownsampleLatLong(const std::vector<float>& values, int width, int height, int channels,
-                                         int out_width, int out_height) {
+namespace {
+
+// A pixel whose every channel is positive and finite.
+bool Positive(const float* v, int channels) {
+  for (int c = 0; c < channels; ++c)
+    if (!(v[c] > 0.0f) || !std::isfinite(v[c])) return false;
+  return true;
+}
+
+std::vector<float> Downsample(const std::vector<float>& values, int width, int height, int channels, int out_width,
+                              int out_height, bool positive_only) {
   const std::string sizes = std::to_string(width) + "x" + std::to_string(height) + " to " + std::to_string(out_width) +
                             "x" + std::to_string(out_height);
   if (out_width <= 0 || out_height <= 0 || out_width > width || out_height > height || channels <= 0)
@@ -47,15 +56,29 @@ std::vector<float> AreaDownsampleLatLong(const std::vector<float>& values, int w
       double total = 0.0;
       for (size_t j = 0; j < ys[oy].weights.size(); ++j)
         for (size_t i = 0; i < xs[ox].weights.size(); ++i) {
-          const double w = ys[oy].weights[j] * xs[ox].weights[i];
           const size_t p = (static_cast<size_t>(ys[oy].first + j) * width + xs[ox].first + i) * channels;
+          if (positive_only && !Positive(&values[p], channels)) continue;
+          const double w = ys[oy].weights[j] * xs[ox].weights[i];
           for (int c = 0; c < channels; ++c) sum[c] += w * values[p + c];
           total += w;
         }
       for (int c = 0; c < channels; ++c)
-        out[(static_cast<size_t>(oy) * out_width + ox) * channels + c] = static_cast<float>(sum[c] / total);
+        out[(static_cast<size_t>(oy) * out_width + ox) * channels + c] =
+            total > 0.0 ? static_cast<float>(sum[c] / total) : 0.0f;
     }
   return out;
+}
+
+}  // namespace
+
+std::vector<float> AreaDownsampleLatLong(const std::vector<float>& values, int width, int height, int channels,
+                                         int out_width, int out_height) {
+  return Downsample(values, width, height, channels, out_width, out_height, false);
+}
+
+std::vector<float> AreaDownsampleLatLongOfPositive(const std::vector<float>& values, int width, int height, int channels,
+                                                   int out_width, int out_height) {
+  return Downsample(values, width, height, channels, out_width, out_height, true);
 }
 
 }  // namespace skycal

@@ -13,4 +13,10 @@ namespace skycal {
 std::vector<float> AreaDownsampleLatLong(const std::vector<float>& values, int width, int height, int channels,
                                          int out_width, int out_height);
 
+// The same mean over the input pixels whose every channel is positive and finite (radiance a
+// fit can take the log of: import zeroes non-finite pixels, and a plain mean would darken the
+// area around one); an output pixel that covers none is 0 in every channel.
+std::vector<float> AreaDownsampleLatLongOfPositive(const std::vector<float>& values, int width, int height, int channels,
+                                                   int out_width, int out_height);
+
 }  // namespace skycal
