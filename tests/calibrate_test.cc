@@ -275,8 +275,9 @@ int ExpectNamedImagesExist(const std::filesystem::path& record) {
 }
 
 // Every file a record names as read (a reference's path, a mask, the starting preset; relative:
-// beside the record) is where the record says once calibrate has committed (they were read from its staging directory,
-// which is gone by then), or the record says it was an intermediate not kept; returns how many.
+// beside the record) is where the record says once calibrate has committed (the fits read them
+// from its staging directory, gone by then), or the record says it was an intermediate not kept;
+// returns how many.
 int ExpectRecordedPathsResolve(const std::filesystem::path& record) {
   int named = 0;
   std::function<void(const nlohmann::json&, bool)> walk = [&](const nlohmann::json& j, bool path) {
@@ -290,7 +291,8 @@ int ExpectRecordedPathsResolve(const std::filesystem::path& record) {
       if (p.empty()) return;  // none given
       ++named;
       EXPECT_EQ(p.find(".tmp-"), std::string::npos) << record << " names the staging path " << p;
-      const std::filesystem::path at = std::filesystem::path(p).is_absolute() ? std::filesystem::path(p) : record.parent_path() / p;
+      const std::filesystem::path at =
+          std::filesystem::path(p).is_absolute() ? std::filesystem::path(p) : record.parent_path() / p;
       EXPECT_TRUE(std::filesystem::exists(at) || p.ends_with("(an intermediate of the refit, not kept)"))
           << record << " names " << p << ", which is not there";
     }

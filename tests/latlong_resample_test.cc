@@ -1,4 +1,5 @@
-// core/latlong_resample.h: identities, the block mean, the mean kept at any factor, bad sizes.
+// core/latlong_resample.h: identities, the block mean, the mean kept at any factor, the mean
+// over positive pixels, bad sizes.
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -74,14 +75,14 @@ TEST(AreaDownsampleLatLong, OfPositiveLeavesBadPixelsOut) {
     v[3 * 1 + c] = 6.0f;                            // ... and one brighter: mean of 6, 2, 2 = 10/3
     for (int p : {2, 3, 10, 11}) v[3 * p + c] = 0.0f;  // block (1, 0): all four zeroed
   }
-  v[3 * 12 + 1] = std::numeric_limits<float>::quiet_NaN();  // block (2, 1): one NaN channel
+  v[3 * 12 + 1] = std::numeric_limits<float>::quiet_NaN();  // block (2, 0): one NaN channel
   v[3 * 21 + 2] = -1.0f;                                    // block (2, 1): one negative channel
   const auto d = AreaDownsampleLatLongOfPositive(v, 8, 4, 3, 4, 2);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(d[3 * 0 + c], 10.0f / 3.0f, 1e-5);
     EXPECT_EQ(d[3 * 1 + c], 0.0f);
-    EXPECT_NEAR(d[3 * 2 + c], 2.0f, 1e-6);
-    EXPECT_NEAR(d[3 * (4 + 2) + c], 2.0f, 1e-6);  // the two bad pixels of four left out
+    EXPECT_NEAR(d[3 * 2 + c], 2.0f, 1e-6);  // the NaN pixel left out
+    EXPECT_NEAR(d[3 * (4 + 2) + c], 2.0f, 1e-6);  // the negative pixel left out
     EXPECT_NEAR(d[3 * 3 + c], 2.0f, 1e-6);
   }
   const auto plain = AreaDownsampleLatLong(v, 8, 4, 3, 4, 2);

@@ -46,14 +46,15 @@ struct FitPlan {
   std::vector<fit::FitDecision> decisions;
 };
 
-// The fit of one photo staged in `out` (photo.exr and mask.exr written there): what the
-// kind of sky asks for. An overcast sky writes its start preset (the CIE overcast term
-// carrying the sky) into `out` too.
-// `final_dir`: where `out` will be committed (the fitted preset takes its name).
 // The refit's staged inputs (calibrate_weather.cc), removed before the commit.
 inline constexpr const char* kInvertedShapesDir = "inverted_shapes";
 inline constexpr const char* kRefitInputsDir = "refit_inputs";
 
+// The fit of one photo staged in `out` (photo.exr and mask.exr written there): what the
+// kind of sky asks for. An overcast sky writes its start preset (the CIE overcast term
+// carrying the sky) into `out` too.
+// `final_dir`: where `out` will be committed (the fitted preset takes its name); the fit's
+// records name the staged files there (FitControllerOptions::record_path).
 FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::string& final_dir, const CalibrateOptions& o);
 
 }  // namespace skycal::controllers

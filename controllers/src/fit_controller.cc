@@ -270,7 +270,8 @@ std::string RecordedPath(const FitControllerOptions& o, const std::string& path)
 
 // The options' mask paths as the records name them.
 void RecordPathsOfOptions(const FitControllerOptions& o, nlohmann::json* options) {
-  if ((*options)["mask"].is_string()) (*options)["mask"] = RecordedPath(o, (*options)["mask"].get<std::string>());
+  if (options->contains("mask") && (*options)["mask"].is_string())
+    (*options)["mask"] = RecordedPath(o, (*options)["mask"].get<std::string>());
   if (options->contains("masks"))
     for (auto& m : (*options)["masks"]) m = RecordedPath(o, m.get<std::string>());
 }
