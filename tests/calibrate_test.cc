@@ -17,6 +17,7 @@
 
 #include "calibrate_plan.h"
 #include "calibrate_sun.h"
+#include "calibrate_weather.h"
 #include "run_binary.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sky_segmentation.h"
@@ -272,6 +273,19 @@ int ExpectNamedImagesExist(const std::filesystem::path& record) {
   };
   walk(ReadJsonFile(record.string()), false);
   return named;
+}
+
+// The refit's free parameters at an end of their range are named in its decision (in
+// CloudLightingNames order), the held ones and those inside their range are not.
+TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRange) {
+  const nlohmann::json clouds = {{"parameters",
+                                  {{"ms_a", {{"value", 0.0}, {"held", false}}},
+                                   {"phase_g1", {{"value", 0.99}, {"held", false}}},
+                                   {"sun_scale", {{"value", 1.2}, {"held", false}}},
+                                   {"phase_g2", {{"value", 0.99}, {"held", true}}}}}};
+  EXPECT_EQ(controllers::ParametersAtBounds(clouds), "phase_g1 0.99 (its maximum), ms_a 0 (its minimum)");
+  EXPECT_EQ(controllers::ParametersAtBounds({{"parameters", nlohmann::json::object()}}), "");
+  EXPECT_EQ(controllers::ParametersAtBounds(nlohmann::json()), "");
 }
 
 // Every file a record names as read (a reference's path, a mask, the starting preset; relative:

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/cloudfit/cloud_lighting_params.h"
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/cloud_noise.h"
 #include "skycal/clouds/cloud_params.h"
@@ -91,6 +92,22 @@ int InversionRenderWidth(int width, int height) {
   for (int rw : kRenderWidths)
     if (width >= rw && height >= rw / 2) return rw;
   return 0;
+}
+
+std::string ParametersAtBounds(const nlohmann::json& clouds) {
+  std::string out;
+  const auto p = clouds.is_object() ? clouds.find("parameters") : clouds.end();
+  if (p == clouds.end() || !p->is_object()) return out;
+  for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
+    const clouds::CloudParamSpec& spec = cloudfit::CloudLightingSpec(k);
+    const auto e = p->find(cloudfit::CloudLightingNames()[k]);
+    if (e == p->end() || !e->is_object() || e->value("held", true) || !(*e)["value"].is_number()) continue;
+    const double v = (*e)["value"].get<double>(), tol = 1e-6 * (spec.max - spec.min);
+    if (v > spec.min + tol && v < spec.max - tol) continue;
+    out += (out.empty() ? "" : ", ") + std::string(cloudfit::CloudLightingNames()[k]) + " " + FormatNumber(v) +
+           (v >= spec.max - tol ? " (its maximum)" : " (its minimum)");
+  }
+  return out;
 }
 
 fit::FitDecision WeatherInversionRecord::Decision() const {
@@ -301,6 +318,10 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
             " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
             "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
+    const std::string at_bounds = ParametersAtBounds(clouds);
+    if (!at_bounds.empty())
+      d.why += "; at the end of its range: " + at_bounds +
+               " (making up for the recovered shapes, which are not the photo's 3D clouds: a value to read with care)";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
     d.what = "cloud lighting: the statistics fit's kept";
     d.why = std::string("the known-shapes refit failed: ") + e.what() +

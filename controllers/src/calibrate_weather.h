@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "calibrate_plan.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/staged_directory.h"
@@ -31,6 +33,12 @@ struct WeatherInversionRecord {
 // The inversion's refinement renders' width (pixels) for a width x height photo; 0: the photo
 // is smaller than 256x128, and its map is not inverted.
 int InversionRenderWidth(int width, int height);
+
+// The free lighting parameters a fit's `clouds` record (fit.json) left at an end of their range,
+// as "phase_g1 0.99 (its maximum), ms_a 0 (its minimum)"; empty when none. On a photo's recovered
+// shapes a lobe or factor runs there to make up for what the shapes get wrong (docs/calibrate.md),
+// and an artist reading the preset should know it.
+std::string ParametersAtBounds(const nlohmann::json& clouds);
 
 // The march the inversion and the day's predictions render: the game's (its noise, steps and
 // optimisations) on `backend` (Vulkan, else the float CPU twin), its transmittance only (no
