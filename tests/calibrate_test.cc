@@ -276,8 +276,9 @@ int ExpectNamedImagesExist(const std::filesystem::path& record) {
 }
 
 // The refit's free parameters at an end of their range are named in its decision (in
-// CloudLightingNames order), the held ones and those inside their range are not.
-TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRange) {
+// CloudLightingNames order), the held ones and those inside their range are not; its restarts
+// from the far side of a bound are said.
+TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRangeAndItsRestarts) {
   const nlohmann::json clouds = {{"parameters",
                                   {{"ms_a", {{"value", 0.0}, {"held", false}}},
                                    {"phase_g1", {{"value", 0.99}, {"held", false}}},
@@ -286,6 +287,13 @@ TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRange) {
   EXPECT_EQ(controllers::ParametersAtBounds(clouds), "phase_g1 0.99 (its maximum), ms_a 0 (its minimum)");
   EXPECT_EQ(controllers::ParametersAtBounds({{"parameters", nlohmann::json::object()}}), "");
   EXPECT_EQ(controllers::ParametersAtBounds(nlohmann::json()), "");
+  // The restarts from the far side of a bound, as the refit's record gives them.
+  EXPECT_EQ(controllers::BoundRestartsText({{"solve", {{"bound_restarts", {{"tried", 2}, {"kept", "ms_a"}}}}}}),
+            "; solved again from the far side of a bound 2 time(s), the restart in ms_a kept (lower cost)");
+  EXPECT_EQ(controllers::BoundRestartsText({{"solve", {{"bound_restarts", {{"tried", 1}, {"kept", ""}}}}}}),
+            "; solved again from the far side of a bound 1 time(s), the first solve kept (lower cost)");
+  EXPECT_EQ(controllers::BoundRestartsText({{"solve", {{"iterations", 10}}}}), "");
+  EXPECT_EQ(controllers::BoundRestartsText(nlohmann::json()), "");
 }
 
 // Every file a record names as read (a reference's path, a mask, the starting preset; relative:

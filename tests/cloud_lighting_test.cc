@@ -62,6 +62,61 @@ struct Scene {
   clouds::CloudRenderRequest Request() const { return RequestFor(sun, width, height, shapes); }
 };
 
+// RestartAtBounds on a double well in ms_a (range 0..1): a solve started at or above 0.5 ends
+// at the bound 1 (cost 2), one started below ends at 0.1 (cost 1). The first solve's result
+// at the bound is solved again from 0.25 and the lower well kept; a parameter ending inside its
+// range, or held, is not restarted; a restart that ends higher is not kept.
+TEST(CloudLighting, ASolveLeftAtABoundIsSolvedAgainFromTheOtherSide) {
+  const int ms_a = CloudLightingIndex("ms_a"), g1 = CloudLightingIndex("phase_g1");
+  CloudLighting start{};  // every parameter inside its range: the middle
+  for (int k = 0; k < kCloudLightingParameters; ++k) start[k] = 0.5 * (CloudLightingSpec(k).min + CloudLightingSpec(k).max);
+  start[ms_a] = 0.5;
+  start[g1] = 0.5;
+  std::vector<double> restarted_from;
+  const auto well = [&](CloudLighting* t) {
+    restarted_from.push_back((*t)[ms_a]);
+    const bool high = (*t)[ms_a] >= 0.5;
+    (*t)[ms_a] = high ? 1.0 : 0.1;
+    return high ? 2.0 : 1.0;
+  };
+  std::vector<char> held(kCloudLightingParameters, 0);
+  CloudLighting theta = start;
+  theta[ms_a] = 1.0;  // where the first solve ended
+  double cost = 2.0;
+  const BoundRestarts r = RestartAtBounds(start, held, well, &theta, &cost);
+  EXPECT_EQ(r.tried, 1);
+  EXPECT_EQ(r.kept, 0);
+  EXPECT_EQ(r.parameter, "ms_a");
+  ASSERT_EQ(restarted_from.size(), 1u);
+  EXPECT_DOUBLE_EQ(restarted_from[0], 0.25);
+  EXPECT_DOUBLE_EQ(theta[ms_a], 0.1);
+  EXPECT_DOUBLE_EQ(theta[g1], 0.5);  // the rest from the start
+  EXPECT_DOUBLE_EQ(cost, 1.0);
+
+  // Inside its range: no restart. Held at a bound: none either.
+  theta = start;
+  theta[ms_a] = 0.999;
+  cost = 2.0;
+  EXPECT_EQ(RestartAtBounds(start, held, well, &theta, &cost).tried, 0);
+  held[ms_a] = 1;
+  theta[ms_a] = 1.0;
+  EXPECT_EQ(RestartAtBounds(start, held, well, &theta, &cost).tried, 0);
+  EXPECT_DOUBLE_EQ(theta[ms_a], 1.0);
+
+  // At the lower bound the restart starts at 0.75, lands in the worse well and is not kept.
+  held[ms_a] = 0;
+  theta[ms_a] = 0.0;
+  cost = 1.5;
+  restarted_from.clear();
+  const BoundRestarts worse = RestartAtBounds(start, held, well, &theta, &cost);
+  EXPECT_EQ(worse.tried, 1);
+  EXPECT_EQ(worse.kept, -1);
+  ASSERT_EQ(restarted_from.size(), 1u);
+  EXPECT_DOUBLE_EQ(restarted_from[0], 0.75);
+  EXPECT_DOUBLE_EQ(theta[ms_a], 0.0);
+  EXPECT_DOUBLE_EQ(cost, 1.5);
+}
+
 // The model at every cloud pixel above the horizon with the double values (central
 // differences need double precision: the renderers store floats).
 struct DoubleModel {

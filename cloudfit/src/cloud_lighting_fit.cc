@@ -94,7 +94,19 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
   CloudLighting scale{};
   for (int k = 0; k < kCloudLightingParameters; ++k) scale[k] = day[0].parameters[k].scale;
   int prior_residuals = 0;
-  const ceres::Solver::Summary s = SolveCloudDay(models, blocks, day[0], times, scale, o, &prior_residuals);
+  ceres::Solver::Summary s = SolveCloudDay(models, blocks, day[0], times, scale, o, &prior_residuals);
+  BoundRestarts restarts;
+  if (o.restart_at_bounds && m.size() == 1) {
+    std::vector<char> held(kCloudLightingParameters);
+    for (int k = 0; k < kCloudLightingParameters; ++k) held[k] = day[0].parameters[k].held;
+    std::vector<ceres::Solver::Summary> again;
+    double cost = s.final_cost;
+    restarts = RestartAtBounds(start, held, [&](CloudLighting* t) {
+      again.push_back(SolveCloudBlock(models[0], t->data(), day[0], o));
+      return again.back().final_cost;
+    }, &theta[0], &cost);
+    if (restarts.kept >= 0) s = again[static_cast<size_t>(restarts.kept)];
+  }
   const double solve_s = Seconds(t0);
 
   const auto tr = Clock::now();
@@ -119,6 +131,8 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
     rep.cloud_initial = CompositeErrors(x.pixels, *x.reference, composite(start, shapes.params));
     rep.cloud_final = CompositeErrors(x.pixels, *x.reference, composite(theta[r], rep.fitted_params));
     rep.iterations = static_cast<int>(s.iterations.size()) - 1;
+    rep.bound_restarts = restarts.tried;
+    rep.bound_restart_kept = restarts.kept >= 0 ? restarts.parameter : "";
     rep.termination = ceres::TerminationTypeToString(s.termination_type);
     rep.renders = x.model->renders;
     rep.jacobians = x.model->jacobians;

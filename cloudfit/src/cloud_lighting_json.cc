@@ -62,6 +62,8 @@ nlohmann::json CloudReportJson(const CloudReportSettings& o, const SkyCloudFit& 
                 {"cloud_pixels_time_s", r.cloud_pixels_time_s},
                 {"sky_fit_time_s", r.sky_fit_time_s}, {"cloud_solve_time_s", r.solve_time_s},
                 {"report_time_s", r.report_time_s},  {"time_s", r.time_s}};
+  if (r.bound_restarts > 0)  // CloudLightingOptions::restart_at_bounds
+    j["solve"]["bound_restarts"] = {{"tried", r.bound_restarts}, {"kept", r.bound_restart_kept}};
   if (f.references.size() > 1) {
     j["day"] = {{"references", f.references.size()},
                 {"smoothness", o.day_smoothness},

@@ -104,6 +104,29 @@ void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* the
   }
 }
 
+BoundRestarts RestartAtBounds(const CloudLighting& start, const std::vector<char>& held,
+                              const std::function<double(CloudLighting*)>& solve, CloudLighting* theta, double* cost) {
+  BoundRestarts r;
+  const CloudLighting first = *theta;
+  for (int k = 0; k < kCloudLightingParameters; ++k) {
+    const clouds::CloudParamSpec& spec = CloudLightingSpec(k);
+    const double range = spec.max - spec.min, tol = 1e-6 * range;
+    const bool at_min = first[k] <= spec.min + tol, at_max = first[k] >= spec.max - tol;
+    if (held.at(static_cast<size_t>(k)) || !(at_min || at_max)) continue;
+    CloudLighting again = start;
+    again[k] = at_max ? spec.min + 0.25 * range : spec.max - 0.25 * range;
+    const double c = solve(&again);
+    if (c < *cost) {
+      *theta = again;
+      *cost = c;
+      r.kept = r.tried;
+      r.parameter = CloudLightingNames()[k];
+    }
+    ++r.tried;
+  }
+  return r;
+}
+
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
                                        const CloudLightingOptions& o) {
   return SolveCloudDay({model}, {theta}, c, {0.0}, {}, o, nullptr);

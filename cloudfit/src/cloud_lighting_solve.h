@@ -4,6 +4,7 @@
 #pragma once
 #include <ceres/ceres.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,21 @@ Conditioning ConditionAt(CloudSampleModel* model, const CloudLighting& theta, co
 
 // Adds the cloud block (bounds from the spec table; held entries constant) to `problem`.
 void AddCloudBlock(ceres::Problem* problem, CloudSampleModel* model, double* theta, const Conditioning& c);
+
+// A free parameter the solve left at an end of its range may sit in a basin its bound made
+// (the fit ran there and stopped): each such parameter of `*theta` is solved again by `solve`
+// (which moves the lighting it is given and returns its final cost) from `start` with that
+// parameter a quarter of its range in from the other end, and the lowest cost is kept in
+// `*theta` and `*cost`. On a photo's recovered shapes the multiple-scattering factor ended at
+// 1 or at 0 for shapes that differed by one refinement render, the 0 a far better image
+// (bench/results/weather_inversion.md). Returns how many restarts ran and which was kept.
+struct BoundRestarts {
+  int tried = 0;
+  int kept = -1;          // index of the restart kept; -1: the first solve stood
+  std::string parameter;  // the kept restart's parameter
+};
+BoundRestarts RestartAtBounds(const CloudLighting& start, const std::vector<char>& held,
+                              const std::function<double(CloudLighting*)>& solve, CloudLighting* theta, double* cost);
 
 // Solves the cloud block alone (the sky fixed); returns the Ceres summary.
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,

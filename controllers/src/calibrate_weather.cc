@@ -94,6 +94,18 @@ int InversionRenderWidth(int width, int height) {
   return 0;
 }
 
+// "; solved again from the far side of a bound 1 time(s), ..." from the refit's record, or "".
+std::string BoundRestartsText(const nlohmann::json& clouds) {
+  if (!clouds.is_object() || !clouds.contains("solve") || !clouds["solve"].is_object()) return "";
+  const nlohmann::json& solve = clouds["solve"];
+  if (!solve.contains("bound_restarts") || !solve["bound_restarts"].is_object()) return "";
+  const nlohmann::json& r = solve["bound_restarts"];
+  const std::string kept = r.value("kept", std::string());
+  return "; solved again from the far side of a bound " + std::to_string(r.value("tried", 0)) + " time(s), " +
+         (kept.empty() ? std::string("the first solve kept (lower cost)")
+                       : "the restart in " + kept + " kept (lower cost)");
+}
+
 std::string ParametersAtBounds(const nlohmann::json& clouds) {
   std::string out;
   const auto p = clouds.is_object() ? clouds.find("parameters") : clouds.end();
@@ -295,6 +307,9 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // The solve's values from the model at its samples: a frame's march per trial point cost
     // most of the refit, and the game's image is rendered from the result anyway.
     k.clouds.values_from_renderer = false;
+    // Its minima sit at opposite ends of a factor's range for shapes that differ by a render:
+    // a parameter left at a bound is solved again from the other side, the lower cost kept.
+    k.clouds.restart_at_bounds = true;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the
@@ -318,6 +333,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
             " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
             "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
             "; the statistics fit's record: fit.statistics.json";
+    d.why += BoundRestartsText(clouds);
     const std::string at_bounds = ParametersAtBounds(clouds);
     if (!at_bounds.empty())
       d.why += "; at the end of its range: " + at_bounds +

@@ -39,6 +39,9 @@ int InversionRenderWidth(int width, int height);
 // shapes a lobe or factor runs there to make up for what the shapes get wrong (docs/calibrate.md),
 // and an artist reading the preset should know it.
 std::string ParametersAtBounds(const nlohmann::json& clouds);
+// What the refit's record says of its restarts from the far side of a bound
+// (CloudLightingOptions::restart_at_bounds), as a clause to append to its decision; "" when none ran.
+std::string BoundRestartsText(const nlohmann::json& clouds);
 
 // The march the inversion and the day's predictions render: the game's (its noise, steps and
 // optimisations) on `backend` (Vulkan, else the float CPU twin), its transmittance only (no

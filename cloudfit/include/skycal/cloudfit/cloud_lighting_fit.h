@@ -80,6 +80,10 @@ struct CloudLightingOptions {
   // against it; ~1/10 of a Jet march a sample, not a frame's march): the refit of a
   // calibration, where the frame is rendered for the report and the game's image anyway.
   bool values_from_renderer = true;
+  // One reference: a free parameter the solve leaves at an end of its range is solved again
+  // from a quarter of the range in from the other end, and the lower cost kept (calibrate's
+  // refit on a photo's recovered shapes, whose minima sit at opposite bounds).
+  bool restart_at_bounds = false;
   int threads = 2;
   bool verbose = false;
   bool IsValid(std::string* why) const;
@@ -117,6 +121,10 @@ struct CloudLightingReport {
   PixelErrors cloud_initial, cloud_final;    // every cloud pixel, from the value renderer
   PixelErrors clear;                         // the clear pixels (the sky terms), final
   int iterations = 0, renders = 0, jacobians = 0;
+  // CloudLightingOptions::restart_at_bounds: the solves run again from the far side of a
+  // bound, and the parameter whose restart was kept (empty: the first solve stood).
+  int bound_restarts = 0;
+  std::string bound_restart_kept;
   double render_time_s = 0.0, jacobian_time_s = 0.0, conditioning_time_s = 0.0, time_s = 0.0;
   // Stages of the whole fit (FitSkyAndClouds), s: the cloud renders that find the cloud
   // pixels, the sky fit on the clear pixels, the cloud solve (conditioning included), the
