@@ -281,6 +281,27 @@ std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
   return FormatNumber(std::round((*c)[when]["log_rmse"].get<double>() * 1000.0) / 1000.0);
 }
 
+// The refit's decision, from its record's `clouds`.
+fit::FitDecision RefitDecision(const nlohmann::json& clouds) {
+  fit::FitDecision d;
+  d.saved_ms_basis = "not measured in this run";
+  d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
+  d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
+          "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
+          "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
+          "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
+          std::to_string(kRefitIterations) +
+          " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
+          "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
+          CloudPixelsLogRmse(clouds, "final") + "; the statistics fit's record: fit.statistics.json";
+  d.why += BoundRestartsText(clouds);
+  const std::string at_bounds = ParametersAtBounds(clouds);
+  if (!at_bounds.empty())
+    d.why += "; at the end of its range: " + at_bounds +
+             " (making up for the recovered shapes, which are not the photo's 3D clouds: a value to read with care)";
+  return d;
+}
+
 }  // namespace
 
 fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir) {
@@ -321,23 +342,11 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
       RunFitInto(k, refit);
       refit.Commit();
     }
+    // The decision from the refit's record before anything moves: a failure here leaves the
+    // statistics fit's files in place, as the catch below says.
+    d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds);
     fs::rename(out / "fit.json", out / "fit.statistics.json");
     MoveUp(refit_dir, out.staging());
-    const nlohmann::json clouds = fit::ReadFitResultFile(out / "fit.json").clouds;
-    d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
-    d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
-            "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
-            "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
-            "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
-            std::to_string(kRefitIterations) +
-            " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
-            "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
-            "; the statistics fit's record: fit.statistics.json";
-    d.why += BoundRestartsText(clouds);
-    const std::string at_bounds = ParametersAtBounds(clouds);
-    if (!at_bounds.empty())
-      d.why += "; at the end of its range: " + at_bounds +
-               " (making up for the recovered shapes, which are not the photo's 3D clouds: a value to read with care)";
   } catch (const std::exception& e) {  // the statistics fit's lighting stands
     d.what = "cloud lighting: the statistics fit's kept";
     d.why = std::string("the known-shapes refit failed: ") + e.what() +
