@@ -35,6 +35,12 @@ int CloudLightingIndex(const std::string& name) {
   return -1;
 }
 
+int CloudLightingRangeEnd(int k, double value) {
+  const clouds::CloudParamSpec& spec = CloudLightingSpec(k);
+  const double tol = 1e-6 * (spec.max - spec.min);
+  return value <= spec.min + tol ? -1 : value >= spec.max - tol ? 1 : 0;
+}
+
 CloudLighting GetCloudLighting(const clouds::CloudParams& params) {
   clouds::CloudParams p = params;  // the spec table hands out mutable pointers
   CloudLighting l{};

@@ -109,12 +109,12 @@ BoundRestarts RestartAtBounds(const CloudLighting& start, const std::vector<char
   BoundRestarts r;
   const CloudLighting first = *theta;
   for (int k = 0; k < kCloudLightingParameters; ++k) {
+    const int end = CloudLightingRangeEnd(k, first[k]);
+    if (held.at(static_cast<size_t>(k)) || end == 0) continue;
     const clouds::CloudParamSpec& spec = CloudLightingSpec(k);
-    const double range = spec.max - spec.min, tol = 1e-6 * range;
-    const bool at_min = first[k] <= spec.min + tol, at_max = first[k] >= spec.max - tol;
-    if (held.at(static_cast<size_t>(k)) || !(at_min || at_max)) continue;
+    const double range = spec.max - spec.min;
     CloudLighting again = start;
-    again[k] = at_max ? spec.min + 0.25 * range : spec.max - 0.25 * range;
+    again[k] = end > 0 ? spec.min + 0.25 * range : spec.max - 0.25 * range;
     const double c = solve(&again);
     if (c < *cost) {
       *theta = again;

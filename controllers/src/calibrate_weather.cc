@@ -111,13 +111,13 @@ std::string ParametersAtBounds(const nlohmann::json& clouds) {
   const auto p = clouds.is_object() ? clouds.find("parameters") : clouds.end();
   if (p == clouds.end() || !p->is_object()) return out;
   for (int k = 0; k < cloudfit::kCloudLightingParameters; ++k) {
-    const clouds::CloudParamSpec& spec = cloudfit::CloudLightingSpec(k);
     const auto e = p->find(cloudfit::CloudLightingNames()[k]);
     if (e == p->end() || !e->is_object() || e->value("held", true) || !(*e)["value"].is_number()) continue;
-    const double v = (*e)["value"].get<double>(), tol = 1e-6 * (spec.max - spec.min);
-    if (v > spec.min + tol && v < spec.max - tol) continue;
+    const double v = (*e)["value"].get<double>();
+    const int end = cloudfit::CloudLightingRangeEnd(k, v);
+    if (end == 0) continue;
     out += (out.empty() ? "" : ", ") + std::string(cloudfit::CloudLightingNames()[k]) + " " + FormatNumber(v) +
-           (v >= spec.max - tol ? " (its maximum)" : " (its minimum)");
+           (end > 0 ? " (its maximum)" : " (its minimum)");
   }
   return out;
 }
@@ -261,17 +261,14 @@ std::pair<fs::path, fs::path> RefitInputs(const StagedDirectory& out, const fs::
   if (rw == 0 || rw >= w) return {photo, mask};
   const int rh = rw / 2;
   fs::create_directories(dir);
-  const auto small = [&](const ImageRGB& im) {
-    ImageRGB s(rw, rh);
-    s.pixels = AreaDownsampleLatLong(im.pixels, w, h, 3, rw, rh);
-    return s;
-  };
   ImageRGB radiance(rw, rh);  // over the positive pixels: import zeroes the non-finite ones
   radiance.pixels = AreaDownsampleLatLongOfPositive(f.radiance.pixels, w, h, 3, rw, rh);
   f.radiance = std::move(radiance);
   capture::WriteLatLongFrame((dir / "photo.exr").string(), f);
   const ExrRGB m = ReadExrRGB(mask.string());
-  WriteExrRGB((dir / "mask.exr").string(), small(m.image), m.attributes, ExrPixelType::kHalf);
+  ImageRGB small_mask(rw, rh);
+  small_mask.pixels = AreaDownsampleLatLong(m.image.pixels, w, h, 3, rw, rh);
+  WriteExrRGB((dir / "mask.exr").string(), small_mask, m.attributes, ExrPixelType::kHalf);
   return {dir / "photo.exr", dir / "mask.exr"};
 }
 

@@ -27,10 +27,6 @@ std::vector<Span> Spans(int n, int out_n) {
   return spans;
 }
 
-}  // namespace
-
-namespace {
-
 // A pixel whose every channel is positive and finite.
 bool Positive(const float* v, int channels) {
   for (int c = 0; c < channels; ++c)

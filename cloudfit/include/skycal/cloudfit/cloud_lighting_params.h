@@ -21,6 +21,9 @@ const std::array<const char*, kCloudLightingParameters>& CloudLightingNames();
 const clouds::CloudParamSpec& CloudLightingSpec(int k);
 // Index of a parameter by its spec name; -1 when it is not a fitted lighting parameter.
 int CloudLightingIndex(const std::string& name);
+// Where `value` sits in parameter k's range: -1 at its minimum, +1 at its maximum (within 1e-6
+// of the range: a fit that ran into a bound), 0 inside.
+int CloudLightingRangeEnd(int k, double value);
 
 CloudLighting GetCloudLighting(const clouds::CloudParams& params);
 void SetCloudLighting(const CloudLighting& lighting, clouds::CloudParams* params);
