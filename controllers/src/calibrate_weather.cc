@@ -5,6 +5,7 @@
 #include <memory>
 #include <utility>
 
+#include "skycal/capture/cloud_opacity.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/cloudfit/cloud_lighting_params.h"
 #include "skycal/cloudfit/weather_inversion.h"
@@ -23,6 +24,7 @@
 #include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
+#include "skycal/render/renderer.h"
 
 namespace skycal::controllers {
 namespace {
@@ -57,10 +59,10 @@ void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::file
   WriteExrRGB(path.string(), image, attributes, ExrPixelType::kHalf);
 }
 
-// Near the sun the cloud probability's colour test reads glare, and the silver lining of a
-// cloud in front of the sun, as clear sky: a sun hidden by a cloud carved a hole through it,
-// where the game then drew the disc. Within kSunGlareDeg of the sun the photo's opacity is
-// taken from the ring around it (kSunGlareDeg to 1.5x), where the test is trusted.
+// Near the sun the photo's colour reads glare, and the silver lining of a cloud in front of
+// the sun, as clear sky: a sun hidden by a cloud carved a hole through it, where the game then
+// drew the disc. Within kSunGlareDeg of the sun the photo's opacity is taken from the ring
+// around it (kSunGlareDeg to 1.5x), where the colour is trusted.
 constexpr double kSunGlareDeg = 10.0;
 
 void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, int width, int height,
@@ -78,6 +80,38 @@ void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, in
     }
   if (n > 0.0)
     for (size_t i : glare) (*opacity)[i] = static_cast<float>(sum / n);
+}
+
+// The photo's cloud opacity at the inversion's width: its colour unmixed into the statistics
+// fit's clear sky (times its exposure) and the clouds' light (capture/cloud_opacity.h), the
+// cloud probability standing in where the two colours are alike, 0 outside the sky, the sun's
+// glare filled from around it.
+std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
+                                int rw, int rh, WeatherInversionRecord* r) {
+  const int w = a.frame.radiance.width, h = a.frame.radiance.height;
+  std::vector<float> probability(a.cloud_probability.size());
+  for (size_t i = 0; i < probability.size(); ++i)
+    probability[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
+  ImageRGB photo(rw, rh);
+  photo.pixels = AreaDownsampleLatLongOfPositive(a.frame.radiance.pixels, w, h, 3, rw, rh);
+  const std::vector<float> sky = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
+  render::RenderRequest req;
+  req.sun_dir = *a.sun.direction;
+  req.width = rw;
+  req.height = rh;
+  req.sun_disc = false;
+  ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
+  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
+  for (float& v : clear.pixels) v = static_cast<float>(v * exposure);
+  capture::CloudOpacity o = capture::EstimateCloudOpacity(
+      photo, clear, AreaDownsampleLatLong(probability, w, h, 1, rw, rh), sky, {});
+  FillSunGlare(&o.opacity, sky, rw, rh, *a.sun.direction);
+  r->cloud_colour = o.cloud_colour;
+  r->colour_pixels = o.colour_pixels;
+  r->opacity_from_probability = o.unmixed + o.from_probability > 0
+                                    ? static_cast<double>(o.from_probability) / static_cast<double>(o.unmixed + o.from_probability)
+                                    : 0.0;
+  return std::move(o.opacity);
 }
 
 }  // namespace
@@ -135,6 +169,13 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
           kConstrainedTexelsFile + "; the rest keep the statistics fit's coverage); rendered vs photo cloud opacity RMS";
   for (double r : rms) d.why += " " + FormatNumber(std::round(r * 1000.0) / 1000.0);
   d.why += " over " + std::to_string(rms.size()) + " renders at " + std::to_string(render_width) + " px wide";
+  const auto f3 = [](double v) { return FormatNumber(std::round(v * 1000.0) / 1000.0); };
+  d.why += "; the photo's opacity unmixed from its colour (the statistics fit's clear sky behind, the clouds' colour " +
+           f3(cloud_colour[0]) + " " + f3(cloud_colour[1]) + " " + f3(cloud_colour[2]) +
+           (colour_pixels > 0 ? " from " + std::to_string(colour_pixels) + " sure cloud pixels"
+                              : std::string(" (grey: too few sure cloud pixels)")) +
+           "; the cloud probability stood in for " + f3(100.0 * opacity_from_probability) +
+           "% of the sky pixels, whose colour matches the clouds')";
   if (horizon_rule_off)
     d.why += "; the horizon rule off (it would draw a bank of cumulus beyond 15 km where the photo shows its own horizon)";
   return d;
@@ -191,11 +232,8 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   }
   clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", params.weather_extent_m);
   if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
-  std::vector<float> photo(a.cloud_probability.size());
-  for (size_t i = 0; i < photo.size(); ++i) photo[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
-  std::vector<float> photo_small = AreaDownsampleLatLong(photo, w, h, 1, rw, rh);
+  const std::vector<float> photo_small = PhotoOpacity(a, out, preset, rw, rh, &r);
   const std::vector<float> sky_small = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
-  FillSunGlare(&photo_small, sky_small, rw, rh, *a.sun.direction);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
   // The march's transmittance through the map being refined.
   const auto noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());

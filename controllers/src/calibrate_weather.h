@@ -25,6 +25,12 @@ struct WeatherInversionRecord {
   int texels = 0, constrained = 0;
   int render_width = 0;         // the refinement renders' lat-long width (pixels)
   std::vector<double> rms;      // per refinement render: RMS of rendered - photo opacity
+  // The photo's opacity (capture/cloud_opacity.h): the clouds' colour (chromaticity), the sure
+  // cloud pixels it is the median of (0: grey), and the share of the sky pixels whose colour
+  // could not be unmixed (the cloud probability stood in).
+  std::array<double, 3> cloud_colour{};
+  long long colour_pixels = 0;
+  double opacity_from_probability = 0.0;
   bool horizon_rule_off = false;  // the preset's horizon rule turned off (the map draws the horizon)
   double seconds = 0.0;
   fit::FitDecision Decision() const;
