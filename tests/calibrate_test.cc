@@ -277,7 +277,7 @@ int ExpectNamedImagesExist(const std::filesystem::path& record) {
 
 // The refit's free parameters at an end of their range are named in its decision (in
 // CloudLightingNames order), the held ones and those inside their range are not; its restarts
-// from the far side of a bound are said.
+// from the far side of a bound, and the holds it released, are said.
 TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRangeAndItsRestarts) {
   const nlohmann::json clouds = {{"parameters",
                                   {{"ms_a", {{"value", 0.0}, {"held", false}}},
@@ -294,6 +294,19 @@ TEST(Calibrate, TheRefitNamesTheParametersItLeftAtTheEndOfTheirRangeAndItsRestar
             "; solved again from the far side of a bound 1 time(s), the first solve kept (lower cost)");
   EXPECT_EQ(controllers::BoundRestartsText({{"solve", {{"iterations", 10}}}}), "");
   EXPECT_EQ(controllers::BoundRestartsText(nlohmann::json()), "");
+  // The holds released after the solve, kept or not.
+  const nlohmann::json released = {{"freed", {"phase_blend", "ms_b"}}, {"kept", true}, {"cost_before", 0.10051},
+                                   {"cost_after", 0.09479}};
+  EXPECT_EQ(controllers::ReleasedHoldsText({{"solve", {{"released_holds", released}}}}),
+            "; then the holds of the separability rule released (phase_blend, ms_b) and the solve continued: cost "
+            "0.1005 -> 0.0948, kept (the freed values are the image's best, not determined ones)");
+  nlohmann::json higher = released;
+  higher["kept"] = false;
+  higher["cost_after"] = 0.2;
+  EXPECT_EQ(controllers::ReleasedHoldsText({{"solve", {{"released_holds", higher}}}}),
+            "; then the holds of the separability rule released (phase_blend, ms_b) and the solve continued: cost "
+            "0.1005 -> 0.2, not kept (no lower)");
+  EXPECT_EQ(controllers::ReleasedHoldsText({{"solve", {{"iterations", 10}}}}), "");
 }
 
 // Every file a record names as read (a reference's path, a mask, the starting preset; relative:

@@ -117,6 +117,66 @@ TEST(CloudLighting, ASolveLeftAtABoundIsSolvedAgainFromTheOtherSide) {
   EXPECT_DOUBLE_EQ(cost, 1.5);
 }
 
+// ReleaseInseparableHolds: the parameters held by the separability rule (not the unobserved,
+// not those held on request) are freed for a solve from where the first ended; a lower cost is
+// kept with the conditioning saying so, a higher one leaves lighting, cost and holds as they were.
+TEST(CloudLighting, TheSeparabilityRulesHoldsAreReleasedAndKeptOnlyWhenTheCostFalls) {
+  const int g2 = CloudLightingIndex("phase_g2"), ms_b = CloudLightingIndex("ms_b"),
+            rain = CloudLightingIndex("rain_absorption"), ext = CloudLightingIndex("extinction");
+  Conditioning c;
+  c.parameters.resize(kCloudLightingParameters);
+  c.parameters[g2] = {.held = true, .inseparable = true, .why = "inseparable: predicted error 3%"};
+  c.parameters[ms_b] = {.held = true, .inseparable = true, .why = "inseparable: predicted error 2%"};
+  c.parameters[rain] = {.held = true, .why = "unobserved: no rain"};
+  c.parameters[ext] = {.held = true, .why = "held on request (--cloud-hold)"};
+  CloudLighting theta{};
+  theta[g2] = 0.5;
+  std::vector<std::vector<char>> asked;  // the held flags each solve was given
+  const auto solve_to = [&](double cost) {
+    return [&asked, cost, g2](const Conditioning& freed, CloudLighting* t) {
+      std::vector<char> held;
+      for (const ParameterConditioning& p : freed.parameters) held.push_back(p.held);
+      asked.push_back(held);
+      (*t)[g2] = 0.9;
+      return cost;
+    };
+  };
+  double cost = 1.0;
+  Conditioning kept = c;
+  const ReleasedHolds r = ReleaseInseparableHolds(solve_to(0.8), &kept, &theta, &cost);
+  EXPECT_EQ(r.names, (std::vector<std::string>{"phase_g2", "ms_b"}));
+  EXPECT_TRUE(r.kept);
+  EXPECT_DOUBLE_EQ(r.cost_before, 1.0);
+  EXPECT_DOUBLE_EQ(cost, 0.8);
+  EXPECT_DOUBLE_EQ(theta[g2], 0.9);
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_FALSE(asked[0][g2]);
+  EXPECT_FALSE(asked[0][ms_b]);
+  EXPECT_TRUE(asked[0][rain]);  // unobserved: stays held
+  EXPECT_TRUE(asked[0][ext]);   // on request: stays held
+  EXPECT_FALSE(kept.parameters[g2].held);
+  EXPECT_NE(kept.parameters[g2].why.find("freed after the first solve"), std::string::npos) << kept.parameters[g2].why;
+  EXPECT_TRUE(kept.parameters[rain].held);
+
+  // A higher cost: nothing moves.
+  theta[g2] = 0.5;
+  cost = 1.0;
+  Conditioning not_kept = c;
+  const ReleasedHolds worse = ReleaseInseparableHolds(solve_to(1.2), &not_kept, &theta, &cost);
+  EXPECT_FALSE(worse.kept);
+  EXPECT_DOUBLE_EQ(worse.cost_after, 1.2);
+  EXPECT_DOUBLE_EQ(cost, 1.0);
+  EXPECT_DOUBLE_EQ(theta[g2], 0.5);
+  EXPECT_TRUE(not_kept.parameters[g2].held);
+
+  // Nothing held as inseparable: no solve.
+  c.parameters[g2] = {};
+  c.parameters[ms_b] = {};
+  asked.clear();
+  EXPECT_TRUE(ReleaseInseparableHolds(solve_to(0.1), &c, &theta, &cost).names.empty());
+  EXPECT_TRUE(asked.empty());
+}
+
 // The model at every cloud pixel above the horizon with the double values (central
 // differences need double precision: the renderers store floats).
 struct DoubleModel {
@@ -298,6 +358,7 @@ TEST(CloudLighting, ConditioningHoldsWhatThePixelsDoNotSee) {
   // held as inseparable was predicted worse when it was held (greedy, worst first).
   int free = 0;
   for (const ParameterConditioning& p : with_rain.parameters) {
+    EXPECT_EQ(p.inseparable, p.held && p.why.starts_with("inseparable")) << p.why;  // what ReleaseInseparableHolds frees
     if (!p.held) {
       ++free;
       EXPECT_LE(p.predicted_relative_error, 0.01);

@@ -107,6 +107,7 @@ Conditioning AnalyseConditioning(const std::vector<double>& jacobian, const Clou
     if (!o.auto_hold || e[worst] <= o.max_relative_error) break;
     ParameterConditioning& pc = out.parameters[free[worst]];
     pc.held = true;
+    pc.inseparable = true;
     const std::string partner = pc.most_collinear >= 0 ? CloudLightingNames()[pc.most_collinear] : "none";
     pc.why = "inseparable: predicted error " + FormatNumber(100.0 * e[worst]) + "% at " + FormatNumber(100.0 * o.noise) +
              "% pixel noise (> " + FormatNumber(100.0 * o.max_relative_error) + "%) with the others free; most collinear with " +

@@ -30,7 +30,8 @@ struct ParameterConditioning {
   int most_collinear = -1;           // the parameter whose column is closest in angle
   double collinear_cosine = 0.0;     // |cos| of that angle
   bool held = false;
-  std::string why;                   // when held
+  bool inseparable = false;          // held by the separability rule (not unobserved, not on request)
+  std::string why;                   // when held; or why a hold was released (ReleaseInseparableHolds)
 };
 
 struct Conditioning {

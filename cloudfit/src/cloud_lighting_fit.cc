@@ -71,6 +71,37 @@ std::vector<Conditioning> DayConditioning(const std::vector<Conditioning>& each,
   return out;
 }
 
+// One reference's solves after the first (CloudLightingOptions): each free parameter left at a
+// bound solved again from the far side (restart_at_bounds), then the inseparable holds released
+// and the solve continued (release_inseparable). `*c`, `*theta` and `*s` become the kept solve's.
+struct SolvedAgain {
+  BoundRestarts restarts;
+  ReleasedHolds released;
+};
+SolvedAgain SolveAgain(CloudSampleModel* model, const CloudLighting& start, const CloudLightingOptions& o,
+                       Conditioning* c, CloudLighting* theta, ceres::Solver::Summary* s) {
+  SolvedAgain r;
+  double cost = s->final_cost;
+  std::vector<ceres::Solver::Summary> solves;
+  if (o.restart_at_bounds) {
+    std::vector<char> held(kCloudLightingParameters);
+    for (int k = 0; k < kCloudLightingParameters; ++k) held[k] = c->parameters[k].held;
+    r.restarts = RestartAtBounds(start, held, [&](CloudLighting* t) {
+      solves.push_back(SolveCloudBlock(model, t->data(), *c, o));
+      return solves.back().final_cost;
+    }, theta, &cost);
+    if (r.restarts.kept >= 0) *s = solves[static_cast<size_t>(r.restarts.kept)];
+  }
+  if (o.release_inseparable) {
+    r.released = ReleaseInseparableHolds([&](const Conditioning& freed, CloudLighting* t) {
+      solves.push_back(SolveCloudBlock(model, t->data(), freed, o));
+      return solves.back().final_cost;
+    }, c, theta, &cost);
+    if (r.released.kept) *s = solves.back();
+  }
+  return r;
+}
+
 // Conditions every member at `start`, solves their blocks (one problem; the day's prior
 // with three or more), and fills one report per member. `images` renders what the
 // members' models did not already render (the composites of the report).
@@ -81,7 +112,7 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
   std::vector<Conditioning> each;
   for (Member& x : m) each.push_back(ConditionAt(x.model.get(), start, o));
   const double conditioning_s = Seconds(t0);
-  const std::vector<Conditioning> day = DayConditioning(each, m);
+  std::vector<Conditioning> day = DayConditioning(each, m);
   std::vector<CloudLighting> theta(m.size(), start);
   std::vector<CloudSampleModel*> models;
   std::vector<double*> blocks;
@@ -95,18 +126,8 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
   for (int k = 0; k < kCloudLightingParameters; ++k) scale[k] = day[0].parameters[k].scale;
   int prior_residuals = 0;
   ceres::Solver::Summary s = SolveCloudDay(models, blocks, day[0], times, scale, o, &prior_residuals);
-  BoundRestarts restarts;
-  if (o.restart_at_bounds && m.size() == 1) {
-    std::vector<char> held(kCloudLightingParameters);
-    for (int k = 0; k < kCloudLightingParameters; ++k) held[k] = day[0].parameters[k].held;
-    std::vector<ceres::Solver::Summary> again;
-    double cost = s.final_cost;
-    restarts = RestartAtBounds(start, held, [&](CloudLighting* t) {
-      again.push_back(SolveCloudBlock(models[0], t->data(), day[0], o));
-      return again.back().final_cost;
-    }, &theta[0], &cost);
-    if (restarts.kept >= 0) s = again[static_cast<size_t>(restarts.kept)];
-  }
+  SolvedAgain again;
+  if (m.size() == 1) again = SolveAgain(models[0], start, o, &day[0], &theta[0], &s);
   const double solve_s = Seconds(t0);
 
   const auto tr = Clock::now();
@@ -131,8 +152,12 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
     rep.cloud_initial = CompositeErrors(x.pixels, *x.reference, composite(start, shapes.params));
     rep.cloud_final = CompositeErrors(x.pixels, *x.reference, composite(theta[r], rep.fitted_params));
     rep.iterations = static_cast<int>(s.iterations.size()) - 1;
-    rep.bound_restarts = restarts.tried;
-    rep.bound_restart_kept = restarts.kept >= 0 ? restarts.parameter : "";
+    rep.bound_restarts = again.restarts.tried;
+    rep.bound_restart_kept = again.restarts.kept >= 0 ? again.restarts.parameter : "";
+    rep.released_holds = again.released.names;
+    rep.released_kept = again.released.kept;
+    rep.released_cost_before = again.released.cost_before;
+    rep.released_cost_after = again.released.cost_after;
     rep.termination = ceres::TerminationTypeToString(s.termination_type);
     rep.renders = x.model->renders;
     rep.jacobians = x.model->jacobians;

@@ -18,7 +18,7 @@ nlohmann::json CloudReportJson(const CloudReportSettings& o, const SkyCloudFit& 
   nlohmann::json params = nlohmann::json::object();
   for (const CloudParamReport& p : r.parameters) {
     nlohmann::json j = {{"value", p.value}, {"unit", p.unit}, {"initial", p.initial}, {"held", p.held}};
-    if (p.held) j["why"] = p.why;
+    if (!p.why.empty()) j["why"] = p.why;  // held, or a hold released
     if (r.fitted) {
       j["sensitivity"] = Finite(p.sensitivity);
       j["predicted_relative_error"] = Finite(p.predicted_relative_error);
@@ -64,6 +64,11 @@ nlohmann::json CloudReportJson(const CloudReportSettings& o, const SkyCloudFit& 
                 {"report_time_s", r.report_time_s},  {"time_s", r.time_s}};
   if (r.bound_restarts > 0)  // CloudLightingOptions::restart_at_bounds
     j["solve"]["bound_restarts"] = {{"tried", r.bound_restarts}, {"kept", r.bound_restart_kept}};
+  if (!r.released_holds.empty())  // CloudLightingOptions::release_inseparable
+    j["solve"]["released_holds"] = {{"freed", r.released_holds},
+                                    {"kept", r.released_kept},
+                                    {"cost_before", r.released_cost_before},
+                                    {"cost_after", r.released_cost_after}};
   if (f.references.size() > 1) {
     j["day"] = {{"references", f.references.size()},
                 {"smoothness", o.day_smoothness},

@@ -127,6 +127,30 @@ BoundRestarts RestartAtBounds(const CloudLighting& start, const std::vector<char
   return r;
 }
 
+ReleasedHolds ReleaseInseparableHolds(const std::function<double(const Conditioning&, CloudLighting*)>& solve,
+                                      Conditioning* c, CloudLighting* theta, double* cost) {
+  ReleasedHolds r;
+  Conditioning freed = *c;
+  for (int k = 0; k < kCloudLightingParameters; ++k) {
+    ParameterConditioning& pc = freed.parameters[k];
+    if (!pc.held || !pc.inseparable) continue;
+    pc.held = false;
+    pc.why = "freed after the first solve, which held it (" + pc.why + "): the image's best value, not a determined one";
+    r.names.push_back(CloudLightingNames()[k]);
+  }
+  if (r.names.empty()) return r;
+  CloudLighting again = *theta;
+  r.cost_before = *cost;
+  r.cost_after = solve(freed, &again);
+  if (r.cost_after < *cost) {
+    r.kept = true;
+    *theta = again;
+    *cost = r.cost_after;
+    *c = freed;
+  }
+  return r;
+}
+
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
                                        const CloudLightingOptions& o) {
   return SolveCloudDay({model}, {theta}, c, {0.0}, {}, o, nullptr);

@@ -47,6 +47,19 @@ struct BoundRestarts {
 BoundRestarts RestartAtBounds(const CloudLighting& start, const std::vector<char>& held,
                               const std::function<double(CloudLighting*)>& solve, CloudLighting* theta, double* cost);
 
+// CloudLightingOptions::release_inseparable: the parameters `*c` holds as inseparable are freed
+// and `solve` (given the freed conditioning; it moves the lighting and returns its final cost)
+// continues from `*theta`. Kept when its cost is below `*cost`: `*theta`, `*cost` and `*c`
+// (those parameters no longer held, their why saying so) updated. No solve when nothing is
+// held as inseparable.
+struct ReleasedHolds {
+  std::vector<std::string> names;  // the parameters freed, CloudLightingNames order
+  bool kept = false;
+  double cost_before = 0.0, cost_after = 0.0;
+};
+ReleasedHolds ReleaseInseparableHolds(const std::function<double(const Conditioning&, CloudLighting*)>& solve,
+                                      Conditioning* c, CloudLighting* theta, double* cost);
+
 // Solves the cloud block alone (the sky fixed); returns the Ceres summary.
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
                                        const CloudLightingOptions& o);

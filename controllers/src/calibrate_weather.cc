@@ -140,6 +140,20 @@ std::string BoundRestartsText(const nlohmann::json& clouds) {
                        : "the restart in " + kept + " kept (lower cost)");
 }
 
+std::string ReleasedHoldsText(const nlohmann::json& clouds) {
+  if (!clouds.is_object() || !clouds.contains("solve") || !clouds["solve"].is_object()) return "";
+  const nlohmann::json& solve = clouds["solve"];
+  if (!solve.contains("released_holds") || !solve["released_holds"].is_object()) return "";
+  const nlohmann::json& r = solve["released_holds"];
+  std::string names;
+  for (const auto& n : r.value("freed", nlohmann::json::array())) names += (names.empty() ? "" : ", ") + n.get<std::string>();
+  const auto cost = [&](const char* key) { return FormatNumber(std::round(r.value(key, 0.0) * 1e4) / 1e4); };
+  return "; then the holds of the separability rule released (" + names + ") and the solve continued: cost " +
+         cost("cost_before") + " -> " + cost("cost_after") +
+         (r.value("kept", false) ? std::string(", kept (the freed values are the image's best, not determined ones)")
+                                 : std::string(", not kept (no lower)"));
+}
+
 std::string ParametersAtBounds(const nlohmann::json& clouds) {
   std::string out;
   const auto p = clouds.is_object() ? clouds.find("parameters") : clouds.end();
@@ -170,11 +184,11 @@ fit::FitDecision WeatherInversionRecord::Decision() const {
   for (double r : rms) d.why += " " + FormatNumber(std::round(r * 1000.0) / 1000.0);
   d.why += " over " + std::to_string(rms.size()) + " renders at " + std::to_string(render_width) + " px wide";
   const auto f3 = [](double v) { return FormatNumber(std::round(v * 1000.0) / 1000.0); };
-  d.why += "; the photo's opacity unmixed from its colour (the statistics fit's clear sky behind, the clouds' colour " +
-           f3(cloud_colour[0]) + " " + f3(cloud_colour[1]) + " " + f3(cloud_colour[2]) +
-           (colour_pixels > 0 ? " from " + std::to_string(colour_pixels) + " sure cloud pixels"
-                              : std::string(" (grey: too few sure cloud pixels)")) +
-           "; the cloud probability stood in for " + f3(100.0 * opacity_from_probability) +
+  d.why += "; the photo's opacity unmixed from its colour (the statistics fit's clear sky behind, the clouds' colour";
+  for (double c : cloud_colour) d.why += " " + f3(c);
+  if (colour_pixels > 0) d.why += " from " + std::to_string(colour_pixels) + " sure cloud pixels";
+  else d.why += " (grey: too few sure cloud pixels)";
+  d.why += "; the cloud probability stood in for " + f3(100.0 * opacity_from_probability) +
            "% of the sky pixels, whose colour matches the clouds')";
   if (horizon_rule_off)
     d.why += "; the horizon rule off (it would draw a bank of cumulus beyond 15 km where the photo shows its own horizon)";
@@ -329,7 +343,7 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds) {
           " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
           "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
           CloudPixelsLogRmse(clouds, "final") + "; the statistics fit's record: fit.statistics.json";
-  d.why += BoundRestartsText(clouds);
+  d.why += BoundRestartsText(clouds) + ReleasedHoldsText(clouds);
   const std::string at_bounds = ParametersAtBounds(clouds);
   if (!at_bounds.empty())
     d.why += "; at the end of its range: " + at_bounds +
@@ -366,6 +380,11 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // Its minima sit at opposite ends of a factor's range for shapes that differ by a render:
     // a parameter left at a bound is solved again from the other side, the lower cost kept.
     k.clouds.restart_at_bounds = true;
+    // Which parameters the conditioning holds flips with small changes of the shapes, and the
+    // image then lands in another basin: the holds released after the solve and the solve
+    // continued from there, kept when the image's error is lower, make it less a matter of
+    // which side of the separability line a parameter fell (bench/results/weather_inversion.md).
+    k.clouds.release_inseparable = true;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the

@@ -48,6 +48,9 @@ std::string ParametersAtBounds(const nlohmann::json& clouds);
 // What the refit's record says of its restarts from the far side of a bound
 // (CloudLightingOptions::restart_at_bounds), as a clause to append to its decision; "" when none ran.
 std::string BoundRestartsText(const nlohmann::json& clouds);
+// What the refit's record says of the holds it released after the solve
+// (CloudLightingOptions::release_inseparable), as a clause to append to its decision; "" when none.
+std::string ReleasedHoldsText(const nlohmann::json& clouds);
 
 // The march the inversion and the day's predictions render: the game's (its noise, steps and
 // optimisations) on `backend` (Vulkan, else the float CPU twin), its transmittance only (no

@@ -103,6 +103,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   co.fit_sun_scale = o.fit_sun_scale;
   co.values_from_renderer = o.values_from_renderer;
   co.restart_at_bounds = o.restart_at_bounds;
+  co.release_inseparable = o.release_inseparable;
   co.hold = o.hold;
   co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;

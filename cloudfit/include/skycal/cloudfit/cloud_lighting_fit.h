@@ -84,6 +84,12 @@ struct CloudLightingOptions {
   // from a quarter of the range in from the other end, and the lower cost kept (calibrate's
   // refit on a photo's recovered shapes, whose minima sit at opposite bounds).
   bool restart_at_bounds = false;
+  // One reference: after the solve, the parameters the separability rule held are freed and
+  // the solve continues from its result; kept when the cost is lower (calibrate's refit: the
+  // recovered shapes are not the photo's clouds, and a lobe or factor the image cannot pin
+  // down alone still lowers the image's error; the values are then the image's best, not
+  // determined ones, and the report says which).
+  bool release_inseparable = false;
   int threads = 2;
   bool verbose = false;
   bool IsValid(std::string* why) const;
@@ -125,6 +131,11 @@ struct CloudLightingReport {
   // bound, and the parameter whose restart was kept (empty: the first solve stood).
   int bound_restarts = 0;
   std::string bound_restart_kept;
+  // CloudLightingOptions::release_inseparable: the holds released, whether the continued
+  // solve was kept, and the cost before and after it (0.5 sum of squared weighted residuals).
+  std::vector<std::string> released_holds;
+  bool released_kept = false;
+  double released_cost_before = 0.0, released_cost_after = 0.0;
   double render_time_s = 0.0, jacobian_time_s = 0.0, conditioning_time_s = 0.0, time_s = 0.0;
   // Stages of the whole fit (FitSkyAndClouds), s: the cloud renders that find the cloud
   // pixels, the sky fit on the clear pixels, the cloud solve (conditioning included), the
