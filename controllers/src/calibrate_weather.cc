@@ -377,13 +377,13 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // The solve's values from the model at its samples: a frame's march per trial point cost
     // most of the refit, and the game's image is rendered from the result anyway.
     k.clouds.values_from_renderer = false;
-    // Its minima sit at opposite ends of a factor's range for shapes that differ by a render:
-    // a parameter left at a bound is solved again from the other side, the lower cost kept.
-    k.clouds.restart_at_bounds = true;
     // Which parameters the conditioning holds flips with small changes of the shapes, and the
-    // image then lands in another basin: the holds released after the solve and the solve
-    // continued from there, kept when the image's error is lower, make it less a matter of
-    // which side of the separability line a parameter fell (bench/results/weather_inversion.md).
+    // image then lands in another basin (a lobe or a factor at the far end of its range): the
+    // holds released after the solve and the solve continued from there, kept when the cost
+    // falls, make it less a matter of which side of the separability line a parameter fell.
+    // Not restart_at_bounds as well: over the synthetic sky's sizes and inversion renders it
+    // gained little more than this alone, for a solve per parameter at a bound
+    // (bench/results/weather_inversion.md).
     k.clouds.release_inseparable = true;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the

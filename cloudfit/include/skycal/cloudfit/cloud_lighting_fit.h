@@ -81,8 +81,9 @@ struct CloudLightingOptions {
   // calibration, where the frame is rendered for the report and the game's image anyway.
   bool values_from_renderer = true;
   // One reference: a free parameter the solve leaves at an end of its range is solved again
-  // from a quarter of the range in from the other end, and the lower cost kept (calibrate's
-  // refit on a photo's recovered shapes, whose minima sit at opposite bounds).
+  // from a quarter of the range in from the other end, and the lower cost kept (a refit on a
+  // photo's recovered shapes has minima at opposite bounds; calibrate's uses
+  // release_inseparable below, which gained more for one solve).
   bool restart_at_bounds = false;
   // One reference: after the solve, the parameters the separability rule held are freed and
   // the solve continues from its result; kept when the cost is lower (calibrate's refit: the
