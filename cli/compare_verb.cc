@@ -1,8 +1,10 @@
 #include "compare_verb.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "command_line.h"
+#include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
@@ -22,11 +24,29 @@ nlohmann::json BandsJson(const std::vector<appearance::BandStats>& bands) {
   return out;
 }
 
+bool HasTransmittance(const ExrRGB& e) {
+  return std::find(e.channels.begin(), e.channels.end(), controllers::kCloudTransmittancePlane) != e.channels.end();
+}
+
+// The clouds' shapes against a synthetic photo's truth, when both files carry them.
+nlohmann::json CloudLayers(const CompareVerbOptions& o, const ExrRGB& photo, const ExrRGB& game,
+                           const std::vector<float>& sky) {
+  if (!HasTransmittance(photo) || !HasTransmittance(game)) return nullptr;
+  int w = 0, h = 0, gw = 0, gh = 0;
+  const std::vector<float> pt = ReadExrChannel(o.photo, controllers::kCloudTransmittancePlane, &w, &h);
+  const std::vector<float> gt = ReadExrChannel(o.game, controllers::kCloudTransmittancePlane, &gw, &gh);
+  const appearance::CloudLayerAgreement a = appearance::CompareCloudLayers(pt, gt, w, h, sky, o.options, o.game);
+  Log("compare", "clouds (both files' cloudTransmittance): opacity RMS " + FormatNumber(a.opacity_rms) +
+                     ", IoU " + (a.iou ? FormatNumber(*a.iou) : std::string("none (no cloud in either)")));
+  return {{"pixels", a.pixels}, {"opacity_rms", a.opacity_rms}, {"iou", a.iou ? nlohmann::json(*a.iou) : nlohmann::json()}};
+}
+
 }  // namespace
 
 nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
-  const ImageRGB photo = ReadExrRGB(o.photo).image;
-  ImageRGB game = ReadExrRGB(o.game).image;
+  const ExrRGB photo_file = ReadExrRGB(o.photo), game_file = ReadExrRGB(o.game);
+  const ImageRGB& photo = photo_file.image;
+  ImageRGB game = game_file.image;
   for (float& v : game.pixels) v = static_cast<float>(v * o.exposure);
   std::vector<float> sky;
   if (!o.mask.empty()) {
@@ -52,7 +72,8 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
           {"band_deg", o.options.band_deg},
           {"min_elevation_deg", o.options.min_elevation_deg},
           {"photo_bands", BandsJson(c.photo)},
-          {"game_bands", BandsJson(c.game)}};
+          {"game_bands", BandsJson(c.game)},
+          {"clouds", CloudLayers(o, photo_file, game_file, sky)}};
 }
 
 CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
@@ -62,6 +83,8 @@ CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
                      "Per-pixel log RMSE (solid-angle weighted, over the sky pixels and channels) and the\n"
                      "appearance error (per elevation band: 10/50/90% quantiles of ln luminance, medians of\n"
                      "ln R/G and ln B/G; RMS of the differences), which does not depend on where clouds sit.\n"
+                     "When both files carry cloudTransmittance (skycal render --clouds, calibrate's render.exr, a\n"
+                     "synthetic photo's truth): where the clouds sit, opacity RMS and cloud-mask IoU (T < 0.5).\n"
                      "docs/fitting.md \"Judging a calibration\".");
   CompareVerbOptions o;
   cl.Text("--photo", &o.photo, "P.exr", "the photograph (lat-long EXR)");

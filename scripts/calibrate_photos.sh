@@ -118,6 +118,9 @@ for size in 512x256 1000x500 1024x512 2048x1024; do
   t0=$(date +%s.%N)
   "$SKYCAL" calibrate --photo "$WORK/sizes_$size.exr" --out "$WORK/sizes_$size" --json >"$WORK/sizes_$size.json" 2>/dev/null || true
   awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f\n", b - a }' >"$WORK/sizes_$size.seconds"
+  # Where the game's clouds sit against the truth's (both EXRs carry cloudTransmittance).
+  "$SKYCAL" compare --photo "$WORK/sizes_$size.exr" --game "$WORK/sizes_$size/sizes_$size/render.exr" \
+    --mask "$WORK/sizes_$size/sizes_$size/mask.exr" --json >"$WORK/sizes_$size.truth.json" 2>/dev/null || true
 done
 
 python3 scripts/calibrate_photos_table.py "$WORK" "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" >"$WORK/table.md"

@@ -76,11 +76,20 @@ if on and off:
     for name, v in (("on (the default)", on), ("off (SKYCAL_HUGE_PAGES=0)", off)):
         print("| %s | %.2f (%.2f - %.2f) |" % (name, v[len(v) // 2], v[0], v[-1]))
     print()
+def truth_clouds(size):
+    # `skycal compare` of the photo (its own cloudTransmittance: the truth) and render.exr.
+    try:
+        t = json.load(open(os.path.join(work, "sizes_%s.truth.json" % size)))["clouds"]
+        return "%.2f | %.3f" % (t["iou"], t["opacity_rms"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return " | "
+
+
 sizes = []
 for size in ("512x256", "1000x500", "1024x512", "2048x1024"):
     try:
         c = json.load(open(os.path.join(work, "sizes_%s.json" % size)))["photos"][0]
-        sizes.append((size, float(open(os.path.join(work, "sizes_%s.seconds" % size)).read()), c))
+        sizes.append((size, float(open(os.path.join(work, "sizes_%s.seconds" % size)).read()), c, truth_clouds(size)))
     except (OSError, ValueError, KeyError, IndexError):
         pass
 if sizes:
@@ -88,12 +97,16 @@ if sizes:
     print("A partly cloudy sky the game's own march draws (a procedural weather map, the sun 40 deg up) at four sizes,")
     print("one fresh `skycal calibrate` each. The inversion and the lighting refit work at 512 wide whatever the size;")
     print("the segmentation, the sky fit and the game's image at the photo's. 1000x500 divides into none of the")
-    print("working widths: it is averaged down to them by area (before this, such a photo got no cloud layer).\n")
-    print("| size | wall s | per-pixel log RMSE | appearance error | cloud IoU |\n|---|---|---|---|---|")
-    for size, seconds, c in sizes:
-        print("| %s | %.1f | %.3f | %.3f | %s |" % (size, seconds, c.get("game_per_pixel_log_rmse", float("nan")),
-                                                 c.get("game_appearance_error", float("nan")),
-                                                 "%.2f" % c["game_cloud_iou"] if "game_cloud_iou" in c else ""))
+    print("working widths: it is averaged down to them by area (before this, such a photo got no cloud layer).")
+    print("The photo carries its clouds' true transmittance: the last two columns are where the game's clouds sit")
+    print("against the truth's (`skycal compare`, solid-angle weighted), while cloud IoU, as for the photos above, is")
+    print("against the photo's colour-ramp cloud mask.\n")
+    print("| size | wall s | per-pixel log RMSE | appearance error | cloud IoU | IoU against the truth | opacity RMS "
+          "against the truth |\n|---|---|---|---|---|---|---|")
+    for size, seconds, c, truth in sizes:
+        print("| %s | %.1f | %.3f | %.3f | %s | %s |" % (size, seconds, c.get("game_per_pixel_log_rmse", float("nan")),
+                                                      c.get("game_appearance_error", float("nan")),
+                                                      "%.2f" % c["game_cloud_iou"] if "game_cloud_iou" in c else "", truth))
     print()
 print("## The clear frames over their hand masks\n")
 print("| photo | calibrate, per-pixel log RMSE | main job (hand mask, hand flags) | ratio (target <= 1.1) |\n|---|---|---|---|")

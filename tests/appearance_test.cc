@@ -110,5 +110,37 @@ TEST(Appearance, BadInputNamesWhatIsWrong) {
   EXPECT_THROW(Compare(p, p, std::vector<float>(static_cast<size_t>(kW) * kH, 0.0f), Options{}), Error);
 }
 
+// Where the clouds sit: a cloud over the left 64 columns of the upper hemisphere against one over
+// the left 32. A pixel's solid angle is its row's band times its column's width, and the first
+// and last columns are half wide (core/latlong.h: they are one meridian), so the 128 columns weigh
+// 127 units: IoU (31.5 / 63.5), opacity RMS sqrt(32 / 127) (those 32 columns differ by 1);
+// identical layers 0 and 1; no cloud, no IoU.
+TEST(Appearance, CloudLayersCompareWhereTheCloudsSit) {
+  const size_t n = static_cast<size_t>(kW) * kH;
+  std::vector<float> half(n, 1.0f), quarter(n, 1.0f);
+  for (int y = 0; y < kH / 2; ++y)
+    for (int x = 0; x < kW / 2; ++x) {
+      half[static_cast<size_t>(y) * kW + x] = 0.0f;
+      if (x < kW / 4) quarter[static_cast<size_t>(y) * kW + x] = 0.0f;
+    }
+  Options o;  // from the horizon up: the upper half of the rows
+  const CloudLayerAgreement a = CompareCloudLayers(half, quarter, kW, kH, {}, o);
+  EXPECT_EQ(a.pixels, kW * kH / 2);
+  ASSERT_TRUE(a.iou.has_value());
+  EXPECT_NEAR(*a.iou, 31.5 / 63.5, 1e-12);
+  EXPECT_NEAR(a.opacity_rms, std::sqrt(32.0 / 127.0), 1e-12);
+  const CloudLayerAgreement same = CompareCloudLayers(half, half, kW, kH, {}, o);
+  EXPECT_EQ(same.opacity_rms, 0.0);
+  EXPECT_EQ(*same.iou, 1.0);
+  const std::vector<float> clear(n, 1.0f);
+  EXPECT_FALSE(CompareCloudLayers(clear, clear, kW, kH, {}, o).iou.has_value());
+  try {
+    CompareCloudLayers(half, std::vector<float>(10, 1.0f), kW, kH, {}, o, "render.exr");
+    FAIL() << "a size mismatch was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("render.exr: cloud transmittance of 10 pixels"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace skycal::appearance

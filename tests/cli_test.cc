@@ -230,7 +230,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
 
 // `compare` through the binary: a frame against itself is 0 in both numbers, against a frame
 // twice as bright ln 2 per pixel and ln 2 * sqrt(3/5) in appearance (core/appearance.h), and
-// bad input names the file and writes nothing.
+// bad input names the file and writes nothing; the clouds compared when both carry them.
 TEST(Cli, CompareGivesBothNumbersAndRefusesBadInput) {
   ScratchDir dir("cli-compare");
   const std::string sun = " --sun-elevation 20 --sun-azimuth 30 --size 64x32 --backend cpu";
@@ -258,6 +258,16 @@ TEST(Cli, CompareGivesBothNumbersAndRefusesBadInput) {
   ExpectFailure("compare --photo " + (dir / "a.exr"), "--game G.exr is required", dir);
   ExpectFailure("compare --photo " + (dir / "nope.exr") + " --game " + (dir / "a.exr"), "nope.exr", dir);
   ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --band 0", "--band 0", dir);
+  // Where the clouds sit, when both files carry their transmittance: none here; a cloudy render
+  // against itself agrees exactly.
+  EXPECT_TRUE(js["clouds"].is_null());
+  ASSERT_EQ(Skycal("render" + sun + " --clouds --out " + (dir / "c.exr")).rc, 0);
+  const Result clouds = Skycal("compare --photo " + (dir / "c.exr") + " --game " + (dir / "c.exr") + " --json");
+  ASSERT_EQ(clouds.rc, 0) << clouds.err;
+  const auto jc = nlohmann::json::parse(clouds.out)["clouds"];
+  ASSERT_TRUE(jc.is_object()) << clouds.out;
+  EXPECT_EQ(jc["opacity_rms"].get<double>(), 0.0);
+  EXPECT_EQ(jc["iou"].get<double>(), 1.0);
 }
 
 TEST(Cli, NoVulkanDeviceGivesAClearMessage) {

@@ -102,6 +102,9 @@ GameJudgement RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const S
   f.sun_direction = game.sun_dir;
   f.extra.strings["skycalRenderOf"] = "preset.json as the game renders it" + std::string(r.clouds.enabled ? ", clouds drawn" : "");
   f.extra.floats["skycalExposure"] = static_cast<float>(exposure);
+  // As `skycal render --clouds` writes it: `skycal compare` then measures where the clouds sit
+  // against a synthetic photo's own.
+  if (!game.cloud_transmittance.empty()) f.planes.push_back({kCloudTransmittancePlane, game.cloud_transmittance});
   capture::WriteLatLongFrame(out / "render.exr", f);
   const std::vector<float> compared = ComparedPixels(a, plan);
   WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, compared);

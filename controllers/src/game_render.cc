@@ -261,7 +261,7 @@ capture::LatLongFrame FrameOf(const GameRenderFileOptions& f, GameImage* g) {
   capture::LatLongFrame frame;
   frame.radiance = std::move(g->radiance);
   if (g->clouds_drawn) {
-    frame.planes.push_back({"cloudTransmittance", std::move(g->cloud_transmittance)});
+    frame.planes.push_back({kCloudTransmittancePlane, std::move(g->cloud_transmittance)});
     frame.extra.strings["skycalClouds"] = g->clouds_origin;
     frame.extra.strings["skycalWeatherMap"] = g->weather_map_origin;
     frame.extra.floats["skycalCloudTimeS"] = static_cast<float>(f.render.clouds.time_s);

@@ -175,4 +175,34 @@ Comparison Compare(const ImageRGB& photo, const ImageRGB& game, const std::vecto
   return c;
 }
 
+CloudLayerAgreement CompareCloudLayers(const std::vector<float>& photo_t, const std::vector<float>& game_t, int width,
+                                       int height, const std::vector<float>& sky, const Options& o,
+                                       const std::string& game_name) {
+  if (const std::string e = o.IsValid(); !e.empty()) throw Error("cloud layer comparison: " + e);
+  const size_t n = static_cast<size_t>(width) * height;
+  if (photo_t.size() != n || game_t.size() != n || (!sky.empty() && sky.size() != n))
+    throw Error(game_name + ": cloud transmittance of " + std::to_string(game_t.size()) + " pixels against " +
+                std::to_string(photo_t.size()) + " (and a sky mask of " + std::to_string(sky.size()) +
+                "), expected " + std::to_string(n));
+  CloudLayerAgreement a;
+  double sum = 0.0, wsum = 0.0, both = 0.0, either = 0.0;
+  for (int r = 0; r < height; ++r) {
+    if (ElevationDeg(r, height) < o.min_elevation_deg) continue;
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(r) * width + x;
+      if (!Counts(sky, i)) continue;
+      const double w = latlong::PixelSolidAngle(x, r, width, height), d = game_t[i] - photo_t[i];
+      sum += w * d * d;
+      wsum += w;
+      const bool p = photo_t[i] < 0.5f, g = game_t[i] < 0.5f;
+      both += w * (p && g);
+      either += w * (p || g);
+      ++a.pixels;
+    }
+  }
+  a.opacity_rms = wsum > 0.0 ? std::sqrt(sum / wsum) : 0.0;
+  if (either > 0.0) a.iou = both / either;
+  return a;
+}
+
 }  // namespace skycal::appearance

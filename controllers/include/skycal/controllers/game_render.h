@@ -21,6 +21,10 @@ namespace skycal::controllers {
 
 std::string DefaultPresetPath();  // datasets/presets/default_clear.json in the data directory (core/data_dir.h)
 
+// The EXR channel a game image with clouds carries their transmittance in (render --clouds,
+// calibrate's render.exr); `skycal compare` reads it.
+inline constexpr const char* kCloudTransmittancePlane = "cloudTransmittance";
+
 struct GameRenderOptions {
   std::string preset_path;                          // preset JSON; empty: DefaultPresetPath()
   std::array<double, 3> sun_dir = {0.0, 1.0, 0.0};  // unit vector toward the sun, +Y up (core/latlong.h)

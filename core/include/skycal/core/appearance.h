@@ -17,6 +17,7 @@
 // clamped to it before the logarithm (a black sensor pixel or a zero render has no logarithm;
 // the floor keeps them finite and heavily penalised without one pixel ruling the RMS).
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,5 +61,21 @@ std::vector<BandStats> BandStatistics(const ImageRGB& image, const std::vector<f
 Comparison Compare(const ImageRGB& photo, const ImageRGB& game, const std::vector<float>& sky,
                    const Options& options, const std::string& photo_name = "photo",
                    const std::string& game_name = "game");
+
+// Where the clouds are, when both images carry their clouds' transmittance T (a synthetic
+// photo's truth, the game's render): over the pixels Compare counts, solid-angle weighted, the
+// RMS of the opacity (1 - T) difference and the IoU of the cloud masks (T < 0.5; none when
+// neither image has cloud there). The appearance error does not say where the clouds sit and
+// the per-pixel error mixes it with their light: this is the shapes alone.
+struct CloudLayerAgreement {
+  int pixels = 0;
+  double opacity_rms = 0.0;
+  std::optional<double> iou;
+};
+// Throws skycal::Error naming `game_name` when the sizes differ from width x height.
+CloudLayerAgreement CompareCloudLayers(const std::vector<float>& photo_transmittance,
+                                       const std::vector<float>& game_transmittance, int width, int height,
+                                       const std::vector<float>& sky, const Options& options,
+                                       const std::string& game_name = "game");
 
 }  // namespace skycal::appearance
