@@ -231,6 +231,7 @@ bool CloudSampleModel::JetValues(const double* theta, double* log_model, double*
   if (n <= 2) return JetValuesOf<2>(theta, log_model, jacobian);
   if (n <= 4) return JetValuesOf<4>(theta, log_model, jacobian);
   if (n <= 8) return JetValuesOf<8>(theta, log_model, jacobian);
+  if (n <= 12) return JetValuesOf<12>(theta, log_model, jacobian);  // the released holds' solve frees 9-12
   return JetValuesOf<kCloudLightingParameters>(theta, log_model, jacobian);
 }
 

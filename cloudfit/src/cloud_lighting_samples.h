@@ -60,7 +60,7 @@ class CloudSampleModel {
   // columns are 0 (or, at the point of an earlier Jacobian with more columns, its values:
   // that one is reused). Default: all (the conditioning needs every column; the solve only its
   // free ones, and a Jet of 4 dual parts marches several times faster than one of 15). The
-  // Jet's width is the smallest of 2, 4, 8, 15 that holds them.
+  // Jet's width is the smallest of 2, 4, 8, 12, 15 that holds them.
   void SetFreeParameters(const std::vector<int>& free);
 
   // The full-frame cloud render at `theta` when one of the renders since SetSky was made
