@@ -125,6 +125,7 @@ TEST(CloudLighting, TheSeparabilityRulesHoldsAreReleasedAndKeptOnlyWhenTheCostFa
             rain = CloudLightingIndex("rain_absorption"), ext = CloudLightingIndex("extinction");
   Conditioning c;
   c.parameters.resize(kCloudLightingParameters);
+  c.singular_values_free = {1.0, 0.5};
   c.parameters[g2] = {.held = true, .inseparable = true, .why = "inseparable: predicted error 3%"};
   c.parameters[ms_b] = {.held = true, .inseparable = true, .why = "inseparable: predicted error 2%"};
   c.parameters[rain] = {.held = true, .why = "unobserved: no rain"};
@@ -157,6 +158,7 @@ TEST(CloudLighting, TheSeparabilityRulesHoldsAreReleasedAndKeptOnlyWhenTheCostFa
   EXPECT_FALSE(kept.parameters[g2].held);
   EXPECT_NE(kept.parameters[g2].why.find("freed after the first solve"), std::string::npos) << kept.parameters[g2].why;
   EXPECT_TRUE(kept.parameters[rain].held);
+  EXPECT_TRUE(kept.singular_values_free.empty());  // they were the conditioning's free set's
 
   // A higher cost: nothing moves.
   theta[g2] = 0.5;
@@ -168,6 +170,7 @@ TEST(CloudLighting, TheSeparabilityRulesHoldsAreReleasedAndKeptOnlyWhenTheCostFa
   EXPECT_DOUBLE_EQ(cost, 1.0);
   EXPECT_DOUBLE_EQ(theta[g2], 0.5);
   EXPECT_TRUE(not_kept.parameters[g2].held);
+  EXPECT_EQ(not_kept.singular_values_free.size(), 2u);
 
   // Nothing held as inseparable: no solve.
   c.parameters[g2] = {};

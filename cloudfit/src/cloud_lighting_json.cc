@@ -43,7 +43,9 @@ nlohmann::json CloudReportJson(const CloudReportSettings& o, const SkyCloudFit& 
                       "when the parameter is near 0), at the start"},
       {"predicted_relative_error", "sigma sqrt(diag((J^T J)^-1)) with sigma = 2% pixel noise over the samples, free set"},
       {"separability", "1 / sqrt(variance inflation) among all observed parameters: 1 independent, 0 collinear"},
-      {"singular_values", "of the column-normalised Jacobian (d ln composite / d ln parameter), descending"},
+      {"singular_values", "of the column-normalised Jacobian (d ln composite / d ln parameter), descending; "
+                          "singular_values_free: of the free parameters' columns, empty when the solve released "
+                          "the separability rule's holds (solve.released_holds)"},
       {"solve", "seconds of the whole fit (time_s, the same as fit.json time_s) and of its stages: cloud_pixels_time_s "
                 "(the start's cloud renders that find the cloud pixels), sky_fit_time_s (the sky on its clear pixels; "
                 "sky_renders backend renders), conditioning_time_s and cloud_solve_time_s (the Ceres solve of the cloud "

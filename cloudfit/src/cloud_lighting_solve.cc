@@ -139,6 +139,7 @@ ReleasedHolds ReleaseInseparableHolds(const std::function<double(const Condition
     r.names.push_back(CloudLightingNames()[k]);
   }
   if (r.names.empty()) return r;
+  freed.singular_values_free.clear();  // of the conditioning's free set, which this is not
   CloudLighting again = *theta;
   r.cost_before = *cost;
   r.cost_after = solve(freed, &again);
