@@ -47,7 +47,7 @@ const std::vector<Verb>& Verbs() {
       {"ceiling", "the model's best possible fit of a reference sky (rel RMSE), LUT and per image row", &skycal::cli::RunCeiling},
       {"capture", "exposure brackets (fisheye or rig) to a calibrated lat-long reference frame", &skycal::cli::RunCapture},
       {"chart", "a colour-chart correction (ColorChecker -> 3x3 to scene-linear Rec.709) for capture", &skycal::cli::RunChart},
-      {"compare", "the game's image of a sky against the photo: per-pixel log RMSE and appearance error", &skycal::cli::RunCompare},
+      {"compare", "the game's image of a sky against the photo: per-pixel log RMSE, appearance error, and where the clouds sit", &skycal::cli::RunCompare},
       {"export", "write game tables (half-float LUTs, time-of-day keyframes) from presets", &skycal::cli::RunExport},
       {"fit", "fit the sky model to HDR reference skies (Ceres), write a calibrated preset", &skycal::cli::RunFit},
       {"batch", "calibrate a time-lapse day frame by frame (local cores or Slurm), then the day's fit and tables", &skycal::cli::RunBatch},
