@@ -82,19 +82,25 @@ void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, in
     for (size_t i : glare) (*opacity)[i] = static_cast<float>(sum / n);
 }
 
-// The photo's cloud opacity at the inversion's width: its colour unmixed into the statistics
-// fit's clear sky (times its exposure) and the clouds' light (capture/cloud_opacity.h), the
-// cloud probability standing in where the two colours are alike, 0 outside the sky, the sun's
-// glare filled from around it.
+// The object `key` of a fit record's clouds.solve (the refit's second solves), or null.
+const nlohmann::json* SolveRecord(const nlohmann::json& clouds, const char* key) {
+  if (!clouds.is_object() || !clouds.contains("solve") || !clouds["solve"].is_object()) return nullptr;
+  const nlohmann::json& solve = clouds["solve"];
+  return solve.contains(key) && solve[key].is_object() ? &solve[key] : nullptr;
+}
+
+// The photo's cloud opacity at the inversion's width (`sky`: the sky mask there): its colour
+// unmixed into the statistics fit's clear sky (times its exposure) and the clouds' light
+// (capture/cloud_opacity.h), the cloud probability standing in where the two colours are
+// alike, 0 outside the sky, the sun's glare filled from around it.
 std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
-                                int rw, int rh, WeatherInversionRecord* r) {
+                                const std::vector<float>& sky, int rw, int rh, WeatherInversionRecord* r) {
   const int w = a.frame.radiance.width, h = a.frame.radiance.height;
   std::vector<float> probability(a.cloud_probability.size());
   for (size_t i = 0; i < probability.size(); ++i)
     probability[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
   ImageRGB photo(rw, rh);
   photo.pixels = AreaDownsampleLatLongOfPositive(a.frame.radiance.pixels, w, h, 3, rw, rh);
-  const std::vector<float> sky = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
   render::RenderRequest req;
   req.sun_dir = *a.sun.direction;
   req.width = rw;
@@ -130,10 +136,9 @@ int InversionRenderWidth(int width, int height) {
 
 // "; solved again from the far side of a bound 1 time(s), ..." from the refit's record, or "".
 std::string BoundRestartsText(const nlohmann::json& clouds) {
-  if (!clouds.is_object() || !clouds.contains("solve") || !clouds["solve"].is_object()) return "";
-  const nlohmann::json& solve = clouds["solve"];
-  if (!solve.contains("bound_restarts") || !solve["bound_restarts"].is_object()) return "";
-  const nlohmann::json& r = solve["bound_restarts"];
+  const nlohmann::json* record = SolveRecord(clouds, "bound_restarts");
+  if (!record) return "";
+  const nlohmann::json& r = *record;
   const std::string kept = r.value("kept", std::string());
   return "; solved again from the far side of a bound " + std::to_string(r.value("tried", 0)) + " time(s), " +
          (kept.empty() ? std::string("the first solve kept (lower cost)")
@@ -141,10 +146,9 @@ std::string BoundRestartsText(const nlohmann::json& clouds) {
 }
 
 std::string ReleasedHoldsText(const nlohmann::json& clouds) {
-  if (!clouds.is_object() || !clouds.contains("solve") || !clouds["solve"].is_object()) return "";
-  const nlohmann::json& solve = clouds["solve"];
-  if (!solve.contains("released_holds") || !solve["released_holds"].is_object()) return "";
-  const nlohmann::json& r = solve["released_holds"];
+  const nlohmann::json* record = SolveRecord(clouds, "released_holds");
+  if (!record) return "";
+  const nlohmann::json& r = *record;
   std::string names;
   for (const auto& n : r.value("freed", nlohmann::json::array())) names += (names.empty() ? "" : ", ") + n.get<std::string>();
   const auto cost = [&](const char* key) { return FormatNumber(std::round(r.value(key, 0.0) * 1e4) / 1e4); };
@@ -246,8 +250,8 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   }
   clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", params.weather_extent_m);
   if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
-  const std::vector<float> photo_small = PhotoOpacity(a, out, preset, rw, rh, &r);
   const std::vector<float> sky_small = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
+  const std::vector<float> photo_small = PhotoOpacity(a, out, preset, sky_small, rw, rh, &r);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
   // The march's transmittance through the map being refined.
   const auto noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
