@@ -405,10 +405,22 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_EQ(ones, constrained);
   EXPECT_GT(constrained, 0);
   EXPECT_LT(constrained, texels);
-  // Then the lighting refitted on those shapes: its decision, and the statistics fit's record kept.
-  bool refitted = false;
-  for (const fit::FitDecision& d : inv.decisions) refitted |= d.what.starts_with("cloud lighting refitted");
-  EXPECT_TRUE(refitted);
+  // Then the lighting refitted on those shapes, precipitation read from the light where the
+  // photo's clouds are darker, and the lighting refitted again: three decisions in that order,
+  // and the statistics fit's record kept.
+  std::vector<std::string> lit;
+  for (const fit::FitDecision& d : inv.decisions)
+    if (d.what.starts_with("cloud lighting refitted") || d.what.starts_with("precipitation where")) lit.push_back(d.what);
+  ASSERT_EQ(lit.size(), 3u);
+  EXPECT_EQ(lit[0], "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)");
+  EXPECT_TRUE(lit[1].starts_with("precipitation where"));
+  EXPECT_EQ(lit[2], "cloud lighting refitted again with the precipitation (known shapes)");
+  {
+    const ImageRGB weather = ReadExrRGB(s / "inverted/scattered/preset.weather.exr").image;
+    double rain = 0.0;
+    for (size_t i = 1; i < weather.pixels.size(); i += 3) rain += weather.pixels[i];
+    EXPECT_GT(rain, 0.0);  // the truth has none; the light asked for it where the shapes are too bright
+  }
   EXPECT_TRUE(std::filesystem::exists(s / "inverted/scattered/fit.statistics.json"));
   // The records name only images that are there: the refit's previews in fit.json; the
   // statistics fit, whose outputs the refit replaces, drew none (it used to name six, three of

@@ -41,12 +41,35 @@ struct Scene {
 
   Scene() { params.horizon_rule = 0.0; }  // an inverted map draws the horizon itself
 
-  std::vector<float> Opacity(const clouds::WeatherMap& map) {
+  // The lit clouds over a uniform clear sky (cd/m^2; its value about the default sky's near the
+  // zenith): ln Y where `counts` (and, with `cloud_only`, the render's opacity >= 0.5), and the
+  // opacity.
+  cloudfit::LitPixels Lit(const clouds::WeatherMap& map, const std::vector<char>& counts, bool cloud_only) {
+    const clouds::CloudImage image = renderer->Render({&preset, &params, &noise, &map}, Request());
+    cloudfit::LitPixels p;
+    p.opacity.resize(image.transmittance.size());
+    p.log_luminance.assign(p.opacity.size(), std::nanf(""));
+    for (size_t i = 0; i < p.opacity.size(); ++i) {
+      const float t = image.transmittance[i];
+      p.opacity[i] = 1.0f - t;
+      if (!counts[i] || (cloud_only && t > 0.5f)) continue;
+      const float* c = &image.radiance.pixels[3 * i];
+      const double y = 4000.0 * t + 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+      if (y > 0.0) p.log_luminance[i] = static_cast<float>(std::log(y));
+    }
+    return p;
+  }
+
+  clouds::CloudRenderRequest Request() const {
     clouds::CloudRenderRequest r;
     r.width = kW;
     r.height = kH;
     r.sun_dir = latlong::DirectionFromElevationAzimuthDeg(40.0, 60.0);
-    const clouds::CloudImage image = renderer->Render({&preset, &params, &noise, &map}, r);
+    return r;
+  }
+
+  std::vector<float> Opacity(const clouds::WeatherMap& map) {
+    const clouds::CloudImage image = renderer->Render({&preset, &params, &noise, &map}, Request());
     std::vector<float> o(image.transmittance.size());
     for (size_t i = 0; i < o.size(); ++i) o[i] = 1.0f - image.transmittance[i];
     return o;
@@ -142,6 +165,56 @@ TEST(WeatherInversionRender, APaintedMapIsRecoveredFromItsOpacity) {
   EXPECT_LT(control.iou, 0.9);
   EXPECT_GT(control.rms, 0.1);
   EXPECT_LT(control.correlation, 0.7);
+}
+
+// The light inside known shapes: the painted map rained on (precipitation 0.7) east of the
+// camera, dry to the west, under known lighting; the photo is its lit render. From the same
+// shapes with no rain, two steps of the light's refinement (cloudfit::RefineByLight) read the
+// rain back: asserted, over the cloudy texels within 8 km, a mean precipitation within 0.15 of
+// the truth's 0.7 where it rained and <= 0.05 where it did not, and the ln Y RMS over the cloud
+// pixels (opaque in both, upper hemisphere) at most half the dry start's (the control, which
+// must fail it). It reaches 0.72, 0.009 and 0.38x (printed).
+TEST(WeatherInversionRender, RainIsReadFromTheLight) {
+  Scene scene;
+  clouds::WeatherMap truth = PaintedMap(scene.params.weather_extent_m);
+  const std::vector<char> near = TexelsWithin(scene.params.weather_extent_m, 8000.0);
+  for (int j = 0; j < kMap; ++j)
+    for (int i = 0; i < kMap; ++i) truth.rgb[3 * (static_cast<size_t>(j) * kMap + i) + 1] = i >= kMap / 2 ? 0.7f : 0.0f;
+  clouds::WeatherMap map = truth;
+  for (size_t t = 0; t < map.rgb.size(); t += 3) map.rgb[t + 1] = 0.0f;
+  const cloudfit::WeatherTexelView view =
+      cloudfit::ProjectWeatherTexels(scene.params, kMap, kMap, kW, kH, std::vector<float>());
+  const std::vector<char> upper = [] {
+    std::vector<char> u(static_cast<size_t>(kW) * kH, 0);
+    std::fill(u.begin(), u.begin() + static_cast<long>(u.size() / 2), 1);
+    return u;
+  }();
+  const cloudfit::LitPixels photo = scene.Lit(truth, upper, true);
+  const cloudfit::LightRefineOptions o;
+  std::vector<double> rms;
+  for (int k = 0; k < 3; ++k) {
+    const cloudfit::LitPixels at = scene.Lit(map, upper, true);
+    const cloudfit::LitPixels raised = scene.Lit(cloudfit::RaisedMap(view, map, o), upper, false);
+    clouds::WeatherMap next = map;
+    const cloudfit::LightRefineStep step = cloudfit::RefineByLight(view, photo, at, raised, o, &next);
+    rms.push_back(step.log_rms);
+    if (k < 2) map = std::move(next);  // the third call only measures
+  }
+  double wet = 0, n_wet = 0, dry = 0, n_dry = 0;
+  for (size_t t = 0; t < near.size(); ++t) {
+    if (!near[t] || !view.linked[t] || truth.rgb[3 * t] < 0.3f) continue;
+    (truth.rgb[3 * t + 1] > 0.0f ? wet : dry) += map.rgb[3 * t + 1];
+    (truth.rgb[3 * t + 1] > 0.0f ? n_wet : n_dry) += 1.0;
+  }
+  wet /= n_wet;
+  dry /= n_dry;
+  std::cout << "[rain from the light] ln Y RMS " << rms[0] << " -> " << rms[1] << " -> " << rms[2]
+            << "; precipitation where it rained " << wet << " (" << n_wet << " texels), where not " << dry << " ("
+            << n_dry << ")\n";
+  EXPECT_NEAR(wet, 0.7, 0.15);
+  EXPECT_LE(dry, 0.05);
+  EXPECT_LE(rms[2], 0.5 * rms[0]);
+  EXPECT_GT(rms[0], 0.1);  // the dry start: the rain is visible in the light
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/weather_map.h"
@@ -168,6 +169,94 @@ TEST(WeatherInversion, RefinementMovesTheTexelsBelowTheirTopsByTheMeanOfTheirRay
     disagreeing += links[t] > 0 && std::abs(want - 0.5) < 0.099;  // crossed by clear and cloudy rays
   }
   EXPECT_GT(disagreeing, 100);
+}
+
+// The light's step (RefineByLight): with every pixel's log luminance 0.3 above the photo's and
+// the raised render 0.6 below it (a response of -2 per unit precipitation), each pixel asks
+// -(J r) / (J^2 + damping) = 0.6 / 4.001; the texels below their tops move by exactly that, the
+// rest not at all. A photo brighter than the render lowers the channel (clamped at 0); the
+// step is capped at max_step; pixels without a log luminance leave it to the opacity, which
+// here asks nothing. The coverage is never touched. (A uniform photo: the steps' averaging over
+// neighbouring pixels changes nothing; it is checked on stripes below.)
+TEST(WeatherInversion, TheLightsStepMovesTheChannelByEachPixelsGaussNewtonStep) {
+  clouds::CloudParams p;
+  const cloudfit::WeatherTexelView v = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
+  clouds::WeatherMap map = clouds::UniformWeatherMap(0.8, 0.2, 0.5, p.weather_extent_m);
+  map = clouds::ResampleWeatherMap(map, kMap);
+  const clouds::WeatherMap start = map;
+  const size_t n = static_cast<size_t>(kW) * kH;
+  const auto lit = [&](float ln_y) { return cloudfit::LitPixels{std::vector<float>(n, 0.9f), std::vector<float>(n, ln_y)}; };
+  const cloudfit::LightRefineOptions o;  // precipitation, delta 0.3, max_step 0.5
+  std::vector<double> links(map.rgb.size() / 3, 0.0);
+  for (const auto& s : v.rays)
+    if (s.fraction <= 0.6f) links[static_cast<size_t>(s.texel)] += 1.0;
+  const auto expect_moved_by = [&](double step, int moved, const char* what) {
+    int reached = 0;
+    for (size_t t = 0; t < links.size(); ++t) {
+      EXPECT_EQ(map.rgb[3 * t], start.rgb[3 * t]) << what << t;
+      EXPECT_EQ(map.rgb[3 * t + 2], start.rgb[3 * t + 2]) << what << t;
+      const double want = links[t] > 0 ? std::clamp(0.2 + step, 0.0, 1.0) : 0.2;
+      EXPECT_NEAR(map.rgb[3 * t + 1], want, 1e-6) << what << t;
+      reached += links[t] > 0;
+    }
+    EXPECT_EQ(moved, step == 0.0 ? 0 : reached) << what;
+    EXPECT_GT(reached, 1000) << what;
+  };
+  cloudfit::LightRefineStep r = cloudfit::RefineByLight(v, lit(0.0f), lit(0.3f), lit(-0.3f), o, &map);
+  EXPECT_NEAR(r.log_rms, 0.3, 1e-6);
+  int linked_pixels = 0;
+  for (size_t i = 0; i < v.rays.size(); ++i) linked_pixels += i == 0 || v.rays[i].pixel != v.rays[i - 1].pixel;
+  EXPECT_EQ(r.pixels, linked_pixels);
+  expect_moved_by(0.6 / 4.001, r.texels_moved, "darker photo: ");
+  map = start;
+  r = cloudfit::RefineByLight(v, lit(0.6f), lit(0.3f), lit(-0.3f), o, &map);
+  expect_moved_by(-0.6 / 4.001, r.texels_moved, "brighter photo: ");
+  map = start;
+  r = cloudfit::RefineByLight(v, lit(-3.0f), lit(0.3f), lit(-0.3f), o, &map);
+  expect_moved_by(0.5, r.texels_moved, "capped: ");
+  map = start;
+  r = cloudfit::RefineByLight(v, lit(std::nanf("")), lit(0.3f), lit(-0.3f), o, &map);
+  EXPECT_EQ(r.pixels, 0);
+  expect_moved_by(0.0, r.texels_moved, "no light: ");
+  // A photo whose light alternates from column to column (+-0.3 about the render): each pixel
+  // alone asks +-0.15, and the texels follow their few rays; the steps averaged over
+  // neighbouring pixels (pixel_radius 1, the default) leave a third of that spread.
+  std::vector<float> stripes(n);
+  for (size_t i = 0; i < n; ++i) stripes[i] = (i % kW) % 2 == 0 ? 0.0f : 0.6f;
+  const auto spread = [&](int radius) {
+    cloudfit::LightRefineOptions ro;
+    ro.pixel_radius = radius;
+    map = start;
+    cloudfit::RefineByLight(v, cloudfit::LitPixels{std::vector<float>(n, 0.9f), stripes}, lit(0.3f), lit(-0.3f), ro, &map);
+    float lo = 1.0f, hi = 0.0f;
+    for (size_t t = 0; t < links.size(); ++t)
+      if (links[t] > 0) lo = std::min(lo, map.rgb[3 * t + 1]), hi = std::max(hi, map.rgb[3 * t + 1]);
+    return hi - lo;
+  };
+  const float raw = spread(0), smoothed = spread(1);
+  EXPECT_GT(raw, 0.2f);
+  EXPECT_LT(smoothed, 0.5f * raw);
+  // Bad input, named.
+  cloudfit::LightRefineOptions bad;
+  bad.channel = 2;
+  try {
+    cloudfit::RefineByLight(v, lit(0.0f), lit(0.3f), lit(-0.3f), bad, &map);
+    ADD_FAILURE() << "channel 2 accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("LightRefineOptions::channel"), std::string::npos) << e.what();
+  }
+  cloudfit::LitPixels short_photo = lit(0.0f);
+  short_photo.log_luminance.pop_back();
+  try {
+    cloudfit::RefineByLight(v, short_photo, lit(0.3f), lit(-0.3f), o, &map);
+    ADD_FAILURE() << "a short photo accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("photo"), std::string::npos) << e.what();
+  }
+  // The raised map: the channel of the constrained texels only, at most 1.
+  const clouds::WeatherMap raised = cloudfit::RaisedMap(v, start, o);
+  for (size_t t = 0; t < links.size(); ++t)
+    EXPECT_NEAR(raised.rgb[3 * t + 1], v.linked[t] ? 0.5f : 0.2f, 1e-6) << t;
 }
 
 // Resolution by distance: a map of one value stays one value; a lone far texel spreads over

@@ -222,7 +222,122 @@ double RefineCoverage(const WeatherTexelView& v, const std::vector<float>& photo
   return pixels > 0.0 ? std::sqrt(sq / pixels) : 0.0;
 }
 
+bool LightRefineOptions::IsValid(std::string* why) const {
+  const auto fail = [&](const std::string& text) {
+    if (why) *why = "LightRefineOptions::" + text;
+    return false;
+  };
+  if (channel != 0 && channel != 1) return fail("channel = " + std::to_string(channel) + ": expected 0 (coverage) or 1 (precipitation)");
+  if (!(delta > 0.0 && delta <= 1.0)) return fail("delta = " + std::to_string(delta) + ": expected a raise in (0, 1]");
+  if (!(max_step > 0.0 && max_step <= 1.0)) return fail("max_step = " + std::to_string(max_step) + ": expected (0, 1]");
+  if (!(damping > 0.0 && std::isfinite(damping))) return fail("damping = " + std::to_string(damping) + ": expected > 0");
+  if (pixel_radius < 0 || pixel_radius > 16) return fail("pixel_radius = " + std::to_string(pixel_radius) + ": expected 0..16");
+  return true;
+}
+
+clouds::WeatherMap RaisedMap(const WeatherTexelView& v, const clouds::WeatherMap& map, const LightRefineOptions& o) {
+  clouds::WeatherMap out = map;
+  for (size_t t = 0; t < v.linked.size(); ++t)
+    if (v.linked[t]) {
+      float& c = out.rgb[3 * t + static_cast<size_t>(o.channel)];
+      c = static_cast<float>(std::min(1.0, c + o.delta));
+    }
+  return out;
+}
+
+namespace {
+
+// One pixel's Gauss-Newton step in the channel on its opacity and log-luminance residuals,
+// the derivatives the difference of the two renders over delta; the luminance residual's
+// square added to *sq (and 1 to *n) where it counts.
+double PixelStep(size_t p, const LitPixels& photo, const LitPixels& at, const LitPixels& raised,
+                 const LightRefineOptions& o, double* sq, double* n) {
+  const double r_o = static_cast<double>(at.opacity[p]) - photo.opacity[p];
+  const double j_o = (static_cast<double>(raised.opacity[p]) - at.opacity[p]) / o.delta;
+  double num = j_o * r_o, den = j_o * j_o + o.damping;
+  const double l = at.log_luminance[p], lp = photo.log_luminance[p], lr = raised.log_luminance[p];
+  if (std::isfinite(l) && std::isfinite(lp)) {
+    const double r_l = l - lp;
+    *sq += r_l * r_l;
+    *n += 1.0;
+    if (std::isfinite(lr)) {
+      const double j_l = (lr - l) / o.delta;
+      num += j_l * r_l;
+      den += j_l * j_l;
+    }
+  }
+  return std::clamp(-num / den, -o.max_step, o.max_step);
+}
+
+// Each pixel's step as the mean of the steps within `radius` pixels (the lat-long wraps in x),
+// pixels without one (NaN) left out and left without.
+std::vector<double> SmoothSteps(const std::vector<double>& steps, int width, int height, int radius) {
+  if (radius <= 0) return steps;
+  std::vector<double> out(steps.size(), std::numeric_limits<double>::quiet_NaN());
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      if (std::isnan(steps[static_cast<size_t>(y) * width + x])) continue;
+      double sum = 0.0, n = 0.0;
+      for (int j = std::max(0, y - radius); j <= std::min(height - 1, y + radius); ++j)
+        for (int i = x - radius; i <= x + radius; ++i) {
+          const double s = steps[static_cast<size_t>(j) * width + static_cast<size_t>((i + width) % width)];
+          if (!std::isnan(s)) sum += s, n += 1.0;
+        }
+      out[static_cast<size_t>(y) * width + x] = sum / n;
+    }
+  return out;
+}
+
+void CheckLitPixels(const LitPixels& p, size_t n, const char* which) {
+  if (p.opacity.size() != n || p.log_luminance.size() != n)
+    throw Error(std::string("RefineByLight: ") + which + " has " + std::to_string(p.opacity.size()) + " opacities and " +
+                std::to_string(p.log_luminance.size()) + " log luminances; expected the view's " + std::to_string(n) +
+                " pixels each");
+}
+
+}  // namespace
+
+LightRefineStep RefineByLight(const WeatherTexelView& v, const LitPixels& photo, const LitPixels& at,
+                              const LitPixels& raised, const LightRefineOptions& o, clouds::WeatherMap* map) {
+  std::string why;
+  if (!o.IsValid(&why)) throw Error("RefineByLight: " + why);
+  const size_t pixels = static_cast<size_t>(v.width) * v.height, n = static_cast<size_t>(v.map_width) * v.map_height;
+  CheckLitPixels(photo, pixels, "photo");
+  CheckLitPixels(at, pixels, "at");
+  CheckLitPixels(raised, pixels, "raised");
+  std::vector<double> steps(pixels, std::numeric_limits<double>::quiet_NaN());
+  double sq = 0.0, counted = 0.0;
+  for (size_t b = 0; b < v.rays.size(); ++b)
+    if (b == 0 || v.rays[b].pixel != v.rays[b - 1].pixel) {
+      const size_t p = static_cast<size_t>(v.rays[b].pixel);
+      steps[p] = PixelStep(p, photo, at, raised, o, &sq, &counted);
+    }
+  steps = SmoothSteps(steps, v.width, v.height, o.pixel_radius);
+  std::vector<double> sum(n, 0.0), count(n, 0.0);
+  for (const auto& s : v.rays) {
+    const size_t t = static_cast<size_t>(s.texel);
+    if (s.fraction > TopForType(map->rgb[3 * t + 2])) continue;  // above the texel's cloud top
+    sum[t] += steps[static_cast<size_t>(s.pixel)];
+    count[t] += 1.0;
+  }
+  LightRefineStep r;
+  for (size_t t = 0; t < n; ++t) {
+    if (count[t] == 0.0) continue;
+    float& c = map->rgb[3 * t + static_cast<size_t>(o.channel)];
+    const float next = static_cast<float>(std::clamp(c + sum[t] / count[t], 0.0, 1.0));
+    r.texels_moved += std::abs(next - c) > 1e-3f;
+    c = next;
+  }
+  r.pixels = static_cast<int>(counted);
+  r.log_rms = counted > 0.0 ? std::sqrt(sq / counted) : 0.0;
+  return r;
+}
+
 void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, clouds::WeatherMap* map) {
+  SmoothChannelByFootprint(v, extent_m, 0, map);
+}
+
+void SmoothChannelByFootprint(const WeatherTexelView& v, double extent_m, int channel, clouds::WeatherMap* map) {
   const int W = v.map_width, H = v.map_height;
   const std::vector<char>& constrained = v.linked;
   const double texel_m = extent_m / W, pixel_rad = 2.0 * kPi / v.width;
@@ -237,10 +352,10 @@ void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, cloud
       for (int y = std::max(0, j - k); y <= std::min(H - 1, j + k); ++y)
         for (int x = std::max(0, i - k); x <= std::min(W - 1, i + k); ++x)
           if (constrained[static_cast<size_t>(y) * W + x]) {
-            sum += map->rgb[3 * (static_cast<size_t>(y) * W + x)];
+            sum += map->rgb[3 * (static_cast<size_t>(y) * W + x) + static_cast<size_t>(channel)];
             n += 1.0;
           }
-      out[3 * (static_cast<size_t>(j) * W + i)] = static_cast<float>(sum / n);
+      out[3 * (static_cast<size_t>(j) * W + i) + static_cast<size_t>(channel)] = static_cast<float>(sum / n);
     }
   map->rgb = std::move(out);
 }

@@ -155,6 +155,29 @@ void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* 
   }
 }
 
+// The inverted shapes lit: the lighting refitted on them, precipitation where the photo's clouds
+// are darker than that lighting draws them, and the lighting refitted again (calibrate_weather.h).
+// A failed first refit leaves the statistics fit's lighting, and no precipitation is read from it.
+void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& view, const StagedDirectory& out,
+                             const std::string& final_dir, const CalibrateOptions& o, FitPlan* plan) {
+  Log(o, "refitting the cloud lighting on the recovered shapes");
+  RefitPass first;
+  first.previews = false;  // the second pass's replace them
+  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, first));
+  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+  if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing to read the light with
+  Log(o, "reading the light inside the clouds");
+  const PrecipitationRecord rain = RainFromTheLight(a, view, out, plan->fit.fit.backend);
+  plan->decisions.push_back(rain.Decision());
+  Log(o, "  " + rain.Decision().what + ": " + rain.Decision().why);
+  RefitPass second;
+  second.first = false;
+  second.iterations = kRefitAfterRainIterations;
+  second.release_holds = false;
+  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, second));
+  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+}
+
 // Partly cloudy: the weather map inverted from the photo (or the user's, held), then the cloud
 // lighting refitted on those shapes (calibrate_weather.h); each step a decision. Nothing
 // without clouds.
@@ -173,13 +196,15 @@ void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const st
     return;
   } else {
     Log(o, "inverting the weather map: the clouds where the photo has them");
-    const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend);
+    PhotoWeatherView view;
+    const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend, &view);
     plan->decisions.push_back(w.Decision());
     Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
-    if (!w.done) return;
+    if (w.done) LightTheRecoveredClouds(a, view, out, final_dir, o, plan);
+    return;
   }
-  Log(o, "refitting the cloud lighting on the recovered shapes");
-  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir));
+  Log(o, "refitting the cloud lighting on the user's shapes");
+  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, {}));
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
 }
 

@@ -29,10 +29,6 @@
 namespace skycal::controllers {
 namespace {
 
-// The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
-// inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
-constexpr int kRefitIterations = 10;
-
 std::vector<float> Opacity(const std::vector<float>& transmittance) {
   std::vector<float> o(transmittance.size());
   for (size_t i = 0; i < o.size(); ++i) o[i] = 1.0f - transmittance[i];
@@ -59,11 +55,9 @@ void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::file
   WriteExrRGB(path.string(), image, attributes, ExrPixelType::kHalf);
 }
 
-// Near the sun the photo's colour reads glare, and the silver lining of a cloud in front of
-// the sun, as clear sky: a sun hidden by a cloud carved a hole through it, where the game then
-// drew the disc. Within kSunGlareDeg of the sun the photo's opacity is taken from the ring
-// around it (kSunGlareDeg to 1.5x), where the colour is trusted.
-constexpr double kSunGlareDeg = 10.0;
+// A sun hidden by a cloud carved a hole through it (its glare read as clear sky), where the
+// game then drew the disc. Within kSunGlareDeg of the sun the photo's opacity is taken from
+// the ring around it (kSunGlareDeg to 1.5x), where the colour is trusted.
 
 void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, int width, int height,
                   const std::array<double, 3>& sun) {
@@ -94,7 +88,8 @@ const nlohmann::json* SolveRecord(const nlohmann::json& clouds, const char* key)
 // (capture/cloud_opacity.h), the cloud probability standing in where the two colours are
 // alike, 0 outside the sky, the sun's glare filled from around it.
 std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
-                                const std::vector<float>& sky, int rw, int rh, WeatherInversionRecord* r) {
+                                const std::vector<float>& sky, int rw, int rh, WeatherInversionRecord* r,
+                                ImageRGB* photo_small) {
   const int w = a.frame.radiance.width, h = a.frame.radiance.height;
   std::vector<float> probability(a.cloud_probability.size());
   for (size_t i = 0; i < probability.size(); ++i)
@@ -117,6 +112,7 @@ std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& o
   r->opacity_from_probability = o.unmixed + o.from_probability > 0
                                     ? static_cast<double>(o.from_probability) / static_cast<double>(o.unmixed + o.from_probability)
                                     : 0.0;
+  *photo_small = std::move(photo);
   return std::move(o.opacity);
 }
 
@@ -227,7 +223,8 @@ std::optional<double> CloudIou(const std::vector<float>& transmittance, const st
   return both / either;
 }
 
-WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend) {
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend,
+                                          PhotoWeatherView* kept) {
   const auto t0 = std::chrono::steady_clock::now();
   WeatherInversionRecord r;
   const render::Preset preset = render::LoadPreset(out / "preset.json");
@@ -250,9 +247,13 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   }
   clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", params.weather_extent_m);
   if (map.width < cloudfit::kInvertedMapSize) map = clouds::ResampleWeatherMap(map, cloudfit::kInvertedMapSize);
-  const std::vector<float> sky_small = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
-  const std::vector<float> photo_small = PhotoOpacity(a, out, preset, sky_small, rw, rh, &r);
-  const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, sky_small);
+  PhotoWeatherView v;
+  v.width = rw;
+  v.height = rh;
+  v.sky = AreaDownsampleLatLong(a.mask.sky, w, h, 1, rw, rh);
+  v.opacity = PhotoOpacity(a, out, preset, v.sky, rw, rh, &r, &v.photo);
+  v.texels = cloudfit::ProjectWeatherTexels(params, map.width, map.height, rw, rh, v.sky);
+  const cloudfit::WeatherTexelView& view = v.texels;
   // The march's transmittance through the map being refined.
   const auto noise = clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir());
   const std::unique_ptr<clouds::CloudRenderer> renderer = OpacityRenderer(backend);
@@ -261,7 +262,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   const auto render = [&](const clouds::WeatherMap& m) {
     return Opacity(renderer->Render({&preset, &params, noise.get(), &m}, request).transmittance);
   };
-  r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, photo_small, render, {}, &map);
+  r.rms = cloudfit::InvertWeatherMap(view, params.weather_extent_m, v.opacity, render, {}, &map);
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");
   WriteConstrainedTexels(view, out / kConstrainedTexelsFile);
   r.done = true;
@@ -269,6 +270,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
   r.constrained = view.constrained;
   r.render_width = rw;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (kept) *kept = std::move(v);
   return r;
 }
 
@@ -335,7 +337,7 @@ std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
 }
 
 // The refit's decision, from its record's `clouds`.
-fit::FitDecision RefitDecision(const nlohmann::json& clouds) {
+fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations) {
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
   d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
@@ -343,7 +345,7 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds) {
           "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
           "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
           "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
-          std::to_string(kRefitIterations) +
+          std::to_string(iterations) +
           " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
           "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
           CloudPixelsLogRmse(clouds, "final") + "; the statistics fit's record: fit.statistics.json";
@@ -357,7 +359,8 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds) {
 
 }  // namespace
 
-fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir) {
+fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir,
+                                    const RefitPass& pass) {
   const fs::path shapes = out.staging() / kInvertedShapesDir, refit_dir = out.staging() / "refit",
                  inputs = out.staging() / kRefitInputsDir;
   fit::FitDecision d;
@@ -372,11 +375,11 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.out_dir = final_dir;
     k.cloud_stats.enabled = false;
     k.cloud_mask = false;
-    k.previews = true;  // its outputs are the ones kept
+    k.previews = pass.previews;  // the last pass's outputs are the ones kept
     k.clouds.mode = "on";
     k.clouds.preset = (shapes / "preset.json").string();
     k.clouds.hold.push_back("extinction");
-    k.clouds.max_iterations = kRefitIterations;
+    k.clouds.max_iterations = pass.iterations;
     k.clouds.sky_pixels_from_photo = true;
     // The solve's values from the model at its samples: a frame's march per trial point cost
     // most of the refit, and the game's image is rendered from the result anyway.
@@ -388,7 +391,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // Not restart_at_bounds as well: over the synthetic sky's sizes and inversion renders it
     // gained little more than this alone, for a solve per parameter at a bound
     // (bench/results/weather_inversion.md).
-    k.clouds.release_inseparable = true;
+    k.clouds.release_inseparable = pass.release_holds;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the
@@ -402,13 +405,15 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     }
     // The decision from the refit's record before anything moves: a failure here leaves the
     // statistics fit's files in place, as the catch below says.
-    d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds);
-    fs::rename(out / "fit.json", out / "fit.statistics.json");
+    d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds, pass.iterations);
+    if (!pass.first) d.what = "cloud lighting refitted again with the precipitation (known shapes)";
+    if (pass.first) fs::rename(out / "fit.json", out / "fit.statistics.json");
     MoveUp(refit_dir, out.staging());
-  } catch (const std::exception& e) {  // the statistics fit's lighting stands
-    d.what = "cloud lighting: the statistics fit's kept";
-    d.why = std::string("the known-shapes refit failed: ") + e.what() +
-            " (the statistics fit wrote no previews, report.png and fit/*.png, expecting the refit's)";
+  } catch (const std::exception& e) {  // the previous fit's lighting stands
+    d.what = pass.first ? "cloud lighting: the statistics fit's kept" : "cloud lighting: the first refit's kept";
+    d.why = std::string("the known-shapes refit failed: ") + e.what() + " (the " +
+            (pass.first ? "statistics fit" : "first refit") +
+            " wrote no previews, report.png and fit/*.png, expecting the refit's)";
   }
   std::error_code ec;
   fs::remove_all(shapes, ec);

@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include "calibrate_plan.h"
+#include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/cloud_renderer.h"
+#include "skycal/core/image.h"
 #include "skycal/core/staged_directory.h"
 #include "skycal/fit/fit_report.h"
 
@@ -63,10 +65,34 @@ clouds::CloudRenderRequest OpacityRequest(int width, int height);
 std::optional<double> CloudIou(const std::vector<float>& transmittance, const std::vector<float>& probability,
                                const std::vector<float>& compared);
 
+// What the inversion read of the photo at its renders' width, kept for the light's step.
+struct PhotoWeatherView {
+  int width = 0, height = 0;
+  std::vector<float> sky;      // the sky mask there
+  std::vector<float> opacity;  // the photo's cloud opacity (PhotoOpacity)
+  ImageRGB photo;              // the photo averaged down to it
+  cloudfit::WeatherTexelView texels;
+};
+
 // Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
 // clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud
-// probability covers. `backend` marches the renders (their transmittance only).
-WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend);
+// probability covers. `backend` marches the renders (their transmittance only). `view`
+// (optional) receives what it read of the photo.
+WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend,
+                                          PhotoWeatherView* view = nullptr);
+
+// The light inside the recovered clouds (cloudfit::RefineByLight): the preset's map gains
+// precipitation where the photo's clouds are darker than the game draws them under the
+// lighting refitted on the shapes. One step, from two lit renders at the view's width.
+struct PrecipitationRecord {
+  cloudfit::LightRefineStep step;
+  int raised_texels = 0;                       // texels whose precipitation rose
+  double mean_raised = 0.0, max_raised = 0.0;  // their precipitation
+  double seconds = 0.0;
+  fit::FitDecision Decision() const;
+};
+PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherView& view, const StagedDirectory& out,
+                                     render::Backend backend);
 
 // The user's weather map (CalibrateOptions::weather_map) as the preset's, held: read over the
 // preset's weather extent (its errors name the file) and written as `out`/preset.weather.exr.
@@ -76,6 +102,29 @@ fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDire
 // (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
 // a staged subdirectory and moved over the statistics fit's files only when it succeeds
 // (the statistics fit's fit.json kept as fit.statistics.json). `final_dir` names the preset.
-fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir);
+// The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
+// inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
+// After the precipitation it starts from the first's result and moves by about a level (the
+// clouds' sun and ambient): one iteration gave the game's image what 3 or 10 gave, and
+// releasing the held parameters again changed nothing (bench/results/weather_inversion.md).
+inline constexpr int kRefitIterations = 10;
+inline constexpr int kRefitAfterRainIterations = 1;
+
+// Near the sun the photo's colour reads glare, and the silver lining of a cloud in front of the
+// sun, as clear sky (or, for its light, as the brightest cloud): within this angle of the sun
+// (degrees) neither its opacity nor its light is trusted.
+inline constexpr double kSunGlareDeg = 10.0;
+
+// `pass`: the first on the inverted shapes (its previews, replaced by the second's, not drawn;
+// the statistics fit's record kept) or the second, after the precipitation (the first's
+// record dropped: the decisions keep what it did).
+struct RefitPass {
+  bool first = true;
+  int iterations = kRefitIterations;
+  bool previews = true;
+  bool release_holds = true;  // CloudLightingOptions::release_inseparable
+};
+fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir,
+                                    const RefitPass& pass);
 
 }  // namespace skycal::controllers

@@ -31,6 +31,7 @@
 // bench/results/weather_inversion.md.)
 #pragma once
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "skycal/clouds/cloud_params.h"
@@ -102,6 +103,49 @@ double RefineCoverage(const WeatherTexelView& view, const std::vector<float>& ph
 // zenith, where a texel is wider than a pixel), so that texels between two far pixels' rays
 // follow their neighbours instead of keeping a seed the photo never saw.
 void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_extent_m, clouds::WeatherMap* map);
+// The same for another channel of the map (0 coverage, 1 precipitation, 2 type).
+void SmoothChannelByFootprint(const WeatherTexelView& view, double weather_extent_m, int channel, clouds::WeatherMap* map);
+
+// The light inside the clouds. The opacity says where cloud is, not how the light falls inside
+// it: once a column is opaque its coverage hardly changes its pixels' light (on the bundled
+// partly cloudy photo a pixel's ln Y moves by about 0.1 per unit coverage there), so the
+// shapes' light is the noise's, not the photo's. The map's precipitation is the lever the game
+// gives: its rain absorption darkens a column (HZD's weather map; cloud_march.glsl.h) with
+// little change to where its cloud is. One Gauss-Newton step per pixel, its derivatives from
+// two lit renders: at the map (`at`) and with the channel of every constrained texel raised by
+// `delta` (`raised`). Each pixel asks the change that best fits its opacity (every linked pixel)
+// and its log luminance (where both `photo` and `at` give one; NaN elsewhere), at most
+// max_step; each texel below its cloud top moves by the mean of what its pixels ask, within
+// [0, 1]. The sign of the response is read, not assumed.
+struct LitPixels {
+  std::vector<float> opacity;        // 1 - transmittance, per pixel of the view's lat-long
+  std::vector<float> log_luminance;  // ln Y, NaN where the pixel does not count
+};
+struct LightRefineOptions {
+  // The map's channel refined: 1, precipitation. (0, coverage: its light barely moves where
+  // the photo is opaque, and the opacity it moves instead made the image worse,
+  // bench/results/weather_inversion.md.)
+  int channel = 1;
+  double delta = 0.3;     // the raise of the second render (a difference, not a tangent: the
+                          // march's response is flat for small changes of precipitation)
+  double max_step = 0.5;  // per step, at most
+  double damping = 1e-3;  // added to each pixel's Gauss-Newton denominator (per unit channel^2)
+  // Each pixel's step the mean of those within this many pixels: without it the rain followed
+  // each pixel's texture, and the game's clouds alternated from column to column 1.32x as
+  // much as the photo's near the horizon (1.26x with it; bench/results/weather_inversion.md).
+  int pixel_radius = 1;
+  bool IsValid(std::string* why) const;  // false: LightRefineOptions::<field>, value and expectation
+};
+struct LightRefineStep {
+  double log_rms = 0.0;  // RMS of the ln Y residual (at - photo) over the pixels that have one
+  int pixels = 0;        // pixels with a ln Y residual
+  int texels_moved = 0;  // texels whose channel changed by more than 0.001
+};
+// The second render's map: the channel of every constrained texel raised by delta (at most 1).
+clouds::WeatherMap RaisedMap(const WeatherTexelView& view, const clouds::WeatherMap& map, const LightRefineOptions& options);
+// Throws skycal::Error naming the field when the options or the pixels' sizes are wrong.
+LightRefineStep RefineByLight(const WeatherTexelView& view, const LitPixels& photo, const LitPixels& at,
+                              const LitPixels& raised, const LightRefineOptions& options, clouds::WeatherMap* map);
 
 // The inverted map's texels a side (calibrate resamples a coarser statistics map to it first):
 // over HZD's 60 km extent a 256 map's texel is 234 m, about 5 degrees seen from under a
