@@ -124,6 +124,7 @@ PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherV
     }
   r.mean_raised = r.raised_texels > 0 ? sum / r.raised_texels : 0.0;
   clouds::SaveWeatherMap(map, out / "preset.weather.exr");
+  r.width = v.width;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
@@ -138,7 +139,8 @@ fit::FitDecision PrecipitationRecord::Decision() const {
           " under the refitted lighting; precipitation raised in " + std::to_string(raised_texels) +
           " texels (mean " + f3(mean_raised) + ", at most " + f3(max_raised) +
           "): the game's rain absorption darkens a column with little change to where its cloud is, which coverage cannot "
-          "once the column is opaque; the lighting refitted on them next";
+          "once the column is opaque; two lit renders at " + std::to_string(width) + " px wide, " +
+          FormatNumber(std::round(seconds * 100.0) / 100.0) + " s; the lighting refitted on them next";
   return d;
 }
 

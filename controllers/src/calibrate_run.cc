@@ -167,9 +167,16 @@ void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& vie
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
   if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing to read the light with
   Log(o, "reading the light inside the clouds");
-  const PrecipitationRecord rain = RainFromTheLight(a, view, out, plan->fit.fit.backend);
-  plan->decisions.push_back(rain.Decision());
-  Log(o, "  " + rain.Decision().what + ": " + rain.Decision().why);
+  try {
+    plan->decisions.push_back(RainFromTheLight(a, view, out, plan->fit.fit.backend).Decision());
+  } catch (const std::exception& e) {  // the map stays as inverted; the second refit still draws the previews
+    fit::FitDecision d;
+    d.what = "precipitation: none read from the light";
+    d.why = std::string("the lit renders failed: ") + e.what() + "; the inverted map kept as it was";
+    d.saved_ms_basis = "not measured in this run";
+    plan->decisions.push_back(d);
+  }
+  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
   RefitPass second;
   second.first = false;
   second.iterations = kRefitAfterRainIterations;

@@ -88,6 +88,7 @@ struct PrecipitationRecord {
   cloudfit::LightRefineStep step;
   int raised_texels = 0;                       // texels whose precipitation rose
   double mean_raised = 0.0, max_raised = 0.0;  // their precipitation
+  int width = 0;                               // the renders' lat-long width (pixels)
   double seconds = 0.0;
   fit::FitDecision Decision() const;
 };
