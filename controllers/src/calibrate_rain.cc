@@ -23,6 +23,10 @@
 namespace skycal::controllers {
 namespace {
 
+// A texel counts as rained on in the decision when its precipitation rose by this much: the
+// footprint smoothing spreads traces of a far texel's rain over many neighbours.
+constexpr float kRaisedAtLeast = 0.01f;
+
 // The pixels whose light is compared: sky, cloud in the photo (opacity >= 0.5), outside the
 // sun's glare. (The game's side adds its own opacity >= 0.5: a pixel only one of them calls
 // cloud is the opacity's business.)
@@ -117,7 +121,7 @@ PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherV
   cloudfit::SmoothChannelByFootprint(v.texels, game.weather_extent_m(), o.channel, &map);
   double sum = 0.0;
   for (size_t t = 0; t < map.rgb.size(); t += 3)
-    if (map.rgb[t + 1] - before[t + 1] > 1e-3f) {
+    if (map.rgb[t + 1] - before[t + 1] >= kRaisedAtLeast) {
       sum += map.rgb[t + 1];
       r.max_raised = std::max(r.max_raised, static_cast<double>(map.rgb[t + 1]));
       ++r.raised_texels;
@@ -136,8 +140,8 @@ fit::FitDecision PrecipitationRecord::Decision() const {
   d.what = "precipitation where the photo's clouds are darker than the game draws them";
   d.why = std::to_string(step.pixels) + " cloud pixels compared (cloud in the photo and the game, outside " +
           FormatNumber(kSunGlareDeg) + " degrees of the sun): ln Y RMS " + f3(step.log_rms) +
-          " under the refitted lighting; precipitation raised in " + std::to_string(raised_texels) +
-          " texels (mean " + f3(mean_raised) + ", at most " + f3(max_raised) +
+          " under the refitted lighting; precipitation raised by " + FormatNumber(kRaisedAtLeast) + " or more in " +
+          std::to_string(raised_texels) + " texels (mean " + f3(mean_raised) + ", at most " + f3(max_raised) +
           "): the game's rain absorption darkens a column with little change to where its cloud is, which coverage cannot "
           "once the column is opaque; two lit renders at " + std::to_string(width) + " px wide, " +
           FormatNumber(std::round(seconds * 100.0) / 100.0) + " s; the lighting refitted on them next";

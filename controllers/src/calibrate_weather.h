@@ -86,7 +86,7 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
 // lighting refitted on the shapes. One step, from two lit renders at the view's width.
 struct PrecipitationRecord {
   cloudfit::LightRefineStep step;
-  int raised_texels = 0;                       // texels whose precipitation rose
+  int raised_texels = 0;                       // texels whose precipitation rose (by 0.01 or more)
   double mean_raised = 0.0, max_raised = 0.0;  // their precipitation
   int width = 0;                               // the renders' lat-long width (pixels)
   double seconds = 0.0;
