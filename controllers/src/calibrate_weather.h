@@ -99,15 +99,11 @@ PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherV
 // preset's weather extent (its errors name the file) and written as `out`/preset.weather.exr.
 fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDirectory& out);
 
-// The cloud lighting refitted pixel by pixel on the recovered shapes: the known-shapes fit
-// (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
-// a staged subdirectory and moved over the statistics fit's files only when it succeeds
-// (the statistics fit's fit.json kept as fit.statistics.json). `final_dir` names the preset.
 // The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
 // inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
 // After the precipitation it starts from the first's result and moves by about a level (the
-// clouds' sun and ambient): one iteration gave the game's image what 3 or 10 gave, and
-// releasing the held parameters again changed nothing (bench/results/weather_inversion.md).
+// clouds' sun and ambient): more iterations, or the held parameters released again, did not
+// change the game's image (bench/results/weather_inversion.md).
 inline constexpr int kRefitIterations = 10;
 inline constexpr int kRefitAfterRainIterations = 1;
 
@@ -116,6 +112,10 @@ inline constexpr int kRefitAfterRainIterations = 1;
 // (degrees) neither its opacity nor its light is trusted.
 inline constexpr double kSunGlareDeg = 10.0;
 
+// The cloud lighting refitted pixel by pixel on the recovered shapes: the known-shapes fit
+// (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
+// a staged subdirectory and moved over the statistics fit's files only when it succeeds
+// (the statistics fit's fit.json kept as fit.statistics.json). `final_dir` names the preset.
 // `pass`: the first on the inverted shapes (its previews, replaced by the second's, not drawn;
 // the statistics fit's record kept) or the second, after the precipitation (the first's
 // record dropped: the decisions keep what it did).

@@ -107,9 +107,9 @@ void SmoothCoverageByFootprint(const WeatherTexelView& view, double weather_exte
 void SmoothChannelByFootprint(const WeatherTexelView& view, double weather_extent_m, int channel, clouds::WeatherMap* map);
 
 // The light inside the clouds. The opacity says where cloud is, not how the light falls inside
-// it: once a column is opaque its coverage hardly changes its pixels' light (on the bundled
-// partly cloudy photo a pixel's ln Y moves by about 0.1 per unit coverage there), so the
-// shapes' light is the noise's, not the photo's. The map's precipitation is the lever the game
+// it: once a column is opaque its coverage hardly changes its pixels' light
+// (bench/results/weather_inversion.md, "The light inside the clouds"), so the shapes' light
+// is the noise's, not the photo's. The map's precipitation is the lever the game
 // gives: its rain absorption darkens a column (HZD's weather map; cloud_march.glsl.h) with
 // little change to where its cloud is. One Gauss-Newton step per pixel, its derivatives from
 // two lit renders: at the map (`at`) and with the channel of every constrained texel raised by
@@ -131,8 +131,8 @@ struct LightRefineOptions {
   double max_step = 0.5;  // per step, at most
   double damping = 1e-3;  // added to each pixel's Gauss-Newton denominator (per unit channel^2)
   // Each pixel's step the mean of those within this many pixels: without it the rain followed
-  // each pixel's texture, and the game's clouds alternated from column to column 1.32x as
-  // much as the photo's near the horizon (1.26x with it; bench/results/weather_inversion.md).
+  // each pixel's texture, and the game's clouds near the horizon alternated from column to
+  // column more than the photo's (bench/results/weather_inversion.md).
   int pixel_radius = 1;
   bool IsValid(std::string* why) const;  // false: LightRefineOptions::<field>, value and expectation
 };
