@@ -81,6 +81,22 @@ TEST(SkyKind, EachRuleDecidesAtItsThreshold) {
   f.texture = 0.01;
   EXPECT_EQ(kind(f), capture::SkyKind::kPartlyCloudy);
   EXPECT_NE(capture::ClassifySky(f, o).reason.find("cloudy_texture 0.01"), std::string::npos);
+  // A noise-free sky (a game's render): the median on the clear sky, cloud edges in the upper
+  // quartile. Blue: partly cloudy; grey or mostly cloud: broken cloud, not one deck.
+  f = ClearDay();
+  f.texture = 0.001;
+  f.texture_q75 = 0.0499;
+  EXPECT_EQ(kind(f), capture::SkyKind::kClear);
+  f.texture_q75 = 0.05;
+  EXPECT_EQ(kind(f), capture::SkyKind::kPartlyCloudy);
+  EXPECT_NE(capture::ClassifySky(f, o).reason.find("cloudy_texture_q75 0.05"), std::string::npos);
+  f.cloud_share = 0.7;
+  EXPECT_EQ(kind(f), capture::SkyKind::kPartlyCloudy);
+  f.cloud_share = 0.05;
+  f.zenith_blue = 0.3;
+  EXPECT_EQ(kind(f), capture::SkyKind::kPartlyCloudy);
+  f.texture_q75 = 0.0499;
+  EXPECT_EQ(kind(f), capture::SkyKind::kOvercast);
 }
 
 TEST(SkyKind, OptionsNameTheFieldAndValue) {
@@ -125,6 +141,20 @@ TEST(SkyKind, StatisticsOfConstructedFrames) {
   const auto t = capture::MeasureSkyFeatures(thumb, std::vector<float>(64 * 32, 1.0f), {}, 30.0);
   EXPECT_LT(t.texture, 0.005);
   EXPECT_EQ(capture::ClassifySky(t, {}).kind, capture::SkyKind::kClear);
+
+  // Without noise (a game's render): the same clear sky with textured clouds over a third of
+  // the upper hemisphere's rows leaves the median texture at the clear sky's, its upper
+  // quartile on the clouds: partly cloudy. The clear sky alone (the control) is not.
+  EXPECT_LT(f.texture_q75, 0.05);
+  ImageRGB cloudy = sky;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 256; ++x)
+      if ((x / 32) % 3 == 0 && y > 8)
+        for (int c = 0; c < 3; ++c) cloudy.at(x, y, c) = 5e3f * (1.0f + 0.6f * std::sin(1.3f * x) * std::sin(1.1f * y));
+  const auto k = capture::MeasureSkyFeatures(cloudy, all, {}, 30.0);
+  EXPECT_LT(k.texture, 0.01);
+  EXPECT_GE(k.texture_q75, 0.05);
+  EXPECT_EQ(capture::ClassifySky(k, {}).kind, capture::SkyKind::kPartlyCloudy);
 
   ImageRGB grey(256, 128);
   for (float& v : grey.pixels) v = 2.0f;

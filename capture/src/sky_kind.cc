@@ -38,6 +38,14 @@ double Median(std::vector<double> v) {
   return v[mid];
 }
 
+// The q-quantile of v (the element at rank q (n - 1), no interpolation); NaN when empty.
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t k = static_cast<size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
 // ln Y per pixel of the upper half (rows above the horizon), invalid pixels set to the
 // row's valid mean so the blur does not spread them; `valid` marks the real ones.
 cv::Mat UpperLogLuminance(const ImageRGB& f, int rows, cv::Mat* valid) {
@@ -124,6 +132,7 @@ bool SkyKindOptions::IsValid(std::string* why) const {
          Range(why, "overcast_cloud_share", overcast_cloud_share, 0.0, 1.0 + 1e-12, true) &&
          Range(why, "overcast_blue", overcast_blue, -1.0, 2.0) &&
          Range(why, "cloudy_texture", cloudy_texture, 0.0, 10.0, true) &&
+         Range(why, "cloudy_texture_q75", cloudy_texture_q75, 0.0, 10.0, true) &&
          (night_sun_deg < twilight_sun_deg || Range(why, "night_sun_deg", night_sun_deg, -30.0, twilight_sun_deg, true));
 }
 
@@ -165,11 +174,16 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
   out.point_sources = PointSourceShare(ln, valid, sky, f.height);
   out.sky_share = all_w > 0.0 ? sky_w / all_w : 0.0;
   out.zenith_blue = Median(std::move(blue));
+  out.texture_q75 = Quantile(texture, 0.75);
   out.texture = Median(std::move(texture));
   out.sky_luminance = Median(std::move(lum));
   out.cloud_share = cloud_w > 0.0 ? cloud / cloud_w : std::numeric_limits<double>::quiet_NaN();
   out.sun_elevation_deg = sun_elevation_deg;
   return out;
+}
+
+bool HasCloudEdges(const SkyFeatures& s, const SkyKindOptions& o) {
+  return s.texture >= o.cloudy_texture || s.texture_q75 >= o.cloudy_texture_q75;
 }
 
 SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
@@ -193,14 +207,19 @@ SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
   if (s.sun_elevation_deg && *s.sun_elevation_deg < o.twilight_sun_deg)
     return {SkyKind::kTwilight, "sun elevation " + F(*s.sun_elevation_deg) + " deg < twilight_sun_deg " +
                                     F(o.twilight_sun_deg) + " (and above night_sun_deg " + F(o.night_sun_deg) + ")"};
-  if (std::isfinite(s.cloud_share) && s.cloud_share >= o.overcast_cloud_share && s.texture < o.cloudy_texture)
+  const bool edges = HasCloudEdges(s, o);
+  if (std::isfinite(s.cloud_share) && s.cloud_share >= o.overcast_cloud_share && !edges)
     return {SkyKind::kOvercast, "cloud share " + F(s.cloud_share) + " >= overcast_cloud_share " + F(o.overcast_cloud_share) +
                                     ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) + " (one deck)"};
-  if (grey && s.texture < o.cloudy_texture)
+  if (grey && !edges)
     return {SkyKind::kOvercast, "a grey, uniform sky: zenith ln(B/R) " + F(s.zenith_blue) + " < overcast_blue " +
                                     F(o.overcast_blue) + ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture)};
   if (s.texture >= o.cloudy_texture)
     return {SkyKind::kPartlyCloudy, "cloud edges: texture " + F(s.texture) + " >= cloudy_texture " + F(o.cloudy_texture)};
+  if (s.texture_q75 >= o.cloudy_texture_q75)
+    return {SkyKind::kPartlyCloudy, "cloud edges over a quarter of the sky: texture's upper quartile " + F(s.texture_q75) +
+                                        " >= cloudy_texture_q75 " + F(o.cloudy_texture_q75) + " (its median " + F(s.texture) +
+                                        ": a clear sky without noise between them)"};
   return {SkyKind::kClear, "texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) + ", zenith ln(B/R) " +
                                F(s.zenith_blue) + " >= overcast_blue " + F(o.overcast_blue)};
 }

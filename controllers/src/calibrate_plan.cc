@@ -97,7 +97,7 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     }
   }
   const bool cloudy = a.kind.kind == capture::SkyKind::kPartlyCloudy ||
-                      (a.kind.kind == capture::SkyKind::kTwilight && a.features.texture >= capture::SkyKindOptions{}.cloudy_texture);
+                      (a.kind.kind == capture::SkyKind::kTwilight && capture::HasCloudEdges(a.features, {}));
   if (a.kind.kind == capture::SkyKind::kOvercast) {
     render::Preset start = render::LoadPreset(DefaultPresetPath());
     start.overcast_weight = kOvercastWeight;

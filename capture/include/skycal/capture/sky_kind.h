@@ -14,7 +14,9 @@
 //    at sunset it stays blue (Rayleigh scattering, and ozone's Chappuis band).
 //  - cloud share, the mean cloud probability (cloud_mask.h) over the sky pixels.
 //  - texture, the median local RMS of ln Y about its blur over the sky: cloud edges and
-//    stars carry it, a clear sky and a uniform deck do not.
+//    stars carry it, a clear sky and a uniform deck do not. Its upper quartile too: in a
+//    noise-free image (a game's own render, a denoised photo) the clear sky has no texture
+//    at all, and clouds over less than half the sky leave the median at the clear sky's.
 //  - point sources, strict local maxima of Y above all eight neighbours: stars.
 //  - the sun's elevation, when it is known (disc, time and place, or the sky's pattern):
 //    below the horizon the sky is twilight (civil to astronomical, down to -18 degrees,
@@ -36,6 +38,7 @@ struct SkyFeatures {
   double zenith_blue = 0.0;        // median ln(B/R) over sky pixels above 45 degrees elevation (natural log)
   double cloud_share = 0.0;        // mean cloud probability over sky pixels; NaN when not measured
   double texture = 0.0;            // median local RMS of ln Y about its Gaussian blur over sky pixels (natural log)
+  double texture_q75 = 0.0;        // its 75th percentile
   double sky_luminance = 0.0;      // median Rec.709 luminance of the sky pixels (the file's units)
   double point_sources = 0.0;      // share of sky pixels above 20 degrees brighter than all 8 neighbours by kPointContrast (stars)
   std::optional<double> sun_elevation_deg;  // when the sun is known
@@ -59,6 +62,10 @@ struct SkyKindOptions {
   // Cloud edges: a texture at or above this is a sky with clouds in it (partly cloudy);
   // below it and grey, one uniform deck.
   double cloudy_texture = 0.01;      // natural-log RMS, (0, 10)
+  // ... or an upper quartile at or above this: cloud edges over at least a quarter of the sky,
+  // between clear photos' upper quartiles and those of rendered partly cloudy skies whose
+  // median is a clear sky's (bench/results/sky_segmentation.md, "Cloud edges without noise").
+  double cloudy_texture_q75 = 0.05;  // natural-log RMS, (0, 10)
   // False and the field, its value and the expectation in *why.
   bool IsValid(std::string* why) const;
 };
@@ -73,6 +80,9 @@ struct SkyKindDecision {
   SkyKind kind = SkyKind::kClear;
   std::string reason;  // the statistic that decided, its value and the threshold
 };
+// Cloud edges in the sky: texture >= cloudy_texture or its upper quartile >= cloudy_texture_q75
+// (what makes a blue sky partly cloudy, and a twilight sky one with clouds to place).
+bool HasCloudEdges(const SkyFeatures& features, const SkyKindOptions& options);
 // Throws skycal::Error on invalid options.
 SkyKindDecision ClassifySky(const SkyFeatures& features, const SkyKindOptions& options);
 
