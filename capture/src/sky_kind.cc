@@ -208,20 +208,23 @@ SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
     return {SkyKind::kTwilight, "sun elevation " + F(*s.sun_elevation_deg) + " deg < twilight_sun_deg " +
                                     F(o.twilight_sun_deg) + " (and above night_sun_deg " + F(o.night_sun_deg) + ")"};
   const bool edges = HasCloudEdges(s, o);
+  const std::string no_edges = ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) +
+                               " and its upper quartile " + F(s.texture_q75) + " < cloudy_texture_q75 " +
+                               F(o.cloudy_texture_q75);
   if (std::isfinite(s.cloud_share) && s.cloud_share >= o.overcast_cloud_share && !edges)
     return {SkyKind::kOvercast, "cloud share " + F(s.cloud_share) + " >= overcast_cloud_share " + F(o.overcast_cloud_share) +
-                                    ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) + " (one deck)"};
+                                    no_edges + " (one deck)"};
   if (grey && !edges)
     return {SkyKind::kOvercast, "a grey, uniform sky: zenith ln(B/R) " + F(s.zenith_blue) + " < overcast_blue " +
-                                    F(o.overcast_blue) + ", texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture)};
+                                    F(o.overcast_blue) + no_edges};
   if (s.texture >= o.cloudy_texture)
     return {SkyKind::kPartlyCloudy, "cloud edges: texture " + F(s.texture) + " >= cloudy_texture " + F(o.cloudy_texture)};
   if (s.texture_q75 >= o.cloudy_texture_q75)
     return {SkyKind::kPartlyCloudy, "cloud edges over a quarter of the sky: texture's upper quartile " + F(s.texture_q75) +
                                         " >= cloudy_texture_q75 " + F(o.cloudy_texture_q75) + " (its median " + F(s.texture) +
                                         ": a clear sky without noise between them)"};
-  return {SkyKind::kClear, "texture " + F(s.texture) + " < cloudy_texture " + F(o.cloudy_texture) + ", zenith ln(B/R) " +
-                               F(s.zenith_blue) + " >= overcast_blue " + F(o.overcast_blue)};
+  return {SkyKind::kClear, no_edges.substr(2) + ", zenith ln(B/R) " + F(s.zenith_blue) + " >= overcast_blue " +
+                               F(o.overcast_blue)};
 }
 
 }  // namespace skycal::capture
