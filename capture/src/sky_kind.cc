@@ -31,19 +31,21 @@ bool Range(std::string* why, const char* field, double v, double lo, double hi, 
   return ok;
 }
 
-double Median(std::vector<double> v) {
+// The element of rank k (0-based) of v; NaN when v is empty.
+double AtRank(std::vector<double> v, size_t k) {
   if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
-  return v[mid];
-}
-
-// The q-quantile of v (the element at rank q (n - 1), no interpolation); NaN when empty.
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t k = static_cast<size_t>(q * static_cast<double>(v.size() - 1));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
+}
+
+double Median(std::vector<double> v) {
+  const size_t mid = v.size() / 2;
+  return AtRank(std::move(v), mid);
+}
+
+// The q-quantile of v: the element at rank q (n - 1), no interpolation.
+double Quantile(const std::vector<double>& v, double q) {
+  return AtRank(v, v.empty() ? 0 : static_cast<size_t>(q * static_cast<double>(v.size() - 1)));
 }
 
 // ln Y per pixel of the upper half (rows above the horizon), invalid pixels set to the

@@ -18,7 +18,6 @@
 #include "skycal/core/math_constants.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
-#include "skycal/render/renderer.h"
 
 namespace skycal::controllers {
 namespace {
@@ -55,8 +54,8 @@ cloudfit::LitPixels Lit(const ImageRGB& image, std::vector<float> opacity, const
   return p;
 }
 
-// The game's image at the view's size as the game composites it (clouds over the clear sky,
-// times the fit's exposure: the photo's units), as LitPixels.
+// The game's image at the view's size as the game composites it (clouds over the clear sky),
+// in the photo's units (times the fit's exposure), as LitPixels.
 class LitGame {
  public:
   LitGame(const PhotoAnalysis& a, const PhotoWeatherView& v, const StagedDirectory& out, render::Backend backend)
@@ -64,13 +63,8 @@ class LitGame {
         params_(clouds::ParseCloudSectionText(preset_.clouds_json, out / "preset.json")),
         noise_(clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir())),
         renderer_(OpacityRenderer(backend)),
-        exposure_(fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure) {
-    render::RenderRequest sky;
-    sky.sun_dir = *a.sun.direction;
-    sky.width = v.width;
-    sky.height = v.height;
-    sky.sun_disc = false;
-    clear_ = render::CreateRenderer(render::Backend::kCpu)->Render(preset_, sky);
+        exposure_(fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure),
+        clear_(ClearSkyInPhotoUnits(a, out, preset_, v.width, v.height)) {
     request_.width = v.width;  // the game's march: its steps and light samples
     request_.height = v.height;
     request_.sun_dir = *a.sun.direction;
@@ -87,7 +81,7 @@ class LitGame {
       opacity[i] = 1.0f - t;
       if (cloud_only) counts[i] = counts[i] && t <= 0.5f;
       for (size_t k = 3 * i; k < 3 * i + 3; ++k)
-        g.pixels[k] = static_cast<float>((clear_.pixels[k] * t + c.radiance.pixels[k]) * exposure_);
+        g.pixels[k] = static_cast<float>(clear_.pixels[k] * t + c.radiance.pixels[k] * exposure_);
     }
     return Lit(g, std::move(opacity), counts);
   }

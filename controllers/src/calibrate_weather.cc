@@ -58,7 +58,6 @@ void WriteConstrainedTexels(const cloudfit::WeatherTexelView& v, const std::file
 // A sun hidden by a cloud carved a hole through it (its glare read as clear sky), where the
 // game then drew the disc. Within kSunGlareDeg of the sun the photo's opacity is taken from
 // the ring around it (kSunGlareDeg to 1.5x), where the colour is trusted.
-
 void FillSunGlare(std::vector<float>* opacity, const std::vector<float>& sky, int width, int height,
                   const std::array<double, 3>& sun) {
   const double inner = std::cos(kSunGlareDeg * kRadiansPerDegree), outer = std::cos(1.5 * kSunGlareDeg * kRadiansPerDegree);
@@ -96,16 +95,8 @@ std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& o
     probability[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
   ImageRGB photo(rw, rh);
   photo.pixels = AreaDownsampleLatLongOfPositive(a.frame.radiance.pixels, w, h, 3, rw, rh);
-  render::RenderRequest req;
-  req.sun_dir = *a.sun.direction;
-  req.width = rw;
-  req.height = rh;
-  req.sun_disc = false;
-  ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
-  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
-  for (float& v : clear.pixels) v = static_cast<float>(v * exposure);
-  capture::CloudOpacity o = capture::EstimateCloudOpacity(
-      photo, clear, AreaDownsampleLatLong(probability, w, h, 1, rw, rh), sky, {});
+  capture::CloudOpacity o = capture::EstimateCloudOpacity(photo, ClearSkyInPhotoUnits(a, out, preset, rw, rh),
+                                                          AreaDownsampleLatLong(probability, w, h, 1, rw, rh), sky, {});
   FillSunGlare(&o.opacity, sky, rw, rh, *a.sun.direction);
   r->cloud_colour = o.cloud_colour;
   r->colour_pixels = o.colour_pixels;
@@ -117,6 +108,19 @@ std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& o
 }
 
 }  // namespace
+
+ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
+                              int width, int height) {
+  render::RenderRequest req;
+  req.sun_dir = *a.sun.direction;
+  req.width = width;
+  req.height = height;
+  req.sun_disc = false;
+  ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
+  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
+  for (float& v : clear.pixels) v = static_cast<float>(v * exposure);
+  return clear;
+}
 
 // 512 for a photo at least that wide (a texel near the zenith is about a pixel there), else
 // 256; the photo averaged down to it (core/latlong_resample.h for a size that is no multiple).

@@ -74,6 +74,11 @@ struct PhotoWeatherView {
   cloudfit::WeatherTexelView texels;
 };
 
+// `out`'s preset's clear sky at the photo's sun, width x height, without the disc, times the
+// exposure of `out`/fit.json: the photo's units (the sky the clouds are composited over).
+ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
+                              int width, int height);
+
 // Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
 // clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud
 // probability covers. `backend` marches the renders (their transmittance only). `view`
