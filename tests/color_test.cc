@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -304,6 +305,35 @@ TEST(ColorPreview, OptionsValidation) {
   o = PreviewOptions{};
   o.display.clear();
   EXPECT_FALSE(o.IsValid(nullptr));
+}
+
+// The parsed config is kept per file version: a conversion through an edited config sees the
+// edit (a colour space renamed away is unknown at once), and its first version still converts.
+TEST(ColorConfig, AnEditedConfigIsReadAgain) {
+  const fs::path dir = ScratchDir();
+  const std::string path = (dir / "studio.ocio").string();
+  std::string text;
+  {
+    std::ifstream in(kConfig);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string from = "name: ACEScg", to = "name: ACEScg_renamed_by_the_studio";
+  ASSERT_NE(text.find(from), std::string::npos);
+  std::ofstream(path) << text;
+  ImageRGB red = Grey({0.0f});
+  red.at(0, 0, 0) = 1.0f;
+  ImageRGB first = red;
+  ConvertColorspace(first, "lin_rec709", "ACEScg", path);  // parsed and kept
+  ConvertColorspace(first, "ACEScg", "lin_rec709", path);  // from the kept parse
+  EXPECT_NEAR(first.at(0, 0, 0), 1.0f, 1e-5f);
+  std::ofstream(path) << text.replace(text.find(from), from.size(), to);  // a longer file: its size differs
+  ImageRGB second = red;
+  ExpectErrorNaming([&] { ConvertColorspace(second, "lin_rec709", "ACEScg", path); }, {"ACEScg", path});
+  ConvertColorspace(second, "lin_rec709", "ACEScg_renamed_by_the_studio", path);
+  ImageRGB reference = red;
+  ConvertColorspace(reference, "lin_rec709", "ACEScg", kConfig);
+  for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(second.at(0, 0, c), reference.at(0, 0, c));
+  fs::remove_all(dir);
 }
 
 // $OCIO overrides the repo config; unset, the repo config is used.

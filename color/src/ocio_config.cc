@@ -5,6 +5,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 
 #include "skycal/color/preview.h"
 #include "skycal/core/data_dir.h"
@@ -50,12 +52,34 @@ LoadedConfig LoadConfig(const std::string& path_in) {
     throw Error("OCIO config '" + cfg.path + "': cannot open for reading (" +
                 std::strerror(errno) + ")");
   }
+  // One parse per file version and process: parsing and validating the config, and the
+  // processors OCIO caches inside it, cost each preview tens of milliseconds, and a
+  // calibration writes a handful. Keyed by the file's time and size, so an edited config is
+  // read again.
+  struct Version {
+    std::filesystem::file_time_type time;
+    std::uintmax_t size = 0;
+    OCIO::ConstConfigRcPtr config;
+  };
+  static std::mutex mutex;
+  static std::map<std::string, Version> loaded;
+  std::error_code time_ec, size_ec;
+  const auto time = std::filesystem::last_write_time(cfg.path, time_ec);
+  const std::uintmax_t size = std::filesystem::file_size(cfg.path, size_ec);
+  const bool versioned = !time_ec && !size_ec;
+  std::lock_guard<std::mutex> lock(mutex);
+  const auto it = loaded.find(cfg.path);
+  if (versioned && it != loaded.end() && it->second.time == time && it->second.size == size) {
+    cfg.config = it->second.config;
+    return cfg;
+  }
   try {
     cfg.config = OCIO::Config::CreateFromFile(cfg.path.c_str());
     cfg.config->validate();
   } catch (const OCIO::Exception& e) {
     throw Error("OCIO config '" + cfg.path + "': cannot load (" + e.what() + ")");
   }
+  if (versioned) loaded[cfg.path] = Version{time, size, cfg.config};
   return cfg;
 }
 
