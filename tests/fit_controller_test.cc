@@ -11,6 +11,9 @@
 #include <unistd.h>
 
 #include "skycal/capture/latlong_frame.h"
+#include "skycal/clouds/weather_map.h"
+#include "skycal/controllers/game_render.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/controllers/fit_controller.h"
 #include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
@@ -110,6 +113,90 @@ TEST(FitController, RunFitIntoWritesBesideTheCallersFilesAndMatchesRunFitControl
   own.fit.sun_cone_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(RunFitController(own), Error);
   EXPECT_FALSE(fs::exists(dir / "bad"));
+  fs::remove_all(dir);
+}
+
+// A shape refinement that rains 0.5 on every texel (or keeps the map) and records what the fit
+// handed it.
+class RainEverywhere : public cloudfit::ShapeRefinement {
+ public:
+  explicit RainEverywhere(bool rain) : rain_(rain) {}
+  std::optional<clouds::WeatherMap> Refine(const render::Preset&, const clouds::CloudParams& lit, double exposure,
+                                           const clouds::WeatherMap& map) override {
+    ++calls;
+    exposure_seen = exposure;
+    sun_scale_seen = lit.sun_scale;
+    if (!rain_) return std::nullopt;
+    clouds::WeatherMap m = map;
+    for (size_t t = 1; t < m.rgb.size(); t += 3) m.rgb[t] = 0.5f;
+    return m;
+  }
+  int calls = 0;
+  double exposure_seen = 0.0, sun_scale_seen = 0.0;
+
+ private:
+  bool rain_;
+};
+
+// The mean of the exported weather map's precipitation (G).
+double MeanPrecipitation(const fs::path& exr) {
+  const ImageRGB m = ReadExrRGB(exr.string()).image;
+  double sum = 0.0;
+  for (size_t i = 1; i < m.pixels.size(); i += 3) sum += m.pixels[i];
+  return sum / static_cast<double>(m.pixels.size() / 3);
+}
+
+// The known-shapes fit with a refinement (CloudLightingOptions::refine_shapes): called once,
+// after the solve, with its lighting and exposure; the map it returns is the exported one and
+// the report's (a rain the reference does not have leaves the cloud pixels further from it
+// than the kept map, whose control is the refinement that keeps the map: no rain exported).
+TEST(FitController, TheMapRefinedAfterTheLightingSolveIsTheFits) {
+  const fs::path dir = fs::temp_directory_path() / ("skycal-fit-refine-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  GameRenderOptions g;
+  g.preset_path = DefaultCloudyPresetPath();
+  g.sun_dir = latlong::DirectionFromElevationAzimuthDeg(30.0, 40.0);
+  g.width = 64;
+  g.height = 32;
+  g.backend = render::Backend::kCpu;
+  g.clouds.enabled = true;
+  g.verbose = false;
+  capture::LatLongFrame f;
+  f.radiance = RenderGameImage(g).radiance;
+  f.sun_direction = g.sun_dir;
+  capture::WriteLatLongFrame((dir / "cloudy.exr").string(), f);
+  const double kept_rain = MeanPrecipitation(fs::path(DefaultCloudyPresetPath()).parent_path() / "default_cloudy.weather.exr");
+  auto fit = [&](RainEverywhere* refine, const std::string& name) {
+    FitControllerOptions o;
+    o.references = {(dir / "cloudy.exr").string()};
+    o.init_preset = DefaultCloudyPresetPath();
+    o.fit.backend = render::Backend::kCpu;
+    o.fit.absolute = true;
+    o.fit.verbose = false;
+    o.clouds.mode = "on";
+    o.clouds.preset = DefaultCloudyPresetPath();
+    o.clouds.samples = 64;
+    o.clouds.max_iterations = 3;
+    o.clouds.values_from_renderer = false;
+    o.clouds.refine_shapes = refine;
+    o.report = false;
+    o.out_dir = (dir / name).string();
+    return RunFitController(o);
+  };
+  RainEverywhere rain(true), keep(false);
+  const nlohmann::json rained = fit(&rain, "rained"), kept = fit(&keep, "kept");
+  EXPECT_EQ(rain.calls, 1);
+  EXPECT_EQ(keep.calls, 1);
+  EXPECT_NEAR(rain.exposure_seen, 1.0, 1e-12);  // absolute: the exposure fixed at 1
+  EXPECT_GT(rain.sun_scale_seen, 0.0);
+  EXPECT_NEAR(MeanPrecipitation(dir / "rained/preset.weather.exr"), 0.5, 1e-3);  // half floats
+  EXPECT_NEAR(MeanPrecipitation(dir / "kept/preset.weather.exr"), kept_rain, 1e-3);
+  EXPECT_GT(std::abs(kept_rain - 0.5), 0.1);
+  const double after_rain = rained["clouds"]["cloud_pixels"]["final"]["log_rmse"].get<double>();
+  const double without = kept["clouds"]["cloud_pixels"]["final"]["log_rmse"].get<double>();
+  EXPECT_GT(after_rain, without + 0.01) << "the report is on the rained map";
+  EXPECT_LT(without, 0.05);  // the reference's own shapes and lighting
   fs::remove_all(dir);
 }
 

@@ -102,34 +102,50 @@ SolvedAgain SolveAgain(CloudSampleModel* model, const CloudLighting& start, cons
   return r;
 }
 
-// Conditions every member at `start`, solves their blocks (one problem; the day's prior
-// with three or more), and fills one report per member. `images` renders what the
-// members' models did not already render (the composites of the report).
-std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const CloudLighting& start,
-                                              const KnownCloudShapes& shapes, const CloudLightingOptions& o,
-                                              clouds::CloudRenderer* images, const std::string& decision) {
+// The members' solve: their conditioning at the start, the day's hold set, the lighting found
+// per member, the solver's summary, the solves after the first and the stage times.
+struct Solved {
+  std::vector<Conditioning> day;
+  std::vector<CloudLighting> theta;
+  ceres::Solver::Summary summary;
+  SolvedAgain again;
+  int prior_residuals = 0;
+  int iterations = 0;  // over the solves (a refinement's included)
+  double conditioning_s = 0.0, solve_s = 0.0;
+};
+
+// Conditions every member at `start` and solves their blocks (one problem; the day's prior
+// with three or more).
+Solved SolveMembers(std::vector<Member>& m, const CloudLighting& start, const CloudLightingOptions& o) {
   const auto t0 = Clock::now();
+  Solved r;
   std::vector<Conditioning> each;
   for (Member& x : m) each.push_back(ConditionAt(x.model.get(), start, o));
-  const double conditioning_s = Seconds(t0);
-  std::vector<Conditioning> day = DayConditioning(each, m);
-  std::vector<CloudLighting> theta(m.size(), start);
+  r.conditioning_s = Seconds(t0);
+  r.day = DayConditioning(each, m);
+  r.theta.assign(m.size(), start);
   std::vector<CloudSampleModel*> models;
   std::vector<double*> blocks;
   std::vector<double> times;
-  for (size_t r = 0; r < m.size(); ++r) {
-    models.push_back(m[r].model.get());
-    blocks.push_back(theta[r].data());
-    times.push_back(m[r].time_h.value_or(0.0));
+  for (size_t k = 0; k < m.size(); ++k) {
+    models.push_back(m[k].model.get());
+    blocks.push_back(r.theta[k].data());
+    times.push_back(m[k].time_h.value_or(0.0));
   }
   CloudLighting scale{};
-  for (int k = 0; k < kCloudLightingParameters; ++k) scale[k] = day[0].parameters[k].scale;
-  int prior_residuals = 0;
-  ceres::Solver::Summary s = SolveCloudDay(models, blocks, day[0], times, scale, o, &prior_residuals);
-  SolvedAgain again;
-  if (m.size() == 1) again = SolveAgain(models[0], start, o, &day[0], &theta[0], &s);
-  const double solve_s = Seconds(t0);
+  for (int k = 0; k < kCloudLightingParameters; ++k) scale[k] = r.day[0].parameters[k].scale;
+  r.summary = SolveCloudDay(models, blocks, r.day[0], times, scale, o, &r.prior_residuals);
+  if (m.size() == 1) r.again = SolveAgain(models[0], start, o, &r.day[0], &r.theta[0], &r.summary);
+  r.iterations = static_cast<int>(r.summary.iterations.size()) - 1;
+  r.solve_s = Seconds(t0);
+  return r;
+}
 
+// One report per member of the solve: its parameters, and the composites' errors at the start
+// and the end. `images` renders what the members' models did not already render.
+std::vector<CloudLightingReport> ReportMembers(std::vector<Member>& m, const CloudLighting& start, const Solved& v,
+                                               const KnownCloudShapes& shapes, clouds::CloudRenderer* images,
+                                               const std::string& decision) {
   const auto tr = Clock::now();
   std::vector<CloudLightingReport> out(m.size());
   for (size_t r = 0; r < m.size(); ++r) {
@@ -139,33 +155,33 @@ std::vector<CloudLightingReport> SolveMembers(std::vector<Member>& m, const Clou
     rep.decision = decision;
     rep.reference = x.name;
     rep.time_of_day_h = x.time_h;
-    ReportParameters(start, theta[r], day[r], &rep);
+    ReportParameters(start, v.theta[r], v.day[r], &rep);
     rep.cloud_pixels = static_cast<long long>(x.pixels.size());
     rep.samples = static_cast<int>(x.model->samples().size());
     rep.fitted_params = shapes.params;
-    SetCloudLighting(theta[r], &rep.fitted_params);
+    SetCloudLighting(v.theta[r], &rep.fitted_params);
     auto composite = [&](const CloudLighting& l, const clouds::CloudParams& params) {
       if (!x.model->RenderedAt(l.data()))  // kept: the outputs' composite reuses the fitted one
         x.model->KeepRendered(l.data(), images->Render({&x.sky_preset, &params, shapes.noise, shapes.weather}, x.request));
       return Composite(x.sky_exposed, *x.model->RenderedAt(l.data()), x.exposure);
     };
     rep.cloud_initial = CompositeErrors(x.pixels, *x.reference, composite(start, shapes.params));
-    rep.cloud_final = CompositeErrors(x.pixels, *x.reference, composite(theta[r], rep.fitted_params));
-    rep.iterations = static_cast<int>(s.iterations.size()) - 1;
-    rep.bound_restarts = again.restarts.tried;
-    rep.bound_restart_kept = again.restarts.kept >= 0 ? again.restarts.parameter : "";
-    rep.released_holds = again.released.names;
-    rep.released_kept = again.released.kept;
-    rep.released_cost_before = again.released.cost_before;
-    rep.released_cost_after = again.released.cost_after;
-    rep.termination = ceres::TerminationTypeToString(s.termination_type);
+    rep.cloud_final = CompositeErrors(x.pixels, *x.reference, composite(v.theta[r], rep.fitted_params));
+    rep.iterations = v.iterations;
+    rep.bound_restarts = v.again.restarts.tried;
+    rep.bound_restart_kept = v.again.restarts.kept >= 0 ? v.again.restarts.parameter : "";
+    rep.released_holds = v.again.released.names;
+    rep.released_kept = v.again.released.kept;
+    rep.released_cost_before = v.again.released.cost_before;
+    rep.released_cost_after = v.again.released.cost_after;
+    rep.termination = ceres::TerminationTypeToString(v.summary.termination_type);
     rep.renders = x.model->renders;
     rep.jacobians = x.model->jacobians;
     rep.render_time_s = x.model->render_time_s;
     rep.jacobian_time_s = x.model->jacobian_time_s;
-    rep.conditioning_time_s = conditioning_s;
-    rep.solve_time_s = solve_s;
-    rep.prior_residuals = prior_residuals;
+    rep.conditioning_time_s = v.conditioning_s;
+    rep.solve_time_s = v.solve_s;
+    rep.prior_residuals = v.prior_residuals;
     rep.value_source = x.model->source() == CloudValueSource::kRenderer
                            ? images->Describe()
                            : "cpu double model at the samples (renders by " + images->Describe() + ")";
@@ -245,6 +261,11 @@ bool CloudLightingOptions::IsValid(std::string* why) const {
            std::to_string(threads) + " (expected [1, 10000] and [1, 256])";
     return false;
   }
+  if (iterations_after_refinement < 1 || iterations_after_refinement > 10000) {
+    *why = "CloudLightingOptions::iterations_after_refinement = " + std::to_string(iterations_after_refinement) +
+           " (expected an integer in [1, 10000])";
+    return false;
+  }
   for (const std::string& h : hold) {
     if (CloudLightingIndex(h) < 0) {
       std::string names;
@@ -314,8 +335,9 @@ std::vector<CloudLightingReport> FitCloudDayKnownSky(const std::vector<DayRefere
     m.push_back(std::move(x));
   }
   CheckDayTimes(m);
+  const CloudLighting start = GetCloudLighting(shapes.params);
   std::vector<CloudLightingReport> out =
-      SolveMembers(m, GetCloudLighting(shapes.params), shapes, o, images, "fitted with the sky given");
+      ReportMembers(m, start, SolveMembers(m, start, o), shapes, images, "fitted with the sky given");
   for (CloudLightingReport& r : out) {
     r.time_s = Seconds(t0);
     if (!renderer) r.value_source = "cpu double model at the samples";
@@ -475,6 +497,40 @@ void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitRes
   }
 }
 
+// The solve, and with CloudLightingOptions::refine_shapes (one reference) the map refined with
+// the lighting found and the lighting solved on from there on it (no holds released; the sky
+// and the cloud pixels kept): the report's composites are then drawn once, on the final map.
+Solved SolveAndRefine(const std::vector<fit::Reference>& refs, const fit::FitResult& sky, const CloudLighting& start,
+                      const CloudLightingOptions& o, clouds::CloudRenderer* cloud_renderer, KnownCloudShapes* shapes,
+                      std::vector<Member>* m, std::optional<clouds::WeatherMap>* refined) {
+  Solved first = SolveMembers(*m, start, o);
+  if (!o.refine_shapes || m->size() != 1) return first;
+  clouds::CloudParams lit = shapes->params;
+  SetCloudLighting(first.theta[0], &lit);
+  *refined = o.refine_shapes->Refine(sky.preset, lit, (*m)[0].exposure, *shapes->weather);
+  if (!*refined) return first;
+  const CloudSampleModel& before = *(*m)[0].model;  // its counts and times, carried over
+  const int renders = before.renders, jacobians = before.jacobians;
+  const double render_s = before.render_time_s, jacobian_s = before.jacobian_time_s;
+  shapes->weather = &**refined;
+  BuildCloudModels(refs, sky, *shapes, o, cloud_renderer, m);
+  CloudSampleModel& after = *(*m)[0].model;
+  after.renders += renders;
+  after.jacobians += jacobians;
+  after.render_time_s += render_s;
+  after.jacobian_time_s += jacobian_s;
+  CloudLightingOptions on = o;
+  on.max_iterations = o.iterations_after_refinement;
+  on.restart_at_bounds = on.release_inseparable = false;
+  on.refine_shapes = nullptr;
+  Solved second = SolveMembers(*m, first.theta[0], on);
+  second.again = first.again;  // what the first solve's restarts and releases did
+  second.iterations += first.iterations;
+  second.conditioning_s += first.conditioning_s;
+  second.solve_s += first.solve_s;
+  return second;
+}
+
 // The outputs: each reference's composite with its fitted clouds over the fitted sky, and
 // the sky stages' times and renders (from the fit's report, out->clouds) in each cloud
 // report.
@@ -569,8 +625,10 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
   for (const fit::LevelReport& l : out.sky.levels) rep.sky_renders += l.renders;
 
   BuildCloudModels(refs, out.sky, *shapes, o, cloud_renderer, &m);
-  out.references = SolveMembers(m, start, *shapes, o, cloud_renderer, decision.why);
-  ComposeOutputs(refs, m, *shapes, decision, cloud_renderer, &out);
+  KnownCloudShapes used = *shapes;  // the refined map's, when refined
+  const Solved solved = SolveAndRefine(refs, out.sky, start, o, cloud_renderer, &used, &m, &out.refined_weather);
+  out.references = ReportMembers(m, start, solved, used, cloud_renderer, decision.why);
+  ComposeOutputs(refs, m, used, decision, cloud_renderer, &out);
   SummariseClouds(m, o, t0, &out);
   return out;
 }

@@ -16,7 +16,6 @@
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
 #include "skycal/core/math_constants.h"
-#include "skycal/fit/fit_result_file.h"
 #include "skycal/render/preset.h"
 
 namespace skycal::controllers {
@@ -55,16 +54,17 @@ cloudfit::LitPixels Lit(const ImageRGB& image, std::vector<float> opacity, const
 }
 
 // The game's image at the view's size as the game composites it (clouds over the clear sky),
-// in the photo's units (times the fit's exposure), as LitPixels.
+// in the photo's units (times the fit's exposure), as LitPixels: the fitted sky and lighting.
 class LitGame {
  public:
-  LitGame(const PhotoAnalysis& a, const PhotoWeatherView& v, const StagedDirectory& out, render::Backend backend)
-      : preset_(render::LoadPreset(out / "preset.json")),
-        params_(clouds::ParseCloudSectionText(preset_.clouds_json, out / "preset.json")),
+  LitGame(const PhotoAnalysis& a, const PhotoWeatherView& v, const render::Preset& sky, const clouds::CloudParams& lit,
+          double exposure, render::Backend backend)
+      : preset_(sky),
+        params_(lit),
         noise_(clouds::SharedCloudNoise(kCloudNoiseSeed, clouds::UsableCloudNoiseCacheDir())),
         renderer_(OpacityRenderer(backend)),
-        exposure_(fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure),
-        clear_(ClearSkyInPhotoUnits(a, out, preset_, v.width, v.height)) {
+        exposure_(exposure),
+        clear_(ClearSkyInPhotoUnits(a, preset_, exposure, v.width, v.height)) {
     request_.width = v.width;  // the game's march: its steps and light samples
     request_.height = v.height;
     request_.sun_dir = *a.sun.direction;
@@ -87,8 +87,8 @@ class LitGame {
   }
 
  private:
-  render::Preset preset_;
-  clouds::CloudParams params_;
+  const render::Preset& preset_;
+  const clouds::CloudParams& params_;
   std::shared_ptr<const clouds::CloudNoise> noise_;
   std::unique_ptr<clouds::CloudRenderer> renderer_;
   double exposure_;
@@ -96,49 +96,65 @@ class LitGame {
   clouds::CloudRenderRequest request_;
 };
 
-}  // namespace
-
-PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherView& v, const StagedDirectory& out,
-                                     render::Backend backend) {
-  const auto t0 = std::chrono::steady_clock::now();
-  LitGame game(a, v, out, backend);
-  clouds::WeatherMap map = clouds::LoadWeatherMap(out / "preset.weather.exr", game.weather_extent_m());
+// One step of precipitation on `map` (in place) and what it did.
+PrecipitationRecord Rain(const PhotoAnalysis& a, const PhotoWeatherView& v, LitGame& game, clouds::WeatherMap* map) {
   const std::vector<char> counts = LightCounts(v, *a.sun.direction);
   const cloudfit::LitPixels photo = Lit(v.photo, v.opacity, counts);
   const cloudfit::LightRefineOptions o;
-  const cloudfit::LitPixels at = game.Render(map, counts, true);
-  const cloudfit::LitPixels raised = game.Render(cloudfit::RaisedMap(v.texels, map, o), counts, false);
-  const std::vector<float> before = map.rgb;
+  const cloudfit::LitPixels at = game.Render(*map, counts, true);
+  const cloudfit::LitPixels raised = game.Render(cloudfit::RaisedMap(v.texels, *map, o), counts, false);
+  const std::vector<float> before = map->rgb;
   PrecipitationRecord r;
-  r.step = cloudfit::RefineByLight(v.texels, photo, at, raised, o, &map);
+  r.step = cloudfit::RefineByLight(v.texels, photo, at, raised, o, map);
   // Resolved as the coverage is: far texels, crossed by few rays, follow their neighbours.
-  cloudfit::SmoothChannelByFootprint(v.texels, game.weather_extent_m(), o.channel, &map);
+  cloudfit::SmoothChannelByFootprint(v.texels, game.weather_extent_m(), o.channel, map);
   double sum = 0.0;
-  for (size_t t = 0; t < map.rgb.size(); t += 3)
-    if (map.rgb[t + 1] - before[t + 1] >= kRaisedAtLeast) {
-      sum += map.rgb[t + 1];
-      r.max_raised = std::max(r.max_raised, static_cast<double>(map.rgb[t + 1]));
+  for (size_t t = 0; t < map->rgb.size(); t += 3)
+    if (map->rgb[t + 1] - before[t + 1] >= kRaisedAtLeast) {
+      sum += map->rgb[t + 1];
+      r.max_raised = std::max(r.max_raised, static_cast<double>(map->rgb[t + 1]));
       ++r.raised_texels;
     }
   r.mean_raised = r.raised_texels > 0 ? sum / r.raised_texels : 0.0;
-  clouds::SaveWeatherMap(map, out / "preset.weather.exr");
   r.width = v.width;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
 
-fit::FitDecision PrecipitationRecord::Decision() const {
+}  // namespace
+
+std::optional<clouds::WeatherMap> RainFromTheLight::Refine(const render::Preset& sky, const clouds::CloudParams& lit,
+                                                          double exposure, const clouds::WeatherMap& map) {
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    LitGame game(a_, view_, sky, lit, exposure, backend_);
+    clouds::WeatherMap rained = map;
+    record_ = Rain(a_, view_, game, &rained);
+    record_->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return rained;
+  } catch (const std::exception& e) {  // the map stays as inverted, the lighting as the refit found it
+    failure_ = std::string("the lit renders failed: ") + e.what();
+    return std::nullopt;
+  }
+}
+
+fit::FitDecision RainFromTheLight::Decision() const {
   const auto f3 = [](double x) { return FormatNumber(std::round(x * 1000.0) / 1000.0); };
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
+  if (!record_) {
+    d.what = "precipitation: none read from the light";
+    d.why = failure_ + "; the inverted map kept as it was";
+    return d;
+  }
+  const PrecipitationRecord& r = *record_;
   d.what = "precipitation where the photo's clouds are darker than the game draws them";
-  d.why = std::to_string(step.pixels) + " cloud pixels compared (cloud in the photo and the game, outside " +
-          FormatNumber(kSunGlareDeg) + " degrees of the sun): ln Y RMS " + f3(step.log_rms) +
+  d.why = std::to_string(r.step.pixels) + " cloud pixels compared (cloud in the photo and the game, outside " +
+          FormatNumber(kSunGlareDeg) + " degrees of the sun): ln Y RMS " + f3(r.step.log_rms) +
           " under the refitted lighting; precipitation raised by " + FormatNumber(kRaisedAtLeast) + " or more in " +
-          std::to_string(raised_texels) + " texels (mean " + f3(mean_raised) + ", at most " + f3(max_raised) +
+          std::to_string(r.raised_texels) + " texels (mean " + f3(r.mean_raised) + ", at most " + f3(r.max_raised) +
           "): the game's rain absorption darkens a column with little change to where its cloud is, which coverage cannot "
-          "once the column is opaque; two lit renders at " + std::to_string(width) + " px wide, " +
-          FormatNumber(std::round(seconds * 100.0) / 100.0) + " s; the lighting refitted on them next";
+          "once the column is opaque; two lit renders at " + std::to_string(r.width) + " px wide, " +
+          FormatNumber(std::round(r.seconds * 100.0) / 100.0) + " s; the lighting solved on from there";
   return d;
 }
 

@@ -156,33 +156,30 @@ void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* 
 }
 
 // The inverted shapes lit: the lighting refitted on them, precipitation where the photo's clouds
-// are darker than that lighting draws them, and the lighting refitted again (calibrate_weather.h).
-// A failed first refit leaves the statistics fit's lighting, and no precipitation is read from it.
+// are darker than that lighting draws them, and the lighting solved on from there, in one
+// known-shapes fit (calibrate_weather.h). A failed refit leaves the statistics fit's lighting
+// and map, and no precipitation.
 void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& view, const StagedDirectory& out,
                              const std::string& final_dir, const CalibrateOptions& o, FitPlan* plan) {
-  Log(o, "refitting the cloud lighting on the recovered shapes");
-  RefitPass first;
-  first.previews = false;  // the second pass's replace them
-  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, first));
+  Log(o, "refitting the cloud lighting on the recovered shapes, with the light inside them");
+  RainFromTheLight rain(a, view, plan->fit.fit.backend);
+  RefitPass pass;
+  pass.refine = &rain;
+  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, pass));
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
-  if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing to read the light with
-  Log(o, "reading the light inside the clouds");
-  try {
-    plan->decisions.push_back(RainFromTheLight(a, view, out, plan->fit.fit.backend).Decision());
-  } catch (const std::exception& e) {  // the map stays as inverted; the second refit still draws the previews
-    fit::FitDecision d;
-    d.what = "precipitation: none read from the light";
-    d.why = std::string("the lit renders failed: ") + e.what() + "; the inverted map kept as it was";
-    d.saved_ms_basis = "not measured in this run";
-    plan->decisions.push_back(d);
-  }
+  if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing it found is kept
+  plan->decisions.push_back(rain.Decision());
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
-  RefitPass second;
-  second.first = false;
-  second.iterations = kRefitAfterRainIterations;
-  second.release_holds = false;
-  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, second));
-  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+  if (!rain.refined()) return;
+  fit::FitDecision d;
+  d.what = "cloud lighting refitted again with the precipitation (known shapes)";
+  d.why = "solved on in the same fit from the lighting above, on the map with its precipitation, for at most " +
+          std::to_string(kRefitAfterRainIterations) +
+          " iteration(s), no holds released; the sky and the cloud pixels kept (the precipitation moves neither); "
+          "the refit's errors above are the final map's";
+  d.saved_ms_basis = "not measured in this run";
+  plan->decisions.push_back(d);
+  Log(o, "  " + d.what + ": " + d.why);
 }
 
 // Partly cloudy: the weather map inverted from the photo (or the user's, held), then the cloud

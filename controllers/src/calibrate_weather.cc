@@ -109,17 +109,22 @@ std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& o
 
 }  // namespace
 
-ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
-                              int width, int height) {
+ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const render::Preset& preset, double exposure, int width,
+                              int height) {
   render::RenderRequest req;
   req.sun_dir = *a.sun.direction;
   req.width = width;
   req.height = height;
   req.sun_disc = false;
   ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
-  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
   for (float& v : clear.pixels) v = static_cast<float>(v * exposure);
   return clear;
+}
+
+ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
+                              int width, int height) {
+  return ClearSkyInPhotoUnits(a, preset, fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure, width,
+                              height);
 }
 
 // 512 for a photo at least that wide (a texel near the zenith is about a pixel there), else
@@ -379,7 +384,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.out_dir = final_dir;
     k.cloud_stats.enabled = false;
     k.cloud_mask = false;
-    k.previews = pass.previews;  // the last pass's outputs are the ones kept
+    k.previews = true;  // the refit's are the ones kept (the statistics fit drew none)
     k.clouds.mode = "on";
     k.clouds.preset = (shapes / "preset.json").string();
     k.clouds.hold.push_back("extinction");
@@ -396,6 +401,8 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // gained little more than this alone, for a solve per parameter at a bound
     // (bench/results/weather_inversion.md).
     k.clouds.release_inseparable = pass.release_holds;
+    k.clouds.refine_shapes = pass.refine;
+    k.clouds.iterations_after_refinement = kRefitAfterRainIterations;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
     // the clouds' radiance the two are one degree of freedom (L = C + a s D + a k A), and the
     // scale is the one a photo leaves open (its sky fit does not pin the sun apart from the
@@ -410,14 +417,12 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // The decision from the refit's record before anything moves: a failure here leaves the
     // statistics fit's files in place, as the catch below says.
     d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds, pass.iterations);
-    if (!pass.first) d.what = "cloud lighting refitted again with the precipitation (known shapes)";
-    if (pass.first) fs::rename(out / "fit.json", out / "fit.statistics.json");
+    fs::rename(out / "fit.json", out / "fit.statistics.json");
     MoveUp(refit_dir, out.staging());
-  } catch (const std::exception& e) {  // the previous fit's lighting stands
-    d.what = pass.first ? "cloud lighting: the statistics fit's kept" : "cloud lighting: the first refit's kept";
-    d.why = std::string("the known-shapes refit failed: ") + e.what() + " (the " +
-            (pass.first ? "statistics fit" : "first refit") +
-            " wrote no previews, report.png and fit/*.png, expecting the refit's)";
+  } catch (const std::exception& e) {  // the statistics fit's lighting stands
+    d.what = "cloud lighting: the statistics fit's kept";
+    d.why = std::string("the known-shapes refit failed: ") + e.what() +
+            " (the statistics fit wrote no previews, report.png and fit/*.png, expecting the refit's)";
   }
   std::error_code ec;
   fs::remove_all(shapes, ec);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "calibrate_plan.h"
+#include "skycal/cloudfit/cloud_lighting_fit.h"
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/cloud_renderer.h"
 #include "skycal/core/image.h"
@@ -74,8 +75,11 @@ struct PhotoWeatherView {
   cloudfit::WeatherTexelView texels;
 };
 
-// `out`'s preset's clear sky at the photo's sun, width x height, without the disc, times the
-// exposure of `out`/fit.json: the photo's units (the sky the clouds are composited over).
+// `preset`'s clear sky at the photo's sun, width x height, without the disc, times `exposure`
+// (the fit's): the photo's units (the sky the clouds are composited over).
+ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const render::Preset& preset, double exposure, int width,
+                              int height);
+// The same with the exposure of `out`/fit.json.
 ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
                               int width, int height);
 
@@ -86,19 +90,36 @@ ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out
 WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDirectory& out, render::Backend backend,
                                           PhotoWeatherView* view = nullptr);
 
-// The light inside the recovered clouds (cloudfit::RefineByLight): the preset's map gains
-// precipitation where the photo's clouds are darker than the game draws them under the
-// lighting refitted on the shapes. One step, from two lit renders at the view's width.
+// The light inside the recovered clouds (cloudfit::RefineByLight), as the lighting refit's
+// shape refinement (cloudfit::ShapeRefinement): with the lighting the refit's solve found, the
+// map gains precipitation where the photo's clouds are darker than the game draws them, and
+// the refit solves on from there. One step, from two lit renders at the view's width.
 struct PrecipitationRecord {
   cloudfit::LightRefineStep step;
   int raised_texels = 0;                       // texels whose precipitation rose (by 0.01 or more)
   double mean_raised = 0.0, max_raised = 0.0;  // their precipitation
   int width = 0;                               // the renders' lat-long width (pixels)
   double seconds = 0.0;
-  fit::FitDecision Decision() const;
 };
-PrecipitationRecord RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherView& view, const StagedDirectory& out,
-                                     render::Backend backend);
+class RainFromTheLight : public cloudfit::ShapeRefinement {
+ public:
+  // `a` and `view` (the inversion's) outlive it.
+  RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherView& view, render::Backend backend)
+      : a_(a), view_(view), backend_(backend) {}
+  // A failed lit render keeps the map (nullopt; failure() says why): the refit ends as it was.
+  std::optional<clouds::WeatherMap> Refine(const render::Preset& sky, const clouds::CloudParams& lit, double exposure,
+                                           const clouds::WeatherMap& map) override;
+  bool refined() const { return record_.has_value(); }
+  // What it did, or why nothing ("precipitation: none read from the light").
+  fit::FitDecision Decision() const;
+
+ private:
+  const PhotoAnalysis& a_;
+  const PhotoWeatherView& view_;
+  render::Backend backend_;
+  std::optional<PrecipitationRecord> record_;
+  std::string failure_ = "the lighting refit did not reach it";
+};
 
 // The user's weather map (CalibrateOptions::weather_map) as the preset's, held: read over the
 // preset's weather extent (its errors name the file) and written as `out`/preset.weather.exr.
@@ -106,7 +127,7 @@ fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDire
 
 // The known-shapes refit of the lighting: its cost flattens within about ten iterations on the
 // inverted shapes (bench/results/calibrate.md); the default 100 costs seconds for nothing.
-// After the precipitation it starts from the first's result and moves by about a level (the
+// After the precipitation it solves on from its result and moves by about a level (the
 // clouds' sun and ambient): more iterations, or the held parameters released again, did not
 // change the game's image (bench/results/weather_inversion.md).
 inline constexpr int kRefitIterations = 10;
@@ -121,14 +142,11 @@ inline constexpr double kSunGlareDeg = 10.0;
 // (regime 1, docs/cloud-fitting.md) with the inverted preset as its shapes and start, run in
 // a staged subdirectory and moved over the statistics fit's files only when it succeeds
 // (the statistics fit's fit.json kept as fit.statistics.json). `final_dir` names the preset.
-// `pass`: the first on the inverted shapes (its previews, replaced by the second's, not drawn;
-// the statistics fit's record kept) or the second, after the precipitation (the first's
-// record dropped: the decisions keep what it did).
+// `pass.refine`: the map refined after the solve and solved on (kRefitAfterRainIterations).
 struct RefitPass {
-  bool first = true;
   int iterations = kRefitIterations;
-  bool previews = true;
-  bool release_holds = true;  // CloudLightingOptions::release_inseparable
+  bool release_holds = true;                   // CloudLightingOptions::release_inseparable
+  cloudfit::ShapeRefinement* refine = nullptr;  // not owned; null: none
 };
 fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir,
                                     const RefitPass& pass);

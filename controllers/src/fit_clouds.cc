@@ -53,6 +53,7 @@ bool FitCloudOptions::IsValid(std::string* why) const {
   co.samples = samples;
   co.max_iterations = max_iterations;
   co.day_smoothness = day_smoothness;
+  co.iterations_after_refinement = iterations_after_refinement;
   co.hold = hold;
   return co.IsValid(why);  // its messages name CloudLightingOptions' fields of the same names
 }
@@ -104,6 +105,8 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   co.values_from_renderer = o.values_from_renderer;
   co.restart_at_bounds = o.restart_at_bounds;
   co.release_inseparable = o.release_inseparable;
+  co.refine_shapes = o.refine_shapes;
+  co.iterations_after_refinement = o.iterations_after_refinement;
   co.hold = o.hold;
   co.day_smoothness = o.day_smoothness;
   co.verbose = fo.verbose;
@@ -159,7 +162,8 @@ void AttachFittedClouds(const cloudfit::SkyCloudFit& f, const LoadedCloudShapes&
   if (!r.fitted) return;
   clouds::CloudParams p = r.fitted_params;
   const std::string weather_name = preset_json.stem().string() + ".weather.exr";
-  clouds::SaveWeatherMap(shapes.weather, (preset_json.parent_path() / weather_name).string());
+  clouds::SaveWeatherMap(f.refined_weather ? *f.refined_weather : shapes.weather,
+                         (preset_json.parent_path() / weather_name).string());
   p.weather_map = weather_name;
   preset->clouds_json = clouds::CloudSectionToJson(p).dump();
   if (f.references.size() > 1) {

@@ -47,6 +47,22 @@ struct KnownCloudShapes {
   }
 };
 
+// Shapes refined once the lighting is known: FitSkyAndClouds (one reference) hands its map
+// to Refine with the lighting its solve found; a refined map is solved on from there
+// (CloudLightingOptions::iterations_after_refinement, no holds released, the sky and the
+// cloud pixels kept) and is the fit's map (SkyCloudFit::refined_weather). Calibrate's reads
+// precipitation from the photo's light (what the lighting cannot do, the map does, and the
+// lighting then settles on it): in one fit, not a second one that fits the sky again.
+class ShapeRefinement {
+ public:
+  virtual ~ShapeRefinement() = default;
+  // `sky`: the fitted sky preset; `lit`: the clouds section with the fitted lighting;
+  // `exposure`: the reference's. The refined map, or nullopt to keep `map` (nothing solved
+  // again). May throw: the fit fails with it.
+  virtual std::optional<clouds::WeatherMap> Refine(const render::Preset& sky, const clouds::CloudParams& lit,
+                                                   double exposure, const clouds::WeatherMap& map) = 0;
+};
+
 struct CloudLightingOptions {
   // Cloud pixels whose Jacobian rows (Jet marches, ~15 double marches each) the fit uses;
   // all of them when there are fewer. One Jet march of the game's march costs ~2-4 ms at
@@ -91,6 +107,10 @@ struct CloudLightingOptions {
   // down alone still lowers the image's error; the values are then the image's best, not
   // determined ones, and the report says which).
   bool release_inseparable = false;
+  // FitSkyAndClouds with one reference: the shapes refined after the solve (null: none), and
+  // the iterations solved on the refined map from the lighting found before.
+  ShapeRefinement* refine_shapes = nullptr;
+  int iterations_after_refinement = 1;
   int threads = 2;
   bool verbose = false;
   bool IsValid(std::string* why) const;
@@ -202,6 +222,9 @@ struct SkyCloudFit {
   // with the day's solve (iterations, renders, times summed over the references).
   CloudLightingReport clouds;
   std::vector<CloudLightingReport> references;  // per reference (input order) when fitted
+  // The map CloudLightingOptions::refine_shapes returned (the fit's report is on it); none:
+  // the known shapes' map.
+  std::optional<clouds::WeatherMap> refined_weather;
 };
 
 // The fit with clouds, when decision.march: the cloud pixels (known-shape transmittance

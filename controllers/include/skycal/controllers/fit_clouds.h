@@ -37,6 +37,11 @@ struct FitCloudOptions {
   // the horizon covers every pixel of some LUT columns, which the sky stage would then
   // extrapolate from their neighbours' bilinear tails.
   bool sky_pixels_from_photo = false;
+  // The map refined after the lighting solve and solved on (CloudLightingOptions, not owned;
+  // null: none): calibrate's precipitation read from the photo's light. The exported preset
+  // carries the refined map.
+  cloudfit::ShapeRefinement* refine_shapes = nullptr;
+  int iterations_after_refinement = 1;
   // False and the field (FitCloudOptions::, CloudLightingOptions::), its value and the
   // expectation in *why.
   bool IsValid(std::string* why) const;
