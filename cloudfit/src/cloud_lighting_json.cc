@@ -50,7 +50,8 @@ nlohmann::json CloudReportJson(const CloudReportSettings& o, const SkyCloudFit& 
                 "(the start's cloud renders that find the cloud pixels), sky_fit_time_s (the sky on its clear pixels; "
                 "sky_renders backend renders), conditioning_time_s and cloud_solve_time_s (the Ceres solve of the cloud "
                 "blocks, conditioning included; renders and jacobians counted, render_time_s and jacobian_time_s of it), "
-                "report_time_s (the composites' errors)"}};
+                "report_time_s (the composites' errors); with a shape refinement (calibrate's precipitation), the "
+                "solves before and after it summed, the refinement itself in time_s alone"}};
   j["singular_values"] = r.singular_values;
   j["singular_values_free"] = r.singular_values_free;
   j["cloud_pixels"] = {{"count", r.cloud_pixels}, {"samples", r.samples},
