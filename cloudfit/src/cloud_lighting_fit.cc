@@ -438,8 +438,8 @@ std::vector<fit::Reference> MaskCloudPixels(const std::vector<fit::Reference>& r
     own.time_s = shapes.TimeOf(r);
     x.request = RequestFor(ref.sun_dir, ref.radiance.width, ref.radiance.height, own);
     // Only the transmittance is read: marched without the light samples, which feed the
-    // source term alone (cloud_march.glsl.h), it is the same to the bit at a fraction of the
-    // cost.
+    // source term alone (cloud_march.glsl.h), it is the same to the bit and cheaper (the
+    // primary march's density reads remain).
     clouds::CloudRenderRequest opacity_only = x.request;
     opacity_only.march.light_samples = 0;
     opacity_only.march.far_light = false;
