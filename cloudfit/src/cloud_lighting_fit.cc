@@ -47,6 +47,7 @@ struct Member {
   std::vector<size_t> pixels;
   std::unique_ptr<CloudSampleModel> model;
   render::Preset sky_preset;
+  ImageRGB sky;          // the fitted sky without the disc (the model's), unexposed
   ImageRGB sky_exposed;  // the sky behind the clouds x the exposure
   double exposure = 1.0;
   clouds::CloudRenderRequest request;
@@ -472,6 +473,16 @@ void UseSkyPixelClasses(const std::vector<std::vector<fit::PixelClass>>& classes
 }
 
 // The cloud blocks on the fitted sky (after its gauge move), values through the renderer.
+// Member x's sample model on `shapes` over its sky (x.sky, x.sky_preset, x.exposure).
+void MakeCloudModel(const fit::Reference& ref, const KnownCloudShapes& shapes, const CloudLightingOptions& o,
+                    clouds::CloudRenderer* cloud_renderer, Member* x) {
+  x->model = std::make_unique<CloudSampleModel>(
+      CloudSampleScene{x->sky_preset, shapes.params, shapes.noise, shapes.weather, x->request},
+      ChooseSamples(x->pixels, ref.radiance, o.samples),
+      o.values_from_renderer ? CloudValueSource::kRenderer : CloudValueSource::kCpuDouble, cloud_renderer, o.threads);
+  x->model->SetSky(x->sky_preset, x->sky, x->exposure);
+}
+
 void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitResult& sky_fit,
                       const KnownCloudShapes& shapes, const CloudLightingOptions& o,
                       clouds::CloudRenderer* cloud_renderer, std::vector<Member>* members) {
@@ -484,36 +495,32 @@ void BuildCloudModels(const std::vector<fit::Reference>& refs, const fit::FitRes
     req.width = refs[r].radiance.width;
     req.height = refs[r].radiance.height;
     req.sun_disc = false;  // the sun cone is masked; the clouds' sun light is the direct term
-    const ImageRGB sky = cpu_sky->Render(sky_fit.preset, req);
+    x.sky = cpu_sky->Render(sky_fit.preset, req);
     x.sky_preset = sky_fit.preset;
     x.exposure = sky_fit.references[r].exposure;
     // The report's composites over the rendered sky (the backend's, disc included).
     x.sky_exposed = sky_fit.references[r].rendered;
-    x.model = std::make_unique<CloudSampleModel>(
-        CloudSampleScene{sky_fit.preset, shapes.params, shapes.noise, shapes.weather, x.request},
-        ChooseSamples(x.pixels, refs[r].radiance, o.samples),
-        o.values_from_renderer ? CloudValueSource::kRenderer : CloudValueSource::kCpuDouble, cloud_renderer, o.threads);
-    x.model->SetSky(sky_fit.preset, sky, x.exposure);
+    MakeCloudModel(refs[r], shapes, o, cloud_renderer, &x);
   }
 }
 
 // The solve, and with CloudLightingOptions::refine_shapes (one reference) the map refined with
 // the lighting found and the lighting solved on from there on it (no holds released; the sky
 // and the cloud pixels kept): the report's composites are then drawn once, on the final map.
-Solved SolveAndRefine(const std::vector<fit::Reference>& refs, const fit::FitResult& sky, const CloudLighting& start,
+Solved SolveAndRefine(const std::vector<fit::Reference>& refs, const CloudLighting& start,
                       const CloudLightingOptions& o, clouds::CloudRenderer* cloud_renderer, KnownCloudShapes* shapes,
                       std::vector<Member>* m, std::optional<clouds::WeatherMap>* refined) {
   Solved first = SolveMembers(*m, start, o);
   if (!o.refine_shapes || m->size() != 1) return first;
   clouds::CloudParams lit = shapes->params;
   SetCloudLighting(first.theta[0], &lit);
-  *refined = o.refine_shapes->Refine(sky.preset, lit, (*m)[0].exposure, *shapes->weather);
+  *refined = o.refine_shapes->Refine((*m)[0].sky_preset, lit, (*m)[0].exposure, *shapes->weather);
   if (!*refined) return first;
   const CloudSampleModel& before = *(*m)[0].model;  // its counts and times, carried over
   const int renders = before.renders, jacobians = before.jacobians;
   const double render_s = before.render_time_s, jacobian_s = before.jacobian_time_s;
   shapes->weather = &**refined;
-  BuildCloudModels(refs, sky, *shapes, o, cloud_renderer, m);
+  MakeCloudModel(refs[0], *shapes, o, cloud_renderer, &(*m)[0]);  // the same sky and samples
   CloudSampleModel& after = *(*m)[0].model;
   after.renders += renders;
   after.jacobians += jacobians;
@@ -626,7 +633,7 @@ SkyCloudFit FitSkyAndClouds(const std::vector<fit::Reference>& refs, const rende
 
   BuildCloudModels(refs, out.sky, *shapes, o, cloud_renderer, &m);
   KnownCloudShapes used = *shapes;  // the refined map's, when refined
-  const Solved solved = SolveAndRefine(refs, out.sky, start, o, cloud_renderer, &used, &m, &out.refined_weather);
+  const Solved solved = SolveAndRefine(refs, start, o, cloud_renderer, &used, &m, &out.refined_weather);
   out.references = ReportMembers(m, start, solved, used, cloud_renderer, decision.why);
   ComposeOutputs(refs, m, used, decision, cloud_renderer, &out);
   SummariseClouds(m, o, t0, &out);

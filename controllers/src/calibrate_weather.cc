@@ -95,7 +95,8 @@ std::vector<float> PhotoOpacity(const PhotoAnalysis& a, const StagedDirectory& o
     probability[i] = a.mask.sky[i] >= 0.5f ? a.cloud_probability[i] : 0.0f;
   ImageRGB photo(rw, rh);
   photo.pixels = AreaDownsampleLatLongOfPositive(a.frame.radiance.pixels, w, h, 3, rw, rh);
-  capture::CloudOpacity o = capture::EstimateCloudOpacity(photo, ClearSkyInPhotoUnits(a, out, preset, rw, rh),
+  const double exposure = fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure;
+  capture::CloudOpacity o = capture::EstimateCloudOpacity(photo, ClearSkyInPhotoUnits(a, preset, exposure, rw, rh),
                                                           AreaDownsampleLatLong(probability, w, h, 1, rw, rh), sky, {});
   FillSunGlare(&o.opacity, sky, rw, rh, *a.sun.direction);
   r->cloud_colour = o.cloud_colour;
@@ -119,12 +120,6 @@ ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const render::Preset& pres
   ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
   for (float& v : clear.pixels) v = static_cast<float>(v * exposure);
   return clear;
-}
-
-ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
-                              int width, int height) {
-  return ClearSkyInPhotoUnits(a, preset, fit::ReadFitResultFile(out / "fit.json").references.at(0).exposure, width,
-                              height);
 }
 
 // 512 for a photo at least that wide (a texel near the zenith is about a pixel there), else

@@ -79,9 +79,6 @@ struct PhotoWeatherView {
 // (the fit's): the photo's units (the sky the clouds are composited over).
 ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const render::Preset& preset, double exposure, int width,
                               int height);
-// The same with the exposure of `out`/fit.json.
-ImageRGB ClearSkyInPhotoUnits(const PhotoAnalysis& a, const StagedDirectory& out, const render::Preset& preset,
-                              int width, int height);
 
 // Rewrites `out`/preset.weather.exr (the cloud statistics fit's map) so that the preset's
 // clouds, marched as the game marches them at the photo's sun, cover what the photo's cloud
