@@ -103,7 +103,7 @@ class RainFromTheLight : public cloudfit::ShapeRefinement {
   // `a` and `view` (the inversion's) outlive it.
   RainFromTheLight(const PhotoAnalysis& a, const PhotoWeatherView& view, render::Backend backend)
       : a_(a), view_(view), backend_(backend) {}
-  // A failed lit render keeps the map (nullopt; failure() says why): the refit ends as it was.
+  // A failed lit render keeps the map (nullopt; Decision() says why): the refit ends as it was.
   std::optional<clouds::WeatherMap> Refine(const render::Preset& sky, const clouds::CloudParams& lit, double exposure,
                                            const clouds::WeatherMap& map) override;
   bool refined() const { return record_.has_value(); }
