@@ -108,6 +108,44 @@ TEST(SkySegmentation, ADarkCloudMassOnACumulusBankFloats) {
   EXPECT_GT(count(capture::EstimateSkyMask(img, sun, four)).first, 1000);  // the control: grounded
 }
 
+// A grey cumulus bank drawn down to the horizon (the game's clouds reach it through the
+// planet's curvature; so do a photo's over the sea or a plain) meets the ground band through
+// haze: textured there, but hardly darker than the sky (none of it by the 0.7 of a dark
+// candidate), so it floats;
+// a building of the same height is dark where it stands. The control: with any contact
+// grounding (ground_dark_share 0, the rule before) the bank is taken for ground.
+TEST(SkySegmentation, ACloudBankFadingIntoTheHorizonHazeFloats) {
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
+  ImageRGB img = ClearSky(sun);
+  const int h = img.height;
+  int horizon = 0;
+  while (latlong::Latitude(horizon, h) > 0.0) ++horizon;
+  for (int y = horizon - 12; y < horizon; ++y) {
+    // 0.3 of the sky 12 rows up (~17 deg), fading to 0.9 in the lowest row (0.7 deg), a third
+    // of its pixels 0.7 of that (texture: ln(0.9 x 0.7) = -0.46 in the lowest row).
+    const float t = static_cast<float>(horizon - 1 - y) / 11.0f;
+    for (int x = 20; x < 120; ++x)
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) *= (0.9f - 0.6f * t) * ((x + y) % 3 == 0 ? 0.7f : 1.0f);
+  }
+  Paint(&img, 150, 170, horizon - 12, horizon, 0.1f, true);  // the building
+  const auto count = [&](const capture::SkyMask& m) {
+    long long cloud = 0, building = 0;
+    for (int y = horizon - 12; y < horizon; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const bool ns = m.sky[static_cast<size_t>(y) * img.width + x] < 0.5f;
+        if (x >= 20 && x < 120) cloud += ns;
+        if (x >= 150 && x < 170) building += ns;
+      }
+    return std::pair(cloud, building);
+  };
+  const auto [cloud, building] = count(capture::EstimateSkyMask(img, sun, {}));
+  EXPECT_EQ(cloud, 0);  // of 1200 px
+  EXPECT_EQ(building, 240);
+  capture::SkyMaskOptions any_contact;
+  any_contact.ground_dark_share = 0.0;
+  EXPECT_GT(count(capture::EstimateSkyMask(img, sun, any_contact)).first, 600);  // the control: grounded
+}
+
 // Where segmentations fail: thin dark structures standing on the horizon (a pylon 2 px wide,
 // a crane's 1-px mast and jib, a 1-px wire slung between the pylon and the mast) and a
 // bright, colourless façade beside a bright sky (as bright as the sky next to it, grey where
@@ -163,6 +201,10 @@ TEST(SkySegmentation, OptionsNameTheField) {
   o.darkness_quantile = 1.5;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("darkness_quantile"), std::string::npos) << why;
+  o = {};
+  o.ground_dark_share = 1.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("ground_dark_share"), std::string::npos) << why;
   o = {};
   o.dilate_px = 99;
   EXPECT_FALSE(o.IsValid(&why));

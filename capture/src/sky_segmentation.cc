@@ -104,14 +104,24 @@ cv::Mat SkyReference(const cv::Mat& L, double quantile, double window_deg, doubl
   return ref;
 }
 
-// Keeps the components of `candidates` (8-connected, CV_8U 0/255) that reach a row at or
-// below `band_top_row`; returns the kept mask and counts the dropped pixels.
-cv::Mat KeepGroundConnected(const cv::Mat& candidates, int band_top_row, long long* dropped) {
+// Keeps the components of `candidates` (8-connected, CV_8U 0/255) that stand on the ground:
+// they reach a row at or below `band_top_row`, and at least `min_dark_share` of their pixels
+// there are darker than the sky's reference by `dark_threshold` (log units). Returns the kept
+// mask and counts the dropped pixels.
+cv::Mat KeepGroundConnected(const cv::Mat& candidates, int band_top_row, const cv::Mat& dark, double dark_threshold,
+                            double min_dark_share, long long* dropped) {
   cv::Mat labels;
   const int n = cv::connectedComponents(candidates, labels, 8, CV_32S);
-  std::vector<char> grounded(n, 0);
+  std::vector<long long> contact(n, 0), dark_contact(n, 0);
   for (int y = std::max(0, band_top_row); y < labels.rows; ++y)
-    for (int x = 0; x < labels.cols; ++x) grounded[labels.at<int>(y, x)] = 1;
+    for (int x = 0; x < labels.cols; ++x) {
+      const int l = labels.at<int>(y, x);
+      ++contact[l];
+      dark_contact[l] += dark.at<float>(y, x) > dark_threshold;
+    }
+  std::vector<char> grounded(n, 0);
+  for (int l = 1; l < n; ++l)
+    grounded[l] = contact[l] > 0 && static_cast<double>(dark_contact[l]) >= min_dark_share * contact[l];
   // The lat-long wraps: a component touching column 0 and one touching the last column on
   // the same row are one object.
   for (bool changed = true; changed;) {
@@ -170,6 +180,7 @@ bool SkyMaskOptions::IsValid(std::string* why) const {
     return Fail(why, "texture_threshold", texture_threshold, "> 0, natural-log units");
   if (!InRange(textured_darkness, 0.0, 10.0)) return Fail(why, "textured_darkness", textured_darkness, "[0, 10]");
   if (!InRange(ground_band_deg, 0.0, 45.0)) return Fail(why, "ground_band_deg", ground_band_deg, "[0, 45] deg");
+  if (!InRange(ground_dark_share, 0.0, 1.0)) return Fail(why, "ground_dark_share", ground_dark_share, "[0, 1]");
   if (!InRange(sun_exclusion_deg, 0.0, 45.0))
     return Fail(why, "sun_exclusion_deg", sun_exclusion_deg, "[0, 45] deg");
   if (grabcut_iterations < 1 || grabcut_iterations > 20)
@@ -295,7 +306,8 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
 
   const SkyCues q = ComputeSkyCues(frame, rows, o);
   const cv::Mat candidates = NonSkyCandidates(q, sun, rows, w, h, o);
-  cv::Mat kept = KeepGroundConnected(candidates, band_top, &m.floating_candidates);
+  cv::Mat kept =
+      KeepGroundConnected(candidates, band_top, q.dark, o.darkness_threshold, o.ground_dark_share, &m.floating_candidates);
   m.ground_connected_candidates = cv::countNonZero(kept);
 
   cv::Mat non_sky = kept.clone();
@@ -313,7 +325,7 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
       cv::Mat fg_now = (gc_mask == cv::GC_FGD) | (gc_mask == cv::GC_PR_FGD);
       long long dropped = 0;
       // grabCut's colour model may also take dark floating cloud: the ground rule again.
-      non_sky = KeepGroundConnected(fg_now, band_top, &dropped);
+      non_sky = KeepGroundConnected(fg_now, band_top, q.dark, o.darkness_threshold, o.ground_dark_share, &dropped);
     }
   } else {
     gc_mask.setTo(cv::GC_PR_BGD);

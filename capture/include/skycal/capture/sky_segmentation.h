@@ -13,7 +13,8 @@
 //    luminance at the pixel scale, the sky (clouds included) has little;
 //  - ground connection: buildings, trees and terrain stand on the horizon, clouds float.
 //    Candidates (dark, or textured and somewhat dark) are kept only where their connected
-//    component reaches the lowest rows above the horizon;
+//    component reaches the lowest rows above the horizon, and is dark there (a cloud bank
+//    that reaches the horizon fades into its haze);
 //  - grabCut (OpenCV, Rother et al. 2004, "GrabCut: interactive foreground extraction")
 //    seeded from the confident pixels of both classes refines the boundary by colour
 //    models and an edge-aware smoothness term.
@@ -41,6 +42,14 @@ struct SkyMaskOptions {
   // horizon; a cloud's base at the game's draw distance (1.5 km up, 35 km away) is ~2.3 deg
   // up, so a dark cloud mass over a cumulus bank is not grounded (4 deg grounded it).
   double ground_band_deg = 1.0;
+  // ... and stand on it darkly: at least this share of a component's pixels in that band must
+  // be darker than the sky's reference by darkness_threshold, [0, 1] (0: any contact grounds).
+  // Trees, buildings and pylons occlude the horizon and are dark where they meet it (a thin
+  // mast: its one or two pixels in the ring of texture candidates around them, 0.2 of the
+  // contact in the test); a cloud bank reaching the horizon is seen there through tens of
+  // kilometres of haze, and only its texture makes it a candidate: none of its contact is
+  // dark (bench/results/sky_segmentation.md, "Cloud banks on the horizon").
+  double ground_dark_share = 0.1;
   double sun_exclusion_deg = 6.0;      // no candidates within this angle of the sun (glare, DWAB ringing), [0, 45]
   bool grabcut = true;                 // refine with cv::grabCut
   int grabcut_iterations = 3;          // [1, 20]
