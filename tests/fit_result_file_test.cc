@@ -115,6 +115,7 @@ FitResultFile FullFile() {
   c.sky_kind = "partly cloudy";
   c.sky_kind_reason = "cloud edges: texture 0.051 >= cloudy_texture 0.01";
   c.sky_share = 0.9 / 7.0;
+  c.zenith_sky_share = 0.95 / 7.0;
   c.zenith_blue = 0.55;
   c.texture = 0.051;
   c.point_sources = 2.2e-4;

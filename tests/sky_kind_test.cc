@@ -28,6 +28,7 @@ constexpr double kCalibrateDiscContrast = 300.0;
 capture::SkyFeatures ClearDay() {
   capture::SkyFeatures f;
   f.sky_share = 0.9;
+  f.zenith_sky_share = 1.0;
   f.zenith_blue = 1.2;
   f.cloud_share = 0.05;
   f.texture = 0.002;
@@ -44,6 +45,12 @@ TEST(SkyKind, EachRuleDecidesAtItsThreshold) {
   EXPECT_EQ(kind(f), capture::SkyKind::kClear);
   f.sky_share = 0.249;
   EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
+  f = ClearDay();
+  f.zenith_sky_share = 0.499;  // enough sky around, but a roof overhead
+  EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
+  EXPECT_NE(capture::ClassifySky(f, o).reason.find("min_zenith_sky_share 0.5"), std::string::npos);
+  f.zenith_sky_share = 0.5;
+  EXPECT_EQ(kind(f), capture::SkyKind::kClear);
   f = ClearDay();
   f.zenith_blue = -0.21;  // redder than any sky overhead: a lamp-lit ceiling
   EXPECT_EQ(kind(f), capture::SkyKind::kNotSky);
@@ -127,6 +134,7 @@ TEST(SkyKind, StatisticsOfConstructedFrames) {
   const std::vector<float> all(static_cast<size_t>(256) * 128, 1.0f);
   const auto f = capture::MeasureSkyFeatures(sky, all, {}, 30.0);
   EXPECT_NEAR(f.sky_share, 1.0, 1e-12);
+  EXPECT_NEAR(f.zenith_sky_share, 1.0, 1e-12);
   EXPECT_GT(f.zenith_blue, 0.5);
   EXPECT_LT(f.texture, 0.005);
   EXPECT_EQ(f.point_sources, 0.0);
@@ -173,6 +181,15 @@ TEST(SkyKind, StatisticsOfConstructedFrames) {
   std::vector<float> little(all.size(), 0.0f);
   for (size_t i = 0; i < little.size() / 20; ++i) little[i] = 1.0f;  // the top rows only
   EXPECT_LT(capture::MeasureSkyFeatures(sky, little, {}, 30.0).sky_share, 0.25);
+  // A roof over the zenith, open sky below 45 degrees (rows 32-63 of 128 are 0.7-45 deg up):
+  // about 0.7 of the upper hemisphere's solid angle is sky (sin 45 deg), none of the cap.
+  std::vector<float> roofed(all.size(), 0.0f);
+  for (int y = 32; y < 64; ++y)
+    for (int x = 0; x < 256; ++x) roofed[static_cast<size_t>(y) * 256 + x] = 1.0f;
+  const auto r = capture::MeasureSkyFeatures(sky, roofed, {}, 30.0);
+  EXPECT_NEAR(r.zenith_sky_share, 0.0, 1e-12);
+  EXPECT_GT(r.sky_share, 0.25);
+  EXPECT_EQ(capture::ClassifySky(r, {}).kind, capture::SkyKind::kNotSky);
   EXPECT_THROW(capture::MeasureSkyFeatures(sky, std::vector<float>(10, 1.0f), {}, 30.0), Error);
 }
 

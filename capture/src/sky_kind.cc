@@ -126,6 +126,7 @@ const char* ToString(SkyKind kind) {
 
 bool SkyKindOptions::IsValid(std::string* why) const {
   return Range(why, "min_sky_share", min_sky_share, 0.0, 1.0, true) &&
+         Range(why, "min_zenith_sky_share", min_zenith_sky_share, 0.0, 1.0, true) &&
          Range(why, "lamp_blue", lamp_blue, -3.0, 0.0) &&
          Range(why, "night_sun_deg", night_sun_deg, -30.0, 0.0) &&
          Range(why, "twilight_sun_deg", twilight_sun_deg, -10.0, 5.0) &&
@@ -151,7 +152,7 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
   cv::Mat valid;
   const cv::Mat ln = UpperLogLuminance(f, rows, &valid);
   const cv::Mat rms = TextureVariance(ln);
-  double sky_w = 0.0, all_w = 0.0, cloud = 0.0, cloud_w = 0.0;
+  double sky_w = 0.0, all_w = 0.0, cloud = 0.0, cloud_w = 0.0, cap_sky_w = 0.0, cap_w = 0.0;
   std::vector<double> blue, texture, lum;
   for (int y = 0; y < rows; ++y) {
     const double el_deg = latlong::Latitude(y, f.height) * 180.0 / kPi;
@@ -159,8 +160,10 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
       const size_t i = static_cast<size_t>(y) * f.width + x;
       const double w = latlong::PixelSolidAngle(x, y, f.width, f.height);
       all_w += w;
+      cap_w += el_deg >= kZenithCapDeg ? w : 0.0;
       if (!(sky[i] >= 0.5f)) continue;
       sky_w += w;
+      cap_sky_w += el_deg >= kZenithCapDeg ? w : 0.0;
       if (!valid.at<uint8_t>(y, x)) continue;
       const float r = f.at(x, y, 0), b = f.at(x, y, 2);
       if (el_deg >= kZenithCapDeg && r > kTiny && b > kTiny) blue.push_back(std::log(b / r));
@@ -175,6 +178,7 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
   SkyFeatures out;
   out.point_sources = PointSourceShare(ln, valid, sky, f.height);
   out.sky_share = all_w > 0.0 ? sky_w / all_w : 0.0;
+  out.zenith_sky_share = cap_w > 0.0 ? cap_sky_w / cap_w : 0.0;
   out.zenith_blue = Median(std::move(blue));
   out.texture_q75 = Quantile(texture, 0.75);
   out.texture = Median(std::move(texture));
@@ -196,6 +200,9 @@ SkyKindDecision ClassifySky(const SkyFeatures& s, const SkyKindOptions& o) {
   if (!(s.sky_share >= o.min_sky_share))
     return {SkyKind::kNotSky, "sky share " + F(s.sky_share) + " of the upper hemisphere < min_sky_share " +
                                   F(o.min_sky_share) + " (a canopy, an interior, or a street)"};
+  if (!(s.zenith_sky_share >= o.min_zenith_sky_share))
+    return {SkyKind::kNotSky, "the zenith is covered: sky share " + F(s.zenith_sky_share) + " above 45 deg < " +
+                                  "min_zenith_sky_share " + F(o.min_zenith_sky_share) + " (a roof or a canopy overhead)"};
   if (std::isfinite(s.zenith_blue) && s.zenith_blue < o.lamp_blue)
     return {SkyKind::kNotSky, "the 'sky' overhead is redder than any sky: zenith ln(B/R) " + F(s.zenith_blue) +
                                   " < lamp_blue " + F(o.lamp_blue) + " (a ceiling under lamps: an interior)"};

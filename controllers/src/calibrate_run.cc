@@ -119,6 +119,7 @@ fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, con
   r.sky_kind = capture::ToString(a.kind.kind);
   r.sky_kind_reason = a.kind.reason;
   r.sky_share = a.features.sky_share;
+  r.zenith_sky_share = a.features.zenith_sky_share;
   r.zenith_blue = a.features.zenith_blue;
   r.texture = a.features.texture;
   r.point_sources = a.features.point_sources;

@@ -176,6 +176,7 @@ nlohmann::json ToJson(const FitCalibration& c) {
                       {"sky_kind", c.sky_kind},
                       {"sky_kind_reason", c.sky_kind_reason},
                       {"sky_share", c.sky_share},
+                      {"zenith_sky_share", c.zenith_sky_share},
                       {"zenith_blue", c.zenith_blue},
                       {"texture", c.texture},
                       {"point_sources", c.point_sources},
@@ -336,6 +337,7 @@ void Read(const At& a, FitCalibration* x) {
   Required(a, "sky_kind", &x->sky_kind);
   Optional(a, "sky_kind_reason", &x->sky_kind_reason);
   Optional(a, "sky_share", &x->sky_share);
+  Optional(a, "zenith_sky_share", &x->zenith_sky_share);
   Optional(a, "zenith_blue", &x->zenith_blue);
   Optional(a, "texture", &x->texture);
   Optional(a, "point_sources", &x->point_sources);

@@ -6,7 +6,8 @@
 //
 // The statistics, and the physics that separates the kinds:
 //  - sky share: the sky pixels above the horizon over all pixels above it. Under a canopy
-//    or indoors little of the upper hemisphere is sky.
+//    or indoors little of the upper hemisphere is sky. The same above 45 degrees: buildings
+//    and trees around an open place stand low, a roof or a canopy covers the zenith.
 //  - zenith blueness, the median ln(B/R) of the sky above 45 degrees: Rayleigh scattering
 //    makes a clear day sky blue (ln B/R well above 0); cloud decks are grey (near 0); the
 //    light-polluted night sky is orange-grey, lit by sodium lamps from below; a ceiling lit
@@ -35,6 +36,7 @@ const char* ToString(SkyKind kind);  // "clear", "partly cloudy", "overcast", "t
 
 struct SkyFeatures {
   double sky_share = 0.0;          // sky pixels / pixels above the horizon, by solid angle
+  double zenith_sky_share = 0.0;   // the same above 45 degrees elevation
   double zenith_blue = 0.0;        // median ln(B/R) over sky pixels above 45 degrees elevation (natural log)
   double cloud_share = 0.0;        // mean cloud probability over sky pixels; NaN when not measured
   double texture = 0.0;            // median local RMS of ln Y about its Gaussian blur over sky pixels (natural log)
@@ -49,6 +51,10 @@ struct SkyFeatures {
 
 struct SkyKindOptions {
   double min_sky_share = 0.25;       // below: not a sky, (0, 1)
+  // Below: not a sky, the zenith covered (a roof, a canopy), (0, 1]. Open skies, bundled
+  // and held out, are at least 0.87 (a city's towers); a carport roof 0.03
+  // (bench/results/calibrate.md).
+  double min_zenith_sky_share = 0.5;
   double lamp_blue = -0.2;           // zenith ln(B/R) below: not a sky (a lamp-lit ceiling), [-3, 0]
   double night_sun_deg = -18.0;      // sun at or below: night (astronomical twilight's end), [-30, 0]
   double twilight_sun_deg = 0.0;     // sun below (and above night_sun_deg): twilight, [-10, 5]

@@ -79,7 +79,7 @@ struct FitReferenceEntry {
 struct FitCalibration {
   std::string photo;                       // the photograph as given
   std::string sky_kind, sky_kind_reason;   // capture::SkyKind and the statistic that decided it
-  double sky_share = 0.0, zenith_blue = 0.0, texture = 0.0, point_sources = 0.0;
+  double sky_share = 0.0, zenith_sky_share = 0.0, zenith_blue = 0.0, texture = 0.0, point_sources = 0.0;
   std::optional<double> cloud_share;       // absent when not measured
   std::string sun_source;                  // "option", "attribute", "disc", "time and place", "sky"
   std::optional<double> sun_uncertainty_deg;  // "sky" (and the azimuth of "time and place")
