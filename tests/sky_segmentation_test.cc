@@ -35,6 +35,21 @@ ImageRGB ClearSky(const std::array<double, 3>& sun) {
   return render::CreateRenderer(render::Backend::kCpu)->Render(p, req);
 }
 
+// The first row at or below elevation 0.
+int HorizonRow(int h) {
+  int row = 0;
+  while (latlong::Latitude(row, h) > 0.0) ++row;
+  return row;
+}
+
+// Pixels of the box [x0, x1) x [y0, y1) that the mask calls not sky.
+long long NonSkyIn(const capture::SkyMask& m, int x0, int x1, int y0, int y1) {
+  long long n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) n += m.sky[static_cast<size_t>(y) * m.width + x] < 0.5f;
+  return n;
+}
+
 void Paint(ImageRGB* img, int x0, int x1, int y0, int y1, float scale, bool texture) {
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x)
@@ -45,8 +60,7 @@ TEST(SkySegmentation, FindsTheBuildingAndKeepsTheFloatingCloud) {
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
   ImageRGB img = ClearSky(sun);
   const int h = img.height;
-  int horizon = 0;  // first row at or below elevation 0
-  while (latlong::Latitude(horizon, h) > 0.0) ++horizon;
+  const int horizon = HorizonRow(h);
   // A building 20 px wide from the horizon up ~17 deg (12 rows), 10x darker than the sky,
   // with window texture; a dark cloud blob 4x darker floating at ~45 deg, away from both.
   Paint(&img, 150, 170, horizon - 12, horizon, 0.1f, true);
@@ -82,8 +96,7 @@ TEST(SkySegmentation, ADarkCloudMassOnACumulusBankFloats) {
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
   ImageRGB img = ClearSky(sun);
   const int h = img.height;
-  int horizon = 0;
-  while (latlong::Latitude(horizon, h) > 0.0) ++horizon;
+  const int horizon = HorizonRow(h);
   const double deg = 180.0 / M_PI;
   int base = horizon - 1;  // the lowest row at or above 2.3 deg
   while (latlong::Latitude(base, h) * deg < 2.3) --base;
@@ -91,14 +104,7 @@ TEST(SkySegmentation, ADarkCloudMassOnACumulusBankFloats) {
   Paint(&img, 40, 90, 30, base - 3, 0.25f, false);       // the mass above it, to ~40 deg
   Paint(&img, 150, 170, horizon - 12, horizon, 0.1f, true);  // a building, for the contrast
   const auto count = [&](const capture::SkyMask& m) {
-    long long cloud = 0, building = 0;
-    for (int y = 0; y < horizon; ++y)
-      for (int x = 0; x < img.width; ++x) {
-        const bool ns = m.sky[static_cast<size_t>(y) * img.width + x] < 0.5f;
-        if (x >= 20 && x < 120 && y >= 30 && y <= base) cloud += ns;
-        if (x >= 150 && x < 170 && y >= horizon - 12) building += ns;
-      }
-    return std::pair(cloud, building);
+    return std::pair(NonSkyIn(m, 20, 120, 30, base + 1), NonSkyIn(m, 150, 170, horizon - 12, horizon));
   };
   const auto [cloud, building] = count(capture::EstimateSkyMask(img, sun, {}));
   EXPECT_EQ(cloud, 0);
@@ -111,15 +117,14 @@ TEST(SkySegmentation, ADarkCloudMassOnACumulusBankFloats) {
 // A grey cumulus bank drawn down to the horizon (the game's clouds reach it through the
 // planet's curvature; so do a photo's over the sea or a plain) meets the ground band through
 // haze: textured there, but hardly darker than the sky (none of it by the 0.7 of a dark
-// candidate), so it floats;
-// a building of the same height is dark where it stands. The control: with any contact
-// grounding (ground_dark_share 0, the rule before) the bank is taken for ground.
+// candidate), so it floats; a building of the same height is dark where it stands. The
+// control: with any contact grounding (ground_dark_share 0, the rule before) the bank is
+// taken for ground.
 TEST(SkySegmentation, ACloudBankFadingIntoTheHorizonHazeFloats) {
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
   ImageRGB img = ClearSky(sun);
   const int h = img.height;
-  int horizon = 0;
-  while (latlong::Latitude(horizon, h) > 0.0) ++horizon;
+  const int horizon = HorizonRow(h);
   for (int y = horizon - 12; y < horizon; ++y) {
     // 0.3 of the sky 12 rows up (~17 deg), fading to 0.9 in the lowest row (0.7 deg), a third
     // of its pixels 0.7 of that (texture: ln(0.9 x 0.7) = -0.46 in the lowest row).
@@ -129,14 +134,7 @@ TEST(SkySegmentation, ACloudBankFadingIntoTheHorizonHazeFloats) {
   }
   Paint(&img, 150, 170, horizon - 12, horizon, 0.1f, true);  // the building
   const auto count = [&](const capture::SkyMask& m) {
-    long long cloud = 0, building = 0;
-    for (int y = horizon - 12; y < horizon; ++y)
-      for (int x = 0; x < img.width; ++x) {
-        const bool ns = m.sky[static_cast<size_t>(y) * img.width + x] < 0.5f;
-        if (x >= 20 && x < 120) cloud += ns;
-        if (x >= 150 && x < 170) building += ns;
-      }
-    return std::pair(cloud, building);
+    return std::pair(NonSkyIn(m, 20, 120, horizon - 12, horizon), NonSkyIn(m, 150, 170, horizon - 12, horizon));
   };
   const auto [cloud, building] = count(capture::EstimateSkyMask(img, sun, {}));
   EXPECT_EQ(cloud, 0);  // of 1200 px
@@ -153,8 +151,7 @@ TEST(SkySegmentation, ACloudBankFadingIntoTheHorizonHazeFloats) {
 TEST(SkySegmentation, ThinStructuresAndABrightFacade) {
   const auto sun = latlong::DirectionFromElevationAzimuthDeg(30.0, 0.0);
   ImageRGB img = ClearSky(sun);
-  int horizon = 0;
-  while (latlong::Latitude(horizon, img.height) > 0.0) ++horizon;
+  const int horizon = HorizonRow(img.height);
   std::vector<uint8_t> truth(img.pixels.size() / 3, 0);  // 1: a thin structure, 2: the façade
   auto dark = [&](int x, int y, uint8_t label) {
     for (int c = 0; c < 3; ++c) img.at(x, y, c) *= 0.15f;
