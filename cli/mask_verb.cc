@@ -35,6 +35,7 @@ bool MaskOptions::IsValid(std::string* why) const {
                                      {"SkyMaskOptions::darkness_threshold", "--darkness"},
                                      {"SkyMaskOptions::texture_threshold", "--texture"},
                                      {"SkyMaskOptions::ground_band_deg", "--ground-band-deg"},
+                                     {"SkyMaskOptions::ground_dark_share", "--ground-dark-share"},
                                      {"SkyMaskOptions::dilate_px", "--dilate"}};
   *why = FieldsAsFlags(*why, kFlags);
   return false;
@@ -89,6 +90,9 @@ MaskOptions ParseMaskArgs(int argc, char** argv) {
             "local RMS of log luminance that marks texture (foliage, lattice; default 0.06)");
   cl.Number("--ground-band-deg", &s.ground_band_deg, "DEG",
             "candidates count only when connected to this band above the horizon (default 1)");
+  cl.Number("--ground-dark-share", &s.ground_dark_share, "F",
+            "... and when this share of their pixels in that band is dark (by --darkness): a cloud bank meeting the "
+            "horizon through haze is not ground (default 0.1, [0, 1]; 0: any contact)");
   cl.Integer("--dilate", &s.dilate_px, 0, 16, "expected an integer in [0, 16] pixels", "PX",
              "grow the non-sky class by this many pixels (default 1)");
   cl.Flag("--no-grabcut", &no_grabcut, "skip the cv::grabCut refinement (cues and ground connection only)");

@@ -257,6 +257,13 @@ TEST(SkySegmentation, MaskVerbRefusesBadInputAndWritesNothing) {
   // The library names SkyMaskOptions::horizon_deg; the user typed --horizon-deg.
   EXPECT_NE(text.find("--horizon-deg 45 (expected [-10, 30] deg)"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(out));
+  const std::string cmd3 = std::string(SKYCAL_BINARY) + " mask --reference " + missing + " --out " + out +
+                           " --ground-dark-share 2 2>" + (dir / "err3.txt").string();
+  EXPECT_EQ(WEXITSTATUS(std::system(cmd3.c_str())), 1);
+  std::ifstream err3(dir / "err3.txt");
+  const std::string text3((std::istreambuf_iterator<char>(err3)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text3.find("--ground-dark-share 2 (expected [0, 1])"), std::string::npos) << text3;
+  EXPECT_FALSE(std::filesystem::exists(out));
   std::filesystem::remove_all(dir);
 }
 #endif
