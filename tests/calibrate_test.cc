@@ -415,6 +415,13 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   EXPECT_EQ(lit[0], "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)");
   EXPECT_TRUE(lit[1].starts_with("precipitation where"));
   EXPECT_EQ(lit[2], "cloud lighting refitted again with the precipitation (known shapes)");
+  // The clear sky near the horizon is said to be fitted between clouds, with the share of
+  // the sky below 20 deg that is cloud in the photo (at least the tenth that makes it said).
+  int horizon_cloud_percent = -1;
+  for (const fit::FitDecision& d : inv.decisions)
+    if (d.what == "the clear sky below 20 deg fitted between the photo's clouds") horizon_cloud_percent = std::stoi(d.why);
+  EXPECT_GE(horizon_cloud_percent, 10);
+  EXPECT_LE(horizon_cloud_percent, 100);
   {
     const ImageRGB weather = ReadExrRGB(s / "inverted/scattered/preset.weather.exr").image;
     double rain = 0.0;

@@ -156,6 +156,38 @@ void RunThePlan(const StagedDirectory& out, const CalibrateOptions& o, FitPlan* 
   }
 }
 
+// What the exported clear sky near the horizon is, when the photo's horizon is cloudy: its
+// clear pixels there are seen through the farther cloud layer (a low ray crosses kilometres
+// of it inside the draw distance), so the fitted clear sky there is darker than a cloudless
+// one would be (bench/results/weather_inversion.md, "The atmosphere behind the horizon's
+// clouds"). Said when at least a tenth of the sky below kHorizonBandDeg is cloud in the photo.
+std::optional<fit::FitDecision> HorizonSkyDecision(const PhotoAnalysis& a) {
+  constexpr double kHorizonBandDeg = 20.0;
+  const int w = a.frame.radiance.width, h = a.frame.radiance.height;
+  if (a.cloud_probability.size() != static_cast<size_t>(w) * h) return std::nullopt;
+  double sky = 0.0, cloud = 0.0;
+  for (int y = 0; y < h; ++y) {
+    const double el = latlong::Latitude(y, h) / kRadiansPerDegree;
+    if (el <= 0.0 || el > kHorizonBandDeg) continue;
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (a.mask.sky[i] < 0.5f) continue;
+      const double sa = latlong::PixelSolidAngle(x, y, w, h);
+      sky += sa;
+      cloud += a.cloud_probability[i] >= 0.5f ? sa : 0.0;
+    }
+  }
+  if (!(sky > 0.0) || cloud < 0.1 * sky) return std::nullopt;
+  fit::FitDecision d;
+  d.what = "the clear sky below " + FormatNumber(kHorizonBandDeg) + " deg fitted between the photo's clouds";
+  d.why = FormatNumber(std::round(100.0 * cloud / sky)) + "% of the sky there is cloud in the photo (cloud probability >= " +
+          "0.5); the clear pixels between those clouds are seen through the farther cloud layer, so the preset's clear "
+          "sky near the horizon is darker than a cloudless one: the game's image draws its clouds over it, the preset "
+          "used without them would show it";
+  d.saved_ms_basis = "not measured in this run";
+  return d;
+}
+
 // The inverted shapes lit: the lighting refitted on them, precipitation where the photo's clouds
 // are darker than that lighting draws them, and the lighting solved on from there, in one
 // known-shapes fit (calibrate_weather.h). A failed refit leaves the statistics fit's lighting
@@ -169,6 +201,10 @@ void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& vie
   plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, pass));
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
   if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing it found is kept
+  if (auto d = HorizonSkyDecision(a)) {
+    plan->decisions.push_back(*d);
+    Log(o, "  " + d->what + ": " + d->why);
+  }
   plan->decisions.push_back(rain.Decision());
   Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
   if (!rain.refined()) return;
