@@ -249,21 +249,20 @@ TEST(SkySegmentation, MaskVerbRefusesBadInputAndWritesNothing) {
   const int rc = std::system(cmd.c_str());
   EXPECT_EQ(WEXITSTATUS(rc), 1);
   EXPECT_FALSE(std::filesystem::exists(out));
-  const std::string cmd2 = std::string(SKYCAL_BINARY) + " mask --reference " + missing + " --out " + out +
-                           " --horizon-deg 45 2>" + (dir / "err2.txt").string();
-  EXPECT_EQ(WEXITSTATUS(std::system(cmd2.c_str())), 1);
-  std::ifstream err(dir / "err2.txt");
-  const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
-  // The library names SkyMaskOptions::horizon_deg; the user typed --horizon-deg.
-  EXPECT_NE(text.find("--horizon-deg 45 (expected [-10, 30] deg)"), std::string::npos) << text;
-  EXPECT_FALSE(std::filesystem::exists(out));
-  const std::string cmd3 = std::string(SKYCAL_BINARY) + " mask --reference " + missing + " --out " + out +
-                           " --ground-dark-share 2 2>" + (dir / "err3.txt").string();
-  EXPECT_EQ(WEXITSTATUS(std::system(cmd3.c_str())), 1);
-  std::ifstream err3(dir / "err3.txt");
-  const std::string text3((std::istreambuf_iterator<char>(err3)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text3.find("--ground-dark-share 2 (expected [0, 1])"), std::string::npos) << text3;
-  EXPECT_FALSE(std::filesystem::exists(out));
+  // Each out-of-range flag: exit 1, nothing written, the flag the user typed named with its
+  // range (the library names SkyMaskOptions' fields).
+  const auto refused = [&](const std::string& flag, const std::string& expected) {
+    const std::string err = (dir / "err_flag.txt").string();
+    const std::string c =
+        std::string(SKYCAL_BINARY) + " mask --reference " + missing + " --out " + out + " " + flag + " 2>" + err;
+    EXPECT_EQ(WEXITSTATUS(std::system(c.c_str())), 1) << flag;
+    std::ifstream in(err);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find(expected), std::string::npos) << text;
+    EXPECT_FALSE(std::filesystem::exists(out)) << flag;
+  };
+  refused("--horizon-deg 45", "--horizon-deg 45 (expected [-10, 30] deg)");
+  refused("--ground-dark-share 2", "--ground-dark-share 2 (expected [0, 1])");
   std::filesystem::remove_all(dir);
 }
 #endif
