@@ -104,10 +104,16 @@ cv::Mat SkyReference(const cv::Mat& L, double quantile, double window_deg, doubl
   return ref;
 }
 
+// A component with at least this many dark pixels on the ground band stands on the ground
+// whatever else it touches: a tree line merged with a wide cloud bank beside it (one
+// component after the closing or grabCut) keeps the trees, though the bank's hazy contact
+// outnumbers theirs. A cloud bank alone has none (bench/results/sky_segmentation.md).
+constexpr long long kGroundedDarkPixels = 8;
+
 // Keeps the components of `candidates` (8-connected, CV_8U 0/255) that stand on the ground:
 // they reach a row at or below `band_top_row`, and at least `min_dark_share` of their pixels
-// there are darker than the sky's reference by `dark_threshold` (log units). Returns the kept
-// mask and counts the dropped pixels.
+// there (or kGroundedDarkPixels) are darker than the sky's reference by `dark_threshold` (log
+// units). Returns the kept mask and counts the dropped pixels.
 cv::Mat KeepGroundConnected(const cv::Mat& candidates, int band_top_row, const cv::Mat& dark, double dark_threshold,
                             double min_dark_share, long long* dropped) {
   cv::Mat labels;
@@ -121,7 +127,8 @@ cv::Mat KeepGroundConnected(const cv::Mat& candidates, int band_top_row, const c
     }
   std::vector<char> grounded(n, 0);
   for (int l = 1; l < n; ++l)
-    grounded[l] = contact[l] > 0 && static_cast<double>(dark_contact[l]) >= min_dark_share * contact[l];
+    grounded[l] = contact[l] > 0 && (static_cast<double>(dark_contact[l]) >= min_dark_share * contact[l] ||
+                                     dark_contact[l] >= kGroundedDarkPixels);
   // The lat-long wraps: a component touching column 0 and one touching the last column on
   // the same row are one object.
   for (bool changed = true; changed;) {

@@ -43,7 +43,8 @@ struct SkyMaskOptions {
   // up, so a dark cloud mass over a cumulus bank is not grounded (4 deg grounded it).
   double ground_band_deg = 1.0;
   // ... and stand on it darkly: at least this share of a component's pixels in that band must
-  // be darker than the sky's reference by darkness_threshold, [0, 1] (0: any contact grounds).
+  // be darker than the sky's reference by darkness_threshold, [0, 1] (0: any contact grounds),
+  // or 8 of them (a tree line merged with a wide hazy bank beside it keeps the trees).
   // Trees, buildings and pylons occlude the horizon and are dark where they meet it (a thin
   // mast: its one or two pixels in the ring of texture candidates around them, 0.2 of the
   // contact in the test); a cloud bank reaching the horizon is seen there through tens of
