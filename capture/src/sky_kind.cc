@@ -155,18 +155,18 @@ SkyFeatures MeasureSkyFeatures(const ImageRGB& f, const std::vector<float>& sky,
   double sky_w = 0.0, all_w = 0.0, cloud = 0.0, cloud_w = 0.0, cap_sky_w = 0.0, cap_w = 0.0;
   std::vector<double> blue, texture, lum;
   for (int y = 0; y < rows; ++y) {
-    const double el_deg = latlong::Latitude(y, f.height) * 180.0 / kPi;
+    const bool cap = latlong::Latitude(y, f.height) * 180.0 / kPi >= kZenithCapDeg;
     for (int x = 0; x < f.width; ++x) {
       const size_t i = static_cast<size_t>(y) * f.width + x;
       const double w = latlong::PixelSolidAngle(x, y, f.width, f.height);
       all_w += w;
-      cap_w += el_deg >= kZenithCapDeg ? w : 0.0;
+      cap_w += cap ? w : 0.0;
       if (!(sky[i] >= 0.5f)) continue;
       sky_w += w;
-      cap_sky_w += el_deg >= kZenithCapDeg ? w : 0.0;
+      cap_sky_w += cap ? w : 0.0;
       if (!valid.at<uint8_t>(y, x)) continue;
       const float r = f.at(x, y, 0), b = f.at(x, y, 2);
-      if (el_deg >= kZenithCapDeg && r > kTiny && b > kTiny) blue.push_back(std::log(b / r));
+      if (cap && r > kTiny && b > kTiny) blue.push_back(std::log(b / r));
       texture.push_back(std::sqrt(std::max(0.0f, rms.at<float>(y, x))));
       lum.push_back(std::exp(ln.at<float>(y, x)));
       if (!cloud_probability.empty()) {

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <utility>
 
 #include "calibrate_day.h"
 #include "calibrate_figure.h"
@@ -42,6 +43,12 @@ double Since(std::chrono::steady_clock::time_point t0) {
 }
 
 void Log(const CalibrateOptions& o, const std::string& line) { CalibrateLog(o, line); }
+
+// A decision taken: into the plan (fit.json) and the progress log, "  what: why".
+void Decide(const CalibrateOptions& o, FitPlan* plan, fit::FitDecision d) {
+  Log(o, "  " + d.what + ": " + d.why);
+  plan->decisions.push_back(std::move(d));
+}
 
 std::string Round(double v, double unit = 0.001) { return FormatNumber(std::round(v / unit) * unit); }
 
@@ -198,15 +205,10 @@ void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& vie
   RainFromTheLight rain(a, view, plan->fit.fit.backend);
   RefitPass pass;
   pass.refine = &rain;
-  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, pass));
-  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+  Decide(o, plan, RefitCloudLighting(*plan, out, final_dir, pass));
   if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing it found is kept
-  if (auto d = HorizonSkyDecision(a)) {
-    plan->decisions.push_back(*d);
-    Log(o, "  " + d->what + ": " + d->why);
-  }
-  plan->decisions.push_back(rain.Decision());
-  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+  if (auto d = HorizonSkyDecision(a)) Decide(o, plan, std::move(*d));
+  Decide(o, plan, rain.Decision());
   if (!rain.refined()) return;
   fit::FitDecision d;
   d.what = "cloud lighting refitted again with the precipitation (known shapes)";
@@ -215,8 +217,7 @@ void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& vie
           " iteration(s), no holds released; the sky and the cloud pixels kept (the precipitation moves neither); "
           "the refit's errors above are the final map's";
   d.saved_ms_basis = "not measured in this run";
-  plan->decisions.push_back(d);
-  Log(o, "  " + d.what + ": " + d.why);
+  Decide(o, plan, std::move(d));
 }
 
 // Partly cloudy: the weather map inverted from the photo (or the user's, held), then the cloud
@@ -239,14 +240,12 @@ void PlaceTheClouds(const PhotoAnalysis& a, const StagedDirectory& out, const st
     Log(o, "inverting the weather map: the clouds where the photo has them");
     PhotoWeatherView view;
     const WeatherInversionRecord w = InvertPhotoWeather(a, out, plan->fit.fit.backend, &view);
-    plan->decisions.push_back(w.Decision());
-    Log(o, "  " + w.Decision().what + ": " + w.Decision().why);
+    Decide(o, plan, w.Decision());
     if (w.done) LightTheRecoveredClouds(a, view, out, final_dir, o, plan);
     return;
   }
   Log(o, "refitting the cloud lighting on the user's shapes");
-  plan->decisions.push_back(RefitCloudLighting(*plan, out, final_dir, {}));
-  Log(o, "  " + plan->decisions.back().what + ": " + plan->decisions.back().why);
+  Decide(o, plan, RefitCloudLighting(*plan, out, final_dir, {}));
 }
 
 }  // namespace
