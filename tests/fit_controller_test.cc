@@ -19,8 +19,10 @@
 #include "skycal/core/error.h"
 #include "skycal/core/json_file.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
+#include "fit_cloud_mask.h"
 
 namespace skycal::controllers {
 namespace {
@@ -56,6 +58,11 @@ TEST(FitController, IsValidNamesTheFieldAndItsValue) {
   EXPECT_EQ(WhyInvalid(bad), "(valid)");
   bad.cloud_stats.width = 65;
   EXPECT_NE(WhyInvalid(bad).find("PhotoCloudStatsOptions::width = 65"), std::string::npos) << WhyInvalid(bad);
+  bad = o;
+  bad.clouds.sky_pixels_sun_boost = -0.1;
+  EXPECT_EQ(WhyInvalid(bad), "FitCloudOptions::sky_pixels_sun_boost = -0.1 (expected [0, 5], as capture::CloudMaskOptions::sun_boost)");
+  bad.clouds.sky_pixels_sun_boost = 0.0;
+  EXPECT_EQ(WhyInvalid(bad), "(valid)");
   bad = o;
   bad.fit.sun_cone_deg = 90.0;
   EXPECT_EQ(WhyInvalid(bad), "FitOptions::sun_cone_deg = 90 (expected degrees in [0, 45])");
@@ -197,6 +204,48 @@ TEST(FitController, TheMapRefinedAfterTheLightingSolveIsTheFits) {
   const double without = kept["clouds"]["cloud_pixels"]["final"]["log_rmse"].get<double>();
   EXPECT_GT(after_rain, without + 0.01) << "the report is on the rained map";
   EXPECT_LT(without, 0.05);  // the reference's own shapes and lighting
+  fs::remove_all(dir);
+}
+
+// The cloud mask's ramp options reach the estimate (FitCloudOptions::sky_pixels_sun_boost,
+// calibrate's refit): a clear sky with two equal whitish patches (ln R/B raised by 0.45, a
+// thin cloud), one 10 deg from the sun, one 90 deg away. The ramp's allowance for the haze
+// round the sun lets the near one pass for clear sky; without it both are cloud.
+TEST(FitCloudMask, TheRampsAllowanceByTheSunIsTheCallers) {
+  const fs::path dir = fs::temp_directory_path() / ("skycal-fit-cloud-mask-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string path = SmallReference(dir);  // sun 25 deg up, azimuth 30
+  capture::LatLongFrame f = capture::ReadLatLongFrame(path);
+  const latlong::Vec3d near = latlong::DirectionFromElevationAzimuthDeg(35.0, 30.0);
+  const latlong::Vec3d far = latlong::DirectionFromElevationAzimuthDeg(35.0, 120.0);
+  std::vector<size_t> near_px, far_px;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 128; ++x) {
+      const latlong::Vec3d d = latlong::PixelDirection(x, y, 128, 64);
+      const size_t i = static_cast<size_t>(y) * 128 + x;
+      if (d[0] * near[0] + d[1] * near[1] + d[2] * near[2] > std::cos(4.0 * kRadiansPerDegree)) near_px.push_back(i);
+      if (d[0] * far[0] + d[1] * far[1] + d[2] * far[2] > std::cos(4.0 * kRadiansPerDegree)) far_px.push_back(i);
+    }
+  ASSERT_GT(near_px.size(), 3u);
+  ASSERT_GT(far_px.size(), 3u);
+  for (const auto* px : {&near_px, &far_px})
+    for (size_t i : *px) f.radiance.pixels[3 * i] *= static_cast<float>(std::exp(0.45));
+  capture::WriteLatLongFrame(path, f);
+  const auto masked = [&](const capture::CloudMaskOptions& ramp, const std::vector<size_t>& px) {
+    fit::FitOptions fo;
+    fit::Reference r = fit::LoadReference(path, fo);
+    ApplyCloudMask(&r, DataPath("datasets/presets/default_clear.json"), ramp);
+    int n = 0;
+    for (size_t i : px) n += r.pixel_class[i] == fit::PixelClass::kUserMasked;
+    return n;
+  };
+  capture::CloudMaskOptions strict;
+  strict.sun_boost = 0.0;
+  EXPECT_EQ(masked({}, near_px), 0);                                   // the allowance: clear
+  EXPECT_EQ(masked(strict, near_px), static_cast<int>(near_px.size()));  // without it: cloud
+  EXPECT_EQ(masked({}, far_px), static_cast<int>(far_px.size()));       // control: cloud either way
+  EXPECT_EQ(masked(strict, far_px), static_cast<int>(far_px.size()));
   fs::remove_all(dir);
 }
 

@@ -5,6 +5,7 @@
 #include <memory>
 #include <utility>
 
+#include "skycal/capture/cloud_mask.h"
 #include "skycal/capture/cloud_opacity.h"
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/cloudfit/cloud_lighting_params.h"
@@ -348,7 +349,10 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations) {
   d.why = "extinction held (the inversion set the coverage for it: the two trade in opacity, and a refitted extinction "
           "would thin or thicken the shapes it placed); the clouds' sun scale fitted with the albedo held physical (one "
           "degree of freedom in the clouds' radiance); the atmosphere on the photo's clear pixels (cloud probability < "
-          "0.5; those clear through the shapes leave LUT columns unseen behind horizon cloud); at most " +
+          "0.5, the colour ramp's allowance for the haze round the sun " + FormatNumber(kRefitSkySunBoost) + ": its default " +
+          FormatNumber(capture::CloudMaskOptions{}.sun_boost) + " let a thin cloud by the sun pass for clear sky and "
+          "brightened the fitted aureole; those clear through the shapes leave LUT columns unseen behind horizon cloud); "
+          "at most " +
           std::to_string(iterations) +
           " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
           "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
@@ -385,6 +389,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     k.clouds.hold.push_back("extinction");
     k.clouds.max_iterations = pass.iterations;
     k.clouds.sky_pixels_from_photo = true;
+    k.clouds.sky_pixels_sun_boost = kRefitSkySunBoost;
     // The solve's values from the model at its samples: a frame's march per trial point cost
     // most of the refit, and the game's image is rendered from the result anyway.
     k.clouds.values_from_renderer = false;

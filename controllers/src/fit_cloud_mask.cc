@@ -13,17 +13,18 @@ namespace skycal::controllers {
 fit::FitCloudMaskEntry CloudMaskApplied::Entry() const { return {cloudy_pixels, fraction, 0.5, source}; }
 
 std::vector<float> EstimatedCloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun,
-                                             const std::string& clear_preset_path) {
+                                             const std::string& clear_preset_path, const capture::CloudMaskOptions& ramp) {
   render::RenderRequest req;
   req.sun_dir = sun;
   req.width = frame.width;
   req.height = frame.height;
   req.sun_disc = false;
   const ImageRGB clear = render::CreateRenderer(render::Backend::kCpu)->Render(render::LoadPreset(clear_preset_path), req);
-  return capture::EstimateCloudProbability(frame, clear, sun, {}).probability;
+  return capture::EstimateCloudProbability(frame, clear, sun, ramp).probability;
 }
 
-CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path) {
+CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path,
+                                const capture::CloudMaskOptions& ramp) {
   const int w = ref->radiance.width, h = ref->radiance.height;
   CloudMaskApplied out;
   std::vector<float> probability;
@@ -34,7 +35,7 @@ CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_pr
     if (cw != w || ch != h) throw Error(ref->path + ": channel 'mask.cloud' is not the frame's size");
     out.source = "mask.cloud channel";
   } else {
-    probability = EstimatedCloudProbability(ref->radiance, ref->sun_dir, clear_preset_path);
+    probability = EstimatedCloudProbability(ref->radiance, ref->sun_dir, clear_preset_path, ramp);
     out.source = "estimated: colour against the clear sky of " + clear_preset_path;
   }
   const long long sky_before = ref->counts.sky;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "skycal/capture/cloud_mask.h"
 #include "skycal/fit/fit_result_file.h"
 #include "skycal/fit/reference.h"
 
@@ -23,12 +24,16 @@ struct CloudMaskApplied {
 };
 
 // The cloud probability of a lat-long frame estimated against the clear sky of the preset
-// at `clear_preset_path` rendered at the frame's sun (CPU, no disc; capture/cloud_mask.h).
+// at `clear_preset_path` rendered at the frame's sun (CPU, no disc; capture/cloud_mask.h,
+// with `ramp`).
 std::vector<float> EstimatedCloudProbability(const ImageRGB& frame, const std::array<double, 3>& sun,
-                                             const std::string& clear_preset_path);
+                                             const std::string& clear_preset_path,
+                                             const capture::CloudMaskOptions& ramp = {});
 
-// Reclassifies `ref` in place. Throws skycal::Error naming the reference when no sky pixel is
-// left (an overcast frame: the model has no clear sky to fit there).
-CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path);
+// Reclassifies `ref` in place (an estimated probability with `ramp`). Throws skycal::Error
+// naming the reference when no sky pixel is left (an overcast frame: the model has no clear
+// sky to fit there).
+CloudMaskApplied ApplyCloudMask(fit::Reference* ref, const std::string& clear_preset_path,
+                                const capture::CloudMaskOptions& ramp = {});
 
 }  // namespace skycal::controllers

@@ -45,6 +45,11 @@ bool FitCloudOptions::IsValid(std::string* why) const {
     *why = e.what();
     return false;
   }
+  if (sky_pixels_sun_boost && !(*sky_pixels_sun_boost >= 0.0 && *sky_pixels_sun_boost <= 5.0)) {
+    *why = "FitCloudOptions::sky_pixels_sun_boost = " + FormatNumber(*sky_pixels_sun_boost) +
+           " (expected [0, 5], as capture::CloudMaskOptions::sun_boost)";
+    return false;
+  }
   if (time_s && (!std::isfinite(*time_s) || std::abs(*time_s) > 1.0e7)) {
     *why = "FitCloudOptions::time_s = " + FormatNumber(*time_s) + " (expected seconds, finite, within 1e7)";
     return false;
@@ -134,9 +139,12 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   if (d.march && o.sky_pixels_from_photo) {
     for (const fit::Reference& r : refs) {
       fit::Reference masked = r;
-      const CloudMaskApplied cm = ApplyCloudMask(&masked, DefaultClearPresetPath());
+      capture::CloudMaskOptions ramp;
+      if (o.sky_pixels_sun_boost) ramp.sun_boost = *o.sky_pixels_sun_boost;
+      const CloudMaskApplied cm = ApplyCloudMask(&masked, DefaultClearPresetPath(), ramp);
       if (fo.verbose) FitLog("clouds: the sky stage fits the photo's clear pixels (" + std::to_string(masked.counts.sky) +
-                             "; cloud probability < 0.5, " + cm.source + ")");
+                             "; cloud probability < 0.5, " + cm.source + ", the ramp's allowance by the sun " +
+                             FormatNumber(ramp.sun_boost) + ")");
       photo_clear.push_back(std::move(masked.pixel_class));
     }
   }

@@ -37,6 +37,13 @@ struct FitCloudOptions {
   // the horizon covers every pixel of some LUT columns, which the sky stage would then
   // extrapolate from their neighbours' bilinear tails.
   bool sky_pixels_from_photo = false;
+  // With sky_pixels_from_photo, the colour ramp's allowance for the haze round the sun in that
+  // cloud mask (capture::CloudMaskOptions::sun_boost, [0, 5]; unset: the ramp's own). The
+  // allowance keeps a clear sky whitened by the sun from being called cloud; the atmosphere
+  // wants pixels that are surely clear, and with the allowance a thin cloud by the sun passes
+  // for clear sky and brightens the fitted aureole (bench/results/weather_inversion.md, "The
+  // clear sky by the sun").
+  std::optional<double> sky_pixels_sun_boost;
   // The map refined after the lighting solve and solved on (CloudLightingOptions, not owned;
   // null: none): calibrate's precipitation read from the photo's light. The exported preset
   // carries the refined map.
