@@ -209,7 +209,7 @@ TEST(FitController, TheMapRefinedAfterTheLightingSolveIsTheFits) {
 
 // The cloud mask's ramp options reach the estimate (FitCloudOptions::sky_pixels_sun_boost,
 // calibrate's refit): a clear sky with two equal whitish patches (ln R/B raised by 0.45, a
-// thin cloud), one 10 deg from the sun, one 90 deg away. The ramp's allowance for the haze
+// thin cloud), one 10 deg above the sun, one 90 deg of azimuth away. The ramp's allowance for the haze
 // round the sun lets the near one pass for clear sky; without it both are cloud.
 TEST(FitCloudMask, TheRampsAllowanceByTheSunIsTheCallers) {
   const fs::path dir = fs::temp_directory_path() / ("skycal-fit-cloud-mask-" + std::to_string(::getpid()));

@@ -133,9 +133,9 @@ inline constexpr int kRefitAfterRainIterations = 1;
 // The refit's atmosphere is fitted on the photo's surely clear pixels: the colour ramp without
 // its allowance for the haze round the sun (FitCloudOptions::sky_pixels_sun_boost). With the
 // allowance a thin cloud by the sun passed for clear sky, and the fitted aureole came out too
-// bright by 0.2-0.3 in ln Y 6-24 deg from the sun on the bundled partly cloudy photo; leaving
-// the sun's surroundings out altogether lost the aureole's peak where the sky by the sun is
-// clear (bench/results/weather_inversion.md, "The clear sky by the sun").
+// bright on the bundled partly cloudy photo; leaving the sun's surroundings out altogether lost
+// the aureole's peak where the sky by the sun is clear (bench/results/weather_inversion.md,
+// "The clear sky by the sun").
 inline constexpr double kRefitSkySunBoost = 0.0;
 
 // Near the sun the photo's colour reads glare, and the silver lining of a cloud in front of the
