@@ -38,7 +38,8 @@ struct FitCloudOptions {
   // extrapolate from their neighbours' bilinear tails.
   bool sky_pixels_from_photo = false;
   // With sky_pixels_from_photo, the colour ramp's allowance for the haze round the sun in that
-  // cloud mask (capture::CloudMaskOptions::sun_boost, [0, 5]; unset: the ramp's own). The
+  // cloud mask (capture::CloudMaskOptions::sun_boost, [0, 5]; unset: the ramp's own; no effect
+  // on a frame that carries its own mask.cloud channel, which is used as it is). The
   // allowance keeps a clear sky whitened by the sun from being called cloud; the atmosphere
   // wants pixels that are surely clear, and with the allowance a thin cloud by the sun passes
   // for clear sky and brightens the fitted aureole (bench/results/weather_inversion.md, "The
