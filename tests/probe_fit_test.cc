@@ -259,6 +259,11 @@ TEST(ProbeFit, SampleFilesAreCheckedBeforeTheFit) {
       {[](auto& d) { d["samples"][1]["normal"] = {0.0, 2.0, 0.0}; }, "field 'samples[1].normal': expected a unit vector"},
       {[](auto& d) { d["samples"][1]["radiance_rgb"] = {1.0, 1.0, 1.0}; }, "did you mean 'radiance'?"},
       {[](auto& d) { d["albedo"] = 1e300; }, "1e+300"},
+      // Found by fuzz/probe_samples_fuzzer: a count as a huge float once overflowed the cast.
+      {[](auto& d) { d["samples"][2]["pixels"] = 3.7e62; }, "field 'samples[2].pixels': expected a positive integer"},
+      {[](auto& d) { d["samples"][2]["pixels"] = 4294967296LL; }, "field 'samples[2].pixels'"},
+      {[](auto& d) { d["samples"][2]["pixels"] = 2.5; }, "field 'samples[2].pixels'"},
+      {[](auto& d) { d["samples"][2]["pixels"] = 0; }, "field 'samples[2].pixels'"},
   };
   for (const Case& c : cases) {
     auto doc = ReadJsonFile(dir / "good.json");

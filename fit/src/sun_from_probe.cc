@@ -5,6 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
 
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
@@ -13,6 +16,23 @@
 #include "skycal/render/preset.h"  // SunTransmittance
 
 namespace skycal::fit {
+
+namespace {
+
+// A sample's pixel count (1 when absent): an integer in [1, 2^31). Checked before any
+// conversion: nlohmann's get<int> of 3.7e62, or of an integer beyond int, overflows (found
+// by fuzz/probe_samples_fuzzer).
+int SampleCount(const nlohmann::json& sample, const std::function<void()>& fail) {
+  const auto it = sample.find("pixels");
+  if (it == sample.end()) return 1;
+  const bool fits = it->is_number_unsigned()  ? it->get<std::uint64_t>() <= std::numeric_limits<int>::max()
+                    : it->is_number_integer() ? it->get<std::int64_t>() <= std::numeric_limits<int>::max()
+                                              : false;
+  if (!fits || it->get<std::int64_t>() < 1) fail();
+  return static_cast<int>(it->get<std::int64_t>());
+}
+
+}  // namespace
 
 ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& origin) {
   auto fail = [&](const std::string& what) -> void { throw Error(origin + ": " + what); };
@@ -37,7 +57,7 @@ ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& 
       capture::ProbeSample ps;
       ps.normal = s.at("normal").get<std::array<double, 3>>();
       ps.radiance = s.at("radiance").get<std::array<double, 3>>();
-      ps.pixels = s.value("pixels", 1);
+      ps.pixels = SampleCount(s, [&] { fail("field '" + field + ".pixels': expected a positive integer count below 2^31"); });
       const double n = std::sqrt(ps.normal[0] * ps.normal[0] + ps.normal[1] * ps.normal[1] + ps.normal[2] * ps.normal[2]);
       if (!(std::abs(n - 1.0) < 1e-3)) fail("field '" + field + ".normal': expected a unit vector, its length is " + FormatNumber(n));
       for (int c = 0; c < 3; ++c) {
