@@ -10,9 +10,9 @@ Prints (tests/, fuzz/ and build trees excluded):
   readme_lines                   README.md
   rec709_files                   source files holding the Rec.709 luminance weight 0.2126
   kpi_definitions                files defining a kPi constant
-  outside_refs                   references to files outside the repository (DESIGN.md,
-                                 seeds/, the folder beside the checkout) or to issue numbers in
-                                 sources
+  outside_refs                   relative paths that climb out of the repository (a user's
+                                 clone has nothing beside it) and issue numbers, in sources,
+                                 build files and scripts
 Usage: scripts/house_metrics.py [--list]   (--list prints the long functions)
 """
 import json, os, re, subprocess, sys
@@ -49,6 +49,22 @@ def long_functions(files):
     return sorted(found, reverse=True)
 
 
+# A relative path that starts with "../" (not one joined to a variable or a folder).
+CLIMB = re.compile(r'(?<![\w/$}.])(?:\.\./)+[A-Za-z0-9_][\w.-]*')
+ISSUE = re.compile(r'[Ii]ssue #?[0-9]+')
+
+
+def outside_refs(path, text):
+    """Climbs that leave the repository, resolved from the file's folder and, for scripts and
+    build files (run from the root), from the root too; and issue numbers."""
+    run_from_root = path.endswith(('.sh', '.py', '.cmake', 'CMakeLists.txt'))
+    bases = [os.path.dirname(path)] + ([ROOT] if run_from_root else [])
+
+    def leaves(ref):
+        return any(not os.path.realpath(os.path.join(b, ref)).startswith(ROOT + os.sep) for b in bases)
+    return sum(1 for m in CLIMB.finditer(text) if leaves(m.group(0))) + len(ISSUE.findall(text))
+
+
 def main():
     files = sorted(sources())
     cc = [f for f in files if f.endswith(('.cc', '.cpp', '.h', '.hpp'))]
@@ -66,9 +82,9 @@ def main():
     for f in set(other):
         if os.path.exists(f):
             text[f] = open(f, errors='replace').read()
-    # The sibling folder's name is assembled so that this file does not itself cite it.
-    sibling = re.escape('..' + '/' + 'shared')
-    outside = re.compile(r'DESIGN\.md|seeds/|' + sibling + r'|[Ii]ssue #?[0-9]+')
+    for f in os.listdir(os.path.join(ROOT, 'scripts')):
+        if f.endswith('.py'):
+            text[os.path.join(ROOT, 'scripts', f)] = open(os.path.join(ROOT, 'scripts', f), errors='replace').read()
     metrics = {
         'cli_lines': cli_lines,
         'cli_nonverb_lines': nonverb,
@@ -77,8 +93,7 @@ def main():
         'readme_lines': count_lines(os.path.join(ROOT, 'README.md')),
         'rec709_files': sum(1 for f in files if '0.2126' in text[f]),
         'kpi_definitions': sum(1 for f in files if re.search(r'\bkPi\s*=', text[f])),
-        'outside_refs': sum(len(outside.findall(t)) for f, t in text.items()
-                            if not f.endswith('house_metrics.py')),
+        'outside_refs': sum(outside_refs(f, t) for f, t in text.items()),
     }
     print(json.dumps(metrics, indent=2))
     if '--list' in sys.argv:
