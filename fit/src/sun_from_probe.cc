@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <limits>
+#include <optional>
 
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
@@ -19,17 +19,16 @@ namespace skycal::fit {
 
 namespace {
 
-// A sample's pixel count (1 when absent): an integer in [1, 2^31). Checked before any
-// conversion: nlohmann's get<int> of 3.7e62, or of an integer beyond int, overflows (found
-// by fuzz/probe_samples_fuzzer).
-int SampleCount(const nlohmann::json& sample, const std::function<void()>& fail) {
-  const auto it = sample.find("pixels");
-  if (it == sample.end()) return 1;
-  const bool fits = it->is_number_unsigned()  ? it->get<std::uint64_t>() <= std::numeric_limits<int>::max()
-                    : it->is_number_integer() ? it->get<std::int64_t>() <= std::numeric_limits<int>::max()
-                                              : false;
-  if (!fits || it->get<std::int64_t>() < 1) fail();
-  return static_cast<int>(it->get<std::int64_t>());
+// A sample's pixel count when `v` is an integer in [1, 2^31); nullopt otherwise. Checked
+// before the conversion: get<int> of 3.7e62 overflowed, and an integer beyond int wrapped
+// (found by fuzz/probe_samples_fuzzer).
+std::optional<int> PixelCount(const nlohmann::json& v) {
+  constexpr std::int64_t kMax = std::numeric_limits<int>::max();
+  if (!v.is_number_integer()) return std::nullopt;
+  if (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(kMax)) return std::nullopt;
+  const std::int64_t n = v.get<std::int64_t>();
+  if (n < 1 || n > kMax) return std::nullopt;
+  return static_cast<int>(n);
 }
 
 }  // namespace
@@ -57,7 +56,9 @@ ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& 
       capture::ProbeSample ps;
       ps.normal = s.at("normal").get<std::array<double, 3>>();
       ps.radiance = s.at("radiance").get<std::array<double, 3>>();
-      ps.pixels = SampleCount(s, [&] { fail("field '" + field + ".pixels': expected a positive integer count below 2^31"); });
+      const std::optional<int> pixels = s.contains("pixels") ? PixelCount(s["pixels"]) : 1;
+      if (!pixels) fail("field '" + field + ".pixels': expected a positive integer count below 2^31, got " + s["pixels"].dump());
+      ps.pixels = *pixels;
       const double n = std::sqrt(ps.normal[0] * ps.normal[0] + ps.normal[1] * ps.normal[1] + ps.normal[2] * ps.normal[2]);
       if (!(std::abs(n - 1.0) < 1e-3)) fail("field '" + field + ".normal': expected a unit vector, its length is " + FormatNumber(n));
       for (int c = 0; c < 3; ++c) {
@@ -67,7 +68,6 @@ ProbeSamples ProbeSamplesFromJson(const nlohmann::json& doc, const std::string& 
           fail("field '" + field + ".radiance': expected values in [0, 1e12) cd/m^2, got " + FormatNumber(ps.radiance[c]));
         }
       }
-      if (ps.pixels < 1) fail("field '" + field + ".pixels': expected a positive count");
       p.samples.push_back(ps);
     }
   } catch (const nlohmann::json::exception& e) {
