@@ -37,11 +37,7 @@ ImageRGB ClearSky(const std::array<double, 3>& sun) {
 }
 
 // The first row at or below elevation 0.
-int HorizonRow(int h) {
-  int row = 0;
-  while (latlong::Latitude(row, h) > 0.0) ++row;
-  return row;
-}
+int HorizonRow(int h) { return static_cast<int>(std::ceil(latlong::RowOfLatitude(0.0, h))); }
 
 // A grey cumulus bank over columns [20, 120) and the 12 rows above the horizon row: 0.3 of
 // the sky at its top (~17 deg), fading to 0.9 in the lowest row (0.7 deg), a third of its
