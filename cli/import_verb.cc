@@ -116,7 +116,7 @@ nlohmann::json RunImportImpl(const controllers::ImportOptions& o) {
 
 controllers::ImportOptions ParseImportArgs(int argc, char** argv) {
   VerbCommandLine cl("import", "skycal import: convert a published equirectangular HDR sky to a reference frame",
-                     "  skycal import --in SRC.exr --out FRAME.exr [--sun-dir X,Y,Z | --detect-sun]\n"
+                     "  skycal import --in SRC.exr|SRC.hdr --out FRAME.exr [--sun-dir X,Y,Z | --detect-sun]\n"
                      "                [--source-convention blender|exr|auto] [--half] [--json]",
                      "Pixels are resampled bilinearly (wrapping in longitude). Negative, NaN and Inf source pixels\n"
                      "(e.g. DWAB ringing) are counted in the summary and masked: the fit leaves values <= 0 out;\n"
@@ -124,7 +124,8 @@ controllers::ImportOptions ParseImportArgs(int argc, char** argv) {
   controllers::ImportOptions o;
   std::optional<std::string> sun_dir, convention;
   bool json = false;
-  cl.Text("--in", &o.in_path, "SRC.exr", "RGB(A) OpenEXR, half or float, any compression (DWAB included; required)");
+  cl.Text("--in", &o.in_path, "SRC.exr|SRC.hdr",
+          "RGB(A) OpenEXR, half or float, any compression (DWAB included), or a Radiance RGBE picture (.hdr; required)");
   cl.Text("--out", &o.out_path, "FRAME.exr",
           "output frame: the project's lat-long (OpenEXR envmap LatLong,\n"
           "+Y up, longitude 0 -> +Z, 90 deg -> +X), same size as the source (required)");

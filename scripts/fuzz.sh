@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
 harnesses=("$@")
-[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line weather_map camera_image)
+[ ${#harnesses[@]} -gt 0 ] || harnesses=(preset rig probe_samples json_file exr_frame command_line weather_map camera_image radiance_picture)
 
 bash scripts/setup.sh --deps-only
 # -gline-tables-only: crash stacks keep file and line at a fraction of -g's compile time.
@@ -41,7 +41,8 @@ options_for() {
     command_line)  echo "-max_len=4096 -rss_limit_mb=2048 -timeout=20" ;;
     weather_map)   echo "-max_len=65536 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/exr.dict" ;;
     camera_image)  echo "-max_len=65536 -rss_limit_mb=2048 -timeout=20" ;;
-    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame command_line weather_map camera_image)" >&2; return 1 ;;
+    radiance_picture) echo "-max_len=65536 -rss_limit_mb=2048 -timeout=20 -dict=fuzz/radiance.dict" ;;
+    *) echo "unknown harness '$1' (expected preset rig probe_samples json_file exr_frame command_line weather_map camera_image radiance_picture)" >&2; return 1 ;;
   esac
 }
 

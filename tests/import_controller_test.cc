@@ -3,6 +3,7 @@
 // given, and bad options are refused naming the field (and, through the verb, the flag).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -138,7 +139,7 @@ TEST(ImportController, IsValidNamesTheFieldAndTheVerbTheFlag) {
   controllers::ImportOptions o;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_EQ(why, "ImportOptions::in_path is not set (expected the source EXR)");
+  EXPECT_EQ(why, "ImportOptions::in_path is not set (expected the source picture: OpenEXR or Radiance .hdr)");
   o.in_path = "sky.exr";
   EXPECT_TRUE(o.IsValid(&why));  // an empty out_path: ImportPhoto writes nothing
   o.out_path = "frame.png";
@@ -188,6 +189,51 @@ TEST(ImportController, NoSunFoundIsAReasonInMemoryAndARefusalOnFile) {
     ADD_FAILURE() << "a detect_sun without a sun was written";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), o.in_path + ": ImportOptions::detect_sun: " + p.sun.refusal + "; nothing written");
+  }
+  EXPECT_EQ(dir.CountEntries(), 1);  // only the source
+}
+
+// A Radiance picture imports as its OpenEXR twin: tests/data/radiance holds one float image
+// written by OpenCV as .hdr and as .exr (neither carries envmap, so both are read in Blender's
+// convention). The frames agree within RGBE's precision (half a mantissa step of the pixel's
+// largest channel); the frame says where it came from; a truncated picture is refused by name
+// and leaves nothing.
+TEST(ImportController, ARadiancePictureImportsAsItsExrTwin) {
+  const std::string data = std::string(SKYCAL_SOURCE_DIR) + "/tests/data/radiance/";
+  controllers::ImportOptions o;
+  o.in_path = data + "opencv_64x32.hdr";
+  const controllers::ImportedPhoto hdr = controllers::ImportPhoto(o);
+  o.in_path = data + "opencv_64x32.exr";
+  const controllers::ImportedPhoto exr = controllers::ImportPhoto(o);
+  EXPECT_EQ(hdr.convention, capture::SourceConvention::kBlender);
+  ASSERT_EQ(hdr.frame.radiance.pixels.size(), exr.frame.radiance.pixels.size());
+  // The conversion to the project's layout interpolates between neighbours: the bound is the
+  // largest channel over the pixel's 3 x 3 neighbourhood.
+  const ImageRGB& e = exr.frame.radiance;
+  long long outside = 0;
+  for (int y = 0; y < e.height; ++y)
+    for (int x = 0; x < e.width; ++x) {
+      float m = 0.0f;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          for (int c = 0; c < 3; ++c)
+            m = std::max(m, e.at((x + dx + e.width) % e.width, std::clamp(y + dy, 0, e.height - 1), c));
+      for (int c = 0; c < 3; ++c) outside += !(std::abs(hdr.frame.radiance.at(x, y, c) - e.at(x, y, c)) <= m / 256.0f + 1e-30f);
+    }
+  EXPECT_EQ(outside, 0);
+  EXPECT_EQ(hdr.frame.extra.strings.at("skycalSourceFormat"), "Radiance RGBE (-Y 32 +X 64, EXPOSURE 1 divided out)");
+  EXPECT_EQ(exr.frame.extra.strings.at("skycalSourceFormat"), "OpenEXR");
+  testing::ScratchDir dir("import-ctl-radiance");
+  std::filesystem::copy_file(data + "opencv_64x32.hdr", dir / "cut.hdr");
+  std::filesystem::resize_file(dir / "cut.hdr", 1000);
+  o.in_path = dir / "cut.hdr";
+  o.out_path = dir / "frame.exr";
+  try {
+    controllers::ImportToFile(o);
+    ADD_FAILURE() << "a truncated picture was imported";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(dir / "cut.hdr"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
   }
   EXPECT_EQ(dir.CountEntries(), 1);  // only the source
 }

@@ -11,6 +11,7 @@
 #include "skycal/core/finite_pixels.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/radiance_io.h"
 #include "skycal/core/sha256.h"
 #include "skycal/skysun/find_sun.h"
 
@@ -107,6 +108,23 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
   p->frame.sun_direction = p->sun.direction;
 }
 
+// The source picture: a Radiance picture (.hdr: no attributes, so the Blender convention that
+// HDR publishers write), else an OpenEXR file.
+ExrRGB ReadSource(const std::string& path, std::vector<std::string>* warnings, std::string* format) {
+  if (!IsRadiancePicture(path)) {
+    *format = "OpenEXR";
+    return ReadExrRGB(path);
+  }
+  RadiancePicture pic = ReadRadiancePicture(path);
+  *format = "Radiance RGBE (" + pic.header.resolution + ", EXPOSURE " + FormatNumber(pic.header.exposure) +
+            " divided out)";
+  warnings->insert(warnings->end(), pic.warnings.begin(), pic.warnings.end());
+  ExrRGB src;
+  src.image = std::move(pic.image);
+  src.channels = {"R", "G", "B"};
+  return src;
+}
+
 }  // namespace
 
 const char* ToString(SunSource s) {
@@ -123,7 +141,7 @@ const char* ToString(SunSource s) {
 const char* RecordedName(SunSource s) { return s == SunSource::kDisc ? "detected" : ToString(s); }
 
 bool ImportOptions::IsValid(std::string* why) const {
-  if (in_path.empty()) return Fail(why, "ImportOptions::in_path is not set (expected the source EXR)");
+  if (in_path.empty()) return Fail(why, "ImportOptions::in_path is not set (expected the source picture: OpenEXR or Radiance .hdr)");
   if (!out_path.empty() && !EndsWith(out_path, ".exr"))
     return Fail(why, "ImportOptions::out_path = " + out_path + " (expected a path ending in .exr)");
   if (sun_dir && detect_sun)
@@ -142,9 +160,10 @@ bool ImportOptions::IsValid(std::string* why) const {
 ImportedPhoto ImportPhoto(const ImportOptions& o) {
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
-  ExrRGB src = ReadExrRGB(o.in_path);
-  RequireValidShare(o.in_path, src.image);
   ImportedPhoto p;
+  std::string format;
+  ExrRGB src = ReadSource(o.in_path, &p.warnings, &format);
+  RequireValidShare(o.in_path, src.image);
   p.source_sha256 = Sha256OfFile(o.in_path);
   p.source_file = std::filesystem::path(o.in_path).filename().string();
   p.source_channels = src.channels;
@@ -173,6 +192,7 @@ ImportedPhoto ImportPhoto(const ImportOptions& o) {
   capture::AddTimePlaceAttributes(p.time_place, &p.frame.extra);
   p.frame.extra.strings["skycalSource"] = p.source_file + " sha256:" + p.source_sha256;
   p.frame.extra.strings["skycalSourceConvention"] = capture::ToString(p.convention);
+  p.frame.extra.strings["skycalSourceFormat"] = format;
   p.frame.extra.strings["skycalSunSource"] = RecordedName(p.sun.source);
   p.frame.extra.strings["skycalUnits"] = "relative scene-linear Rec.709 (source not calibrated: exposure unknown)";
   p.zeroed = MaskNonFinite(&p.frame.radiance, false).non_finite;

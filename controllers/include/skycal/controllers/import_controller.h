@@ -16,7 +16,7 @@
 namespace skycal::controllers {
 
 struct ImportOptions {
-  std::string in_path;   // source EXR (RGB(A), half or float, any compression); required
+  std::string in_path;   // source picture: OpenEXR (RGB(A), half or float, any compression) or Radiance RGBE (.hdr); required
   std::string out_path;  // ImportToFile's output, ending in .exr; ImportPhoto ignores it (may be empty)
   std::optional<std::array<double, 3>> sun_dir;  // the sun given, in the project frame; normalised
   bool detect_sun = false;         // skysun::FindSun on the converted frame (disc, else sky pattern)
