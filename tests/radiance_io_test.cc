@@ -183,6 +183,7 @@ TEST(RadiancePicture, BadPicturesAreRefusedNamingTheFileAndField) {
   ExpectRefused(WithHeader("FORMAT=32-bit_rle_xyze\n", "-Y 1 +X 4", pixel4), "FORMAT=32-bit_rle_xyze");
   ExpectRefused(WithHeader("EXPOSURE=0\n", "-Y 1 +X 4", pixel4), "EXPOSURE=0");
   ExpectRefused(WithHeader("COLORCORR=1 1\n", "-Y 1 +X 4", pixel4), "COLORCORR=1 1");
+  ExpectRefused(WithHeader("EXPOSURE=1e-200\nEXPOSURE=1e-200\n", "-Y 1 +X 4", pixel4), "product of the EXPOSURE");
   ExpectRefused(WithHeader("EXPOSURE=1e-300\n", "-Y 1 +X 4", {255, 1, 1, 255, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}),
                 "scanline 0: pixel 0 is");
   ExpectRefused(WithHeader("", "+X 4 -Y 1", pixel4), "resolution string '+X 4 -Y 1'");

@@ -62,6 +62,11 @@ void ReadHeaderLine(const std::string& line, const std::string& name, RadianceHe
   } else if (line.rfind("PRIMARIES=", 0) == 0) {
     h->primaries = line.substr(10);
   }
+  // The lines multiply: their product must stay a usable divisor too.
+  for (double m : {h->exposure, h->colour_correction[0], h->colour_correction[1], h->colour_correction[2]})
+    if (!std::isnormal(m))
+      throw Error(name + ": header line '" + line + "' makes the product of the EXPOSURE or COLORCORR lines " +
+                  FormatNumber(m) + " (expected a positive normal number)");
 }
 
 // The resolution string: "-Y H +X W" (top row first) or "+Y H +X W" (bottom row first).

@@ -1,8 +1,11 @@
 // Radiance pictures (.hdr, .pic): the RGBE format many HDR skies are published in beside
 // OpenEXR (Poly Haven offers both). Format: Greg Ward, "Real Pixels", Graphics Gems II
 // (1991), and the Radiance reference's "Radiance file formats" (the header lines, the
-// resolution string, and the scanline encodings: flat, the original run-length scheme, and
-// the adaptive run-length scheme of four separate component runs per scanline).
+// resolution string, and the scanlines: flat, or the adaptive run-length scheme of four
+// separate component runs per scanline that Radiance's own writer uses for widths 8 to
+// 32767). The original scheme's repeat pixels (1, 1, 1, n), which that writer stopped
+// producing when the adaptive scheme replaced it, are read as the pixels they are, as
+// Walter's rgbe.c and stb_image read them.
 //
 // Why a reader of the project's own and not a library's: OpenCV's imgcodecs reads RGBE but
 // linking it costs every skycal process its start-up (about 0.13 s on these machines: 141
@@ -48,7 +51,8 @@ bool IsRadiancePicture(const std::string& path);
 // Reads the picture. Throws skycal::Error naming the file and what is wrong: not a Radiance
 // picture, a header over 64 KiB or without its blank line, FORMAT other than
 // 32-bit_rle_rgbe (32-bit_rle_xyze pictures are not read), an EXPOSURE or COLORCORR that is
-// not a positive number, a resolution string other than "-Y H +X W" or "+Y H +X W" (the
+// not a positive number (or whose lines multiply to no positive normal number, or divide a
+// pixel beyond a float), a resolution string other than "-Y H +X W" or "+Y H +X W" (the
 // rotated and mirrored layouts are refused), a size over core/image.h's limit or more
 // pixels than the file's bytes can encode (checked before anything is allocated), and a
 // scanline that is truncated or whose runs overrun it.
