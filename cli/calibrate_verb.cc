@@ -69,7 +69,7 @@ nlohmann::json RunCalibrateImpl(const controllers::CalibrateOptions& o) {
 controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   VerbCommandLine cl("calibrate",
                      "skycal calibrate: photographs of the sky in, calibrated presets, game tables and a report out",
-                     "  skycal calibrate --photo P.exr|P.hdr [--photo ...] --out DIR [--time ISO8601 --lat DEG --lon DEG [--north DEG]]\n"
+                     "  skycal calibrate --photo P.exr|P.hdr|FOLDER [--photo ...] --out DIR [--time ISO8601 --lat DEG --lon DEG [--north DEG]]\n"
                      "                   [--sun-elevation DEG --sun-azimuth DEG] [--no-weather-inversion | --weather-map W.exr]\n"
                      "                   [--no-export] [--no-report] [--quiet] [--json]",
                      "Per photo, into DIR/<stem>/: the sky found (mask.exr), the sun placed (disc, time and place, or\n"
@@ -80,8 +80,9 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
                      "DIR/game (the game tables) and DIR/report.html. Exit 1 when a photo was not calibrated (the\n"
                      "others are written). docs/calibrate.md.");
   controllers::CalibrateOptions o;
-  cl.Repeatable("--photo", &o.photos, "P.exr|P.hdr",
-                "a lat-long HDR photo: OpenEXR or Radiance .hdr, either convention `import` reads; repeatable");
+  cl.Repeatable("--photo", &o.photos, "P.exr|P.hdr|FOLDER",
+                "a lat-long HDR photo (OpenEXR or Radiance .hdr, either convention `import` reads), or a folder: its "
+                "pictures in name order; repeatable");
   cl.Text("--out", &o.out_dir, "DIR", "output directory (required)");
   cl.Text("--time", &o.time_iso8601, "ISO8601", "when the photos were taken, with a UTC offset (2026-06-21T06:30+02:00)");
   cl.Number("--lat", &o.latitude_deg, "DEG", "where: latitude, north positive");
@@ -105,7 +106,7 @@ controllers::CalibrateOptions ParseCalibrateArgs(int argc, char** argv) {
   o.report = !no_report;
   o.verbose = !quiet;
   o.log = [](const std::string& line) { Log("calibrate", FieldsAsFlags(line, kFlags)); };
-  if (o.photos.empty()) throw Error("calibrate: --photo P.exr|P.hdr is required (repeat it for several photos)");
+  if (o.photos.empty()) throw Error("calibrate: --photo P.exr|P.hdr|FOLDER is required (repeat it for several photos)");
   if (o.out_dir.empty()) throw Error("calibrate: --out DIR is required");
   std::string why;
   if (!o.IsValid(&why)) throw Error(FieldsAsFlags(why, kFlags));

@@ -256,6 +256,34 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
   EXPECT_EQ(manifest["presets"].size(), 2u) << manifest.dump();
 }
 
+// A folder given as --photo stands for its pictures, by their first bytes and in name order;
+// its other files are named as left out, hidden ones skipped; a folder with no picture is
+// refused by name with nothing written.
+TEST(Calibrate, AFolderOfPhotosIsItsPictures) {
+  testing::ScratchDir s("calibrate-folder");
+  std::filesystem::create_directories(s / "shoot");
+  ImageRGB img = ModelSky(latlong::DirectionFromElevationAzimuthDeg(30.0, 40.0), 512, 256, true);
+  WritePhoto(s / "shoot/b_park.exr", img);
+  WritePhoto(s / "shoot/a_field.exr", img);
+  WritePhoto(s / "shoot/.hidden.exr", img);
+  WriteText(s / "shoot/notes.txt", "shot at noon");
+  const auto r = Skycal("calibrate --photo " + s / "shoot/" + " --out " + s / "out" + " --json --no-report --no-export");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["photos"].size(), 2u) << r.out;
+  EXPECT_EQ(j["photos"][0]["photo"], s / "shoot/a_field.exr");
+  EXPECT_EQ(j["photos"][1]["photo"], s / "shoot/b_park.exr");
+  EXPECT_NE(r.err.find("left out, not OpenEXR or Radiance pictures: " + s / "shoot/notes.txt"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "out/.hidden"));
+  std::filesystem::create_directories(s / "empty");
+  WriteText(s / "empty/readme.txt", "nothing here");
+  const auto e = Skycal("calibrate --photo " + s / "empty" + " --out " + s / "out2");
+  EXPECT_EQ(e.rc, 1);
+  EXPECT_NE(e.err.find(s / "empty" + ": no OpenEXR or Radiance picture in the folder (1 other file(s))"), std::string::npos)
+      << e.err;
+  EXPECT_FALSE(std::filesystem::exists(s / "out2"));
+}
+
 // Every image a fit record names (a relative *.png or *.exr under "images") exists beside it;
 // returns how many it names.
 int ExpectNamedImagesExist(const std::filesystem::path& record) {

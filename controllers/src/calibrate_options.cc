@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -5,6 +6,9 @@
 
 #include "skycal/capture/solar_position.h"
 #include "skycal/controllers/calibrate.h"
+#include "skycal/core/error.h"
+#include "skycal/core/exr_io.h"
+#include "skycal/core/radiance_io.h"
 
 namespace skycal::controllers {
 namespace {
@@ -20,13 +24,46 @@ std::string Value(double v) {
   return s.str();
 }
 
+// The pictures of one folder, sorted by name; the other visible files into *skipped.
+std::vector<std::string> PicturesIn(const std::filesystem::path& dir, std::vector<std::string>* skipped) {
+  std::vector<std::string> found, other;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::filesystem::path& f = it->path();
+    if (f.filename().string().starts_with(".") || !std::filesystem::is_regular_file(f)) continue;
+    (IsOpenExrFile(f.string()) || IsRadiancePicture(f.string()) ? found : other).push_back(f.string());
+  }
+  if (ec) throw Error(dir.string() + ": cannot list the folder (" + ec.message() + ")");
+  if (found.empty())
+    throw Error(dir.string() + ": no OpenEXR or Radiance picture in the folder (" + std::to_string(other.size()) +
+                " other file(s))");
+  std::sort(found.begin(), found.end());
+  std::sort(other.begin(), other.end());
+  if (skipped) skipped->insert(skipped->end(), other.begin(), other.end());
+  return found;
+}
+
 }  // namespace
+
+std::vector<std::string> ExpandPhotoFolders(const std::vector<std::string>& photos, std::vector<std::string>* skipped) {
+  std::vector<std::string> out;
+  for (const std::string& p : photos) {
+    if (!std::filesystem::is_directory(p)) {
+      out.push_back(p);
+      continue;
+    }
+    const std::vector<std::string> in = PicturesIn(p, skipped);
+    out.insert(out.end(), in.begin(), in.end());
+  }
+  return out;
+}
 
 bool CalibrateOptions::IsValid(std::string* why) const {
   if (photos.empty()) return Fail(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
   std::set<std::string> stems;
   for (const std::string& p : photos) {
     if (p.empty()) return Fail(why, "CalibrateOptions::photos holds an empty path");
+    if (std::filesystem::is_directory(p)) continue;  // its pictures are checked once listed (ExpandPhotoFolders)
     const std::string stem = std::filesystem::path(p).stem().string();
     if (stem.empty() || stem == "game" || stem[0] == '.')
       return Fail(why, "CalibrateOptions::photos = '" + p + "' (expected a file name whose stem names its directory: not empty, not 'game', not hidden)");

@@ -366,11 +366,26 @@ void WriteRunReport(const CalibrateOptions& o, CalibrateResult* r) {
   }
 }
 
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) {
+    if (!s.empty()) s += ", ";
+    s += n;
+  }
+  return s;
+}
+
 }  // namespace
 
-CalibrateResult RunCalibrate(const CalibrateOptions& o) {
+CalibrateResult RunCalibrate(const CalibrateOptions& given) {
+  std::vector<std::string> skipped;
+  CalibrateOptions o = given;
+  o.photos = ExpandPhotoFolders(given.photos, &skipped);
   std::string why;
   if (!o.IsValid(&why)) throw Error(why);
+  if (o.photos.size() != given.photos.size() || !skipped.empty())
+    Log(o, std::to_string(o.photos.size()) + " photo(s), folders read in name order" +
+               (skipped.empty() ? std::string("") : "; left out, not OpenEXR or Radiance pictures: " + JoinNames(skipped)));
   const auto t0 = std::chrono::steady_clock::now();
   std::error_code kind_ec;
   const fs::file_status st = fs::symlink_status(o.out_dir, kind_ec);

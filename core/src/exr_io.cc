@@ -338,6 +338,13 @@ std::vector<float> ReadExrChannel(const std::string& path, const std::string& ch
   }
 }
 
+bool IsOpenExrFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  unsigned char magic[4] = {0, 0, 0, 0};
+  return f.read(reinterpret_cast<char*>(magic), 4) && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 &&
+         magic[3] == 0x01;
+}
+
 ExrRGB ReadExrRGB(const std::string& path) { return ReadExrRGB(path, nullptr); }
 
 ExrRGB ReadExrRGB(const std::string& path, const std::function<void(int width, int height)>& check_size) {

@@ -17,7 +17,9 @@
 namespace skycal::controllers {
 
 struct CalibrateOptions {
-  std::vector<std::string> photos;  // lat-long EXRs (either convention import accepts), >= 1
+  // Lat-long photos (OpenEXR or Radiance .hdr, either convention import accepts), >= 1; a
+  // folder stands for the pictures in it (ExpandPhotoFolders).
+  std::vector<std::string> photos;
   std::string out_dir;              // DIR: DIR/<photo stem>/ per photo
   // The time and place of the photos (a time-lapse frame's), for the sun when the disc is
   // hidden: ISO 8601 local or UTC time ("2026-06-21T06:30:00+02:00"), degrees north, east.
@@ -82,6 +84,12 @@ struct CalibrateResult {
 // reason and leaves nothing behind; the others go on. Throws skycal::Error on invalid
 // options, or when DIR cannot be written.
 CalibrateResult RunCalibrate(const CalibrateOptions& options);
+
+// The photos with each folder among them replaced by the pictures in it: its regular files
+// that start with OpenEXR's or Radiance's magic (the bytes decide, not the name), hidden ones
+// left out, sorted by name. *skipped (may be null) gets the folders' other files. Throws
+// skycal::Error naming a folder with no picture in it, or one that cannot be read.
+std::vector<std::string> ExpandPhotoFolders(const std::vector<std::string>& photos, std::vector<std::string>* skipped);
 
 // One photo (what RunCalibrate does per photo). Throws skycal::Error naming the file on a
 // refusal, leaving nothing behind.

@@ -53,6 +53,9 @@ struct ExrRGB {
   ExrAttributes attributes;
   std::vector<std::string> channels;  // every channel name in the file
 };
+// True when the file starts with OpenEXR's magic number (20000630, little-endian); false for
+// any other file or one that cannot be read (the reader then says why).
+bool IsOpenExrFile(const std::string& path);
 // Reads the R, G, B channels (as float) and the attributes. Throws skycal::Error naming
 // the file and what is wrong: unreadable/truncated file, missing R/G/B channel, empty
 // data window, an image larger than the limits above (the message gives its size).
