@@ -236,6 +236,23 @@ TEST(ImportController, ARadiancePictureImportsAsItsExrTwin) {
     EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
   }
   EXPECT_EQ(dir.CountEntries(), 1);  // only the source
+  // A JPEG, PNG or TIFF is not an HDR picture: said so, and what to do; a text file is left
+  // to the OpenEXR reader's message.
+  struct Case { const char* name; std::string bytes; const char* said; };
+  for (const Case& c : {Case{"pano.jpg", std::string("\xff\xd8\xff\xe0JFIF", 9), "a JPEG image, not an HDR picture"},
+                        Case{"pano.png", std::string("\x89PNG\r\n\x1a\n", 8), "a PNG image, not an HDR picture"},
+                        Case{"pano.tif", std::string("II*\0\x08\0\0\0", 8), "a TIFF image, not an HDR picture"},
+                        Case{"pano.exr", std::string("not an image"), "OpenEXR"}}) {
+    testing::WriteText(dir / c.name, c.bytes);
+    o.in_path = dir / c.name;
+    try {
+      controllers::ImportPhoto(o);
+      ADD_FAILURE() << c.name << " was imported";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(dir / c.name + ": "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.said), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

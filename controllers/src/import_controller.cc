@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "skycal/core/atomic_file.h"
@@ -108,10 +109,25 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
   p->frame.sun_direction = p->sun.direction;
 }
 
+// What a readable file that is neither picture is, by its first bytes ("" when unknown).
+std::string LowDynamicRangeKind(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  unsigned char b[4] = {0, 0, 0, 0};
+  if (!f.read(reinterpret_cast<char*>(b), 4)) return "";
+  if (b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff) return "a JPEG";
+  if (b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G') return "a PNG";
+  if ((b[0] == 'I' && b[1] == 'I' && b[2] == 42 && b[3] == 0) || (b[0] == 'M' && b[1] == 'M' && b[2] == 0 && b[3] == 42))
+    return "a TIFF";
+  return "";
+}
+
 // The source picture: a Radiance picture (.hdr: no attributes, so the Blender convention that
-// HDR publishers write), else an OpenEXR file.
+// HDR publishers write), else an OpenEXR file. A JPEG, PNG or TIFF is refused with what to do.
 ExrRGB ReadSource(const std::string& path, std::vector<std::string>* warnings, std::string* format) {
   if (!IsRadiancePicture(path)) {
+    if (const std::string kind = LowDynamicRangeKind(path); !kind.empty())
+      throw Error(path + ": " + kind + " image, not an HDR picture (expected a lat-long OpenEXR or Radiance .hdr; " +
+                  "exposure brackets are merged by `skycal capture`)");
     *format = "OpenEXR";
     return ReadExrRGB(path);
   }
