@@ -68,7 +68,8 @@ std::optional<std::pair<double, std::string>> FrameTime(const PhotoCalibration& 
   const capture::TimePlace t = capture::TimePlaceFromExrAttributes(ReadExrHeader(photo_exr).attributes, photo_exr);
   if (!t.time_iso8601.empty()) return std::pair(EpochSeconds(t.time_iso8601), std::string("capDate + utcOffset"));
   std::error_code ec;
-  if (!fs::is_regular_file(p.photo, ec)) return std::nullopt;  // an earlier run's photo, moved since
+  // An earlier run's photo, moved since, or a Radiance picture (no attributes to carry a time).
+  if (!fs::is_regular_file(p.photo, ec) || !IsOpenExrFile(p.photo)) return std::nullopt;
   const ExrAttributes given = ReadExrHeader(p.photo).attributes;
   if (const auto it = given.floats.find("skycalCloudTimeS"); it != given.floats.end())
     return std::pair(static_cast<double>(it->second), std::string("skycalCloudTimeS"));
