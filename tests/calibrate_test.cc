@@ -62,7 +62,7 @@ TEST(Calibrate, OptionsNameTheFieldAndValue) {
   CalibrateOptions o;
   std::string why;
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_EQ(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
+  EXPECT_EQ(why, "CalibrateOptions::photos is empty (expected at least one lat-long OpenEXR or Radiance picture, or a folder of them)");
   o.photos = {"a/sky.exr", "b/sky.exr"};
   o.out_dir = "out";
   EXPECT_FALSE(o.IsValid(&why));

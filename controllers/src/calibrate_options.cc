@@ -59,7 +59,7 @@ std::vector<std::string> ExpandPhotoFolders(const std::vector<std::string>& phot
 }
 
 bool CalibrateOptions::IsValid(std::string* why) const {
-  if (photos.empty()) return Fail(why, "CalibrateOptions::photos is empty (expected at least one lat-long EXR)");
+  if (photos.empty()) return Fail(why, "CalibrateOptions::photos is empty (expected at least one lat-long OpenEXR or Radiance picture, or a folder of them)");
   std::set<std::string> stems;
   for (const std::string& p : photos) {
     if (p.empty()) return Fail(why, "CalibrateOptions::photos holds an empty path");
