@@ -3,6 +3,7 @@
 // orders), parity with OpenCV's independent encoder (tests/data/radiance: one float image
 // written by OpenCV 4.6 as .hdr and as .exr), and every refusal naming the file and field.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <chrono>
@@ -218,6 +219,20 @@ TEST(RadiancePicture, BadPicturesAreRefusedNamingTheFileAndField) {
 }
 
 TEST(RadiancePicture, AnUnreadableFileIsNamed) {
+  // A FIFO is not opened (nothing writes to it: a read would wait forever), by the magic
+  // tests nor by the reader.
+  const std::string fifo = (std::filesystem::temp_directory_path() / "skycal_radiance_fifo.hdr").string();
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_FALSE(IsRadiancePicture(fifo));
+  EXPECT_FALSE(IsOpenExrFile(fifo));
+  try {
+    ReadRadiancePicture(fifo);
+    ADD_FAILURE() << "a FIFO was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(fifo + ": is not a regular file"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(fifo);
   const std::string path = (std::filesystem::temp_directory_path() / "skycal_radiance_missing.hdr").string();
   std::filesystem::remove(path);
   try {

@@ -111,6 +111,8 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
 
 // What a readable file that is neither picture is, by its first bytes ("" when unknown).
 std::string LowDynamicRangeKind(const std::string& path) {
+  std::error_code ec;  // a FIFO or a device is left to the OpenEXR reader's refusal, never opened here
+  if (!std::filesystem::is_regular_file(path, ec)) return "";
   std::ifstream f(path, std::ios::binary);
   unsigned char b[4] = {0, 0, 0, 0};
   if (!f.read(reinterpret_cast<char*>(b), 4)) return "";

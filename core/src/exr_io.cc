@@ -339,6 +339,8 @@ std::vector<float> ReadExrChannel(const std::string& path, const std::string& ch
 }
 
 bool IsOpenExrFile(const std::string& path) {
+  std::error_code ec;  // a FIFO or a device is never opened: reading one could wait forever
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   std::ifstream f(path, std::ios::binary);
   unsigned char magic[4] = {0, 0, 0, 0};
   return f.read(reinterpret_cast<char*>(magic), 4) && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 &&

@@ -44,8 +44,8 @@ struct RadiancePicture {
 };
 
 // True when the file starts with the Radiance magic ("#?RADIANCE" or "#?RGBE", or any "#?"
-// program name, as the format allows). False for an unreadable file: the caller's reader
-// then reports it.
+// program name, as the format allows). False for an unreadable file or anything but a
+// regular file (a FIFO is never opened): the caller's reader then reports it.
 bool IsRadiancePicture(const std::string& path);
 
 // Reads the picture. Throws skycal::Error naming the file and what is wrong: not a Radiance
