@@ -22,14 +22,15 @@ if [ "${1:-}" = "--ci" ]; then
   shift
 fi
 # Library tests that run in-process (no skycal binary, no cli/report/export/batch library),
-# chosen for what they reach per second under ASan: the parsers and writers (io), the fit's
-# costs and solvers, the conventions, the Vulkan host code (compute pipeline, render parity).
+# chosen for what they reach per second under ASan: the parsers and writers (io, the Radiance
+# picture reader), the fit's costs and solvers, the conventions, the Vulkan host code (compute
+# pipeline, render parity).
 # Left to the full run: the noise cache, the probe GradientChecker and the cloud statistics
 # suites (each minutes under ASan on 2 cores).
 CI_TARGETS=(conventions_test io_test linear_sky_test fit_cost_test fit_roundtrip_test
   fit_degenerate_test shape_noise_covariance_test weather_map_test cie_sky_test
   workgroup_order_test compute_pipeline_test cloud_mask_test response_recovery_test
-  render_parity_test appearance_test)
+  render_parity_test appearance_test radiance_io_test)
 bash scripts/setup.sh --deps-only
 
 # -O1: the usual sanitizer trade-off (readable stacks, tests ~2-3x a Release run); NDEBUG
