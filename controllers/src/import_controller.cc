@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "skycal/core/atomic_file.h"
@@ -111,15 +110,10 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
 
 // What a readable file that is neither picture is, by its first bytes ("" when unknown).
 std::string LowDynamicRangeKind(const std::string& path) {
-  std::error_code ec;  // a FIFO or a device is left to the OpenEXR reader's refusal, never opened here
-  if (!std::filesystem::is_regular_file(path, ec)) return "";
-  std::ifstream f(path, std::ios::binary);
-  unsigned char b[4] = {0, 0, 0, 0};
-  if (!f.read(reinterpret_cast<char*>(b), 4)) return "";
-  if (b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff) return "a JPEG";
-  if (b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G') return "a PNG";
-  if ((b[0] == 'I' && b[1] == 'I' && b[2] == 42 && b[3] == 0) || (b[0] == 'M' && b[1] == 'M' && b[2] == 0 && b[3] == 42))
-    return "a TIFF";
+  const std::string head = LeadingBytes(path, 4);  // empty for a FIFO: left to the OpenEXR reader's refusal
+  if (head.starts_with("\xFF\xD8\xFF")) return "a JPEG";
+  if (head == "\x89PNG") return "a PNG";
+  if (head == std::string("II*\0", 4) || head == std::string("MM\0*", 4)) return "a TIFF";
   return "";
 }
 

@@ -27,6 +27,7 @@
 
 #include "skycal/core/atomic_file.h"
 #include "skycal/core/error.h"
+#include "skycal/core/file_safety.h"
 #include "skycal/core/output_kind.h"
 
 namespace skycal {
@@ -71,21 +72,6 @@ std::pair<int, int> CheckReadableLayout(const std::string& path) {
   }
   return {static_cast<int>(w), static_cast<int>(hh)};
 }
-
-// Why `path` is not a readable regular file, in the user's terms: "no such file" only when
-// nothing is there.
-std::string NotAFileWhy(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    if (errno == ELOOP) return "a symlink loop";
-    if (errno == EACCES) return "permission denied";
-    struct stat lst {};
-    return ::lstat(path.c_str(), &lst) == 0 ? "a dangling symlink (its target does not exist)" : "no such file";
-  }
-  if (S_ISDIR(st.st_mode)) return "is a directory";
-  return "is not a regular file (a FIFO, socket or device)";
-}
-
 
 void AddAttributes(Imf::Header& header, const ExrAttributes& a) {
   for (const auto& [name, value] : a.strings) header.insert(name, Imf::StringAttribute(value));
@@ -338,14 +324,7 @@ std::vector<float> ReadExrChannel(const std::string& path, const std::string& ch
   }
 }
 
-bool IsOpenExrFile(const std::string& path) {
-  std::error_code ec;  // a FIFO or a device is never opened: reading one could wait forever
-  if (!std::filesystem::is_regular_file(path, ec)) return false;
-  std::ifstream f(path, std::ios::binary);
-  unsigned char magic[4] = {0, 0, 0, 0};
-  return f.read(reinterpret_cast<char*>(magic), 4) && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 &&
-         magic[3] == 0x01;
-}
+bool IsOpenExrFile(const std::string& path) { return LeadingBytes(path, 4) == std::string("\x76\x2f\x31\x01", 4); }
 
 ExrRGB ReadExrRGB(const std::string& path) { return ReadExrRGB(path, nullptr); }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 
@@ -21,8 +22,27 @@ std::string LowerExtension(const std::string& path) {
   return ext;
 }
 
-// The first `n` bytes of a regular file (fewer when it is shorter).
-std::string Head(const std::string& path, size_t n) {
+// Empty when the existing regular file at `path` is of the kind its extension names.
+std::string KindMismatch(const std::string& path, const std::string& ext) {
+  if (ext == ".exr") return LeadingBytes(path, 4) == std::string("\x76\x2f\x31\x01", 4) ? "" : "not an OpenEXR file";
+  if (ext == ".png") return LeadingBytes(path, 8) == "\x89PNG\r\n\x1a\n" ? "" : "not a PNG file";
+  if (ext == ".json") {
+    const std::string h = LeadingBytes(path, 4096);
+    const size_t at = h.find_first_not_of(" \t\r\n");
+    return at != std::string::npos && (h[at] == '{' || h[at] == '[') ? "" : "not a JSON file";
+  }
+  if (ext == ".html" || ext == ".htm") {
+    // The report's first lines hold the marker; 64 KiB covers the style sheet before it.
+    return LeadingBytes(path, 65536).find("Written by skycal") != std::string::npos ? "" : "an HTML page skycal did not write";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string LeadingBytes(const std::string& path, size_t n) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return "";
   std::ifstream f(path, std::ios::binary);
   std::string s(n, '\0');
   f.read(s.data(), static_cast<std::streamsize>(n));
@@ -30,23 +50,17 @@ std::string Head(const std::string& path, size_t n) {
   return s;
 }
 
-// Empty when the existing regular file at `path` is of the kind its extension names.
-std::string KindMismatch(const std::string& path, const std::string& ext) {
-  if (ext == ".exr") return Head(path, 4) == std::string("\x76\x2f\x31\x01", 4) ? "" : "not an OpenEXR file";
-  if (ext == ".png") return Head(path, 8) == "\x89PNG\r\n\x1a\n" ? "" : "not a PNG file";
-  if (ext == ".json") {
-    const std::string h = Head(path, 4096);
-    const size_t at = h.find_first_not_of(" \t\r\n");
-    return at != std::string::npos && (h[at] == '{' || h[at] == '[') ? "" : "not a JSON file";
+std::string NotAFileWhy(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ELOOP) return "a symlink loop";
+    if (errno == EACCES) return "permission denied";
+    struct stat lst {};
+    return ::lstat(path.c_str(), &lst) == 0 ? "a dangling symlink (its target does not exist)" : "no such file";
   }
-  if (ext == ".html" || ext == ".htm") {
-    // The report's first lines hold the marker; 64 KiB covers the style sheet before it.
-    return Head(path, 65536).find("Written by skycal") != std::string::npos ? "" : "an HTML page skycal did not write";
-  }
-  return "";
+  if (S_ISDIR(st.st_mode)) return "is a directory";
+  return "is not a regular file (a FIFO, socket or device)";
 }
-
-}  // namespace
 
 void RefuseReplacingAnotherKind(const std::string& path) {
   struct stat st {};

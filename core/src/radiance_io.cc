@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "skycal/core/error.h"
+#include "skycal/core/file_safety.h"
 #include "skycal/core/format_number.h"
 
 namespace skycal {
@@ -176,13 +177,7 @@ bool IsRec709(const std::string& primaries) {
 
 }  // namespace
 
-bool IsRadiancePicture(const std::string& path) {
-  std::error_code ec;  // a FIFO or a device is never opened: reading one could wait forever
-  if (!std::filesystem::is_regular_file(path, ec)) return false;
-  std::ifstream f(path, std::ios::binary);
-  char magic[2] = {0, 0};
-  return f.read(magic, 2) && magic[0] == '#' && magic[1] == '?';
-}
+bool IsRadiancePicture(const std::string& path) { return LeadingBytes(path, 2) == "#?"; }
 
 RadiancePicture DecodeRadiancePicture(const std::vector<unsigned char>& bytes, const std::string& name) {
   Cursor c{bytes};
@@ -209,10 +204,8 @@ RadiancePicture DecodeRadiancePicture(const std::vector<unsigned char>& bytes, c
 
 RadiancePicture ReadRadiancePicture(const std::string& path) {
   std::error_code ec;
-  const std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (std::filesystem::is_directory(st)) throw Error(path + ": is a directory (expected a Radiance picture)");
-  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
-    throw Error(path + ": is not a regular file (a FIFO, socket or device; expected a Radiance picture)");
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw Error(path + ": " + NotAFileWhy(path) + " (expected a Radiance picture)");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path + ": cannot open for reading");
   std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());

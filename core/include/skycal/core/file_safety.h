@@ -4,6 +4,7 @@
 // links included), so `--out ball.exr` over `--image ./x/../ball.exr` or a symlink to it
 // is caught as well as the literal repeat.
 #pragma once
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -25,5 +26,15 @@ void RefuseInputsInsideDirectory(const NamedPath& dir, const std::vector<NamedPa
 
 // True when both paths exist and are the same file (device and inode).
 bool SameFile(const std::string& a, const std::string& b);
+
+// The first `n` bytes of a regular file (fewer when it is shorter), for a format's magic
+// number; empty for anything else. A FIFO or a device is never opened: a read there could
+// wait forever.
+std::string LeadingBytes(const std::string& path, size_t n);
+
+// Why `path` is not a readable regular file, in the user's terms ("is a directory", "is not a
+// regular file (a FIFO, socket or device)", "a dangling symlink ...", "no such file" only when
+// nothing is there), for a reader's refusal.
+std::string NotAFileWhy(const std::string& path);
 
 }  // namespace skycal
