@@ -11,6 +11,7 @@
 #include "noise_primitives.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/parallel_chunks.h"
 
 namespace skycal::clouds {
 namespace {
@@ -46,17 +47,21 @@ std::vector<float> NoiseField(uint64_t seed, uint32_t salt, int size, int cells,
   if (billows)
     for (int k = 0; k < std::min(usable, 3); ++k) grids.emplace_back(cells << k, seed, kSaltCoverageWorley + k, 1);  // planar: depth 1
   std::vector<float> field(static_cast<size_t>(size) * size);
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) {
-      const double u = (x + 0.5) * cells / size, v = (y + 0.5) * cells / size;
-      float value = noise::PerlinTo01(noise::PeriodicPerlinFbm(u, v, 0.5, cells, usable, seed, salt));
-      if (billows) {
-        float w[3];
-        for (size_t k = 0; k < grids.size(); ++k) w[k] = grids[k].Inverted(u * (1 << k), v * (1 << k), 0.5);
-        value = noise::PerlinWorley(value, noise::WorleyFbm(w, static_cast<int>(grids.size())));
+  // Rows on the machine's threads: each texel is a pure function of its position (the
+  // statistics fit draws a dozen of these fields before its first render).
+  ParallelChunks(size, ResolveThreads(0), [&](int begin, int end, int) {
+    for (int y = begin; y < end; ++y)
+      for (int x = 0; x < size; ++x) {
+        const double u = (x + 0.5) * cells / size, v = (y + 0.5) * cells / size;
+        float value = noise::PerlinTo01(noise::PeriodicPerlinFbm(u, v, 0.5, cells, usable, seed, salt));
+        if (billows) {
+          float w[3];
+          for (size_t k = 0; k < grids.size(); ++k) w[k] = grids[k].Inverted(u * (1 << k), v * (1 << k), 0.5);
+          value = noise::PerlinWorley(value, noise::WorleyFbm(w, static_cast<int>(grids.size())));
+        }
+        field[static_cast<size_t>(y) * size + x] = value;
       }
-      field[static_cast<size_t>(y) * size + x] = value;
-    }
+  });
   return field;
 }
 
