@@ -9,7 +9,11 @@
 # is also compared over the hand mask, beside the main job's hand-masked fit
 # (bench/results/game_vs_photo.md), the 1.1x target; and each fit beside the model's ceiling.
 #
-#   scripts/calibrate_photos.sh [--build DIR] [--work DIR] [--results FILE]
+#   scripts/calibrate_photos.sh [--build DIR] [--work DIR] [--results FILE] [--baseline DIR LABEL]
+#
+# --baseline: another build (e.g. the previous commit's, in a worktree) timed in the same
+# fresh-process loop, interleaved, so that a change in speed is read as a ratio in one run
+# (the machine's own speed drifts by a fifth from minute to minute here); LABEL names it.
 #
 # Needs datasets/real, the npm tarball and the blender-data package in datasets/cache
 # (datasets/fetch_real_skies.sh --with-npm). Writes bench/results/calibrate.md (or --results); keeps every output in --work.
@@ -18,12 +22,15 @@ cd "$(dirname "$0")/.."
 BUILD=build
 WORK=out/calibrate_photos
 RESULTS=bench/results/calibrate.md
+BASELINE=
+BASELINE_LABEL=
 while [ $# -gt 0 ]; do
   case "$1" in
     --build) BUILD=$2; shift ;;
     --work) WORK=$2; shift ;;
     --results) RESULTS=$2; shift ;;
-    *) echo "usage: $0 [--build DIR] [--work DIR] [--results FILE]" >&2; exit 2 ;;
+    --baseline) BASELINE=$2; BASELINE_LABEL=$3; shift 2 ;;
+    *) echo "usage: $0 [--build DIR] [--work DIR] [--results FILE] [--baseline DIR LABEL]" >&2; exit 2 ;;
   esac
   shift
 done
@@ -97,15 +104,24 @@ done
 # A fresh process per photo, as a user runs one (the slowest frame, partly cloudy `sky`):
 # 5 runs each with and without the huge-page re-exec (core/huge_pages.h), interleaved so a
 # drift of the machine's speed falls on both; wall seconds, one per line.
+# With --baseline, that build's runs (huge pages on) between them.
+if [ -n "$BASELINE" ] && [ ! -x "$BASELINE/skycal" ]; then
+  echo "$0: --baseline $BASELINE: no executable $BASELINE/skycal" >&2
+  exit 2
+fi
 for i in 1 2 3 4 5; do
-  for mode in 1 0; do
+  for mode in 1 0 baseline; do
+    [ "$mode" = baseline ] && [ -z "$BASELINE" ] && continue
     rm -rf "$WORK/fresh"
+    exe=$SKYCAL huge=$mode
+    [ "$mode" = baseline ] && exe=$BASELINE/skycal huge=1
     t0=$(date +%s.%N)
-    SKYCAL_HUGE_PAGES=$mode "$SKYCAL" calibrate --photo "$REAL/sky.exr" --out "$WORK/fresh" >/dev/null 2>&1 || true
+    SKYCAL_HUGE_PAGES=$huge "$exe" calibrate --photo "$REAL/sky.exr" --out "$WORK/fresh" >/dev/null 2>&1 || true
     awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f\n", b - a }' >>"$WORK/fresh_huge$mode.seconds"
   done
 done
 rm -rf "$WORK/fresh"
+[ -n "$BASELINE" ] && printf '%s\n' "$BASELINE_LABEL" >"$WORK/fresh_hugebaseline.label"
 
 # Larger photos, as users bring them (1K and 2K lat-longs): a partly cloudy sky the game's own
 # march draws (a procedural weather map, sun 40 deg up) at four sizes (1000x500: no multiple of

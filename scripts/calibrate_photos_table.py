@@ -63,18 +63,24 @@ for set_name, title, with_before in (("bundled", "Bundled frames (the method was
     print()
 def fresh(mode):
     try:
-        v = sorted(float(x) for x in open(os.path.join(work, "fresh_huge%d.seconds" % mode)).read().split())
+        v = sorted(float(x) for x in open(os.path.join(work, "fresh_huge%s.seconds" % mode)).read().split())
     except (OSError, ValueError):
         return None
     return v
-on, off = fresh(1), fresh(0)
+on, off, base = fresh(1), fresh(0), fresh("baseline")
 if on and off:
     print("## One photo, one fresh process\n")
     print("`skycal calibrate --photo datasets/real/sky.exr` (partly cloudy, the slowest frame) in a new process each time,")
     print("5 runs interleaved; the issue's target is 5 s a 512x256 photo. Seconds, median (min - max):\n")
-    print("| huge pages (core/huge_pages.h) | wall s |\n|---|---|")
-    for name, v in (("on (the default)", on), ("off (SKYCAL_HUGE_PAGES=0)", off)):
+    print("| build, huge pages (core/huge_pages.h) | wall s |\n|---|---|")
+    runs = [("this build, on (the default)", on), ("this build, off (SKYCAL_HUGE_PAGES=0)", off)]
+    if base:
+        label = open(os.path.join(work, "fresh_hugebaseline.label")).read().strip()
+        runs.append(("%s, on" % label, base))
+    for name, v in runs:
         print("| %s | %.2f (%.2f - %.2f) |" % (name, v[len(v) // 2], v[0], v[-1]))
+    if base:
+        print("\nThis build over the baseline, median of the same interleaved runs: %.3f." % (on[len(on) // 2] / base[len(base) // 2]))
     print()
 def truth_clouds(size):
     # `skycal compare` of the photo (its own cloudTransmittance: the truth) and render.exr.
