@@ -395,12 +395,19 @@ CalibrateResult RunCalibrate(const CalibrateOptions& given) {
   const bool dir_existed = fs::exists(st);
   if (!o.weather_map.empty()) clouds::LoadWeatherMap(o.weather_map, clouds::CloudParams{}.weather_extent_m);  // names the file
   const clouds::KeepCloudDevices keep;  // every stage's clouds on one pipeline: the noise uploaded once
-  CloudDeviceWarmup warmup(o.backend);  // while the first photo is analysed
+  // While the first photo is analysed; none when no photo is a file (a refusal by name need
+  // not wait for a device and a noise read it will never use).
+  std::optional<CloudDeviceWarmup> warmup;
+  if (std::any_of(o.photos.begin(), o.photos.end(), [](const std::string& p) {
+        std::error_code ec;
+        return fs::is_regular_file(p, ec);
+      }))
+    warmup.emplace(o.backend);
   CalibrateResult r;
   for (size_t i = 0; i < o.photos.size(); ++i) {
     Log(o, "photo " + std::to_string(i + 1) + " of " + std::to_string(o.photos.size()));
     try {
-      r.photos.push_back(CalibrateOnePhoto(o.photos[i], o, &warmup));
+      r.photos.push_back(CalibrateOnePhoto(o.photos[i], o, warmup ? &*warmup : nullptr));
     } catch (const Error& e) {
       PhotoCalibration p;
       p.photo = o.photos[i];
