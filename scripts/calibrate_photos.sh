@@ -29,12 +29,18 @@ while [ $# -gt 0 ]; do
     --build) BUILD=$2; shift ;;
     --work) WORK=$2; shift ;;
     --results) RESULTS=$2; shift ;;
-    --baseline) BASELINE=$2; BASELINE_LABEL=$3; shift 2 ;;
+    --baseline)
+      [ $# -ge 3 ] || { echo "$0: --baseline needs a build directory and a label" >&2; exit 2; }
+      BASELINE=$2; BASELINE_LABEL=$3; shift 2 ;;
     *) echo "usage: $0 [--build DIR] [--work DIR] [--results FILE] [--baseline DIR LABEL]" >&2; exit 2 ;;
   esac
   shift
 done
 SKYCAL=$BUILD/skycal
+if [ -n "$BASELINE" ] && [ ! -x "$BASELINE/skycal" ]; then
+  echo "$0: --baseline $BASELINE: no executable $BASELINE/skycal" >&2
+  exit 2
+fi
 REAL=datasets/real
 TGZ=datasets/cache/pmndrs-assets-1.7.0.tgz
 DEB=datasets/cache/blender-data_3.4.1+dfsg-2_all.deb
@@ -105,11 +111,7 @@ done
 # 5 runs each with and without the huge-page re-exec (core/huge_pages.h), interleaved so a
 # drift of the machine's speed falls on both; wall seconds, one per line.
 # With --baseline, that build's runs (huge pages on) between them.
-if [ -n "$BASELINE" ] && [ ! -x "$BASELINE/skycal" ]; then
-  echo "$0: --baseline $BASELINE: no executable $BASELINE/skycal" >&2
-  exit 2
-fi
-for i in 1 2 3 4 5; do
+for _ in 1 2 3 4 5; do
   for mode in 1 0 baseline; do
     [ "$mode" = baseline ] && [ -z "$BASELINE" ] && continue
     rm -rf "$WORK/fresh"
