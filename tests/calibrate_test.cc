@@ -578,8 +578,11 @@ double ColumnAlternation(const ImageRGB& img, const ImageRGB& mask) {
 // The bundled partly cloudy photo: the game's clouds near the horizon are drawn as the photo's
 // are, not in vertical streaks. When the inversion's renders were half the photo's width,
 // every other column of the game's image fell between the rays it followed (measured 1.92x
-// the photo's column alternation there; 1.09x at the photo's width). The control: the photo
-// with every other column of the band scaled by 1.3 is caught.
+// the photo's column alternation there; 1.09x at the photo's width then). The bound sits
+// between the bug and where the refit's landing spreads without it: 1.18-1.41x over the
+// inversion's 5-8 renders (1.28x at calibrate's 6; the landing moves with any small change of
+// its start: bench/results/weather_inversion.md, stop 48). The control: the photo with every
+// other column of the band scaled by 1.3 is caught.
 TEST(Calibrate, ThePartlyCloudyPhotosHorizonCloudsHaveNoStreaks) {
   const std::string path = kRoot + "/datasets/real/sky.exr";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent: run datasets/fetch_real_skies.sh";
@@ -590,12 +593,12 @@ TEST(Calibrate, ThePartlyCloudyPhotosHorizonCloudsHaveNoStreaks) {
   const ImageRGB mask = ReadExrRGB(s / "out/sky/mask.exr").image;
   const double photo_alt = ColumnAlternation(photo, mask), game_alt = ColumnAlternation(game, mask);
   std::cout << "[calibrate] column alternation 5-25 deg: photo " << photo_alt << ", game " << game_alt << "\n";
-  EXPECT_LT(game_alt, 1.3 * photo_alt);
+  EXPECT_LT(game_alt, 1.6 * photo_alt);
   ImageRGB striped = photo;
   for (int y = 0; y < striped.height; ++y)
     for (int x = 0; x < striped.width; x += 2)
       for (int c = 0; c < 3; ++c) striped.pixels[3 * (static_cast<size_t>(y) * striped.width + x) + c] *= 1.3f;
-  EXPECT_GT(ColumnAlternation(striped, mask), 1.3 * photo_alt);
+  EXPECT_GT(ColumnAlternation(striped, mask), 1.6 * photo_alt);
 }
 
 // A time-lapse of two partly cloudy frames 60 s apart under a wind of 12 m/s toward azimuth
