@@ -88,14 +88,14 @@ SolvedAgain SolveAgain(CloudSampleModel* model, const CloudLighting& start, cons
     std::vector<char> held(kCloudLightingParameters);
     for (int k = 0; k < kCloudLightingParameters; ++k) held[k] = c->parameters[k].held;
     r.restarts = RestartAtBounds(start, held, [&](CloudLighting* t) {
-      solves.push_back(SolveCloudBlock(model, t->data(), *c, o));
+      solves.push_back(SolveCloudBlock(model, t->data(), *c, o, start));
       return solves.back().final_cost;
     }, theta, &cost);
     if (r.restarts.kept >= 0) *s = solves[static_cast<size_t>(r.restarts.kept)];
   }
   if (o.release_inseparable) {
     r.released = ReleaseInseparableHolds([&](const Conditioning& freed, CloudLighting* t) {
-      solves.push_back(SolveCloudBlock(model, t->data(), freed, o));
+      solves.push_back(SolveCloudBlock(model, t->data(), freed, o, start));
       return solves.back().final_cost;
     }, c, theta, &cost);
     if (r.released.kept) *s = solves.back();
@@ -135,7 +135,7 @@ Solved SolveMembers(std::vector<Member>& m, const CloudLighting& start, const Cl
   }
   CloudLighting scale{};
   for (int k = 0; k < kCloudLightingParameters; ++k) scale[k] = r.day[0].parameters[k].scale;
-  r.summary = SolveCloudDay(models, blocks, r.day[0], times, scale, o, &r.prior_residuals);
+  r.summary = SolveCloudDay(models, blocks, r.day[0], times, scale, o, &r.prior_residuals, &start);
   if (m.size() == 1) r.again = SolveAgain(models[0], start, o, &r.day[0], &r.theta[0], &r.summary);
   r.iterations = static_cast<int>(r.summary.iterations.size()) - 1;
   r.solve_s = Seconds(t0);
@@ -251,6 +251,10 @@ bool CloudLightingOptions::IsValid(std::string* why) const {
   if (!(noise_level > 0.0 && noise_level < 1.0) || !(max_predicted_error > 0.0 && max_predicted_error < 10.0)) {
     *why = "CloudLightingOptions::noise_level = " + FormatNumber(noise_level) + ", max_predicted_error = " +
            FormatNumber(max_predicted_error) + " (expected in (0, 1) and (0, 10))";
+    return false;
+  }
+  if (!(start_prior >= 0.0 && start_prior <= 1e6)) {
+    *why = "CloudLightingOptions::start_prior = " + FormatNumber(start_prior) + " (expected a weight in [0, 1e6])";
     return false;
   }
   if (!(day_smoothness >= 0.0 && day_smoothness <= 1e6)) {

@@ -22,6 +22,17 @@ class Progress final : public ceres::IterationCallback {
   }
 };
 
+// sqrt(w) (theta_k - start_k) / unit_k per parameter (CloudLightingOptions::start_prior).
+struct StartPrior {
+  double sqrt_w;
+  CloudLighting start, unit;
+  template <typename T>
+  bool operator()(const T* theta, T* r) const {
+    for (int k = 0; k < kCloudLightingParameters; ++k) r[k] = T(sqrt_w) * (theta[k] - T(start[k])) / T(unit[k]);
+    return true;
+  }
+};
+
 }  // namespace
 
 clouds::CloudRenderRequest RequestFor(const std::array<double, 3>& sun_dir, int width, int height,
@@ -153,13 +164,14 @@ ReleasedHolds ReleaseInseparableHolds(const std::function<double(const Condition
 }
 
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
-                                       const CloudLightingOptions& o) {
-  return SolveCloudDay({model}, {theta}, c, {0.0}, {}, o, nullptr);
+                                       const CloudLightingOptions& o, const CloudLighting& start) {
+  return SolveCloudDay({model}, {theta}, c, {0.0}, {}, o, nullptr, &start);
 }
 
 ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& models, const std::vector<double*>& thetas,
                                      const Conditioning& c, const std::vector<double>& times_h,
-                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals) {
+                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals,
+                                     const CloudLighting* start) {
   if (models.size() != thetas.size() || models.size() != times_h.size() || models.empty()) {
     throw Error("cloud lighting fit: one model, block and time per reference");
   }
@@ -178,6 +190,15 @@ ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& model
     }
   }
   if (prior_residuals) *prior_residuals = priors * kCloudLightingParameters;
+  if (models.size() == 1 && o.start_prior > 0.0) {
+    if (!start) throw Error("cloud lighting fit: CloudLightingOptions::start_prior needs the solve's start");
+    CloudLighting unit{};
+    for (int k = 0; k < kCloudLightingParameters; ++k) unit[k] = std::max(c.parameters[k].scale, 1e-12);
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<StartPrior, kCloudLightingParameters, kCloudLightingParameters>(
+            new StartPrior{std::sqrt(o.start_prior), *start, unit}),
+        nullptr, thetas[0]);
+  }
   ceres::Solver::Options so;
   // 15 parameters per reference, ~800 rows each: dense normal equations are tiny.
   so.linear_solver_type = models.size() == 1 ? ceres::DENSE_QR : ceres::DENSE_NORMAL_CHOLESKY;

@@ -60,18 +60,21 @@ struct ReleasedHolds {
 ReleasedHolds ReleaseInseparableHolds(const std::function<double(const Conditioning&, CloudLighting*)>& solve,
                                       Conditioning* c, CloudLighting* theta, double* cost);
 
-// Solves the cloud block alone (the sky fixed); returns the Ceres summary.
+// Solves the cloud block alone (the sky fixed); returns the Ceres summary. `start`: the
+// centre of CloudLightingOptions::start_prior.
 ceres::Solver::Summary SolveCloudBlock(CloudSampleModel* model, double* theta, const Conditioning& c,
-                                       const CloudLightingOptions& o);
+                                       const CloudLightingOptions& o, const CloudLighting& start);
 
 // A day's cloud blocks in one problem: one block per reference (models[r], thetas[r]; the
 // sky fixed), the held entries of `c` held in every block, and with three or more
 // references and o.day_smoothness > 0 the time-of-day prior (cloud_lighting_day_prior.h)
 // over each reference and its neighbours in time. `times_h`: one per reference, distinct;
-// `scale`: the prior's unit per parameter.
+// `scale`: the prior's unit per parameter. With one reference and o.start_prior > 0, the pull
+// toward `start` (non-null) too; `prior_residuals` counts the day's prior only.
 ceres::Solver::Summary SolveCloudDay(const std::vector<CloudSampleModel*>& models, const std::vector<double*>& thetas,
                                      const Conditioning& c, const std::vector<double>& times_h,
-                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals);
+                                     const CloudLighting& scale, const CloudLightingOptions& o, int* prior_residuals,
+                                     const CloudLighting* start);
 
 // Errors of a composite against the reference at `pixels` (solid-angle weighted).
 PixelErrors CompositeErrors(const std::vector<size_t>& pixels, const ImageRGB& reference, const ImageRGB& composite);

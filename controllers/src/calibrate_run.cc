@@ -205,6 +205,7 @@ void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& vie
   RainFromTheLight rain(a, view, plan->fit.fit.backend);
   RefitPass pass;
   pass.refine = &rain;
+  pass.start_prior = kRefitStartPrior;
   Decide(o, plan, RefitCloudLighting(*plan, out, final_dir, pass));
   if (!std::filesystem::exists(out / "fit.statistics.json")) return;  // the refit failed: nothing it found is kept
   if (auto d = HorizonSkyDecision(a)) Decide(o, plan, std::move(*d));

@@ -341,8 +341,16 @@ std::string CloudPixelsLogRmse(const nlohmann::json& clouds, const char* when) {
   return FormatNumber(std::round((*c)[when]["log_rmse"].get<double>() * 1000.0) / 1000.0);
 }
 
+// The refit's pull toward the statistics fit's lighting, as a clause of its decision.
+std::string StartPriorText(double start_prior) {
+  if (start_prior <= 0.0) return "";
+  return "every parameter pulled weakly toward the statistics fit's lighting (weight " + FormatNumber(start_prior) +
+         ": what the image does not determine stays near it instead of landing in another basin with each small "
+         "change of the start); ";
+}
+
 // The refit's decision, from its record's `clouds`.
-fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations) {
+fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations, double start_prior) {
   fit::FitDecision d;
   d.saved_ms_basis = "not measured in this run";
   d.what = "cloud lighting refitted pixel by pixel on the recovered shapes (known shapes)";
@@ -355,7 +363,7 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations) {
           "at most " +
           std::to_string(iterations) +
           " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
-          "once at the end; cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
+          "once at the end; " + StartPriorText(start_prior) + "cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
           CloudPixelsLogRmse(clouds, "final") + "; the statistics fit's record: fit.statistics.json";
   d.why += BoundRestartsText(clouds) + ReleasedHoldsText(clouds);
   const std::string at_bounds = ParametersAtBounds(clouds);
@@ -401,6 +409,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     // gained little more than this alone, for a solve per parameter at a bound
     // (bench/results/weather_inversion.md).
     k.clouds.release_inseparable = pass.release_holds;
+    k.clouds.start_prior = pass.start_prior;
     k.clouds.refine_shapes = pass.refine;
     k.clouds.iterations_after_refinement = kRefitAfterRainIterations;
     // The clouds' sun scale free, the albedo held at the statistics fit's physical value: in
@@ -416,7 +425,7 @@ fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& 
     }
     // The decision from the refit's record before anything moves: a failure here leaves the
     // statistics fit's files in place, as the catch below says.
-    d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds, pass.iterations);
+    d = RefitDecision(fit::ReadFitResultFile((refit_dir / "fit.json").string()).clouds, pass.iterations, pass.start_prior);
     fs::rename(out / "fit.json", out / "fit.statistics.json");
     MoveUp(refit_dir, out.staging());
   } catch (const std::exception& e) {  // the statistics fit's lighting stands

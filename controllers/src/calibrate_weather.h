@@ -130,6 +130,14 @@ fit::FitDecision HoldWeatherMap(const std::string& weather_map, const StagedDire
 inline constexpr int kRefitIterations = 10;
 inline constexpr int kRefitAfterRainIterations = 1;
 
+// The refit's weak pull toward the statistics fit's lighting on inverted shapes
+// (CloudLightingOptions::start_prior, RefitPass::start_prior). On inverted shapes the freed parameters are the image's best, not determined ones. Without the
+// pull, a start that moves by 1e-4 sends them to another basin (phase_g1 0.99 or 0.53) and the
+// game's image by up to 0.03 in per-pixel log RMSE. At this weight the worst landings go. It
+// was chosen over `sky` and four synthetic skies, and checked on three others that had no say
+// in it (bench/results/weather_inversion.md, "The refit's released holds, re-checked").
+inline constexpr double kRefitStartPrior = 0.001;
+
 // The refit's atmosphere is fitted on the photo's surely clear pixels: the colour ramp without
 // its allowance for the haze round the sun (FitCloudOptions::sky_pixels_sun_boost). With the
 // allowance a thin cloud by the sun passed for clear sky, and the fitted aureole came out too
@@ -151,6 +159,9 @@ inline constexpr double kSunGlareDeg = 10.0;
 struct RefitPass {
   int iterations = kRefitIterations;
   bool release_holds = true;                   // CloudLightingOptions::release_inseparable
+  // CloudLightingOptions::start_prior: kRefitStartPrior on inverted shapes; 0 on the user's map
+  // (the scene's own shapes: there the pull would only bias what the pixels determine).
+  double start_prior = 0.0;
   cloudfit::ShapeRefinement* refine = nullptr;  // not owned; null: none
 };
 fit::FitDecision RefitCloudLighting(const FitPlan& plan, const StagedDirectory& out, const std::string& final_dir,

@@ -110,6 +110,7 @@ cloudfit::SkyCloudFit RunSkyCloudFit(const FitCloudOptions& o, const std::vector
   co.values_from_renderer = o.values_from_renderer;
   co.restart_at_bounds = o.restart_at_bounds;
   co.release_inseparable = o.release_inseparable;
+  co.start_prior = o.start_prior;
   co.refine_shapes = o.refine_shapes;
   co.iterations_after_refinement = o.iterations_after_refinement;
   co.hold = o.hold;

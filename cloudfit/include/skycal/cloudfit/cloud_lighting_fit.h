@@ -107,6 +107,14 @@ struct CloudLightingOptions {
   // down alone still lowers the image's error; the values are then the image's best, not
   // determined ones, and the report says which).
   bool release_inseparable = false;
+  // One reference: weight w of a pull of every parameter toward the solve's start,
+  // sqrt(w) (theta - theta_start) / scale per parameter (scale: the conditioning's unit of
+  // relative change), in each of its solves (the released holds' too; after a refinement,
+  // toward the first solve's result). 0: none, as the regime-1 recovery needs (exact on
+  // synthetic references). calibrate's refit on inverted shapes uses a weak one: there the
+  // freed parameters are the image's best rather than determined ones, and without it a
+  // small change of the start sends them to other basins (bench/results/weather_inversion.md).
+  double start_prior = 0.0;
   // FitSkyAndClouds with one reference: the shapes refined after the solve (null: none), and
   // the iterations solved on the refined map from the lighting found before.
   ShapeRefinement* refine_shapes = nullptr;

@@ -30,6 +30,7 @@ struct FitCloudOptions {
   bool values_from_renderer = true; // the solve's values by frame renders, else at the samples (CloudLightingOptions)
   bool restart_at_bounds = false;   // a parameter left at a bound solved again from the other side (CloudLightingOptions)
   bool release_inseparable = false;  // the inseparable holds released after the solve, kept when lower (CloudLightingOptions)
+  double start_prior = 0.0;          // weight of the pull toward the solve's start (CloudLightingOptions)
   std::vector<std::string> hold;    // cloud lighting parameters held at the preset's values
   // The sky stage's pixels: false, those clear through the known shapes (exact for shapes
   // that are the scene's); true, the photo's own clear pixels (cloud probability < 0.5, as
