@@ -363,8 +363,9 @@ fit::FitDecision RefitDecision(const nlohmann::json& clouds, int iterations, dou
           "at most " +
           std::to_string(iterations) +
           " iterations, values at the Jacobian's samples by the CPU model (the shader's source), the frame rendered "
-          "once at the end; " + StartPriorText(start_prior) + "cloud pixels' log RMSE " + CloudPixelsLogRmse(clouds, "initial") + " -> " +
-          CloudPixelsLogRmse(clouds, "final") + "; the statistics fit's record: fit.statistics.json";
+          "once at the end; " + StartPriorText(start_prior) + "cloud pixels' log RMSE " +
+          CloudPixelsLogRmse(clouds, "initial") + " -> " + CloudPixelsLogRmse(clouds, "final") +
+          "; the statistics fit's record: fit.statistics.json";
   d.why += BoundRestartsText(clouds) + ReleasedHoldsText(clouds);
   const std::string at_bounds = ParametersAtBounds(clouds);
   if (!at_bounds.empty())
