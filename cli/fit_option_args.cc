@@ -36,6 +36,9 @@ void RegisterFitOptionArgs(VerbCommandLine& cl, FitOptionArgs* a, fit::FitOption
              "per pyramid level (default 50)");
   cl.Number("--smoothness", &f->smoothness, "L", "second-difference prior on the LUT change along sun zenith (default 1e-6)");
   cl.Number("--prior-weight", &f->prior_weight, "L", "pull toward the initial LUT (default 1e-8)");
+  cl.Number("--unseen-profile", &f->unseen_profile, "L",
+            "one reference: smoothness of what the game draws at the azimuths a masked\n"
+            "horizon hides, across the LUT columns (default 1e-4, 0: off)");
   cl.Flag("--no-haziness", &a->no_haziness, "hold g at its initial value");
   cl.Flag("--numeric-derivatives", &f->numeric_derivatives, "central-difference Jacobians (the benchmark's baseline)");
   cl.Flag("--quiet", &a->quiet, "no per-iteration progress");
@@ -54,6 +57,7 @@ std::string WithFitFlags(const std::string& message) {
                                      {"FitOptions::max_iterations_per_level", "--max-iterations"},
                                      {"FitOptions::smoothness", "--smoothness"},
                                      {"FitOptions::prior_weight", "--prior-weight"},
+                                     {"FitOptions::unseen_profile", "--unseen-profile"},
                                      {"FitOptions::pyramid_widths", "--pyramid"},
                                      {"FitOptions::sun_dir", "--sun-dir"},
                                      {"FitOptions::probe_weight", "--probe-weight"},

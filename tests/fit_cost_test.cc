@@ -122,6 +122,10 @@ TEST(FitOptions, IsValidNamesTheFieldAndItsValue) {
   o.time_of_day_h = 24.0;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "FitOptions::time_of_day_h = 24 (expected hours in [0, 24))");
+  o = FitOptions{};
+  o.unseen_profile = -1e-4;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_EQ(why, "FitOptions::unseen_profile = -0.0001 (expected a weight in [0, 1e6])");
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "pyramid.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/fit/reference.h"
 #include "skycal/refsky/reference_skies.h"
 #include "skycal/render/renderer.h"
@@ -26,13 +27,14 @@ struct OwnSky {
 };
 
 // A random preset's own render: the linear structure must reproduce it exactly.
-OwnSky OwnRender(const testing::ScratchDir& dir, render::ModelVariant variant, double elevation, double overcast) {
+OwnSky OwnRender(const testing::ScratchDir& dir, render::ModelVariant variant, double elevation, double overcast,
+                 int width = 128) {
   OwnSky s;
   s.truth = testing::RandomPreset(11, variant);
   s.truth.overcast_weight = overcast;
   s.truth.haziness_g = 0.7;
   const std::string path = dir / "own.exr";
-  refsky::WriteModelReference(path, s.truth, latlong::DirectionFromElevationAzimuthDeg(elevation, 15.0), 128);
+  refsky::WriteModelReference(path, s.truth, latlong::DirectionFromElevationAzimuthDeg(elevation, 15.0), width);
   FitOptions o;
   o.variant = variant;
   s.ref = LoadReference(path, o);
@@ -42,8 +44,25 @@ OwnSky OwnRender(const testing::ScratchDir& dir, render::ModelVariant variant, d
     for (float& v : *t) v *= 0.5f;
   start.overcast_zenith_cd_m2 *= 2.0;
   s.state = FitState::FromPreset(start, variant, 1);
-  s.level = BuildLevel(s.ref, 128);
+  s.level = BuildLevel(s.ref, width);
   return s;
+}
+
+// A tied-rows solution rendered as the fit writes it (the two LUT rows around the sun), at
+// the level's size, without the disc or the ground.
+ImageRGB RenderTied(const LinearSky& sky, const LinearSkySolution& sol, OwnSky* s) {
+  const auto& grid = s->state.preset.luts.grid;
+  const double pos = (1.0 - s->ref.sun_dir[1]) / (1.0 - std::cos(grid.theta_max_deg * M_PI / 180.0)) * (grid.n_theta - 1);
+  s->state.tied_rows = {static_cast<int>(std::floor(pos)), static_cast<int>(std::floor(pos)) + 1};
+  sky.Apply(sol, &s->state);
+  s->state.g = sol.g;
+  render::RenderRequest req;
+  req.sun_dir = s->ref.sun_dir;
+  req.width = s->level.width;
+  req.height = s->level.height;
+  req.sun_disc = false;
+  req.ground = render::GroundMode::kZero;
+  return render::CreateRenderer(render::Backend::kCpu)->Render(s->state.ToPreset(), req);
 }
 
 TEST(LinearSky, SolvesItsOwnRenderExactlyAndTheRendererAgrees) {
@@ -137,6 +156,96 @@ TEST(LinearSky, RobustScalesWidenOnlyWhereTheMisfitIsCoherent) {
   EXPECT_EQ(r.At(179.0), r.ring[RingLossScales::kRings - 1]);
   EXPECT_NEAR(WeightedMedianAbs({-3.0, 1.0, 2.0}, {1.0, 1.0, 1.0}), 2.0, 0.0);
   EXPECT_NEAR(WeightedMedianAbs({-3.0, 1.0, 2.0}, {10.0, 1.0, 1.0}), 3.0, 0.0);
+}
+
+// Stripes along the horizon where no pixel sees it: per image row at 0.5-10 deg elevation,
+// the mean over the columns within 60 deg of azimuth of the sun of ln(Y / Y_truth); the RMS
+// of its second difference from row to row.
+double HorizonBanding(const ImageRGB& image, const ImageRGB& truth, double sun_azimuth_deg) {
+  std::vector<double> profile;
+  for (int y = 0; y < image.height; ++y) {
+    const double elevation = latlong::Latitude(y, image.height) * 180.0 / M_PI;
+    if (elevation < 0.5 || elevation > 10.0) continue;
+    double sum = 0.0;
+    int n = 0;
+    for (int x = 0; x < image.width; ++x) {
+      const double az = latlong::AzimuthDeg(latlong::PixelDirection(x, y, image.width, image.height));
+      if (std::abs(std::remainder(az - sun_azimuth_deg, 360.0)) > 60.0) continue;
+      auto lum = [&](const ImageRGB& im) {
+        return Rec709Luminance<double>(im.at(x, y, 0), im.at(x, y, 1), im.at(x, y, 2));
+      };
+      sum += std::log(lum(image) / lum(truth));
+      ++n;
+    }
+    profile.push_back(sum / n);
+  }
+  double sq = 0.0;
+  for (size_t i = 1; i + 1 < profile.size(); ++i) sq += std::pow(profile[i - 1] - 2.0 * profile[i] + profile[i + 1], 2);
+  return std::sqrt(sq / static_cast<double>(profile.size() - 2));
+}
+
+TEST(LinearSky, TheUnseenProfileDrawsAMaskedHorizonSmoothlyAndLeavesASkySeenAllRoundAlone) {
+  testing::ScratchDir dir("linear-unseen");
+  OwnSky s = OwnRender(dir, render::ModelVariant::kFfxvIso, 27.0, 0.0, 256);
+  LinearSkyOptions off, on;
+  off.unseen_profile = 0.0;
+  on.unseen_profile = 1e-4;  // FitOptions' default
+  {
+    // Seen all round: no term, the same solution to the bit.
+    const LinearSky a(s.state, {&s.level}, {s.ref}, off), b(s.state, {&s.level}, {s.ref}, on);
+    EXPECT_EQ(b.partly_seen_columns(), 0);
+    EXPECT_EQ(b.unseen_profile_terms(), 0);
+    EXPECT_EQ(a.Solve(0.7, {1.0}, {}).values, b.Solve(0.7, {1.0}, {}).values);
+  }
+  // The horizon masked below 10 deg but for 60 deg of azimuth opposite the sun, whose image
+  // rows there are alternately x1.25 and x0.8 (a haze line, a far shore): the columns they
+  // read are seen only there.
+  double stripes_sq = 0.0;
+  for (int y = 0; y < s.level.height; ++y)
+    for (int x = 0; x < s.level.width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, s.level.width, s.level.height);
+      if (latlong::ElevationDeg(d) > 10.0) continue;
+      const size_t i = static_cast<size_t>(y) * s.level.width + x;
+      if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
+        s.level.weight[i] = 0.0;
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) s.level.radiance[3 * i + c] *= y % 2 ? 1.25f : 0.8f;
+      stripes_sq += 3.0 * s.level.weight[i] * (y % 2 ? 0.04 : 0.0625);  // (1 / 1.25 - 1)^2, (1 / 0.8 - 1)^2
+    }
+  double total_weight = 0.0;
+  for (float w : s.level.weight) total_weight += 3.0 * w;
+  // The truth's relative error against the striped pixels: a fit that ignored the stripes.
+  const double stripes_rms = std::sqrt(stripes_sq / total_weight);
+  render::RenderRequest req;
+  req.sun_dir = s.ref.sun_dir;
+  req.width = s.level.width;
+  req.height = s.level.height;
+  req.sun_disc = false;
+  req.ground = render::GroundMode::kZero;
+  const ImageRGB truth = render::CreateRenderer(render::Backend::kCpu)->Render(s.truth, req);
+  double banding[2], rel_rmse[2];
+  for (int k = 0; k < 2; ++k) {
+    const LinearSky sky(s.state, {&s.level}, {s.ref}, k ? on : off);
+    if (k) {
+      EXPECT_GT(sky.partly_seen_columns(), 3);
+      EXPECT_GT(sky.unseen_profile_terms(), 100);
+    }
+    // The fit's steps: the relative solve, then Gauss-Newton on the log error.
+    LinearSkySolution sol = sky.Solve(0.7, {1.0}, {});
+    for (int step = 0; step < 6; ++step) sol = sky.Solve(0.7, {1.0}, {}, &sol);
+    rel_rmse[k] = sol.rel_rmse;
+    banding[k] = HorizonBanding(RenderTied(sky, sol, &s), truth, 15.0);
+  }
+  // The control: without the prior the game draws the sector's stripes on the sun's side,
+  // and the pixels are fitted exactly (the columns follow the rows one by one).
+  EXPECT_GT(banding[0], 0.5) << "off";
+  EXPECT_LT(rel_rmse[0], 1e-3) << "off";
+  // With it the stripes there are a fraction (3 tables x 3 channels per column cannot draw
+  // the stripes opposite the sun and none beside it: Rayleigh's phase is symmetric).
+  EXPECT_LT(banding[1], 0.3 * banding[0]) << "on: " << banding[1] << ", off: " << banding[0];
+  // What the pixels see is still mostly fitted: the error is a fraction of the stripes'.
+  EXPECT_LT(rel_rmse[1], 0.3 * stripes_rms) << "on: " << rel_rmse[1] << ", the stripes " << stripes_rms;
 }
 
 TEST(LinearSky, RefusesLevelsOfDifferentSizesBeforeReadingThemAndNamesBothFiles) {

@@ -112,7 +112,8 @@ nlohmann::json ResolvedFitOptionsJson(const fit::FitOptions& fo) {
           {"smoothness", fo.smoothness},
           {"linear_start", fo.linear_start},       {"linear_width", fo.linear_width},
           {"polish", fo.polish},
-          {"prior_weight", fo.prior_weight},       {"fit_haziness", fo.fit_haziness},
+          {"prior_weight", fo.prior_weight},       {"unseen_profile", fo.unseen_profile},
+          {"fit_haziness", fo.fit_haziness},
           {"probe_weight", fo.probe_weight},       {"probe_quadrature_width", fo.probe_quadrature_width},
           {"fit_ground_albedo", fo.fit_ground_albedo},
           {"numeric_derivatives", fo.numeric_derivatives}};

@@ -22,6 +22,8 @@ bool FitOptions::IsValid(std::string* why) const {
     return bad("max_iterations_per_level", std::to_string(max_iterations_per_level), "an integer in [1, 10000]");
   if (!(smoothness >= 0.0 && smoothness <= 1e6)) return bad("smoothness", num(smoothness), "a weight in [0, 1e6]");
   if (!(prior_weight >= 0.0 && prior_weight <= 1e6)) return bad("prior_weight", num(prior_weight), "a weight in [0, 1e6]");
+  if (!(unseen_profile >= 0.0 && unseen_profile <= 1e6))
+    return bad("unseen_profile", num(unseen_profile), "a weight in [0, 1e6]");
   std::string widths;
   for (int w : pyramid_widths) widths += (widths.empty() ? "" : ",") + std::to_string(w);
   int last = 0;

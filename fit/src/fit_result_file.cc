@@ -43,6 +43,8 @@ nlohmann::json ToJson(const LinearStartSingleReport& r) {
                       {"loss_scale_floor", r.loss_scale_floor},
                       {"loss_scale_by_sun_distance", rings},
                       {"held_non_positive", r.held_non_positive},
+                      {"partly_seen_columns", r.partly_seen_columns},
+                      {"unseen_profile_terms", r.unseen_profile_terms},
                       {"cost_per_step", steps},
                       {"time_s", r.time_s}};
   if (r.render_check) j["render_check"] = ToJson(*r.render_check);
@@ -415,6 +417,8 @@ void Read(const At& a, LinearStartSingleReport* x) {
   Optional(a, "loss_scale_floor", &x->loss_scale_floor);
   Optional(a, "loss_scale_by_sun_distance", &x->loss_scale_by_sun_distance);
   Optional(a, "held_non_positive", &x->held_non_positive);
+  Optional(a, "partly_seen_columns", &x->partly_seen_columns);
+  Optional(a, "unseen_profile_terms", &x->unseen_profile_terms);
   Optional(a, "cost_per_step", &x->cost_per_step);
   Optional(a, "time_s", &x->time_s);
   Optional(a, "render_check", &x->render_check);

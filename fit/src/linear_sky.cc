@@ -1,4 +1,5 @@
 #include "linear_sky.h"
+#include "linear_sky_normal.h"
 
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -115,6 +116,10 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
   start_scale_ = StartScale(exposures, *MiePhases(state.g));
+  if (o_.unknowns == LinearUnknowns::kTiedRows) {
+    column_sectors_ = o_.column_sectors.empty() ? ColumnSectors() : o_.column_sectors;
+    if (o_.unseen_profile > 0.0) BuildProfileTerms(refs[0].sun_dir);
+  }
 }
 
 double LinearSky::InitialLut(int t, int row, int col, int ch) const {
@@ -268,14 +273,6 @@ double LinearSky::Model(const Row& row, const Pixel& px, int ch, double phase_m,
   return (1.0 - w_o) * lut + w_o * v.lz * row.overcast_shape;
 }
 
-// The normal equations N x = b of one solve: N as triplets (summed on assembly into
-// `normal`) and b.
-struct LinearSky::NormalSystem {
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd rhs;
-  Eigen::SparseMatrix<double> normal;
-};
-
 // What a solve's data pass reads (Solve's arguments and the Mie phases at its g).
 struct LinearSky::SolveInputs {
   const std::vector<double>& phase_m;
@@ -314,6 +311,7 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   const std::vector<char> was_held = log_priors ? linearize_at->held : std::vector<char>(num_unknowns_, 0);
   AddPriors(linearize_at, was_held, &sys);
   if (free_rows && o_.smoothness > 0.0) AddSmoothness(linearize_at, was_held, &sys);
+  if (!profile_terms_.empty()) AddUnseenProfile(g, linearize_at, &sys);
   sys.normal = Eigen::SparseMatrix<double>(num_unknowns_, num_unknowns_);
   sys.normal.setFromTriplets(sys.triplets.begin(), sys.triplets.end());
   DampTowardStart(&sys);

@@ -21,8 +21,11 @@
 //    of LUT columns (the LUT's resolution cost, seen against the LUT ceiling).
 // Regularisation: a damping of the normal equations (see LinearSkyOptions::damping), a
 // 1e-14 pull toward the start's shape (only entries no pixel sees feel it) and, with free
-// rows, the second difference of the change along the sun zenith (FitOptions::smoothness). Entries the solve would make non-positive are held at 1e-6 of their
-// initial value (an active set, formed anew in every solve).
+// rows, the second difference of the change along the sun zenith (FitOptions::smoothness);
+// with tied rows, the rendered profile across the LUT columns at the azimuths no pixel reads
+// (FitOptions::unseen_profile, linear_sky_unseen.cc). Entries the solve would make
+// non-positive are held at 1e-6 of their initial value (an active set, formed anew in every
+// solve).
 #pragma once
 #include <array>
 #include <memory>
@@ -59,6 +62,13 @@ struct LinearSkyOptions {
   double damping = 1e-6;         // tied and per-row unknowns only
   double prior_weight = 1e-8;    // free rows: the pull toward the start (FitOptions::prior_weight)
   double smoothness = 1e-6;      // as FitOptions::smoothness (free rows)
+  // Tied rows: FitOptions::unseen_profile, the weight of the rendered profile's second
+  // difference across the LUT columns at the azimuths no fitted pixel reads (0: off).
+  double unseen_profile = 0.0;
+  // Per LUT column, per azimuth sector (kSectors of them), whether some fitted pixel reads
+  // it: given (the finest level's, so that every level smooths the same azimuths), else
+  // the level's own.
+  std::vector<std::vector<char>> column_sectors;
 };
 
 // One solve's result, in the units of the model (cd/m^2 * sr for the LUT).
@@ -132,6 +142,12 @@ class LinearSky {
                                const std::vector<ImageRGB>& images) const;
 
   int num_unknowns() const { return num_unknowns_; }
+  // Tied rows: per LUT column and azimuth sector, whether some fitted pixel reads it.
+  static constexpr int kSectors = 36;  // 10 degrees of azimuth each
+  const std::vector<std::vector<char>>& column_sectors() const { return column_sectors_; }
+  // LUT columns read at some sectors but not all; the unseen-profile terms built for them.
+  int partly_seen_columns() const;
+  int unseen_profile_terms() const { return static_cast<int>(profile_terms_.size()); }
   int width() const { return width_; }  // of the level it was built on
   size_t num_samples() const { return error_weight_.size(); }
 
@@ -195,6 +211,12 @@ class LinearSky {
   void AddSmoothness(const LinearSkySolution* linearize_at, const std::vector<char>& was_held,
                      NormalSystem* sys) const;
   void DampTowardStart(NormalSystem* sys) const;
+  // The rendered profile at the unseen azimuths (linear_sky_unseen.cc): which sectors each
+  // column is read in, the (column triple, sector) terms, and their rows in the normal
+  // equations at haziness g.
+  std::vector<std::vector<char>> ColumnSectors() const;
+  void BuildProfileTerms(const std::array<double, 3>& sun_dir);
+  void AddUnseenProfile(double g, const LinearSkySolution* linearize_at, NormalSystem* sys) const;
   void SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const;  // values, held
   void AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const;       // cost, rel_rmse
 
@@ -208,6 +230,15 @@ class LinearSky {
   int lz_index_ = -1;
   double held_overcast_zenith_ = 0.0;  // L_z when it is not an unknown, cd/m^2
   double start_scale_ = 1.0;           // StartScale at the state's g and exposures
+  std::vector<std::vector<char>> column_sectors_;  // tied rows: ColumnSectors or the given
+  // Three consecutive LUT columns seen somewhere and not all round, at one azimuth sector
+  // where not all three are seen: the view direction's phase terms at each column's node
+  // elevation.
+  struct ProfileTerm {
+    int col[3];
+    double mu[3], one_minus_mu[3], phase_r[3];
+  };
+  std::vector<ProfileTerm> profile_terms_;
   int n_refs_ = 0;
   int width_ = 0;
   struct PhaseCache {

@@ -369,11 +369,14 @@ SingleSkies BuildSingleSkies(const std::vector<Reference>& refs, const LinearSky
   SingleSkies s;
   LinearSkyOptions robust_options = lo;
   robust_options.stride = decimate > 1 && keeps_enough(decimate) ? decimate : 1;
+  // The finest level first: the coarser ones smooth the azimuths it leaves unseen.
+  std::unique_ptr<LinearSky> finest;
+  if (level_ptrs.size() > 1 || robust_options.stride > 1) finest = std::make_unique<LinearSky>(state, level_ptrs.back(), refs, lo);
+  if (finest) robust_options.column_sectors = finest->column_sectors();
   s.skies.push_back(std::make_unique<LinearSky>(state, level_ptrs.front(), refs, robust_options));
-  if (level_ptrs.size() > 1 || robust_options.stride > 1) {
-    s.skies.push_back(std::make_unique<LinearSky>(state, level_ptrs.back(), refs, lo));
-  }
+  if (finest) s.skies.push_back(std::move(finest));
   LinearSkyOptions search_options = lo;
+  search_options.column_sectors = s.skies.back()->column_sectors();
   const int search_stride = decimate > 1 ? 2 * robust_options.stride : std::max(1, robust_width / linear_width);
   search_options.stride = keeps_enough(search_stride) ? search_stride : robust_options.stride;
   s.search = std::make_unique<LinearSky>(state, level_ptrs.front(), refs, search_options);
@@ -406,6 +409,8 @@ LinearStartSingleReport MakeSingleReport(const LinearStartReport& rep, const Fit
   report.loss_scale_floor = o.loss_scale;
   report.loss_scale_by_sun_distance = RingScaleReports(rep.ring_scales);
   report.held_non_positive = rep.held_non_positive;
+  report.partly_seen_columns = sky.partly_seen_columns();
+  report.unseen_profile_terms = sky.unseen_profile_terms();
   report.time_s = linear_time;
   return report;
 }
@@ -443,6 +448,7 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
   lo.fit_overcast = fit_overcast;
   lo.smoothness = o.smoothness;
   lo.prior_weight = o.prior_weight;
+  lo.unseen_profile = o.unseen_profile;
   lo.threads = o.linear_threads;
   const SingleSkies skies = BuildSingleSkies(refs, lo, level_ptrs, decimate, robust_width, linear_width, *state);
   const LinearSky& sky = *skies.skies.back();

@@ -91,6 +91,9 @@ struct LinearStartSingleReport {
   double residual_sigma_log = 0.0, loss_scale = 0.0, loss_scale_floor = 0.0;
   std::vector<RingScaleReport> loss_scale_by_sun_distance;
   int held_non_positive = 0;
+  // LUT columns some fitted pixel reads at some azimuths but not all round, and the terms
+  // of FitOptions::unseen_profile that draw them there (0 with the prior off).
+  int partly_seen_columns = 0, unseen_profile_terms = 0;
   std::vector<CostStep> cost_per_step;
   double time_s = 0.0;
   std::optional<RenderCheckReport> render_check;
