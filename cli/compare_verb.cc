@@ -1,6 +1,7 @@
 #include "compare_verb.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "command_line.h"
@@ -8,6 +9,7 @@
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/latlong.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -41,6 +43,16 @@ nlohmann::json CloudLayers(const CompareVerbOptions& o, const ExrRGB& photo, con
   return {{"pixels", a.pixels}, {"opacity_rms", a.opacity_rms}, {"iou", a.iou ? nlohmann::json(*a.iou) : nlohmann::json()}};
 }
 
+// The sun of --sun-cone: the game file's `sunDirection` (render and calibrate write it).
+std::array<double, 3> GameSun(const CompareVerbOptions& o, const ExrRGB& game) {
+  const auto it = game.attributes.v3fs.find("sunDirection");
+  if (it == game.attributes.v3fs.end())
+    throw Error(o.game + ": no sunDirection attribute (a V3f, as skycal render and calibrate write it); --sun-cone " +
+                FormatNumber(o.sun_cone_deg) + " needs the sun it leaves out");
+  const auto& v = it->second;
+  return latlong::Normalized({v[0], v[1], v[2]}, (o.game + ": sunDirection").c_str());
+}
+
 }  // namespace
 
 nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
@@ -58,6 +70,7 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
     sky.resize(static_cast<size_t>(m.width) * m.height);
     for (size_t i = 0; i < sky.size(); ++i) sky[i] = m.pixels[3 * i];
   }
+  if (o.sun_cone_deg > 0.0) sky = appearance::WithoutSunCone(sky, photo.width, photo.height, GameSun(o, game_file), o.sun_cone_deg);
   const appearance::Comparison c = appearance::Compare(photo, game, sky, o.options, o.photo, o.game);
   Log("compare", o.game + " against " + o.photo + ": per-pixel log RMSE " + FormatNumber(c.per_pixel_log_rmse) +
                      ", appearance error " + FormatNumber(c.appearance_error) + " (" + std::to_string(c.bands_compared) +
@@ -66,6 +79,7 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
           {"game", o.game},
           {"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)},
           {"exposure", o.exposure},
+          {"sun_cone_deg", o.sun_cone_deg},
           {"sky_pixels", c.sky_pixels},
           {"per_pixel_log_rmse", c.per_pixel_log_rmse},
           {"appearance_error", c.appearance_error},
@@ -79,7 +93,7 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
 CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
   VerbCommandLine cl("compare", "skycal compare: the game's image of a sky against the photo (log RMSE, appearance)",
                      "  skycal compare --photo P.exr --game G.exr [--mask MASK.exr] [--exposure K] [--band DEG]\n"
-                     "                 [--min-elevation DEG] [--json]",
+                     "                 [--min-elevation DEG] [--sun-cone DEG] [--json]",
                      "Per-pixel log RMSE (solid-angle weighted, over the sky pixels and channels) and the\n"
                      "appearance error (per elevation band: 10/50/90% quantiles of ln luminance, medians of\n"
                      "ln R/G and ln B/G; RMS of the differences), which does not depend on where clouds sit.\n"
@@ -95,11 +109,16 @@ CompareVerbOptions ParseCompareArgs(int argc, char** argv) {
             "the preset's model units to the photo's (default 1)");
   cl.Number("--band", &o.options.band_deg, "DEG", "elevation band width (default 10)");
   cl.Number("--min-elevation", &o.options.min_elevation_deg, "DEG", "pixels below are left out (default 0)");
+  cl.Number("--sun-cone", &o.sun_cone_deg, "DEG",
+            "leave out the pixels within DEG of the game file's sunDirection (default 0): calibrate's\n"
+            "comparison is --mask mask.exr --sun-cone fit.json's calibration.game_sun_cone_deg");
   bool json = false;
   cl.Flag("--json", &json, "print the result as JSON on stdout");
   cl.Parse(argc, argv);
   if (o.photo.empty()) throw Error("compare: --photo P.exr is required");
   if (o.game.empty()) throw Error("compare: --game G.exr is required");
+  if (!(o.sun_cone_deg >= 0.0 && o.sun_cone_deg <= 45.0))
+    throw Error("--sun-cone " + FormatNumber(o.sun_cone_deg) + ": expected degrees in [0, 45]");
   if (!(o.exposure > 0.0) || !std::isfinite(o.exposure))
     throw Error("--exposure " + FormatNumber(o.exposure) + ": expected a finite factor > 0");
   // The library names its Options fields; the user typed these flags.

@@ -14,6 +14,9 @@ struct CompareVerbOptions {
   std::string game;   // lat-long EXR of the same size (e.g. `skycal render --clouds`), required
   std::string mask;   // optional sky mask EXR (R > 0.5 is sky), e.g. from `skycal mask`
   double exposure = 1.0;  // the game image is multiplied by it first (fit.json's exposure)
+  // Pixels within this many degrees of the game file's sunDirection are left out (0: none):
+  // calibrate's comparison, fit.json's calibration.game_sun_cone_deg.
+  double sun_cone_deg = 0.0;
   appearance::Options options;
 };
 

@@ -240,6 +240,18 @@ TEST(Calibrate, AClearSkyThroughTheBinary) {
     worst = std::max(worst, std::abs(game.pixels[i] - want) / std::max(want, 1e-12));
   }
   EXPECT_LT(worst, 1e-4);  // the --sun-dir text rounds the direction to 6 digits
+  // fit.json's two numbers are `skycal compare` of the files beside it, the disc's cone left out.
+  EXPECT_EQ(f.calibration->game_sun_cone_deg, 3.0);  // the fit's sun cone: the disc is drawn
+  const std::string files = " --photo " + dir + "/photo.exr --game " + dir + "/render.exr --mask " + dir + "/mask.exr";
+  const auto same = Skycal("compare" + files + " --sun-cone 3 --json");
+  ASSERT_EQ(same.rc, 0) << same.err;
+  const auto c = nlohmann::json::parse(same.out);
+  EXPECT_NEAR(c["per_pixel_log_rmse"].get<double>(), f.calibration->game_per_pixel_log_rmse, 1e-12);
+  EXPECT_NEAR(c["appearance_error"].get<double>(), f.calibration->game_appearance_error, 1e-12);
+  EXPECT_EQ(c["sky_pixels"].get<int>(), f.calibration->game_sky_pixels);
+  // The control: with the disc's pixels in, other numbers.
+  const auto disc = nlohmann::json::parse(Skycal("compare" + files + " --json").out);
+  EXPECT_GT(disc["sky_pixels"].get<int>(), f.calibration->game_sky_pixels);
 
   // A second photo into the same DIR: the first calibration stays, the game tables hold both;
   // a photo that cannot be calibrated beside it loses nothing of either.

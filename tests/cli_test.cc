@@ -258,6 +258,12 @@ TEST(Cli, CompareGivesBothNumbersAndRefusesBadInput) {
   ExpectFailure("compare --photo " + (dir / "a.exr"), "--game G.exr is required", dir);
   ExpectFailure("compare --photo " + (dir / "nope.exr") + " --game " + (dir / "a.exr"), "nope.exr", dir);
   ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --band 0", "--band 0", dir);
+  // --sun-cone needs the game file's sun, and a cone that leaves a sky.
+  WriteExrRGB(dir / "nosun.exr", b.image, {});
+  ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "nosun.exr") + " --sun-cone 3",
+                "nosun.exr: no sunDirection attribute", dir);
+  ExpectFailure("compare --photo " + (dir / "a.exr") + " --game " + (dir / "a.exr") + " --sun-cone 50",
+                "--sun-cone 50: expected degrees in [0, 45]", dir);
   // Where the clouds sit, when both files carry their transmittance: none here; a cloudy render
   // against itself agrees exactly.
   EXPECT_TRUE(js["clouds"].is_null());

@@ -71,23 +71,20 @@ void WriteStagedInputs(const PhotoAnalysis& a, const StagedDirectory& out, const
 // The sky pixels the game's image is judged on: the sky mask less the fit's sun cone. A
 // photo's disc is clipped or lossily encoded (its radiance unmeasured), and its few pixels,
 // tens of thousands of times the sky, would outweigh the rest of the sky in a log RMSE.
+// The cone left out, degrees (0: none; a nominal sun draws no disc). `skycal compare
+// --mask mask.exr --sun-cone` of it repeats the numbers.
+double ComparedSunCone(const FitPlan& plan) { return plan.draw_sun_disc ? plan.fit.fit.sun_cone_deg : 0.0; }
+
 std::vector<float> ComparedPixels(const PhotoAnalysis& a, const FitPlan& plan) {
-  std::vector<float> sky = a.mask.sky;
-  if (!plan.draw_sun_disc) return sky;
-  const double cos_cone = std::cos(plan.fit.fit.sun_cone_deg * kPi / 180.0);
-  const auto& s = *a.sun.direction;
-  const int w = a.frame.radiance.width, h = a.frame.radiance.height;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const auto d = latlong::PixelDirection(x, y, w, h);
-      if (d[0] * s[0] + d[1] * s[1] + d[2] * s[2] >= cos_cone) sky[static_cast<size_t>(y) * w + x] = 0.0f;
-    }
-  return sky;
+  if (ComparedSunCone(plan) <= 0.0) return a.mask.sky;
+  return appearance::WithoutSunCone(a.mask.sky, a.frame.radiance.width, a.frame.radiance.height, *a.sun.direction,
+                                    ComparedSunCone(plan));
 }
 
 struct GameJudgement {
   appearance::Comparison comparison;
   std::optional<double> cloud_iou;
+  double sun_cone_deg = 0.0;  // left out of the comparison
 };
 
 // The calibrated preset rendered as the game renders it, at the photo's sun, size and
@@ -116,7 +113,7 @@ GameJudgement RenderTheGame(const PhotoAnalysis& a, const FitPlan& plan, const S
   const std::vector<float> compared = ComparedPixels(a, plan);
   WriteComparisonFigure(out / "compare.png", a.frame.radiance, game.radiance, compared);
   return {appearance::Compare(a.frame.radiance, game.radiance, compared, {}, "photo.exr", "render.exr"),
-          CloudIou(game.cloud_transmittance, a.cloud_probability, compared)};
+          CloudIou(game.cloud_transmittance, a.cloud_probability, compared), ComparedSunCone(plan)};
 }
 
 fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, const GameJudgement& g) {
@@ -137,6 +134,7 @@ fit::FitCalibration Record(const std::string& photo, const PhotoAnalysis& a, con
   r.render = "render.exr";
   r.game_sky_pixels = c.sky_pixels;
   r.game_per_pixel_log_rmse = c.per_pixel_log_rmse;
+  r.game_sun_cone_deg = g.sun_cone_deg;
   r.game_appearance_error = c.appearance_error;
   r.game_cloud_iou = g.cloud_iou;
   return r;

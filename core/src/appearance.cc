@@ -205,4 +205,16 @@ CloudLayerAgreement CompareCloudLayers(const std::vector<float>& photo_t, const 
   return a;
 }
 
+std::vector<float> WithoutSunCone(std::vector<float> sky, int width, int height, const std::array<double, 3>& sun,
+                                  double cone_deg) {
+  if (sky.empty()) sky.assign(static_cast<size_t>(width) * height, 1.0f);
+  const double cos_cone = std::cos(cone_deg * kPi / 180.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, width, height);
+      if (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2] >= cos_cone) sky[static_cast<size_t>(y) * width + x] = 0.0f;
+    }
+  return sky;
+}
+
 }  // namespace skycal::appearance

@@ -188,6 +188,7 @@ nlohmann::json ToJson(const FitCalibration& c) {
                       {"game_sky_pixels", c.game_sky_pixels},
                       {"game_per_pixel_log_rmse", c.game_per_pixel_log_rmse},
                       {"game_appearance_error", c.game_appearance_error},
+                      {"game_sun_cone_deg", c.game_sun_cone_deg},
                       {"seconds", c.seconds}};
   if (c.cloud_share) j["cloud_share"] = *c.cloud_share;
   if (c.sun_uncertainty_deg) j["sun_uncertainty_deg"] = *c.sun_uncertainty_deg;
@@ -351,6 +352,7 @@ void Read(const At& a, FitCalibration* x) {
   Optional(a, "game_sky_pixels", &x->game_sky_pixels);
   Required(a, "game_per_pixel_log_rmse", &x->game_per_pixel_log_rmse);
   Required(a, "game_appearance_error", &x->game_appearance_error);
+  Optional(a, "game_sun_cone_deg", &x->game_sun_cone_deg);
   Optional(a, "game_cloud_iou", &x->game_cloud_iou);
   Optional(a, "seconds", &x->seconds);
 }

@@ -17,6 +17,7 @@
 // clamped to it before the logarithm (a black sensor pixel or a zero render has no logarithm;
 // the floor keeps them finite and heavily penalised without one pixel ruling the RMS).
 #pragma once
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,6 +62,12 @@ std::vector<BandStats> BandStatistics(const ImageRGB& image, const std::vector<f
 Comparison Compare(const ImageRGB& photo, const ImageRGB& game, const std::vector<float>& sky,
                    const Options& options, const std::string& photo_name = "photo",
                    const std::string& game_name = "game");
+
+// The sky weights less the pixels within `cone_deg` of the unit vector `sun` (their weight 0):
+// calibrate judges the game's image without the sun's disc (docs/calibrate.md), and `skycal
+// compare --sun-cone` repeats it. `sky` empty: every pixel weighs 1 first.
+std::vector<float> WithoutSunCone(std::vector<float> sky, int width, int height, const std::array<double, 3>& sun,
+                                  double cone_deg);
 
 // Where the clouds are, when both images carry their clouds' transmittance T (a synthetic
 // photo's truth, the game's render): over the pixels Compare counts, solid-angle weighted, the

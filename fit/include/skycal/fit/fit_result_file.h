@@ -87,6 +87,9 @@ struct FitCalibration {
   int game_sky_pixels = 0;
   double game_per_pixel_log_rmse = 0.0;    // natural log
   double game_appearance_error = 0.0;      // natural log, RMS over bands x statistics
+  // The sun's cone left out of both (degrees; 0: none): `skycal compare --photo photo.exr
+  // --game render.exr --mask mask.exr --sun-cone` of it gives the same two numbers.
+  double game_sun_cone_deg = 0.0;
   // Intersection over union of the game's clouds (transmittance < 0.5) and the photo's (cloud
   // probability >= 0.5) over the same pixels; absent when no clouds were drawn.
   std::optional<double> game_cloud_iou;
