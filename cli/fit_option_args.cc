@@ -37,8 +37,8 @@ void RegisterFitOptionArgs(VerbCommandLine& cl, FitOptionArgs* a, fit::FitOption
   cl.Number("--smoothness", &f->smoothness, "L", "second-difference prior on the LUT change along sun zenith (default 1e-6)");
   cl.Number("--prior-weight", &f->prior_weight, "L", "pull toward the initial LUT (default 1e-8)");
   cl.Number("--unseen-profile", &f->unseen_profile, "L",
-            "one reference: smoothness of what the game draws at the azimuths a masked\n"
-            "horizon hides, across the LUT columns (default 1e-4, 0: off)");
+            "smoothness of what the game draws at the azimuths a masked horizon hides,\n"
+            "across the LUT columns (default 1e-4, 0: off)");
   cl.Flag("--no-haziness", &a->no_haziness, "hold g at its initial value");
   cl.Flag("--numeric-derivatives", &f->numeric_derivatives, "central-difference Jacobians (the benchmark's baseline)");
   cl.Flag("--quiet", &a->quiet, "no per-iteration progress");

@@ -184,6 +184,46 @@ double HorizonBanding(const ImageRGB& image, const ImageRGB& truth, double sun_a
   return std::sqrt(sq / static_cast<double>(profile.size() - 2));
 }
 
+// The horizon masked below 10 deg but for 60 deg of azimuth opposite the sun (azimuth 15),
+// whose image rows there are alternately x1.25 and x0.8 (a haze line, a far shore): the
+// columns they read are seen only there. Returns the truth's relative error against the
+// striped pixels (what a fit that ignored the stripes would leave).
+double StripeAMaskedHorizon(FitLevel* level) {
+  double stripes_sq = 0.0, total_weight = 0.0;
+  for (int y = 0; y < level->height; ++y)
+    for (int x = 0; x < level->width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, level->width, level->height);
+      const size_t i = static_cast<size_t>(y) * level->width + x;
+      if (latlong::ElevationDeg(d) <= 10.0) {
+        if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
+          level->weight[i] = 0.0;
+        } else {
+          for (int c = 0; c < 3; ++c) level->radiance[3 * i + c] *= y % 2 ? 1.25f : 0.8f;
+          stripes_sq += 3.0 * level->weight[i] * (y % 2 ? 0.04 : 0.0625);  // (1 / 1.25 - 1)^2, (1 / 0.8 - 1)^2
+        }
+      }
+      total_weight += 3.0 * level->weight[i];
+    }
+  return std::sqrt(stripes_sq / total_weight);
+}
+
+ImageRGB RenderAt(const render::Preset& preset, const Reference& ref, int width, int height) {
+  render::RenderRequest req;
+  req.sun_dir = ref.sun_dir;
+  req.width = width;
+  req.height = height;
+  req.sun_disc = false;
+  req.ground = render::GroundMode::kZero;
+  return render::CreateRenderer(render::Backend::kCpu)->Render(preset, req);
+}
+
+// The fit's steps: the relative solve, then Gauss-Newton on the log error.
+LinearSkySolution SolveAsTheFit(const LinearSky& sky, const std::vector<double>& exposures) {
+  LinearSkySolution sol = sky.Solve(0.7, exposures, {});
+  for (int step = 0; step < 6; ++step) sol = sky.Solve(0.7, exposures, {}, &sol);
+  return sol;
+}
+
 TEST(LinearSky, TheUnseenProfileDrawsAMaskedHorizonSmoothlyAndLeavesASkySeenAllRoundAlone) {
   testing::ScratchDir dir("linear-unseen");
   OwnSky s = OwnRender(dir, render::ModelVariant::kFfxvIso, 27.0, 0.0, 256);
@@ -197,33 +237,8 @@ TEST(LinearSky, TheUnseenProfileDrawsAMaskedHorizonSmoothlyAndLeavesASkySeenAllR
     EXPECT_EQ(b.unseen_profile_terms(), 0);
     EXPECT_EQ(a.Solve(0.7, {1.0}, {}).values, b.Solve(0.7, {1.0}, {}).values);
   }
-  // The horizon masked below 10 deg but for 60 deg of azimuth opposite the sun, whose image
-  // rows there are alternately x1.25 and x0.8 (a haze line, a far shore): the columns they
-  // read are seen only there.
-  double stripes_sq = 0.0;
-  for (int y = 0; y < s.level.height; ++y)
-    for (int x = 0; x < s.level.width; ++x) {
-      const auto d = latlong::PixelDirection(x, y, s.level.width, s.level.height);
-      if (latlong::ElevationDeg(d) > 10.0) continue;
-      const size_t i = static_cast<size_t>(y) * s.level.width + x;
-      if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
-        s.level.weight[i] = 0.0;
-        continue;
-      }
-      for (int c = 0; c < 3; ++c) s.level.radiance[3 * i + c] *= y % 2 ? 1.25f : 0.8f;
-      stripes_sq += 3.0 * s.level.weight[i] * (y % 2 ? 0.04 : 0.0625);  // (1 / 1.25 - 1)^2, (1 / 0.8 - 1)^2
-    }
-  double total_weight = 0.0;
-  for (float w : s.level.weight) total_weight += 3.0 * w;
-  // The truth's relative error against the striped pixels: a fit that ignored the stripes.
-  const double stripes_rms = std::sqrt(stripes_sq / total_weight);
-  render::RenderRequest req;
-  req.sun_dir = s.ref.sun_dir;
-  req.width = s.level.width;
-  req.height = s.level.height;
-  req.sun_disc = false;
-  req.ground = render::GroundMode::kZero;
-  const ImageRGB truth = render::CreateRenderer(render::Backend::kCpu)->Render(s.truth, req);
+  const double stripes_rms = StripeAMaskedHorizon(&s.level);
+  const ImageRGB truth = RenderAt(s.truth, s.ref, s.level.width, s.level.height);
   double banding[2], rel_rmse[2];
   for (int k = 0; k < 2; ++k) {
     const LinearSky sky(s.state, {&s.level}, {s.ref}, k ? on : off);
@@ -231,9 +246,7 @@ TEST(LinearSky, TheUnseenProfileDrawsAMaskedHorizonSmoothlyAndLeavesASkySeenAllR
       EXPECT_GT(sky.partly_seen_columns(), 3);
       EXPECT_GT(sky.unseen_profile_terms(), 100);
     }
-    // The fit's steps: the relative solve, then Gauss-Newton on the log error.
-    LinearSkySolution sol = sky.Solve(0.7, {1.0}, {});
-    for (int step = 0; step < 6; ++step) sol = sky.Solve(0.7, {1.0}, {}, &sol);
+    const LinearSkySolution sol = SolveAsTheFit(sky, {1.0});
     rel_rmse[k] = sol.rel_rmse;
     banding[k] = HorizonBanding(RenderTied(sky, sol, &s), truth, 15.0);
   }
@@ -246,6 +259,37 @@ TEST(LinearSky, TheUnseenProfileDrawsAMaskedHorizonSmoothlyAndLeavesASkySeenAllR
   EXPECT_LT(banding[1], 0.3 * banding[0]) << "on: " << banding[1] << ", off: " << banding[0];
   // What the pixels see is still mostly fitted: the error is a fraction of the stripes'.
   EXPECT_LT(rel_rmse[1], 0.3 * stripes_rms) << "on: " << rel_rmse[1] << ", the stripes " << stripes_rms;
+}
+
+// A day (free rows: every LUT row an unknown, the references' suns 27 and 35 deg) from one
+// camera, the same masked and striped horizon in both frames: the joint steps keep what
+// each reference's prior drew.
+TEST(LinearSky, TheUnseenProfileHoldsForADayOfFreeRows) {
+  testing::ScratchDir dir("linear-unseen-day");
+  OwnSky a = OwnRender(dir, render::ModelVariant::kFfxvIso, 27.0, 0.0, 256);
+  testing::ScratchDir dir2("linear-unseen-day2");
+  OwnSky b = OwnRender(dir2, render::ModelVariant::kFfxvIso, 35.0, 0.0, 256);
+  StripeAMaskedHorizon(&a.level);
+  StripeAMaskedHorizon(&b.level);
+  const std::vector<Reference> refs = {a.ref, b.ref};
+  FitState state = FitState::FromPreset(render::Preset(a.state.preset), render::ModelVariant::kFfxvIso, 2);
+  const ImageRGB truth = RenderAt(a.truth, a.ref, a.level.width, a.level.height);
+  double banding[2];
+  for (int k = 0; k < 2; ++k) {
+    LinearSkyOptions lo;
+    lo.unknowns = LinearUnknowns::kFreeRows;
+    lo.row_fitted.assign(state.preset.luts.grid.n_theta, true);
+    lo.unseen_profile = k ? 1e-4 : 0.0;
+    const LinearSky day(state, {&a.level, &b.level}, refs, lo);
+    if (k) EXPECT_GT(day.unseen_profile_terms(), 200);
+    const LinearSkySolution sol = SolveAsTheFit(day, {1.0, 1.0});
+    FitState fitted = state;
+    day.Apply(sol, &fitted);
+    fitted.g = sol.g;
+    banding[k] = HorizonBanding(RenderAt(fitted.ToPreset(), a.ref, a.level.width, a.level.height), truth, 15.0);
+  }
+  EXPECT_GT(banding[0], 0.5) << "off";
+  EXPECT_LT(banding[1], 0.3 * banding[0]) << "on: " << banding[1] << ", off: " << banding[0];
 }
 
 TEST(LinearSky, RefusesLevelsOfDifferentSizesBeforeReadingThemAndNamesBothFiles) {

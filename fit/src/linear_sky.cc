@@ -116,10 +116,9 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
   start_scale_ = StartScale(exposures, *MiePhases(state.g));
-  if (o_.unknowns == LinearUnknowns::kTiedRows) {
-    column_sectors_ = o_.column_sectors.empty() ? ColumnSectors() : o_.column_sectors;
-    if (o_.unseen_profile > 0.0) BuildProfileTerms(refs[0].sun_dir);
-  }
+  if (o_.unknowns == LinearUnknowns::kTiedRows)
+    column_sectors_ = o_.column_sectors.empty() ? ColumnSectors(0) : o_.column_sectors;
+  if (o_.unseen_profile > 0.0 && o_.unknowns != LinearUnknowns::kPerImageRow) BuildProfileTerms(refs);
 }
 
 double LinearSky::InitialLut(int t, int row, int col, int ch) const {

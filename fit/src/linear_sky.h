@@ -214,9 +214,15 @@ class LinearSky {
   // The rendered profile at the unseen azimuths (linear_sky_unseen.cc): which sectors each
   // column is read in, the (column triple, sector) terms, and their rows in the normal
   // equations at haziness g.
-  std::vector<std::vector<char>> ColumnSectors() const;
-  void BuildProfileTerms(const std::array<double, 3>& sun_dir);
+  std::vector<std::vector<char>> ColumnSectors(size_t ref) const;
+  void BuildProfileTerms(const std::vector<Reference>& refs);
+  void AddProfileTerms(const std::vector<std::vector<char>>& sectors, const Reference& ref);
   void AddUnseenProfile(double g, const LinearSkySolution* linearize_at, NormalSystem* sys) const;
+  struct ProfileTerm;
+  // One residual of a term for channel c: sum_i s[i] ln(L_i / L0_i), `phase` the tables'
+  // phases at each column's direction.
+  void AddProfileResidual(const ProfileTerm& t, const double (&phase)[3][3], int c, const double (&s)[3],
+                          const LinearSkySolution* linearize_at, NormalSystem* sys) const;
   void SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const;  // values, held
   void AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const;       // cost, rel_rmse
 
@@ -231,12 +237,18 @@ class LinearSky {
   double held_overcast_zenith_ = 0.0;  // L_z when it is not an unknown, cd/m^2
   double start_scale_ = 1.0;           // StartScale at the state's g and exposures
   std::vector<std::vector<char>> column_sectors_;  // tied rows: ColumnSectors or the given
-  // Three consecutive LUT columns seen somewhere and not all round, at one azimuth sector
-  // where not all three are seen: the view direction's phase terms at each column's node
-  // elevation.
+  // Three consecutive LUT columns one reference sees somewhere and not all round, at one
+  // azimuth sector where it does not see all three: per column, the view direction's phase
+  // terms at the column's node elevation, and the unknowns the game blends there (per table,
+  // the tied value, or the two free rows around the reference's sun with their weights).
   struct ProfileTerm {
-    int col[3];
+    struct Node {
+      int table, unknown_ch0;
+      double weight;
+    };
     double mu[3], one_minus_mu[3], phase_r[3];
+    std::array<std::array<Node, 6>, 3> nodes;  // at most 3 tables x 2 rows
+    std::array<int, 3> n_nodes{};
   };
   std::vector<ProfileTerm> profile_terms_;
   int n_refs_ = 0;

@@ -7,29 +7,44 @@
 // sun's azimuth, behind the buildings, the Mie lobe of one column and the Rayleigh of the
 // next make bright and dark stripes parallel to the horizon (bench/results/horizon_columns.md).
 //
-// The prior: at each 10-degree sector of azimuth where a column is unseen, the change of the
-// rendered radiance against the start's, ln(L / L0), varies linearly across three
-// consecutive columns (its second difference is 0). It is a prior on what the game draws
-// there, not on each table's shape: the split between the tables stays the data's wherever
-// the data see it, and a sky seen all round (every column read at every azimuth, or not at
-// all) gets no term, so its fit is unchanged.
+// The prior: at each 10-degree sector of azimuth where one of three consecutive columns is
+// unseen, the change of the rendered radiance against the start's, ln(L / L0), is pulled
+// toward a straight line across the three (its second difference) and, with kUnseenSlope
+// times that weight, toward flat (the first difference of the upper two), so that a long
+// unseen run does not extrapolate a slope. It is a prior on what the game
+// draws there, not on each table's shape: the split between the tables stays the data's
+// wherever the data see it, and a sky seen all round (every column read at every azimuth, or
+// not at all) gets no term, so its fit is unchanged. One reference: the tied values; a day:
+// per reference, the free rows around its sun.
+#include <array>
 #include <cmath>
 
 #include "linear_sky.h"
 #include "linear_sky_normal.h"
 #include "model_structure.h"
 #include "skycal/core/latlong.h"
+#include "skycal/render/sky_params.h"
 
 namespace skycal::fit {
+namespace {
+// The first difference's weight over the second's. The second alone extrapolates the slope of
+// the change: on a model sky masked below 10 deg but for 60 deg of azimuth, it drew the unseen
+// sun side 2.4x off the truth (the stripes away, but ln 0.86 where the fit without any prior
+// was ln 0.28 off); with the first difference 3x as heavy ln 0.26, the photos' stripes as
+// well removed (bench/results/horizon_columns.md).
+constexpr double kUnseenSlope = 3.0;
+}  // namespace
 
-std::vector<std::vector<char>> LinearSky::ColumnSectors() const {
+std::vector<std::vector<char>> LinearSky::ColumnSectors(size_t ref) const {
   const int n_gamma = state_.preset.luts.grid.n_gamma;
   std::vector<std::vector<char>> seen(n_gamma, std::vector<char>(kSectors, 0));
-  for (const Row& row : rows_)
+  for (const Row& row : rows_) {
+    if (row.ref != ref) continue;
     for (const Row::Node& n : row.nodes) {
       if (n.col < 0 || n.weight <= 0.0) continue;
       for (const Pixel& px : row.pixels) seen[n.col][static_cast<size_t>(px.x) * kSectors / width_] = 1;
     }
+  }
   return seen;
 }
 
@@ -43,13 +58,25 @@ int LinearSky::partly_seen_columns() const {
   return n;
 }
 
-void LinearSky::BuildProfileTerms(const std::array<double, 3>& sun_dir) {
-  const int n_gamma = state_.preset.luts.grid.n_gamma;
+void LinearSky::BuildProfileTerms(const std::vector<Reference>& refs) {
+  if (o_.unknowns == LinearUnknowns::kTiedRows) {
+    AddProfileTerms(column_sectors_, refs[0]);
+    return;
+  }
+  for (size_t r = 0; r < refs.size(); ++r) AddProfileTerms(ColumnSectors(r), refs[r]);
+}
+
+void LinearSky::AddProfileTerms(const std::vector<std::vector<char>>& sectors, const Reference& ref) {
+  const auto& grid = state_.preset.luts.grid;
+  const int n_gamma = grid.n_gamma;
   std::vector<int> sectors_seen(n_gamma, 0);
   for (int col = 0; col < n_gamma; ++col)
-    for (char s : column_sectors_[col]) sectors_seen[col] += s;
+    for (char s : sectors[col]) sectors_seen[col] += s;
   NoLut none;
   StructureModel<double> m(none);
+  auto p = render::SkyParamsFromPreset<StructureModel<double>::SkyParams>(state_.preset);
+  const auto lr = m.lut_row(ref.sun_dir[1], p);
+  const double wr[2] = {1.0 - lr.frow, lr.frow};
   for (int a = 0; a + 2 < n_gamma; ++a) {
     bool all_seen_somewhere = true, some_partly = false;
     for (int i = 0; i < 3; ++i) {
@@ -58,17 +85,26 @@ void LinearSky::BuildProfileTerms(const std::array<double, 3>& sun_dir) {
     }
     if (!all_seen_somewhere || !some_partly) continue;
     for (int k = 0; k < kSectors; ++k) {
-      if (column_sectors_[a][k] && column_sectors_[a + 1][k] && column_sectors_[a + 2][k]) continue;
+      if (sectors[a][k] && sectors[a + 1][k] && sectors[a + 2][k]) continue;
       ProfileTerm t;
       const double longitude = latlong::Longitude((k + 0.5) * (width_ - 1) / kSectors, width_);
       for (int i = 0; i < 3; ++i) {
+        const int col = a + i;
         // The node's elevation: sin(e) = (col / (n_gamma - 1))^2 (sky_model.glsl.h lut_col).
-        const double q = static_cast<double>(a + i) / (n_gamma - 1);
+        const double q = static_cast<double>(col) / (n_gamma - 1);
         const auto v = latlong::Direction(std::asin(q * q), longitude);
-        t.col[i] = a + i;
-        t.one_minus_mu[i] = OneMinusMu(v, sun_dir);
+        t.one_minus_mu[i] = OneMinusMu(v, ref.sun_dir);
         t.mu[i] = 1.0 - t.one_minus_mu[i];
         t.phase_r[i] = m.phase_rayleigh(t.mu[i]);
+        for (int tb = 0; tb < state_.tables; ++tb) {
+          if (o_.unknowns == LinearUnknowns::kTiedRows) {
+            t.nodes[i][t.n_nodes[i]++] = {tb, (tb * n_gamma + col) * 3, 1.0};
+            continue;
+          }
+          for (int dr = 0; dr < 2; ++dr)  // free rows: the two rows around the sun, blended
+            if (wr[dr] > 0.0 && o_.row_fitted[lr.row0 + dr])
+              t.nodes[i][t.n_nodes[i]++] = {tb, ((tb * grid.n_theta + lr.row0 + dr) * n_gamma + col) * 3, wr[dr]};
+        }
       }
       profile_terms_.push_back(t);
     }
@@ -76,42 +112,53 @@ void LinearSky::BuildProfileTerms(const std::array<double, 3>& sun_dir) {
 }
 
 void LinearSky::AddUnseenProfile(double g, const LinearSkySolution* linearize_at, NormalSystem* sys) const {
-  const int n_gamma = state_.preset.luts.grid.n_gamma;
-  const double sqrt_w = std::sqrt(o_.unseen_profile / kSectors);
-  const double second[3] = {1.0, -2.0, 1.0};
+  // The second difference (straight across three columns) and, kUnseenSlope times as heavy,
+  // the first difference of the last two (flat), each per (term, channel).
+  const double w2 = std::sqrt(o_.unseen_profile / kSectors), w1 = std::sqrt(kUnseenSlope) * w2;
+  const double second[3] = {w2, -2.0 * w2, w2}, first[3] = {0.0, -w1, w1};
   NoLut none;
   StructureModel<double> m(none);
-  for (const ProfileTerm& t : profile_terms_)
+  for (const ProfileTerm& t : profile_terms_) {
+    const double phase[3][3] = {
+        {t.phase_r[0], m.phase_cornette_shanks(t.mu[0], t.one_minus_mu[0], g), kIsotropicPhase},
+        {t.phase_r[1], m.phase_cornette_shanks(t.mu[1], t.one_minus_mu[1], g), kIsotropicPhase},
+        {t.phase_r[2], m.phase_cornette_shanks(t.mu[2], t.one_minus_mu[2], g), kIsotropicPhase}};
     for (int c = 0; c < 3; ++c) {
-      int index[9];
-      double coef[9], target = 0.0;
-      int n = 0;
-      bool usable = true;
-      for (int i = 0; i < 3; ++i) {
-        const double phase[3] = {t.phase_r[i], m.phase_cornette_shanks(t.mu[i], t.one_minus_mu[i], g), kIsotropicPhase};
-        double l0 = 0.0, lc = 0.0;
-        for (int tb = 0; tb < state_.tables; ++tb) {
-          const int u = (tb * n_gamma + t.col[i]) * 3 + c;
-          l0 += phase[tb] * start_scale_ * initial_[u];
-          if (linearize_at) lc += phase[tb] * linearize_at->values[u];
-        }
-        // Relative form L / L0 in the first solve; the log form ln(L / L0), linearised at
-        // the current L, in the Gauss-Newton steps.
-        const double norm = linearize_at ? lc : l0;
-        if (!(norm > 0.0) || !(l0 > 0.0)) usable = false;
-        if (!usable) break;
-        if (linearize_at) target -= sqrt_w * second[i] * (std::log(lc / l0) - 1.0);
-        for (int tb = 0; tb < state_.tables; ++tb) {
-          index[n] = (tb * n_gamma + t.col[i]) * 3 + c;
-          coef[n++] = sqrt_w * second[i] * phase[tb] / norm;
-        }
-      }
-      if (!usable) continue;
-      for (int i = 0; i < n; ++i) {
-        sys->rhs[index[i]] += target * coef[i];
-        for (int j = 0; j < n; ++j) sys->triplets.emplace_back(index[i], index[j], coef[i] * coef[j]);
-      }
+      AddProfileResidual(t, phase, c, second, linearize_at, sys);
+      AddProfileResidual(t, phase, c, first, linearize_at, sys);
     }
+  }
+}
+
+void LinearSky::AddProfileResidual(const ProfileTerm& t, const double (&phase)[3][3], int c, const double (&s)[3],
+                                   const LinearSkySolution* linearize_at, NormalSystem* sys) const {
+  std::array<int, 18> index;
+  std::array<double, 18> coef;
+  double target = 0.0;
+  int n = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (s[i] == 0.0) continue;
+    double l0 = 0.0, lc = 0.0;
+    for (int j = 0; j < t.n_nodes[i]; ++j) {
+      const ProfileTerm::Node& nd = t.nodes[i][j];
+      l0 += phase[i][nd.table] * nd.weight * start_scale_ * initial_[nd.unknown_ch0 + c];
+      if (linearize_at) lc += phase[i][nd.table] * nd.weight * linearize_at->values[nd.unknown_ch0 + c];
+    }
+    // Relative form L / L0 in the first solve; the log form ln(L / L0), linearised at the
+    // current L, in the Gauss-Newton steps.
+    const double norm = linearize_at ? lc : l0;
+    if (!(norm > 0.0 && l0 > 0.0)) return;
+    if (linearize_at) target -= s[i] * (std::log(lc / l0) - 1.0);
+    for (int j = 0; j < t.n_nodes[i]; ++j) {
+      const ProfileTerm::Node& nd = t.nodes[i][j];
+      index[n] = nd.unknown_ch0 + c;
+      coef[n++] = s[i] * phase[i][nd.table] * nd.weight / norm;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    sys->rhs[index[i]] += target * coef[i];
+    for (int j = 0; j < n; ++j) sys->triplets.emplace_back(index[i], index[j], coef[i] * coef[j]);
+  }
 }
 
 }  // namespace skycal::fit

@@ -312,6 +312,7 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   lo.fit_overcast = fit_overcast;
   lo.smoothness = o.smoothness;
   lo.prior_weight = o.prior_weight;
+  lo.unseen_profile = o.unseen_profile;
   const LinearSky day(*state, level_ptrs, refs, lo);
   const DayJoint joint = RunDayJoint(day, o, out.ring_scales_per_reference, n, state);
   const double joint_time = Seconds(t_joint, Clock::now());

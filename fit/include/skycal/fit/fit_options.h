@@ -45,11 +45,12 @@ struct FitOptions {
   int max_iterations_per_level = 50;  // Ceres iterations per pyramid level (the polish: its only level)
   double smoothness = 1e-6;         // second-difference prior on the LUT change along sun zenith (rows)
   double prior_weight = 1e-8;       // weight pulling each LUT entry (log) toward the initial preset
-  // One reference: the weight of the rendered profile's second difference across the LUT
-  // columns at the azimuths no fitted pixel reads (fit/src/linear_sky_unseen.cc). The game
-  // draws a column at every azimuth; where a masked horizon leaves a column seen at a few,
-  // those pixels would set what it draws all round (stripes along the horizon). A sky seen
-  // all round gets no such term. Why 1e-4: bench/results/horizon_columns.md. 0: off.
+  // The weight of the rendered profile's second difference across the LUT columns at the
+  // azimuths no fitted pixel reads, in the linear start (fit/src/linear_sky_unseen.cc; one
+  // reference and a day alike). The game draws a column at every azimuth; where a masked
+  // horizon leaves a column seen at a few, those pixels would set what it draws all round
+  // (stripes along the horizon). A sky seen all round gets no such term. Why 1e-4:
+  // bench/results/horizon_columns.md. 0: off.
   double unseen_profile = 1e-4;
   bool fit_haziness = true;
   bool fit_overcast = true;         // fit the overcast zenith luminance (weight held, see docs)
