@@ -22,7 +22,7 @@
 // Regularisation: a damping of the normal equations (see LinearSkyOptions::damping), a
 // 1e-14 pull toward the start's shape (only entries no pixel sees feel it) and, with free
 // rows, the second difference of the change along the sun zenith (FitOptions::smoothness);
-// with tied rows, the rendered profile across the LUT columns at the azimuths no pixel reads
+// tied or free, the rendered profile across the LUT columns at the azimuths no pixel reads
 // (FitOptions::unseen_profile, linear_sky_unseen.cc). Entries the solve would make
 // non-positive are held at 1e-6 of their initial value (an active set, formed anew in every
 // solve).
@@ -62,8 +62,9 @@ struct LinearSkyOptions {
   double damping = 1e-6;         // tied and per-row unknowns only
   double prior_weight = 1e-8;    // free rows: the pull toward the start (FitOptions::prior_weight)
   double smoothness = 1e-6;      // as FitOptions::smoothness (free rows)
-  // Tied rows: FitOptions::unseen_profile, the weight of the rendered profile's second
-  // difference across the LUT columns at the azimuths no fitted pixel reads (0: off).
+  // FitOptions::unseen_profile: the weight of the rendered profile's second difference across
+  // the LUT columns at the azimuths no fitted pixel reads (and of its flat pull, times
+  // linear_sky_unseen.cc's kUnseenSlope), tied or free rows (0: off).
   double unseen_profile = 0.0;
   // Per LUT column, per azimuth sector (kSectors of them), whether some fitted pixel reads
   // it: given (the finest level's, so that every level smooths the same azimuths), else

@@ -11,11 +11,11 @@
 // unseen, the change of the rendered radiance against the start's, ln(L / L0), is pulled
 // toward a straight line across the three (its second difference) and, with kUnseenSlope
 // times that weight, toward flat (the first difference of the upper two), so that a long
-// unseen run does not extrapolate a slope. It is a prior on what the game
-// draws there, not on each table's shape: the split between the tables stays the data's
-// wherever the data see it, and a sky seen all round (every column read at every azimuth, or
-// not at all) gets no term, so its fit is unchanged. One reference: the tied values; a day:
-// per reference, the free rows around its sun.
+// unseen run does not extrapolate a slope. It is a prior on what the game draws there, not
+// on each table's shape: the split between the tables stays the data's wherever the data see
+// it, and a sky seen all round (every column read at every azimuth, or not at all) gets no
+// term, so its fit is unchanged. One reference: the tied values; a day: per reference, the
+// free rows around its sun.
 #include <array>
 #include <cmath>
 
@@ -27,11 +27,11 @@
 
 namespace skycal::fit {
 namespace {
-// The first difference's weight over the second's. The second alone extrapolates the slope of
-// the change: on a model sky masked below 10 deg but for 60 deg of azimuth, it drew the unseen
-// sun side 2.4x off the truth (the stripes away, but ln 0.86 where the fit without any prior
-// was ln 0.28 off); with the first difference 3x as heavy ln 0.26, the photos' stripes as
-// well removed (bench/results/horizon_columns.md).
+// The first difference's weight over the second's. The second alone carries the slope of the
+// change across a long unseen run (a horizon masked to 10 deg drew the unseen sun side far off
+// a model sky's truth); 3 is the lightest flat pull that missed it by no more than the fit
+// without any prior, and heavier ones cost the twilight photos' appearance
+// (bench/results/horizon_columns.md).
 constexpr double kUnseenSlope = 3.0;
 }  // namespace
 
