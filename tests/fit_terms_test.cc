@@ -25,6 +25,7 @@
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 #include "test_util.h"
+#include "unseen_profile_term.h"
 
 namespace skycal {
 namespace {
@@ -270,6 +271,48 @@ TEST(FitTerms, CoarseLevelsSavedIsEstimatedFromThisRunWhenThePolishRan) {
   for (size_t i = 0; i + 1 < widths.size(); ++i) share += (widths[i] / 128.0) * (widths[i] / 128.0);
   ASSERT_GT(share, 0.0);
   EXPECT_NEAR(c.saved_ms, 1e3 * polished.levels.back().time_s * share, 1e-9 * c.saved_ms);
+}
+
+// The polish's unseen-profile residuals (unseen_profile_term.h) in numbers: zero at the start,
+// blind to a level common to the three columns (the data set the level), and the second and
+// first differences of the change when one column moves.
+TEST(UnseenProfileCost, ZeroAtTheStartBlindToALevelAndTheDifferencesOfOneColumn) {
+  double p[3][2] = {{0.0, 0.0}, {0.0, 0.0}, {0.0, 0.0}};  // two LUT parameters per column (log)
+  fit::UnseenProfileResidual r;
+  const double a[3][2] = {{2.0, 0.5}, {1.5, 3.0}, {0.25, 4.0}};
+  for (int i = 0; i < 3; ++i) {
+    for (int n = 0; n < 2; ++n) r.nodes[i].push_back({&p[i][n], a[i][n]});
+    r.log_l0[i] = std::log(a[i][0] + a[i][1]);
+  }
+  r.second = {0.1, -0.2, 0.1};
+  r.first = {0.0, -0.3, 0.3};
+  std::unique_ptr<ceres::CostFunction> cost(fit::MakeUnseenProfileCost(r));
+  ASSERT_EQ(cost->parameter_block_sizes().size(), 6u);
+  ASSERT_EQ(cost->num_residuals(), 2);
+  const double* blocks[6] = {&p[0][0], &p[0][1], &p[1][0], &p[1][1], &p[2][0], &p[2][1]};
+  double res[2];
+  auto evaluate = [&] { ASSERT_TRUE(cost->Evaluate(blocks, res, nullptr)); };
+  evaluate();
+  EXPECT_NEAR(res[0], 0.0, 1e-15);
+  EXPECT_NEAR(res[1], 0.0, 1e-15);
+  for (auto& column : p) column[0] = column[1] = 0.7;  // every column x e^0.7: a level
+  evaluate();
+  EXPECT_NEAR(res[0], 0.0, 1e-12);
+  EXPECT_NEAR(res[1], 0.0, 1e-12);
+  for (auto& column : p) column[0] = column[1] = 0.0;
+  p[1][0] = p[1][1] = 0.4;  // the middle column x e^0.4
+  evaluate();
+  EXPECT_NEAR(res[0], -0.2 * 0.4, 1e-12);
+  EXPECT_NEAR(res[1], -0.3 * 0.4, 1e-12);
+  // One parameter's derivative is its share of its column's L times that column's weights.
+  p[1][0] = p[1][1] = 0.0;
+  double j[6][2];
+  double* jacobians[6] = {j[0], j[1], j[2], j[3], j[4], j[5]};
+  ASSERT_TRUE(cost->Evaluate(blocks, res, jacobians));
+  EXPECT_NEAR(j[2][0], -0.2 * 1.5 / 4.5, 1e-12);
+  EXPECT_NEAR(j[2][1], -0.3 * 1.5 / 4.5, 1e-12);
+  EXPECT_NEAR(j[5][0], 0.1 * 4.0 / 4.25, 1e-12);
+  EXPECT_NEAR(j[5][1], 0.3 * 4.0 / 4.25, 1e-12);
 }
 
 }  // namespace

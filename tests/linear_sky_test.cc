@@ -11,6 +11,7 @@
 #include "skycal/core/latlong.h"
 #include "skycal/core/luminance.h"
 #include "skycal/fit/reference.h"
+#include "skycal/fit/sky_fit.h"
 #include "skycal/refsky/reference_skies.h"
 #include "skycal/render/renderer.h"
 #include "test_presets.h"
@@ -287,6 +288,41 @@ TEST(LinearSky, TheUnseenProfileHoldsForADayOfFreeRows) {
     day.Apply(sol, &fitted);
     fitted.g = sol.g;
     banding[k] = HorizonBanding(RenderAt(fitted.ToPreset(), a.ref, a.level.width, a.level.height), truth, 15.0);
+  }
+  EXPECT_GT(banding[0], 0.5) << "off";
+  EXPECT_LT(banding[1], 0.3 * banding[0]) << "on: " << banding[1] << ", off: " << banding[0];
+}
+
+// The Ceres polish (it runs with a probe, or --polish) keeps what the linear start drew where
+// no pixel looks: without the prior in the polish, the polish put the stripes back.
+TEST(LinearSky, ThePolishKeepsTheUnseenProfile) {
+  testing::ScratchDir dir("linear-unseen-polish");
+  OwnSky s = OwnRender(dir, render::ModelVariant::kFfxvIso, 27.0, 0.0, 256);
+  const ImageRGB truth = RenderAt(s.truth, s.ref, s.level.width, s.level.height);
+  // The same mask and stripes as above, on the reference itself.
+  Reference striped = s.ref;
+  for (int y = 0; y < striped.radiance.height; ++y)
+    for (int x = 0; x < striped.radiance.width; ++x) {
+      const auto d = latlong::PixelDirection(x, y, striped.radiance.width, striped.radiance.height);
+      if (latlong::ElevationDeg(d) > 10.0) continue;
+      const size_t i = static_cast<size_t>(y) * striped.radiance.width + x;
+      if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
+        if (striped.pixel_class[i] == PixelClass::kSky) striped.pixel_class[i] = PixelClass::kUserMasked;
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) striped.radiance.at(x, y, c) *= y % 2 ? 1.25f : 0.8f;
+    }
+  auto cpu = render::CreateRenderer(render::Backend::kCpu);
+  double banding[2];
+  for (int k = 0; k < 2; ++k) {
+    FitOptions o;
+    o.variant = render::ModelVariant::kFfxvIso;
+    o.polish = true;
+    o.verbose = false;
+    o.unseen_profile = k ? 1e-4 : 0.0;
+    const FitResult r = FitSky({striped}, s.state.preset, o, *cpu);
+    ASSERT_GT(r.iterations, 0) << "the polish ran";
+    banding[k] = HorizonBanding(RenderAt(r.preset, s.ref, s.level.width, s.level.height), truth, 15.0);
   }
   EXPECT_GT(banding[0], 0.5) << "off";
   EXPECT_LT(banding[1], 0.3 * banding[0]) << "on: " << banding[1] << ", off: " << banding[0];

@@ -37,6 +37,7 @@
 #include "skycal/core/image.h"
 #include "skycal/fit/fit_options.h"
 #include "pyramid.h"
+#include "unseen_profile.h"
 #include "skycal/fit/reference.h"
 
 namespace skycal::fit {
@@ -149,6 +150,9 @@ class LinearSky {
   // LUT columns read at some sectors but not all; the unseen-profile terms built for them.
   int partly_seen_columns() const;
   int unseen_profile_terms() const { return static_cast<int>(profile_terms_.size()); }
+  // The same terms on the state's parameters (log_delta or log_lut), the Mie phase at the
+  // state's g: the Ceres polish's residuals (unseen_profile_term.h).
+  std::vector<UnseenProfileResidual> UnseenProfileResiduals(FitState* state) const;
   int width() const { return width_; }  // of the level it was built on
   size_t num_samples() const { return error_weight_.size(); }
 

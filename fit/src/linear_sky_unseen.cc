@@ -161,4 +161,39 @@ void LinearSky::AddProfileResidual(const ProfileTerm& t, const double (&phase)[3
   }
 }
 
+std::vector<UnseenProfileResidual> LinearSky::UnseenProfileResiduals(FitState* state) const {
+  const auto& grid = state->preset.luts.grid;
+  const double w2 = std::sqrt(o_.unseen_profile / kSectors), w1 = std::sqrt(kUnseenSlope) * w2;
+  const bool tied = o_.unknowns == LinearUnknowns::kTiedRows;
+  NoLut none;
+  StructureModel<double> m(none);
+  std::vector<UnseenProfileResidual> out;
+  for (const ProfileTerm& t : profile_terms_)
+    for (int c = 0; c < 3; ++c) {
+      UnseenProfileResidual r;
+      r.second = {w2, -2.0 * w2, w2};
+      r.first = {0.0, -w1, w1};
+      for (int i = 0; i < 3; ++i) {
+        const double phase[3] = {t.phase_r[i], m.phase_cornette_shanks(t.mu[i], t.one_minus_mu[i], state->g),
+                                 kIsotropicPhase};
+        double l0 = 0.0;
+        for (int j = 0; j < t.n_nodes[i]; ++j) {
+          const ProfileTerm::Node& nd = t.nodes[i][j];
+          const int u = nd.unknown_ch0 + c, col = (u / 3) % grid.n_gamma;
+          const double start = phase[nd.table] * nd.weight * initial_[u];
+          l0 += start;
+          if (tied) {
+            r.nodes[i].push_back({&state->log_delta[state->DeltaIndex(nd.table, col, c)], start});
+          } else {
+            const int row = (u / (3 * grid.n_gamma)) % grid.n_theta;
+            r.nodes[i].push_back({&state->log_lut[state->Index(nd.table, row, col, c)], phase[nd.table] * nd.weight});
+          }
+        }
+        r.log_l0[i] = std::log(l0);
+      }
+      out.push_back(std::move(r));
+    }
+  return out;
+}
+
 }  // namespace skycal::fit

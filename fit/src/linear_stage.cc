@@ -321,6 +321,7 @@ LinearStageOutcome RunLinearStageDay(const std::vector<Reference>& refs, const F
   const double check_time = Seconds(t_check, Clock::now());
   out.observed_columns.clear();
   for (const auto& tc : day.ObservedColumns()) out.observed_columns.insert(tc);
+  out.unseen_profile = day.UnseenProfileResiduals(state);
 
   LinearStartDayReport report;
   report.mode = "each reference on its own (tied rows), combined along the LUT rows, then Gauss-Newton steps of the "
@@ -482,6 +483,7 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
   }
   result->linear_start.single = std::move(report);
   for (const auto& tc : sky.ObservedColumns()) out.observed_columns.insert(tc);
+  out.unseen_profile = sky.UnseenProfileResiduals(state);
   if (renderer) DecidePolish(o, probed, "the linear start converged on the robust log objective itself", &out, result);
   return out;
 }

@@ -11,6 +11,7 @@
 #include "fit_state.h"
 #include "linear_start.h"
 #include "skycal/fit/sky_fit.h"
+#include "unseen_profile.h"
 
 namespace skycal::fit {
 
@@ -24,6 +25,8 @@ struct LinearStageOutcome {
   double render_difference = 0.0;              // the render check's max relative difference
   bool render_agrees = false;
   bool polish = true;                          // the Ceres polish still runs
+  // FitOptions::unseen_profile's terms on the state's parameters, for the polish.
+  std::vector<UnseenProfileResidual> unseen_profile;
 };
 
 // One reference: the linear start on the tied rows, the render check, the polish decision.

@@ -16,6 +16,7 @@
 #include "pyramid.h"
 #include "sky_fit_terms.h"
 #include "sky_terms.h"
+#include "unseen_profile_term.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 
@@ -330,9 +331,10 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
 
   SkyRowsTerm sky_rows(SkyRowsSetup(refs.size(), o, tied, linear));
   LutPriorTerm priors({&sky_rows, row_fitted, tied, o.prior_weight, o.smoothness});
+  UnseenProfileTerm unseen(linear.unseen_profile);
   // Order matters only for the problem's block order: the sky rows, the probe, the
   // priors, then any extra term (a cloud-lighting term plugs in here, FitSkyWithTerms).
-  std::vector<FitTerm*> terms = {&sky_rows, &probe, &priors};
+  std::vector<FitTerm*> terms = {&sky_rows, &probe, &priors, &unseen};
   terms.insert(terms.end(), extra_terms.begin(), extra_terms.end());
   SolveLevels(terms, refs, o, widths, linear, fit_overcast, t_start, renderer, &state, &result);
 
