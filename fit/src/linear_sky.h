@@ -224,10 +224,20 @@ class LinearSky {
   void AddProfileTerms(const std::vector<std::vector<char>>& sectors, const Reference& ref);
   void AddUnseenProfile(double g, const LinearSkySolution* linearize_at, NormalSystem* sys) const;
   struct ProfileTerm;
+  // The normal equations of consecutive residuals on the same unknowns, summed densely.
+  struct ProfileBlock {
+    static constexpr int kMax = 18;  // 3 columns x 3 tables x 2 rows
+    int n = 0;
+    std::array<int, kMax> index{};
+    std::array<double, kMax * kMax> normal{};
+    std::array<double, kMax> rhs{};
+    void Flush(NormalSystem* sys);  // into the system's triplets and rhs; empties the block
+  };
   // One residual of a term for channel c: sum_i s[i] ln(L_i / L0_i), `phase` the tables'
-  // phases at each column's direction.
-  void AddProfileResidual(const ProfileTerm& t, const double (&phase)[3][3], int c, const double (&s)[3],
-                          const LinearSkySolution* linearize_at, NormalSystem* sys) const;
+  // phases at each column's direction; into `block`, flushed first when its unknowns differ.
+  void AddProfileResidual(const ProfileTerm& t, const std::array<std::array<double, 3>, 3>& phase, int c,
+                          const double (&s)[3], const LinearSkySolution* linearize_at, ProfileBlock* block,
+                          NormalSystem* sys) const;
   void SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const;  // values, held
   void AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const;       // cost, rel_rmse
 
