@@ -68,13 +68,13 @@ void WriteStagedInputs(const PhotoAnalysis& a, const StagedDirectory& out, const
   WriteExrRGBWithPlanes(out / "mask.exr", rgb, {{"confidence", a.mask.confidence}}, attributes, ExrPixelType::kHalf);
 }
 
+// The cone left out of the comparison, degrees (0: none; a nominal sun draws no disc).
+// `skycal compare --mask mask.exr --sun-cone` of it repeats the numbers.
+double ComparedSunCone(const FitPlan& plan) { return plan.draw_sun_disc ? plan.fit.fit.sun_cone_deg : 0.0; }
+
 // The sky pixels the game's image is judged on: the sky mask less the fit's sun cone. A
 // photo's disc is clipped or lossily encoded (its radiance unmeasured), and its few pixels,
 // tens of thousands of times the sky, would outweigh the rest of the sky in a log RMSE.
-// The cone left out, degrees (0: none; a nominal sun draws no disc). `skycal compare
-// --mask mask.exr --sun-cone` of it repeats the numbers.
-double ComparedSunCone(const FitPlan& plan) { return plan.draw_sun_disc ? plan.fit.fit.sun_cone_deg : 0.0; }
-
 std::vector<float> ComparedPixels(const PhotoAnalysis& a, const FitPlan& plan) {
   if (ComparedSunCone(plan) <= 0.0) return a.mask.sky;
   return appearance::WithoutSunCone(a.mask.sky, a.frame.radiance.width, a.frame.radiance.height, *a.sun.direction,
