@@ -5,11 +5,11 @@
 #include <cmath>
 
 #include "command_line.h"
+#include "skycal/capture/latlong_frame.h"
 #include "skycal/controllers/game_render.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
-#include "skycal/core/latlong.h"
 #include "verb_common.h"
 
 namespace skycal::cli {
@@ -45,12 +45,11 @@ nlohmann::json CloudLayers(const CompareVerbOptions& o, const ExrRGB& photo, con
 
 // The sun of --sun-cone: the game file's `sunDirection` (render and calibrate write it).
 std::array<double, 3> GameSun(const CompareVerbOptions& o, const ExrRGB& game) {
-  const auto it = game.attributes.v3fs.find("sunDirection");
-  if (it == game.attributes.v3fs.end())
+  const auto sun = capture::SunDirectionAttribute(game.attributes, o.game);
+  if (!sun)
     throw Error(o.game + ": no sunDirection attribute (a V3f, as skycal render and calibrate write it); --sun-cone " +
                 FormatNumber(o.sun_cone_deg) + " needs the sun it leaves out");
-  const auto& v = it->second;
-  return latlong::Normalized({v[0], v[1], v[2]}, (o.game + ": sunDirection").c_str());
+  return *sun;
 }
 
 }  // namespace
@@ -70,7 +69,8 @@ nlohmann::json RunCompareImpl(const CompareVerbOptions& o) {
     sky.resize(static_cast<size_t>(m.width) * m.height);
     for (size_t i = 0; i < sky.size(); ++i) sky[i] = m.pixels[3 * i];
   }
-  if (o.sun_cone_deg > 0.0) sky = appearance::WithoutSunCone(sky, photo.width, photo.height, GameSun(o, game_file), o.sun_cone_deg);
+  if (o.sun_cone_deg > 0.0)
+    sky = appearance::WithoutSunCone(sky, photo.width, photo.height, GameSun(o, game_file), o.sun_cone_deg);
   const appearance::Comparison c = appearance::Compare(photo, game, sky, o.options, o.photo, o.game);
   Log("compare", o.game + " against " + o.photo + ": per-pixel log RMSE " + FormatNumber(c.per_pixel_log_rmse) +
                      ", appearance error " + FormatNumber(c.appearance_error) + " (" + std::to_string(c.bands_compared) +

@@ -187,21 +187,26 @@ double HorizonBanding(const ImageRGB& image, const ImageRGB& truth, double sun_a
 
 // The horizon masked below 10 deg but for 60 deg of azimuth opposite the sun (azimuth 15),
 // whose image rows there are alternately x1.25 and x0.8 (a haze line, a far shore): the
-// columns they read are seen only there. Returns the truth's relative error against the
+// columns they read are seen only there. Per pixel: 0 masked, the stripe's factor, or 1.
+float MaskedHorizonFactor(int x, int y, int width, int height) {
+  const auto d = latlong::PixelDirection(x, y, width, height);
+  if (latlong::ElevationDeg(d) > 10.0) return 1.0f;
+  if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) return 0.0f;
+  return y % 2 ? 1.25f : 0.8f;
+}
+
+// The masked, striped horizon on a level. Returns the truth's relative error against the
 // striped pixels (what a fit that ignored the stripes would leave).
 double StripeAMaskedHorizon(FitLevel* level) {
   double stripes_sq = 0.0, total_weight = 0.0;
   for (int y = 0; y < level->height; ++y)
     for (int x = 0; x < level->width; ++x) {
-      const auto d = latlong::PixelDirection(x, y, level->width, level->height);
       const size_t i = static_cast<size_t>(y) * level->width + x;
-      if (latlong::ElevationDeg(d) <= 10.0) {
-        if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
-          level->weight[i] = 0.0;
-        } else {
-          for (int c = 0; c < 3; ++c) level->radiance[3 * i + c] *= y % 2 ? 1.25f : 0.8f;
-          stripes_sq += 3.0 * level->weight[i] * (y % 2 ? 0.04 : 0.0625);  // (1 / 1.25 - 1)^2, (1 / 0.8 - 1)^2
-        }
+      const float f = MaskedHorizonFactor(x, y, level->width, level->height);
+      if (f == 0.0f) level->weight[i] = 0.0;
+      if (f != 0.0f && f != 1.0f) {
+        for (int c = 0; c < 3; ++c) level->radiance[3 * i + c] *= f;
+        stripes_sq += 3.0 * level->weight[i] * std::pow(1.0 / f - 1.0, 2);
       }
       total_weight += 3.0 * level->weight[i];
     }
@@ -303,14 +308,11 @@ TEST(LinearSky, ThePolishKeepsTheUnseenProfile) {
   Reference striped = s.ref;
   for (int y = 0; y < striped.radiance.height; ++y)
     for (int x = 0; x < striped.radiance.width; ++x) {
-      const auto d = latlong::PixelDirection(x, y, striped.radiance.width, striped.radiance.height);
-      if (latlong::ElevationDeg(d) > 10.0) continue;
+      const float f = MaskedHorizonFactor(x, y, striped.radiance.width, striped.radiance.height);
       const size_t i = static_cast<size_t>(y) * striped.radiance.width + x;
-      if (std::abs(std::remainder(latlong::AzimuthDeg(d) - 195.0, 360.0)) > 30.0) {
-        if (striped.pixel_class[i] == PixelClass::kSky) striped.pixel_class[i] = PixelClass::kUserMasked;
-        continue;
-      }
-      for (int c = 0; c < 3; ++c) striped.radiance.at(x, y, c) *= y % 2 ? 1.25f : 0.8f;
+      if (f == 0.0f && striped.pixel_class[i] == PixelClass::kSky) striped.pixel_class[i] = PixelClass::kUserMasked;
+      if (f != 0.0f)
+        for (int c = 0; c < 3; ++c) striped.radiance.at(x, y, c) *= f;
     }
   auto cpu = render::CreateRenderer(render::Backend::kCpu);
   double banding[2];

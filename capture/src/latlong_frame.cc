@@ -29,6 +29,24 @@ void WriteLatLongFrame(const std::string& path, const LatLongFrame& frame, bool 
   WriteExrRGBWithPlanes(path, frame.radiance, frame.planes, attrs, half ? ExrPixelType::kHalf : ExrPixelType::kFloat);
 }
 
+std::optional<std::array<double, 3>> SunDirectionAttribute(const ExrAttributes& attributes, const std::string& path) {
+  const auto it = attributes.v3fs.find(kSunAttribute);
+  if (it != attributes.v3fs.end()) {
+    const auto& v = it->second;
+    return latlong::Normalized({v[0], v[1], v[2]}, (path + ": attribute 'sunDirection'").c_str());
+  }
+  // Present with another type: an error naming the type, never "no sun direction".
+  std::string type;
+  if (attributes.strings.count(kSunAttribute)) type = "string \"" + attributes.strings.at(kSunAttribute) + "\"";
+  if (attributes.floats.count(kSunAttribute)) type = "float";
+  if (attributes.other_types.count(kSunAttribute)) type = attributes.other_types.at(kSunAttribute);
+  if (!type.empty()) {
+    throw Error(path + ": attribute 'sunDirection' is a " + type +
+                ": expected a v3f (x, y, z) toward the sun in the lat-long's frame (y up)");
+  }
+  return std::nullopt;
+}
+
 LatLongFrame ReadLatLongFrame(const std::string& path, RowMappingPolicy policy) {
   ExrRGB exr = ReadExrRGB(path);
   LatLongFrame frame;
@@ -55,22 +73,8 @@ LatLongFrame ReadLatLongFrame(const std::string& path, RowMappingPolicy policy) 
     throw Error(path + ": image is " + std::to_string(frame.radiance.width) + "x" +
                 std::to_string(frame.radiance.height) + ", expected a 2:1 lat-long (width = 2 x height)");
   }
-  auto it = exr.attributes.v3fs.find(kSunAttribute);
-  if (it != exr.attributes.v3fs.end()) {
-    const auto& v = it->second;
-    frame.sun_direction = latlong::Normalized({v[0], v[1], v[2]}, (path + ": attribute 'sunDirection'").c_str());
-    exr.attributes.v3fs.erase(it);
-  } else {
-    // Present with another type: an error naming the type, never "no sun direction".
-    std::string type;
-    if (exr.attributes.strings.count(kSunAttribute)) type = "string \"" + exr.attributes.strings.at(kSunAttribute) + "\"";
-    if (exr.attributes.floats.count(kSunAttribute)) type = "float";
-    if (exr.attributes.other_types.count(kSunAttribute)) type = exr.attributes.other_types.at(kSunAttribute);
-    if (!type.empty()) {
-      throw Error(path + ": attribute 'sunDirection' is a " + type +
-                  ": expected a v3f (x, y, z) toward the sun in the lat-long's frame (y up)");
-    }
-  }
+  frame.sun_direction = SunDirectionAttribute(exr.attributes, path);
+  exr.attributes.v3fs.erase(kSunAttribute);
   if (!exr.attributes.envmap_latlong) {
     exr.attributes.strings["skycalWarning"] = "no envmap=latlong attribute; assumed the lat-long convention";
   }

@@ -134,9 +134,9 @@ inline constexpr int kRefitAfterRainIterations = 1;
 // (CloudLightingOptions::start_prior, RefitPass::start_prior). There the freed parameters are
 // the image's best, not determined ones: without the pull, a start that moves by 1e-4 sends
 // them to another basin (phase_g1 0.99 or 0.53) and the game's image by up to 0.03 in
-// per-pixel log RMSE. At this weight the worst landings go. It
-// was chosen over `sky` and four synthetic skies, and checked on three others that had no say
-// in it (bench/results/weather_inversion.md, "The refit's released holds, re-checked").
+// per-pixel log RMSE. At this weight the worst landings go. It was chosen over `sky` and four
+// synthetic skies, and checked on three others that had no say in it
+// (bench/results/weather_inversion.md, "The refit's released holds, re-checked").
 inline constexpr double kRefitStartPrior = 0.001;
 
 // The refit's atmosphere is fitted on the photo's surely clear pixels: the colour ramp without

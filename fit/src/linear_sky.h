@@ -236,8 +236,8 @@ class LinearSky {
   // One residual of a term for channel c: sum_i s[i] ln(L_i / L0_i), `phase` the tables'
   // phases at each column's direction; into `block`, flushed first when its unknowns differ.
   void AddProfileResidual(const ProfileTerm& t, const std::array<std::array<double, 3>, 3>& phase, int c,
-                          const double (&s)[3], const LinearSkySolution* linearize_at, ProfileBlock* block,
-                          NormalSystem* sys) const;
+                          const std::array<double, 3>& s, const LinearSkySolution* linearize_at,
+                          ProfileBlock* block, NormalSystem* sys) const;
   void SolveActiveSet(const NormalSystem& eq, LinearSkySolution* sol) const;  // values, held
   void AddDataCost(const SolveInputs& in, LinearSkySolution* sol) const;       // cost, rel_rmse
 

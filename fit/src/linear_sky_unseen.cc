@@ -34,6 +34,25 @@ namespace {
 // without any prior, and heavier ones cost the twilight photos' appearance
 // (bench/results/horizon_columns.md).
 constexpr double kUnseenSlope = 3.0;
+
+// The two residuals' coefficients over the three columns, square-root weights in: the second
+// difference (straight across the triple) and the first difference of the upper two (flat).
+struct ProfileWeights {
+  std::array<double, 3> second, first;
+};
+ProfileWeights Weights(double unseen_profile, int sectors) {
+  const double w2 = std::sqrt(unseen_profile / sectors), w1 = std::sqrt(kUnseenSlope) * w2;
+  return {{w2, -2.0 * w2, w2}, {0.0, -w1, w1}};
+}
+
+// Per column of a term, the tables' phases (Rayleigh, Cornette-Shanks at g, isotropic).
+template <typename Term, typename Model>
+std::array<std::array<double, 3>, 3> Phases(const Term& t, Model& m, double g) {
+  std::array<std::array<double, 3>, 3> p;
+  for (int i = 0; i < 3; ++i)
+    p[i] = {t.phase_r[i], m.phase_cornette_shanks(t.mu[i], t.one_minus_mu[i], g), kIsotropicPhase};
+  return p;
+}
 }  // namespace
 
 std::vector<std::vector<char>> LinearSky::ColumnSectors(size_t ref) const {
@@ -113,26 +132,20 @@ void LinearSky::AddProfileTerms(const std::vector<std::vector<char>>& sectors, c
 }
 
 void LinearSky::AddUnseenProfile(double g, const LinearSkySolution* linearize_at, NormalSystem* sys) const {
-  // The second difference (straight across three columns) and, kUnseenSlope times as heavy,
-  // the first difference of the last two (flat), each per (term, channel).
-  const double w2 = std::sqrt(o_.unseen_profile / kSectors), w1 = std::sqrt(kUnseenSlope) * w2;
-  const double second[3] = {w2, -2.0 * w2, w2}, first[3] = {0.0, -w1, w1};
+  const ProfileWeights w = Weights(o_.unseen_profile, kSectors);
   NoLut none;
   StructureModel<double> m(none);
-  std::vector<std::array<std::array<double, 3>, 3>> phases(profile_terms_.size());
-  for (size_t k = 0; k < profile_terms_.size(); ++k) {
-    const ProfileTerm& t = profile_terms_[k];
-    for (int i = 0; i < 3; ++i)
-      phases[k][i] = {t.phase_r[i], m.phase_cornette_shanks(t.mu[i], t.one_minus_mu[i], g), kIsotropicPhase};
-  }
+  std::vector<std::array<std::array<double, 3>, 3>> phases;
+  phases.reserve(profile_terms_.size());
+  for (const ProfileTerm& t : profile_terms_) phases.push_back(Phases(t, m, g));
   // The terms of one column triple (its sectors, in order) share their unknowns: their normal
   // equations are summed in one dense block before they become triplets (36 times fewer
   // triplets than one set per term, which made the linear start several times slower).
   ProfileBlock block;
   for (int c = 0; c < 3; ++c)
     for (size_t k = 0; k < profile_terms_.size(); ++k) {
-      AddProfileResidual(profile_terms_[k], phases[k], c, second, linearize_at, &block, sys);
-      AddProfileResidual(profile_terms_[k], phases[k], c, first, linearize_at, &block, sys);
+      AddProfileResidual(profile_terms_[k], phases[k], c, w.second, linearize_at, &block, sys);
+      AddProfileResidual(profile_terms_[k], phases[k], c, w.first, linearize_at, &block, sys);
     }
   block.Flush(sys);
 }
@@ -146,8 +159,8 @@ void LinearSky::ProfileBlock::Flush(NormalSystem* sys) {
 }
 
 void LinearSky::AddProfileResidual(const ProfileTerm& t, const std::array<std::array<double, 3>, 3>& phase, int c,
-                                   const double (&s)[3], const LinearSkySolution* linearize_at, ProfileBlock* block,
-                                   NormalSystem* sys) const {
+                                   const std::array<double, 3>& s, const LinearSkySolution* linearize_at,
+                                   ProfileBlock* block, NormalSystem* sys) const {
   std::array<int, ProfileBlock::kMax> index;
   std::array<double, ProfileBlock::kMax> coef;
   double target = 0.0;
@@ -185,19 +198,19 @@ void LinearSky::AddProfileResidual(const ProfileTerm& t, const std::array<std::a
 
 std::vector<UnseenProfileResidual> LinearSky::UnseenProfileResiduals(FitState* state) const {
   const auto& grid = state->preset.luts.grid;
-  const double w2 = std::sqrt(o_.unseen_profile / kSectors), w1 = std::sqrt(kUnseenSlope) * w2;
+  const ProfileWeights w = Weights(o_.unseen_profile, kSectors);
   const bool tied = o_.unknowns == LinearUnknowns::kTiedRows;
   NoLut none;
   StructureModel<double> m(none);
   std::vector<UnseenProfileResidual> out;
-  for (const ProfileTerm& t : profile_terms_)
+  for (const ProfileTerm& t : profile_terms_) {
+    const auto phases = Phases(t, m, state->g);
     for (int c = 0; c < 3; ++c) {
       UnseenProfileResidual r;
-      r.second = {w2, -2.0 * w2, w2};
-      r.first = {0.0, -w1, w1};
+      r.second = w.second;
+      r.first = w.first;
       for (int i = 0; i < 3; ++i) {
-        const double phase[3] = {t.phase_r[i], m.phase_cornette_shanks(t.mu[i], t.one_minus_mu[i], state->g),
-                                 kIsotropicPhase};
+        const auto& phase = phases[i];
         double l0 = 0.0;
         for (int j = 0; j < t.n_nodes[i]; ++j) {
           const ProfileTerm::Node& nd = t.nodes[i][j];
@@ -215,6 +228,7 @@ std::vector<UnseenProfileResidual> LinearSky::UnseenProfileResiduals(FitState* s
       }
       out.push_back(std::move(r));
     }
+  }
   return out;
 }
 

@@ -483,7 +483,9 @@ LinearStageOutcome RunLinearStageSingle(const std::vector<Reference>& refs, cons
   }
   result->linear_start.single = std::move(report);
   for (const auto& tc : sky.ObservedColumns()) out.observed_columns.insert(tc);
-  out.unseen_profile = sky.UnseenProfileResiduals(state);
+  // A day's per-reference start (no renderer) only seeds the joint steps: the polish reads the
+  // day's own terms.
+  if (renderer) out.unseen_profile = sky.UnseenProfileResiduals(state);
   if (renderer) DecidePolish(o, probed, "the linear start converged on the robust log objective itself", &out, result);
   return out;
 }

@@ -33,6 +33,11 @@ void WriteLatLongFrame(const std::string& path, const LatLongFrame& frame, bool 
 // rows and refuse such a frame by name; `fit` and `resample` take them.
 enum class RowMappingPolicy { kRefuse, kAccept };
 
+// The `sunDirection` attribute (a v3f toward the sun, y up), normalised; none when absent.
+// Throws skycal::Error naming `path` when it is present with another type or is not a finite
+// non-zero vector.
+std::optional<std::array<double, 3>> SunDirectionAttribute(const ExrAttributes& attributes, const std::string& path);
+
 // Reads a frame. Throws skycal::Error naming the file when it is unreadable, has no
 // R/G/B channels, is not 2:1 (width = 2 height, as the convention requires) unless it has a
 // row mapping, carries a `sunDirection` that is not a finite non-zero vector, or a
