@@ -49,8 +49,12 @@ Outcome FitAndCeiling(const std::string& path, render::SkyRenderer& renderer) {
   const fit::CeilingResult c = fit::ModelCeiling(ref, DefaultStart(), o);
   // More freedom never fits worse in exact arithmetic; slack for the g search (each
   // ceiling searches its own g, to ~1e-4) and the floor on non-positive entries, which
-  // bind differently in the two (measured: up to 10% apart at a -5 deg twilight sky).
-  EXPECT_LE(c.per_row_rel_rmse, c.lut_rel_rmse * 1.2 + 1e-5) << path;
+  // bind differently in the two (measured: up to 10% apart at a -5 deg twilight sky). Since
+  // the pull toward the start has a floor (linear_sky.cc kPullFloorShare), a table the start
+  // makes vanishing at a twilight sun is no longer pinned to it: at the turbid -5 deg sky,
+  // whose Mie is 1e-6 of its Rayleigh, the per-row ceiling is 0.024% against the LUT's
+  // 0.017%, both far under any fit's error, hence 1e-4 absolute.
+  EXPECT_LE(c.per_row_rel_rmse, c.lut_rel_rmse * 1.2 + 1e-4) << path;
   return {r.references[0].errors.rel_rmse, c.lut_rel_rmse, c.per_row_rel_rmse};
 }
 

@@ -5,6 +5,7 @@
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
 
+#include <algorithm>
 #include <random>
 
 #include "fit_state.h"
@@ -126,6 +127,49 @@ TEST(FitOptions, IsValidNamesTheFieldAndItsValue) {
   o.unseen_profile = -1e-4;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "FitOptions::unseen_profile = -0.0001 (expected a weight in [0, 1e6])");
+}
+
+// The start's LUT (FitState::StartDarkRowsFlat): a fitted row the model leaves partly dark
+// (the Earth's shadow: some Rayleigh or Mie entry zero) starts flat at the zero entries'
+// floor, every table; every other row is FromPreset's, to the bit: fitted rows whose Mie is
+// 0.1% and 5% of their Rayleigh (a tiny table keeps its shape: the model's own twilight sky is
+// fitted from it exactly), and a dark row the fit does not solve (the preset's held rows are
+// written as they came). The control: the dark row as the preset has it spans many orders of
+// magnitude between its tiny entries and the floored zeros beside them.
+TEST(FitState, FittedRowsTheEarthsShadowDarkensStartFlat) {
+  render::Preset p = testing::RandomPreset(5, render::ModelVariant::kFfxvIso);
+  const auto& grid = p.luts.grid;
+  const size_t row_size = static_cast<size_t>(grid.n_gamma) * 3, table = p.luts.table_size();
+  const int shadow = grid.n_theta - 3, faint = grid.n_theta - 5, hazy = grid.n_theta - 7, held = grid.n_theta - 1;
+  const auto max_rayleigh = [&](int row) {
+    return *std::max_element(p.luts.rayleigh.begin() + row * row_size, p.luts.rayleigh.begin() + (row + 1) * row_size);
+  };
+  const double faint_mie = 1e-3 * max_rayleigh(faint), hazy_mie = 0.05 * max_rayleigh(hazy);
+  for (size_t i = 0; i < row_size; ++i) {
+    const bool dark = i >= row_size / 2;  // the shadow rows' last half zero, the rest 1e-12 of a sky's
+    for (int row : {shadow, held}) {
+      p.luts.rayleigh[row * row_size + i] = dark ? 0.0f : 1e-9f;
+      p.luts.mie[row * row_size + i] = dark ? 0.0f : 1e-12f;
+    }
+    p.luts.mie[faint * row_size + i] = static_cast<float>(faint_mie);
+    p.luts.mie[hazy * row_size + i] = static_cast<float>(hazy_mie);
+  }
+  const FitState from = FitState::FromPreset(p, render::ModelVariant::kFfxvIso, 1);
+  FitState st = from;
+  std::vector<bool> rows(grid.n_theta, false);
+  rows[shadow] = rows[faint] = rows[hazy] = true;
+  st.StartDarkRowsFlat(rows);
+  const double floor_value = std::exp(from.log_lut[shadow * row_size + row_size - 1]);
+  EXPECT_GT(floor_value / 1e-9, 1e6);  // the control: the cliff the flat start removes
+  for (int t = 0; t < 3; ++t)
+    for (int row = 0; row < grid.n_theta; ++row)
+      for (size_t i = row * row_size; i < (row + 1) * row_size; ++i) {
+        const size_t k = t * table + i;
+        const double want = row == shadow ? std::log(floor_value) : from.log_lut[k];
+        EXPECT_EQ(st.log_lut[k], want) << t << " " << i;
+        EXPECT_EQ(st.initial_log_lut[k], want) << t << " " << i;
+      }
+  EXPECT_LT(from.log_lut[held * row_size], std::log(floor_value) - 10.0);  // held: as the preset has it
 }
 
 }  // namespace

@@ -2,17 +2,27 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <vector>
 
 #include "fit_state.h"
 #include "linear_sky.h"
 #include "linear_start.h"
 #include "pyramid.h"
+#include "skycal/render/preset.h"
 
 namespace skycal::fit {
 
 CeilingResult ModelCeiling(const Reference& ref, const render::Preset& init, const FitOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  const FitState state = FitState::FromPreset(init, options.variant, 1);
+  FitState state = FitState::FromPreset(init, options.variant, 1);
+  {  // the two rows around the sun start as the fit's do
+    const render::LutGrid& grid = init.luts.grid;
+    const int r0 = std::clamp(static_cast<int>(std::floor(render::LutRowPosition(grid, ref.sun_dir[1]))), 0, grid.n_theta - 2);
+    std::vector<bool> rows(grid.n_theta, false);
+    rows[r0] = rows[r0 + 1] = true;
+    state.StartDarkRowsFlat(rows);
+  }
   CeilingResult out;
   const std::vector<int> widths = AutomaticPyramid(ref.radiance.width);
   const FitLevel level = BuildLevel(ref, widths.back());

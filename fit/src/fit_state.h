@@ -39,6 +39,9 @@ struct FitState {
   }
   // Initial state from a preset; tables with zeros start at a floor (log of 0 is -inf).
   static FitState FromPreset(const render::Preset& init, render::ModelVariant variant, int references);
+  // The rows (rows[row] true: those the fit solves) the start's model leaves dark start flat
+  // at the zero entries' floor, every table, in log_lut and initial_log_lut (fit_state.cc).
+  void StartDarkRowsFlat(const std::vector<bool>& rows);
   // The model the state describes (floats, as the renderer and the preset files hold it).
   render::Preset ToPreset() const;
 

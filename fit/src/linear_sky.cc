@@ -33,6 +33,17 @@ ModelD::SkyParams GridParams(const FitState& st, double sun_height) {
 // (start_scale_ x initial): relative to the data, so a reference 1000x darker than the
 // preset is not held at a floor that is large for it.
 constexpr double kFloorFraction = 1e-6;
+// The pull toward the start (one reference) is relative to the start's entry, so a table the
+// start makes vanishing was pinned to it: at a twilight sun (-3 to -8 deg) the start's Mie
+// table is 1e-4 to 1e-16 of its Rayleigh, and the fit of a twilight photo drew no glow at all
+// (`dawn` under a sun 6 deg down: per-pixel log RMSE 0.60 against 0.16). For the Rayleigh or
+// Mie table whose largest entry at the reference's sun is under kVanishingTable of the other's,
+// the pull's centre is at least kPullFloorShare of that largest: a sky's size. 1e-2 for the
+// share gave the same fits (bench/results/horizon_columns.md); tables that are not vanishing
+// keep the pull as it was (a floor for every table moved daytime fits' weakly seen entries,
+// and a partly cloudy refit downstream landed on a lighting with negative cloud radiance).
+constexpr double kVanishingTable = 1e-2;
+constexpr double kPullFloorShare = 1e-3;
 constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
 constexpr int kActiveSetRounds = 20;
 // Unknowns one row's normal matrix spans: at most 3 tables x 2 x 2 nodes, and L_z.
@@ -116,6 +127,7 @@ LinearSky::LinearSky(const FitState& state, const std::vector<const FitLevel*>& 
   std::vector<double> exposures;
   for (double le : state.log_exposure) exposures.push_back(std::exp(le));
   start_scale_ = StartScale(exposures, *MiePhases(state.g));
+  if (single) pull_floor_ = PullFloor(refs[0]);
   if (o_.unknowns == LinearUnknowns::kTiedRows)
     column_sectors_ = o_.column_sectors.empty() ? ColumnSectors(0) : o_.column_sectors;
   if (o_.unseen_profile > 0.0 && o_.unknowns != LinearUnknowns::kPerImageRow) BuildProfileTerms(refs);
@@ -241,6 +253,33 @@ double LinearSky::StartScale(const std::vector<double>& exposures, const std::ve
 
 double LinearSky::Floor(int j) const { return kFloorFraction * start_scale_ * initial_[j]; }
 
+std::vector<double> LinearSky::PullFloor(const Reference& ref) const {
+  NoLut none;
+  ModelD m(none);
+  const auto p = GridParams(state_, ref.sun_dir[1]);
+  const auto lr = m.lut_row(p.sun_dir.y, p);
+  // The Rayleigh and Mie tables (the isotropic one starts at the zero floor: no shape).
+  std::array<std::array<double, 3>, 2> largest{};  // [table][channel]
+  std::array<double, 3> overall{};
+  for (int t = 0; t < 2; ++t)
+    for (int c = 0; c < 3; ++c) {
+      for (int col = 0; col < state_.preset.luts.grid.n_gamma; ++col)
+        largest[t][c] = std::max(largest[t][c], (1.0 - lr.frow) * InitialLut(t, lr.row0, col, c) +
+                                                    lr.frow * InitialLut(t, lr.row0 + 1, col, c));
+      overall[c] = std::max(overall[c], largest[t][c]);
+    }
+  // Only a vanishing table's entries, and only those a pixel reads: the others have no
+  // start of their own yet (initial_ 1) and take the nearest observed column's change after
+  // the fit (fit_finish.h).
+  std::vector<double> out(num_unknowns_, 0.0);
+  for (const Row& row : rows_)
+    for (const Row::Node& n : row.nodes)
+      for (int c = 0; c < 3; ++c)
+        if (n.table < 2 && largest[n.table][c] < kVanishingTable * overall[c])
+          out[n.unknown_ch0 + c] = kPullFloorShare * start_scale_ * overall[c];
+  return out;
+}
+
 std::shared_ptr<const std::vector<double>> LinearSky::MiePhases(double g) const {
   {
     std::lock_guard<std::mutex> lock(phase_cache_->mutex);
@@ -295,7 +334,8 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   NormalSystem sys = AccumulateData(in);
   // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
   // (x / (k x0) - 1) toward the start's shape at lambda = 1e-14, k the start's
-  // least-squares scale on this data, so only entries no pixel sees feel it; the damping
+  // least-squares scale on this data, k x0 at least pull_floor_ (kPullFloorShare), so only
+  // entries no pixel sees feel it; the damping
   // of the data's diagonal (LinearSkyOptions::damping) conditions the rest. Several
   // references (free rows): the second difference of x / x0 along the sun zenith
   // (scale-free) links the rows between references, and the pull at prior_weight
@@ -444,7 +484,8 @@ void LinearSky::AddPriors(const LinearSkySolution* linearize_at, const std::vect
       sys->rhs[j] += lambda * (1.0 - offset) / xc;
       continue;
     }
-    const double centre = log_priors ? linearize_at->values[j] : k_start * initial_[j];
+    const double least = pull_floor_.empty() ? 0.0 : pull_floor_[j];
+    const double centre = log_priors ? linearize_at->values[j] : std::max(k_start * initial_[j], least);
     const double weight = log_priors ? 1e-14 : lambda;  // held: only keep the entry defined
     sys->triplets.emplace_back(j, j, weight / (centre * centre));
     sys->rhs[j] += weight / centre;

@@ -193,6 +193,10 @@ class LinearSky {
   // Least-squares scale of the start (initial values) on the data, at the start's g and
   // exposures: the centre of the prior is this scale times the start (see Solve).
   double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
+  // One reference: per unknown a pixel reads, kPullFloorShare of the start's largest entry
+  // in its channel at the reference's sun (every table and column) times the start scale;
+  // 0 for the others (linear_sky.cc).
+  std::vector<double> PullFloor(const Reference& ref) const;
 
   // Construction, per reference and level row (the constructor's stages).
   double InitialLut(int t, int row, int col, int ch) const;  // exp of the start's log LUT
@@ -251,6 +255,7 @@ class LinearSky {
   int lz_index_ = -1;
   double held_overcast_zenith_ = 0.0;  // L_z when it is not an unknown, cd/m^2
   double start_scale_ = 1.0;           // StartScale at the state's g and exposures
+  std::vector<double> pull_floor_;     // per unknown, the least centre of the pull toward the start (PullFloor)
   std::vector<std::vector<char>> column_sectors_;  // tied rows: ColumnSectors or the given
   // Three consecutive LUT columns one reference sees somewhere and not all round, at one
   // azimuth sector where it does not see all three: per column, the view direction's phase

@@ -316,6 +316,7 @@ FitResult FitSkyWithTerms(const std::vector<Reference>& refs, const render::Pres
   for (const FitTerm* term : extra_terms) term->ReportSkips(&result.skipped, &result.decisions);
   const bool fit_overcast = PlanSharedBlocks(state, o, &result);
   const std::vector<bool> row_fitted = PlanRows(refs, &state, &result);
+  state.StartDarkRowsFlat(row_fitted);
 
   DecisionFacts facts;
   facts.overcast_absent = state.preset.overcast_weight <= 0.0;
