@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "run_binary.h"
+#include "skycal/core/exr_io.h"
 #include "skycal/core/json_file.h"
 #include "test_util.h"
 
@@ -193,6 +194,17 @@ TEST(Batch, BadInputIsRefusedAndWritesNothing) {
   RenderFrame(dir / "nosun/a.exr", 9.0);
   ASSERT_EQ(Skycal("import --in " + (dir / "nosun/a.exr") + " --out " + (dir / "nosun/b.exr")).rc, 0);
   refused("batch --references '" + (dir / "nosun") + "/*.exr'" + out, "1 frame(s) without a sun direction");
+  // A sunDirection of another type is named as such (capture::SunDirectionAttribute), not
+  // taken for a missing one.
+  fs::create_directories(dir / "textsun");
+  RenderFrame(dir / "textsun/a.exr", 9.0);
+  {
+    ExrRGB f = ReadExrRGB(dir / "textsun/a.exr");
+    f.attributes.v3fs.erase("sunDirection");
+    f.attributes.strings["sunDirection"] = "0 1 0";
+    WriteExrRGB(dir / "textsun/a.exr", f.image, f.attributes);
+  }
+  refused("batch --references '" + (dir / "textsun") + "/*.exr'" + out, "attribute 'sunDirection' is a string \"0 1 0\"");
   fs::create_directories(dir / "notime");
   RenderFrame(dir / "notime/a.exr", 9.0, "64x32", false);
   refused("batch --references '" + (dir / "notime") + "/*.exr'" + out, "without a time of day");

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <map>
 
+#include "skycal/capture/latlong_frame.h"
 #include "skycal/core/error.h"
 #include "skycal/core/exr_io.h"
 #include "skycal/core/format_number.h"
@@ -101,14 +102,10 @@ std::vector<BatchFrame> ScanBatchFrames(const std::vector<std::string>& paths) {
     if (::stat(p.c_str(), &st) != 0) throw Error(p + ": cannot stat the file");
     f.size_bytes = st.st_size;
     f.mtime_ns = static_cast<long long>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
-    const auto sun = h.attributes.v3fs.find("sunDirection");
-    if (sun == h.attributes.v3fs.end()) {
-      no_sun.push_back(p);
+    if (const auto sun = capture::SunDirectionAttribute(h.attributes, p)) {
+      f.sun_dir = *sun;
     } else {
-      const auto& v = sun->second;
-      const double n = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
-      if (!std::isfinite(n) || n <= 0.0) throw Error(p + ": attribute 'sunDirection' is not a finite non-zero vector");
-      f.sun_dir = {v[0] / n, v[1] / n, v[2] / n};
+      no_sun.push_back(p);
     }
     const auto t = h.attributes.floats.find("skycalTimeOfDay");
     if (t == h.attributes.floats.end()) {

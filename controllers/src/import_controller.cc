@@ -99,9 +99,8 @@ void ImportSun(const ImportOptions& o, const ExrAttributes& source, ImportedPhot
   } else if (o.detect_sun) {
     DetectSun(o, p);
   } else if (p->convention == capture::SourceConvention::kExr) {
-    if (auto it = source.v3fs.find("sunDirection"); it != source.v3fs.end()) {
-      const auto& v = it->second;
-      p->sun.direction = latlong::Normalized({v[0], v[1], v[2]}, (o.in_path + ": attribute 'sunDirection'").c_str());
+    if (auto sun = capture::SunDirectionAttribute(source, o.in_path)) {
+      p->sun.direction = *sun;
       p->sun.source = SunSource::kAttribute;
     }
   }
