@@ -287,7 +287,9 @@ TEST(LinearSky, TheUnseenProfileHoldsForADayOfFreeRows) {
     lo.row_fitted.assign(state.preset.luts.grid.n_theta, true);
     lo.unseen_profile = k ? 1e-4 : 0.0;
     const LinearSky day(state, {&a.level, &b.level}, refs, lo);
-    if (k) EXPECT_GT(day.unseen_profile_terms(), 200);
+    if (k) {
+      EXPECT_GT(day.unseen_profile_terms(), 200);
+    }
     const LinearSkySolution sol = SolveAsTheFit(day, {1.0, 1.0});
     FitState fitted = state;
     day.Apply(sol, &fitted);

@@ -258,7 +258,7 @@ std::vector<double> LinearSky::PullFloor(const Reference& ref) const {
   ModelD m(none);
   const auto p = GridParams(state_, ref.sun_dir[1]);
   const auto lr = m.lut_row(p.sun_dir.y, p);
-  // The Rayleigh and Mie tables (the isotropic one starts at the zero floor: no shape).
+  // The Rayleigh and Mie tables (the isotropic one, absent from many presets, as it was).
   std::array<std::array<double, 3>, 2> largest{};  // [table][channel]
   std::array<double, 3> overall{};
   for (int t = 0; t < 2; ++t)
@@ -334,9 +334,9 @@ LinearSkySolution LinearSky::Solve(double g, const std::vector<double>& exposure
   NormalSystem sys = AccumulateData(in);
   // Regularisation. One reference (tied or per-row unknowns): a pull sqrt(lambda)
   // (x / (k x0) - 1) toward the start's shape at lambda = 1e-14, k the start's
-  // least-squares scale on this data, k x0 at least pull_floor_ (kPullFloorShare), so only
-  // entries no pixel sees feel it; the damping
-  // of the data's diagonal (LinearSkyOptions::damping) conditions the rest. Several
+  // least-squares scale on this data (for a vanishing table, k x0 at least pull_floor_), so
+  // only entries no pixel sees feel it; the damping of the data's diagonal
+  // (LinearSkyOptions::damping) conditions the rest. Several
   // references (free rows): the second difference of x / x0 along the sun zenith
   // (scale-free) links the rows between references, and the pull at prior_weight
   // separates the two rows around each sun, which the data see only blended; no damping

@@ -193,9 +193,9 @@ class LinearSky {
   // Least-squares scale of the start (initial values) on the data, at the start's g and
   // exposures: the centre of the prior is this scale times the start (see Solve).
   double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
-  // One reference: per unknown a pixel reads, kPullFloorShare of the start's largest entry
-  // in its channel at the reference's sun (every table and column) times the start scale;
-  // 0 for the others (linear_sky.cc).
+  // One reference: per unknown a pixel reads of a Rayleigh or Mie table the start makes
+  // vanishing at the reference's sun (kVanishingTable), kPullFloorShare of the other table's
+  // largest entry in its channel times the start scale; 0 for the others (linear_sky.cc).
   std::vector<double> PullFloor(const Reference& ref) const;
 
   // Construction, per reference and level row (the constructor's stages).
