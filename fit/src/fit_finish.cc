@@ -1,10 +1,22 @@
 #include "fit_finish.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace skycal::fit {
 namespace {
 constexpr double kHeldLogChange = -9.2;  // ln(1e-4): this far below the data's level an entry sits at its floor
+
+// Whether the Rayleigh or Mie table t is vanishing in the start's row for channel ch
+// (FitState::kVanishingTable).
+bool VanishingInStart(const FitState& s, int t, int row, int ch) {
+  if (t > 1) return false;
+  const int n_gamma = s.preset.luts.grid.n_gamma;
+  double largest[2] = {0.0, 0.0};
+  for (int k = 0; k < 2; ++k)
+    for (int col = 0; col < n_gamma; ++col) largest[k] = std::max(largest[k], std::exp(s.initial_log_lut[s.Index(k, row, col, ch)]));
+  return largest[t] < FitState::kVanishingTable * largest[1 - t];
+}
 }  // namespace
 
 int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, const std::vector<bool>& row_fitted,
@@ -24,7 +36,13 @@ int ExtrapolateUnobservedColumns(const std::set<std::pair<int, int>>& observed, 
         if (!row_fitted[row]) continue;
         for (int ch = 0; ch < 3; ++ch) {
           const size_t k = state->Index(t, row, col, ch), kn = state->Index(t, row, nearest, ch);
-          state->log_lut[k] = state->initial_log_lut[k] + (state->log_lut[kn] - state->initial_log_lut[kn]);
+          // A table the start makes vanishing has a shape nothing in the start's own sky shows
+          // (the Mie at twilight: 1e-4 of the Rayleigh, its columns varying 1,000x): the nearest
+          // column's value, not its change on that shape (which drew a bright line along a
+          // hidden horizon under a twilight glow, bench/results/horizon_columns.md).
+          const bool vanishing = VanishingInStart(*state, t, row, ch);
+          state->log_lut[k] = vanishing ? state->log_lut[kn]
+                                        : state->initial_log_lut[k] + (state->log_lut[kn] - state->initial_log_lut[kn]);
         }
       }
       ++extrapolated;

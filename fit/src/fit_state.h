@@ -37,6 +37,12 @@ struct FitState {
     const auto& gr = preset.luts.grid;
     return ((static_cast<size_t>(table) * gr.n_theta + row) * gr.n_gamma + col) * 3 + ch;
   }
+  // A Rayleigh or Mie table whose largest start entry (at a sun, per channel) is under this
+  // share of the other's is vanishing there: under 1% of the start's radiance, its shape shown
+  // by nothing in the start's own sky (the Mie at twilight, 1e-4 to 1e-16 of the Rayleigh).
+  // The linear start's pull does not pin it (linear_sky.cc) and the columns no pixel sees take
+  // its nearest seen column's value, not its change (fit_finish.cc).
+  static constexpr double kVanishingTable = 1e-2;
   // Initial state from a preset; tables with zeros start at a floor (log of 0 is -inf).
   static FitState FromPreset(const render::Preset& init, render::ModelVariant variant, int references);
   // The rows (rows[row] true: those the fit solves) the start's model leaves dark start flat

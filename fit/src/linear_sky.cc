@@ -36,13 +36,12 @@ constexpr double kFloorFraction = 1e-6;
 // The pull toward the start (one reference) is relative to the start's entry, so a table the
 // start makes vanishing was pinned to it: at a twilight sun (-3 to -8 deg) the start's Mie
 // table is 1e-4 to 1e-16 of its Rayleigh, and the fit of a twilight photo drew no glow at all
-// (`dawn` under a sun 6 deg down: per-pixel log RMSE 0.60 against 0.16). For the Rayleigh or
-// Mie table whose largest entry at the reference's sun is under kVanishingTable of the other's,
-// the pull's centre is at least kPullFloorShare of that largest: a sky's size. 1e-2 for the
-// share gave the same fits (bench/results/horizon_columns.md); tables that are not vanishing
-// keep the pull as it was (a floor for every table moved daytime fits' weakly seen entries,
-// and a partly cloudy refit downstream landed on a lighting with negative cloud radiance).
-constexpr double kVanishingTable = 1e-2;
+// (`dawn` under a sun 6 deg down: per-pixel log RMSE 0.60 against 0.16). For a table vanishing
+// at the reference's sun (FitState::kVanishingTable), the pull's centre is at least
+// kPullFloorShare of the other's largest entry: a sky's size. 1e-2 for the share gave the same
+// fits (bench/results/horizon_columns.md); tables that are not vanishing keep the pull as it
+// was (a floor for every table moved daytime fits' weakly seen entries, and a partly cloudy
+// refit downstream landed on a lighting with negative cloud radiance).
 constexpr double kPullFloorShare = 1e-3;
 constexpr double kActiveSetPenalty = 1e6; // stiffness of the hold, x the entry's diagonal
 constexpr int kActiveSetRounds = 20;
@@ -275,7 +274,7 @@ std::vector<double> LinearSky::PullFloor(const Reference& ref) const {
   for (const Row& row : rows_)
     for (const Row::Node& n : row.nodes)
       for (int c = 0; c < 3; ++c)
-        if (n.table < 2 && largest[n.table][c] < kVanishingTable * overall[c])
+        if (n.table < 2 && largest[n.table][c] < FitState::kVanishingTable * overall[c])
           out[n.unknown_ch0 + c] = kPullFloorShare * start_scale_ * overall[c];
   return out;
 }

@@ -194,8 +194,8 @@ class LinearSky {
   // exposures: the centre of the prior is this scale times the start (see Solve).
   double StartScale(const std::vector<double>& exposures, const std::vector<double>& phase_m) const;
   // One reference: per unknown a pixel reads of a Rayleigh or Mie table the start makes
-  // vanishing at the reference's sun (kVanishingTable), kPullFloorShare of the other table's
-  // largest entry in its channel times the start scale; 0 for the others (linear_sky.cc).
+  // vanishing at the reference's sun (FitState::kVanishingTable), kPullFloorShare of the
+  // other table's largest entry in its channel times the start scale; 0 for the others.
   std::vector<double> PullFloor(const Reference& ref) const;
 
   // Construction, per reference and level row (the constructor's stages).
