@@ -2,14 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <vector>
 
 #include "fit_state.h"
 #include "linear_sky.h"
 #include "linear_start.h"
 #include "pyramid.h"
-#include "skycal/render/preset.h"
 
 namespace skycal::fit {
 
@@ -17,9 +15,8 @@ CeilingResult ModelCeiling(const Reference& ref, const render::Preset& init, con
   const auto t0 = std::chrono::steady_clock::now();
   FitState state = FitState::FromPreset(init, options.variant, 1);
   {  // the two rows around the sun start as the fit's do
-    const render::LutGrid& grid = init.luts.grid;
-    const int r0 = std::clamp(static_cast<int>(std::floor(render::LutRowPosition(grid, ref.sun_dir[1]))), 0, grid.n_theta - 2);
-    std::vector<bool> rows(grid.n_theta, false);
+    std::vector<bool> rows(init.luts.grid.n_theta, false);
+    const int r0 = SunLutRow0(init.luts.grid, ref.sun_dir[1]);
     rows[r0] = rows[r0 + 1] = true;
     state.StartDarkRowsFlat(rows);
   }

@@ -27,6 +27,10 @@ bool DarkRow(const render::Preset& p, int row) {
 
 }  // namespace
 
+int SunLutRow0(const render::LutGrid& grid, double sun_height) {
+  return std::clamp(static_cast<int>(std::floor(render::LutRowPosition(grid, sun_height))), 0, grid.n_theta - 2);
+}
+
 FitState FitState::FromPreset(const render::Preset& init, render::ModelVariant variant, int references) {
   FitState s;
   s.preset = init;

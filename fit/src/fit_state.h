@@ -9,6 +9,10 @@
 
 namespace skycal::fit {
 
+// The lower of the two LUT rows a sun's lookup blends (sun_height: the y of its unit
+// direction), clamped so that the row above it exists.
+int SunLutRow0(const render::LutGrid& grid, double sun_height);
+
 struct FitState {
   render::Preset preset;        // everything not fitted (grid, variant, sun, overcast weight)
   int tables = 2;               // 2: Rayleigh, Mie (ffxv); 3: + isotropic (ffxv-iso)

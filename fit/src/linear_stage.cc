@@ -122,8 +122,7 @@ void RunDayStart(const std::vector<Reference>& refs, size_t r, const FitOptions&
   st.initial_log_lut = state.initial_log_lut;
   st.log_lut = state.initial_log_lut;
   st.g = g;
-  const double pos = SunRowPosition(grid, refs[r].sun_dir);
-  const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
+  const int r0 = SunLutRow0(grid, refs[r].sun_dir[1]);
   st.tied_rows = {r0, r0 + 1};
   std::vector<bool> rows(grid.n_theta, false);
   rows[r0] = rows[r0 + 1] = true;

@@ -66,7 +66,7 @@ std::vector<bool> PlanRows(const std::vector<Reference>& refs, FitState* state, 
   std::set<int> observed;
   for (const Reference& ref : refs) {
     const double pos = render::LutRowPosition(grid, ref.sun_dir[1]);
-    const int r0 = std::clamp(static_cast<int>(std::floor(pos)), 0, grid.n_theta - 2);
+    const int r0 = SunLutRow0(grid, ref.sun_dir[1]);
     ReferenceFit rf;
     rf.observed_rows.push_back(r0);
     if (pos - r0 > 0.0) rf.observed_rows.push_back(r0 + 1);
