@@ -469,6 +469,16 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
     EXPECT_GT(rain, 0.0);  // the truth has none; the light asked for it where the shapes are too bright
   }
   EXPECT_TRUE(std::filesystem::exists(s / "inverted/scattered/fit.statistics.json"));
+  // The statistics only start the refit on the placed clouds: one render per weather map
+  // there, two where they are the calibration's clouds (--no-weather-inversion).
+  const auto renders_and_maps = [](const std::string& file) {
+    const nlohmann::json j = ReadJsonFile(file).at("cloud_stats");
+    return std::pair{j.at("renders_per_evaluation").get<int>(), j.at("weather_maps").get<int>()};
+  };
+  const auto [inv_renders, inv_maps] = renders_and_maps(s / "inverted/scattered/fit.statistics.json");
+  const auto [stat_renders, stat_maps] = renders_and_maps(s / "statistical/scattered/fit.json");
+  EXPECT_EQ(inv_renders, inv_maps);
+  EXPECT_EQ(stat_renders, 2 * stat_maps);
   // The records name only images that are there: the refit's previews in fit.json; the
   // statistics fit, whose outputs the refit replaces, drew none (it used to name six, three of
   // them deleted with its fit/ and three the refit's under its names).
