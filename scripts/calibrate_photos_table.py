@@ -50,7 +50,9 @@ print("Natural logarithms (0.1 is about 10%). \"before\": the main job's hand-ch
 print("(`bench/results/game_vs_photo.md`, the sun's disc included there), per-pixel / appearance.")
 print("The sun's disc (the fit's 3-degree cone) is left out of the comparison: a photo's disc is clipped or lossily")
 print("encoded, and its few pixels would outweigh the sky in a log RMSE. The hand-mask table below keeps it on both sides.")
-print("Cloud IoU: the game's clouds (transmittance < 0.5) against the photo's (cloud probability >= 0.5), where clouds are drawn.\n")
+print("Cloud IoU: the game's clouds (transmittance < 0.5) against the photo's (cloud probability >= 0.5), where clouds are drawn.")
+print("A partly cloudy photo's numbers are one landing of the lighting refit on its inverted clouds, which moves with")
+print("small changes of its inputs (its spread over the refit's sample count: bench/results/weather_inversion.md, stop 51).\n")
 header = ("| photo | kind (why) | sun | per-pixel log RMSE | appearance error | cloud IoU | before | s |\n"
           "|---|---|---|---|---|---|---|---|")
 for set_name, title, with_before in (("bundled", "Bundled frames (the method was developed on these)", True),
