@@ -125,10 +125,9 @@ FitPlan PlanFit(const PhotoAnalysis& a, const StagedDirectory& out, const std::s
     p.fit.previews = o.weather_map.empty() && !(o.invert_weather && InversionRenderWidth(w, h) != 0);
     std::string why = KindWhy(a);
     if (!p.fit.previews) {
-      // The statistics' lighting only starts that refit, and their coverage fills the texels
-      // the photo does not see: one render per weather map, not two, changed neither the
-      // game's image nor the refit's landing on the skies measured (bench/results/
-      // weather_inversion.md, stop 51), for about half the statistics' time.
+      // The statistics' lighting only starts that refit (their coverage fills the texels the
+      // photo does not see): one render per weather map, not two. What it moved:
+      // bench/results/weather_inversion.md, stop 51.
       p.fit.cloud_stats.renders = p.fit.cloud_stats.maps;
       why += "; one statistics render per weather map (" + std::to_string(p.fit.cloud_stats.renders) +
              "): the refit on the placed clouds replaces their lighting, which only starts it";
