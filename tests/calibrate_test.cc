@@ -194,6 +194,12 @@ TEST(Calibrate, TheSunOfTheFilesOwnTimeAndPlace) {
 #ifdef SKYCAL_BINARY
 testing::ProcessResult Skycal(const std::string& args) { return testing::RunSkycal(SKYCAL_BINARY, args); }
 
+// `skycal calibrate` on one photo into `out` with `flags` only, without the report and the
+// game tables (what these tests judge is the photo's own outputs).
+testing::ProcessResult CalibrateQuietly(const std::string& photo, const std::string& out, const std::string& flags = "") {
+  return Skycal("calibrate --photo " + photo + " --out " + out + flags + " --no-report --no-export");
+}
+
 // A photo in the project's convention (envmap=latlong), as a camera rig or `import` writes it.
 void WritePhoto(const std::string& path, const ImageRGB& img) {
   capture::LatLongFrame f;
@@ -279,7 +285,7 @@ TEST(Calibrate, AFolderOfPhotosIsItsPictures) {
   WritePhoto(s / "shoot/a_field.exr", img);
   WritePhoto(s / "shoot/.hidden.exr", img);
   WriteText(s / "shoot/notes.txt", "shot at noon");
-  const auto r = Skycal("calibrate --photo " + s / "shoot/" + " --out " + s / "out" + " --json --no-report --no-export");
+  const auto r = CalibrateQuietly(s / "shoot/", s / "out", " --json");
   ASSERT_EQ(r.rc, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["photos"].size(), 2u) << r.out;
@@ -387,10 +393,9 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   const auto rr = Skycal("render --preset " + kRoot + "/datasets/presets/default_cloudy.json --clouds --weather-map " +
                          s / "w.exr" + " --sun-elevation 40 --sun-azimuth 60 --size 512x256 --out " + s / "scattered.exr");
   ASSERT_EQ(rr.rc, 0) << rr.err;
-  const auto a = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "inverted --no-report --no-export");
+  const auto a = CalibrateQuietly(s / "scattered.exr", s / "inverted");
   ASSERT_EQ(a.rc, 0) << a.err;
-  const auto b = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "statistical --no-report --no-export" +
-                        " --no-weather-inversion");
+  const auto b = CalibrateQuietly(s / "scattered.exr", s / "statistical", " --no-weather-inversion");
   ASSERT_EQ(b.rc, 0) << b.err;
   const fit::FitResultFile inv = fit::ReadFitResultFile(s / "inverted/scattered/fit.json");
   const fit::FitResultFile stat = fit::ReadFitResultFile(s / "statistical/scattered/fit.json");
@@ -494,8 +499,7 @@ TEST(Calibrate, APartlyCloudySkyGetsItsCloudsWhereThePhotoHasThem) {
   // The true map given and held: the preset carries it texel for texel, nothing is inverted,
   // and the game's image is nearer the photo than with the inverted shapes (the shapes are
   // the photo's own: what is left is the lighting fit's).
-  const auto held = Skycal("calibrate --photo " + s / "scattered.exr" + " --out " + s / "held --no-report --no-export" +
-                           " --weather-map " + s / "w.exr");
+  const auto held = CalibrateQuietly(s / "scattered.exr", s / "held", " --weather-map " + s / "w.exr");
   ASSERT_EQ(held.rc, 0) << held.err;
   const ImageRGB given = ReadExrRGB(s / "w.exr").image, kept = ReadExrRGB(s / "held/scattered/preset.weather.exr").image;
   EXPECT_EQ(given.pixels, kept.pixels);
@@ -541,7 +545,7 @@ TEST(Calibrate, AWidePhotoIsRefittedAtTheInversionsWidthAndJudgedAtItsOwn) {
     const auto rr = Skycal("render --preset " + kRoot + "/datasets/presets/default_cloudy.json --clouds --weather-map " +
                            s / "w.exr" + " --sun-elevation 40 --sun-azimuth 60 --size " + size + " --out " + s / (std::string("p") + size + ".exr"));
     ASSERT_EQ(rr.rc, 0) << rr.err;
-    const auto c = Skycal("calibrate --photo " + s / (std::string("p") + size + ".exr") + " --out " + s / "out --no-report --no-export");
+    const auto c = CalibrateQuietly(s / (std::string("p") + size + ".exr"), s / "out");
     ASSERT_EQ(c.rc, 0) << c.err;
   }
   const fit::FitResultFile narrow = fit::ReadFitResultFile(s / "out/p512x256/fit.json");
@@ -609,7 +613,7 @@ TEST(Calibrate, ThePartlyCloudyPhotosHorizonCloudsHaveNoStreaks) {
   const std::string path = kRoot + "/datasets/real/sky.exr";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent: run datasets/fetch_real_skies.sh";
   testing::ScratchDir s("calibrate-streaks");
-  const auto r = Skycal("calibrate --photo " + path + " --out " + s / "out --no-report --no-export");
+  const auto r = CalibrateQuietly(path, s / "out");
   ASSERT_EQ(r.rc, 0) << r.err;
   const ImageRGB photo = ReadExrRGB(s / "out/sky/photo.exr").image, game = ReadExrRGB(s / "out/sky/render.exr").image;
   const ImageRGB mask = ReadExrRGB(s / "out/sky/mask.exr").image;
@@ -653,7 +657,7 @@ TEST(Calibrate, ATwilightGlowReachesTheHorizonUnderTheRidge) {
   const std::string path = kRoot + "/datasets/real/dawn.exr";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent: run datasets/fetch_real_skies.sh";
   testing::ScratchDir s("calibrate-twilight");
-  const auto r = Skycal("calibrate --photo " + path + " --out " + s / "out --no-report --no-export");
+  const auto r = CalibrateQuietly(path, s / "out");
   ASSERT_EQ(r.rc, 0) << r.err;
   const fit::FitResultFile f = fit::ReadFitResultFile(s / "out/dawn/fit.json");
   ASSERT_EQ(f.calibration->sky_kind, "twilight");
@@ -669,8 +673,8 @@ TEST(Calibrate, ATwilightGlowReachesTheHorizonUnderTheRidge) {
   // The same sky under a civil twilight's sun (6 deg down, where the start's Mie table is
   // 1e-4 of its Rayleigh): the glow was not drawn at all (per-pixel log RMSE 0.60 against
   // 0.155 at the sky's own sun estimate); now within 0.01 of it.
-  const auto civil = Skycal("calibrate --photo " + path + " --sun-elevation -6 --sun-azimuth " +
-                            std::to_string(latlong::AzimuthDeg(sun)) + " --out " + s / "civil --no-report --no-export");
+  const auto civil =
+      CalibrateQuietly(path, s / "civil", " --sun-elevation -6 --sun-azimuth " + std::to_string(latlong::AzimuthDeg(sun)));
   ASSERT_EQ(civil.rc, 0) << civil.err;
   const fit::FitResultFile c = fit::ReadFitResultFile(s / "civil/dawn/fit.json");
   const ImageRGB civil_game = ReadExrRGB(s / "civil/dawn/render.exr").image;
@@ -724,10 +728,10 @@ TEST(Calibrate, ADaysWindFromTwoFrames) {
   }
   // One photo a command, the later first (a calibration grows a photo at a time): the first
   // run has no day; the second fits it over both frames in DIR.
-  const auto first = Skycal("calibrate --photo " + s / "f60.exr" + " --out " + s / "day" + " --no-report --no-export");
+  const auto first = CalibrateQuietly(s / "f60.exr", s / "day");
   ASSERT_EQ(first.rc, 0) << first.err;
   EXPECT_FALSE(std::filesystem::exists(s / "day/day.json"));
-  const auto a = Skycal("calibrate --photo " + s / "f0.exr" + " --out " + s / "day" + " --no-report --no-export");
+  const auto a = CalibrateQuietly(s / "f0.exr", s / "day");
   ASSERT_EQ(a.rc, 0) << a.err;
   EXPECT_NE(a.err.find("the day's wind from 2 partly cloudy frames"), std::string::npos) << a.err;
   const nlohmann::json day = ReadJsonFile(s / "day/day.json");

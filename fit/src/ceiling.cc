@@ -14,12 +14,7 @@ namespace skycal::fit {
 CeilingResult ModelCeiling(const Reference& ref, const render::Preset& init, const FitOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   FitState state = FitState::FromPreset(init, options.variant, 1);
-  {  // the two rows around the sun start as the fit's do
-    std::vector<bool> rows(init.luts.grid.n_theta, false);
-    const int r0 = SunLutRow0(init.luts.grid, ref.sun_dir[1]);
-    rows[r0] = rows[r0 + 1] = true;
-    state.StartDarkRowsFlat(rows);
-  }
+  state.StartDarkRowsFlat(SunLutRows(init.luts.grid, ref.sun_dir[1]));  // the two rows around the sun, as the fit's
   CeilingResult out;
   const std::vector<int> widths = AutomaticPyramid(ref.radiance.width);
   const FitLevel level = BuildLevel(ref, widths.back());

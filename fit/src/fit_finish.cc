@@ -15,7 +15,7 @@ bool VanishingInStart(const FitState& s, int t, int row, int ch) {
   double largest[2] = {0.0, 0.0};
   for (int k = 0; k < 2; ++k)
     for (int col = 0; col < n_gamma; ++col) largest[k] = std::max(largest[k], std::exp(s.initial_log_lut[s.Index(k, row, col, ch)]));
-  return largest[t] < FitState::kVanishingTable * largest[1 - t];
+  return FitState::Vanishing(largest[t], largest[1 - t]);
 }
 }  // namespace
 

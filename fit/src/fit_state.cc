@@ -31,6 +31,13 @@ int SunLutRow0(const render::LutGrid& grid, double sun_height) {
   return std::clamp(static_cast<int>(std::floor(render::LutRowPosition(grid, sun_height))), 0, grid.n_theta - 2);
 }
 
+std::vector<bool> SunLutRows(const render::LutGrid& grid, double sun_height) {
+  std::vector<bool> rows(grid.n_theta, false);
+  const int r0 = SunLutRow0(grid, sun_height);
+  rows[r0] = rows[r0 + 1] = true;
+  return rows;
+}
+
 FitState FitState::FromPreset(const render::Preset& init, render::ModelVariant variant, int references) {
   FitState s;
   s.preset = init;

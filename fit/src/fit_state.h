@@ -12,6 +12,9 @@ namespace skycal::fit {
 // The lower of the two LUT rows a sun's lookup blends (sun_height: the y of its unit
 // direction), clamped so that the row above it exists.
 int SunLutRow0(const render::LutGrid& grid, double sun_height);
+// The two LUT rows a sun's lookup blends (SunLutRow0 and the row above), true in a mask of
+// the grid's rows: what one reference sees of the table.
+std::vector<bool> SunLutRows(const render::LutGrid& grid, double sun_height);
 
 struct FitState {
   render::Preset preset;        // everything not fitted (grid, variant, sun, overcast weight)
@@ -47,6 +50,8 @@ struct FitState {
   // The linear start's pull does not pin it (linear_sky.cc) and the columns no pixel sees take
   // its nearest seen column's value, not its change (fit_finish.cc).
   static constexpr double kVanishingTable = 1e-2;
+  // The rule above: a table whose largest entry is `largest`, beside the other's `other`.
+  static bool Vanishing(double largest, double other) { return largest < kVanishingTable * other; }
   // Initial state from a preset; tables with zeros start at a floor (log of 0 is -inf).
   static FitState FromPreset(const render::Preset& init, render::ModelVariant variant, int references);
   // The rows (rows[row] true: those the fit solves) the start's model leaves dark start flat

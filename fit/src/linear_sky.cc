@@ -259,14 +259,11 @@ std::vector<double> LinearSky::PullFloor(const Reference& ref) const {
   const auto lr = m.lut_row(p.sun_dir.y, p);
   // The Rayleigh and Mie tables (the isotropic one, absent from many presets, as it was).
   std::array<std::array<double, 3>, 2> largest{};  // [table][channel]
-  std::array<double, 3> overall{};
   for (int t = 0; t < 2; ++t)
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 3; ++c)
       for (int col = 0; col < state_.preset.luts.grid.n_gamma; ++col)
         largest[t][c] = std::max(largest[t][c], (1.0 - lr.frow) * InitialLut(t, lr.row0, col, c) +
                                                     lr.frow * InitialLut(t, lr.row0 + 1, col, c));
-      overall[c] = std::max(overall[c], largest[t][c]);
-    }
   // Only a vanishing table's entries, and only those a pixel reads: the others have no
   // start of their own yet (initial_ 1) and take the nearest observed column's change after
   // the fit (fit_finish.h).
@@ -274,8 +271,8 @@ std::vector<double> LinearSky::PullFloor(const Reference& ref) const {
   for (const Row& row : rows_)
     for (const Row::Node& n : row.nodes)
       for (int c = 0; c < 3; ++c)
-        if (n.table < 2 && largest[n.table][c] < FitState::kVanishingTable * overall[c])
-          out[n.unknown_ch0 + c] = kPullFloorShare * start_scale_ * overall[c];
+        if (n.table < 2 && FitState::Vanishing(largest[n.table][c], largest[1 - n.table][c]))
+          out[n.unknown_ch0 + c] = kPullFloorShare * start_scale_ * largest[1 - n.table][c];
   return out;
 }
 

@@ -124,8 +124,7 @@ void RunDayStart(const std::vector<Reference>& refs, size_t r, const FitOptions&
   st.g = g;
   const int r0 = SunLutRow0(grid, refs[r].sun_dir[1]);
   st.tied_rows = {r0, r0 + 1};
-  std::vector<bool> rows(grid.n_theta, false);
-  rows[r0] = rows[r0 + 1] = true;
+  const std::vector<bool> rows = SunLutRows(grid, refs[r].sun_dir[1]);
   // No render check of its own (the day's joint solution is checked), decimated
   // (kDayStartStride): this start only seeds the joint steps.
   *outcome = RunLinearStageSingle({refs[r]}, options, true, rows, fit_overcast, false, finest_width, kDayStartStride,
