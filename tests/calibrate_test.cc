@@ -130,6 +130,41 @@ TEST(Calibrate, TheSunWithItsDiscCoveredIsFoundFromTheSky) {
   EXPECT_LE(error, *s.uncertainty_deg + 1.0);
 }
 
+// An overcast deck whose sun nothing places: the nominal sun sits on the deck's bright patch
+// within 1.5 deg (the gradient under the patch lifts the smoothed peak by about a degree), not
+// at the centre of a 10-degree cell (5.1 deg off here). The deck: the CIE
+// overcast gradient (1 + 2 sin el) / 3, a patch of 8 deg round a sun between cell centres, a
+// texture of +-10% and a tower masked out. A control: with the patch off, the peak is the
+// gradient's, at the zenith side of the frame, far from the sun.
+TEST(Calibrate, TheNominalSunOfAnOvercastDeckSitsOnItsBrightPatch) {
+  const int w = 512, h = 256;
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(21.0, 41.5);  // 10-deg cells: (25, 45), 5 deg off
+  auto deck = [&](double patch) {
+    ImageRGB img(w, h);
+    std::vector<float> sky(static_cast<size_t>(w) * h, 1.0f);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const auto d = latlong::PixelDirection(x, y, w, h);
+        const double el = latlong::ElevationDeg(d), g = AngleDeg(d, sun);
+        const double texture = 1.0 + 0.1 * std::sin(0.9 * x) * std::cos(1.3 * y);
+        const double L = ((1.0 + 2.0 * std::sin(std::max(el, 0.0) * kPi / 180.0)) / 3.0 +
+                          patch * std::exp(-0.5 * (g / 8.0) * (g / 8.0))) * texture;
+        for (int c = 0; c < 3; ++c) img.at(x, y, c) = static_cast<float>(L);
+        if (std::abs(x - 300) < 12 && el < 30.0) sky[static_cast<size_t>(y) * w + x] = 0.0f;  // a tower
+      }
+    return controllers::NominalOvercastSun(img, sky);
+  };
+  const auto s = deck(1.0);
+  ASSERT_TRUE(s && s->direction);
+  std::cout << "[calibrate] overcast deck: the nominal sun " << AngleDeg(*s->direction, sun) << " deg off its patch (el "
+            << latlong::ElevationDeg(*s->direction) << ", az " << latlong::AzimuthDeg(*s->direction) << ")\n";
+  EXPECT_LT(AngleDeg(*s->direction, sun), 1.5);
+  EXPECT_EQ(s->uncertainty_deg, 90.0);
+  const auto flat = deck(0.0);
+  ASSERT_TRUE(flat && flat->direction);
+  EXPECT_GT(AngleDeg(*flat->direction, sun), 30.0);
+}
+
 // The time and place: with north known, the SPA's direction exactly; without it, the SPA's
 // elevation with the sky's azimuth.
 TEST(Calibrate, TheSunOfATimeAndPlace) {

@@ -1,6 +1,10 @@
 #include "calibrate_sun.h"
 
+#include <algorithm>
 #include <cmath>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "skycal/capture/solar_position.h"
 #include "skycal/capture/sun_detect.h"
@@ -88,28 +92,41 @@ PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
 }
 
 std::optional<PhotoSun> NominalOvercastSun(const ImageRGB& frame, const std::vector<float>& sky) {
-  constexpr double kCellDeg = 10.0, kMinElevationDeg = 5.0;
-  const int rows = static_cast<int>(90.0 / kCellDeg), cols = static_cast<int>(360.0 / kCellDeg);
-  std::vector<double> sum(static_cast<size_t>(rows) * cols, 0.0), count(sum.size(), 0.0);
-  for (int y = 0; y < frame.height; ++y)
-    for (int x = 0; x < frame.width; ++x) {
-      const auto d = latlong::PixelDirection(x, y, frame.width, frame.height);
-      const double el = latlong::ElevationDeg(d);
-      const size_t i = static_cast<size_t>(y) * frame.width + x;
+  constexpr double kSigmaDeg = 5.0, kMinElevationDeg = 5.0;
+  const int w = frame.width, h = frame.height;
+  cv::Mat1f num(h, w, 0.0f), den(h, w, 0.0f);  // sky luminance and sky weight, above 5 deg
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
       const double Y = capture::Luminance(&frame.pixels[3 * i]);
-      if (el < kMinElevationDeg || !(sky[i] >= 0.5f) || !(Y > 0.0) || !std::isfinite(Y)) continue;
-      const int r = std::min(rows - 1, static_cast<int>(el / kCellDeg));
-      const int c = std::min(cols - 1, static_cast<int>((latlong::AzimuthDeg(d) + 180.0) / kCellDeg));
-      sum[static_cast<size_t>(r) * cols + c] += Y;
-      count[static_cast<size_t>(r) * cols + c] += 1.0;
+      if (latlong::ElevationDeg(latlong::PixelDirection(x, y, w, h)) < kMinElevationDeg || !(sky[i] >= 0.5f) ||
+          !(Y > 0.0) || !std::isfinite(Y))
+        continue;
+      num(y, x) = static_cast<float>(Y);
+      den(y, x) = 1.0f;
     }
-  int best = -1;
-  for (size_t i = 0; i < sum.size(); ++i)
-    if (count[i] >= 4.0 && (best < 0 || sum[i] / count[i] > sum[best] / count[best])) best = static_cast<int>(i);
-  if (best < 0) return std::nullopt;
+  // Normalised convolution (the mask's edges do not darken the sky beside them); the columns
+  // wrap round the seam, the rows reflect at the poles.
+  const double sigma_px = kSigmaDeg / 360.0 * w;
+  const int pad = std::min(w, static_cast<int>(std::ceil(3.0 * sigma_px)));
+  auto blur = [&](const cv::Mat1f& m) {
+    cv::Mat1f wrapped, out;
+    cv::copyMakeBorder(m, wrapped, 0, 0, pad, pad, cv::BORDER_WRAP);
+    cv::GaussianBlur(wrapped, out, cv::Size(0, 0), sigma_px, sigma_px, cv::BORDER_REFLECT);
+    return cv::Mat1f(out.colRange(pad, pad + w));
+  };
+  const cv::Mat1f bn = blur(num), bd = blur(den);
+  int best_x = -1, best_y = -1;
+  double best = 0.0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)  // a pixel of sky, at least half of its neighbourhood sky
+      if (den(y, x) > 0.0f && bd(y, x) >= 0.5f && bn(y, x) / bd(y, x) > best) {
+        best = bn(y, x) / bd(y, x);
+        best_x = x, best_y = y;
+      }
+  if (best_x < 0) return std::nullopt;
   PhotoSun s;
-  s.direction = latlong::DirectionFromElevationAzimuthDeg((best / cols + 0.5) * kCellDeg,
-                                                          (best % cols + 0.5) * kCellDeg - 180.0);
+  s.direction = latlong::PixelDirection(best_x, best_y, w, h);
   s.source = "overcast: nominal, where the deck is brightest";
   s.uncertainty_deg = 90.0;
   return s;
