@@ -210,6 +210,46 @@ TEST(SkySegmentation, ThinStructuresAndABrightFacade) {
   EXPECT_LT(facade, 0.5);
 }
 
+// A wire too faint for the darkness and texture cues (one pixel at 0.8 of the sky: ln 0.22
+// below it, against the darkness threshold of 0.7), slung from a pylon: found by its
+// black-hat, hanging from the pylon. Beside it a fleecy cloud (its opacity rippling between 0
+// and 1 every ~3 pixels, white over the blue sky) sits on a roof: its troughs are just as thin
+// and dark, but the sky's blue shows in them (not neutral) and the cloud round them is
+// textured: it stays sky. The control: line_darkness 0 leaves the wire in the sky.
+TEST(SkySegmentation, AFaintWireHangsFromItsPylonAndACloudOnARoofStaysSky) {
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(60.0, 90.0);  // well away from the wire (~30 deg up)
+  ImageRGB img = ClearSky(sun);
+  const int horizon = HorizonRow(img.height);
+  Paint(&img, 40, 42, horizon - 24, horizon, 0.15f, false);  // the pylon
+  std::vector<std::pair<int, int>> wire;
+  for (int x = 42; x < 140; ++x) {
+    const double t = (x - 42) / 98.0;
+    wire.emplace_back(x, horizon - 22 + static_cast<int>(std::lround(10.0 * t * (1.0 - t))));
+  }
+  for (const auto& [x, y] : wire)
+    for (int c = 0; c < 3; ++c) img.at(x, y, c) *= 0.8f;
+  Paint(&img, 170, 230, horizon - 6, horizon, 0.1f, false);  // the roof
+  for (int y = horizon - 18; y < horizon - 6; ++y)             // the cloud on it
+    for (int x = 170; x < 230; ++x) {
+      const float a = 0.5f + 0.5f * static_cast<float>(std::sin(1.9 * x) * std::sin(2.3 * y));
+      const float white = 1.5f * (0.2126f * img.at(x, y, 0) + 0.7152f * img.at(x, y, 1) + 0.0722f * img.at(x, y, 2));
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = a * white + (1.0f - a) * img.at(x, y, c);
+    }
+  auto wire_found = [&](const capture::SkyMask& m) {
+    long long n = 0;
+    for (const auto& [x, y] : wire) n += m.sky[static_cast<size_t>(y) * m.width + x] < 0.5f;
+    return static_cast<double>(n) / wire.size();
+  };
+  const capture::SkyMask m = capture::EstimateSkyMask(img, sun, {});
+  const long long cloud_taken = NonSkyIn(m, 170, 230, horizon - 18, horizon - 7);  // the roof's dilated ring left out
+  std::cout << "faint wire found " << wire_found(m) << ", cloud pixels taken " << cloud_taken << " of 660\n";
+  EXPECT_GE(wire_found(m), 0.95);
+  EXPECT_LE(cloud_taken, 33);  // 5%
+  capture::SkyMaskOptions off;
+  off.line_darkness = 0.0;
+  EXPECT_LE(wire_found(capture::EstimateSkyMask(img, sun, off)), 0.2);
+}
+
 TEST(SkySegmentation, OptionsNameTheField) {
   std::string why;
   capture::SkyMaskOptions o;
@@ -222,14 +262,18 @@ TEST(SkySegmentation, OptionsNameTheField) {
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("ground_dark_share"), std::string::npos) << why;
   o = {};
+  o.line_darkness = -1.0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("line_darkness"), std::string::npos) << why;
+  o = {};
   o.dilate_px = 99;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("dilate_px"), std::string::npos) << why;
   EXPECT_THROW(capture::EstimateSkyMask(ImageRGB(4, 2), std::nullopt, {}), Error);
 }
 
-// Floors: the measured numbers (bench/results/sky_segmentation.md: sunrise 1.00 / 0.61,
-// sunset 1.00 / 0.77) minus a margin of 0.05 for other OpenCV builds (grabCut's GMM fits
+// Floors: the measured numbers (bench/results/sky_segmentation.md: sunrise 0.98 / 0.70,
+// sunset 1.00 / 0.79, the wires found) minus a margin of 0.05 for other OpenCV builds (grabCut's GMM fits
 // can move a boundary by a pixel). Recall is bounded by the hand masks' conventions, not
 // objects: the lowest 3.3 deg excluded wholesale and, at sunrise, a 260x80 px rectangle
 // around the power lines (mostly sky between the wires).
@@ -240,8 +284,8 @@ struct HandMaskCase {
 };
 
 TEST(SkySegmentation, PrecisionAndRecallAgainstTheHandMasks) {
-  const HandMaskCase cases[] = {{"sunrise", "sunrise_mask.exr", 0.95, 0.56},
-                                {"sunset", "sunset_mask.exr", 0.95, 0.72}};
+  const HandMaskCase cases[] = {{"sunrise", "sunrise_mask.exr", 0.93, 0.65},
+                                {"sunset", "sunset_mask.exr", 0.95, 0.74}};
   for (const auto& c : cases) {
     const std::string path = kRoot + "/datasets/real/" + c.frame + ".exr";
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent: run datasets/fetch_real_skies.sh";

@@ -110,6 +110,21 @@ cv::Mat SkyReference(const cv::Mat& L, double quantile, double window_deg, doubl
 // outnumbers theirs. A cloud bank alone has none (bench/results/sky_segmentation.md).
 constexpr long long kGroundedDarkPixels = 8;
 
+// The lat-long wraps: a component touching column 0 and one touching the last column on the
+// same row are one object. A flag set on either (per label of `labels`) is set on both.
+void SpreadAcrossSeam(const cv::Mat& labels, std::vector<char>* flag) {
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int y = 0; y < labels.rows; ++y) {
+      const int a = labels.at<int>(y, 0), b = labels.at<int>(y, labels.cols - 1);
+      if (a > 0 && b > 0 && (*flag)[a] != (*flag)[b]) {
+        (*flag)[a] = (*flag)[b] = 1;
+        changed = true;
+      }
+    }
+  }
+}
+
 // Keeps the components of `candidates` (8-connected, CV_8U 0/255) that stand on the ground:
 // they reach a row at or below `band_top_row`, and at least `min_dark_share` of their pixels
 // there (or kGroundedDarkPixels) are darker than the sky's reference by `dark_threshold` (log
@@ -129,18 +144,7 @@ cv::Mat KeepGroundConnected(const cv::Mat& candidates, int band_top_row, const c
   for (int l = 1; l < n; ++l)
     grounded[l] = contact[l] > 0 && (static_cast<double>(dark_contact[l]) >= min_dark_share * contact[l] ||
                                      dark_contact[l] >= kGroundedDarkPixels);
-  // The lat-long wraps: a component touching column 0 and one touching the last column on
-  // the same row are one object.
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (int y = 0; y < labels.rows; ++y) {
-      const int a = labels.at<int>(y, 0), b = labels.at<int>(y, labels.cols - 1);
-      if (a > 0 && b > 0 && grounded[a] != grounded[b]) {
-        grounded[a] = grounded[b] = 1;
-        changed = true;
-      }
-    }
-  }
+  SpreadAcrossSeam(labels, &grounded);
   cv::Mat kept(candidates.size(), CV_8U, cv::Scalar(0));
   *dropped = 0;
   for (int y = 0; y < labels.rows; ++y)
@@ -190,6 +194,7 @@ bool SkyMaskOptions::IsValid(std::string* why) const {
   if (!InRange(ground_dark_share, 0.0, 1.0)) return Fail(why, "ground_dark_share", ground_dark_share, "[0, 1]");
   if (!InRange(sun_exclusion_deg, 0.0, 45.0))
     return Fail(why, "sun_exclusion_deg", sun_exclusion_deg, "[0, 45] deg");
+  if (!InRange(line_darkness, 0.0, 10.0)) return Fail(why, "line_darkness", line_darkness, "[0, 10] (0: off)");
   if (grabcut_iterations < 1 || grabcut_iterations > 20)
     return Fail(why, "grabcut_iterations", grabcut_iterations, "an integer in [1, 20]");
   if (dilate_px < 0 || dilate_px > 16) return Fail(why, "dilate_px", dilate_px, "an integer in [0, 16]");
@@ -197,6 +202,38 @@ bool SkyMaskOptions::IsValid(std::string* why) const {
 }
 
 namespace {
+
+// Gradient energy: the local RMS of a log image about its own blur (`sigma_px`), over twice
+// that scale.
+cv::Mat Texture(const cv::Mat& L, double sigma_px) {
+  const cv::Mat residual = L - BlurWrapped(L, sigma_px);
+  cv::Mat energy;
+  cv::sqrt(BlurWrapped(residual.mul(residual), 2.0 * sigma_px), energy);
+  return energy;
+}
+
+// The black-hat of a log image: its 3x3 closing minus itself (> 0 on dark features up to two
+// pixels wide, by how much darker they are than what surrounds them); wraps in longitude.
+cv::Mat BlackHat(const cv::Mat& L) {
+  cv::Mat padded, closed;
+  cv::copyMakeBorder(L, padded, 0, 0, 1, 1, cv::BORDER_WRAP);
+  cv::morphologyEx(padded, closed, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_RECT, {3, 3}), {-1, -1}, 1,
+                   cv::BORDER_REPLICATE);
+  return closed.colRange(1, L.cols + 1) - L;
+}
+
+// The log of channel c over the rows above the horizon; where any channel is invalid, the
+// (filled) log luminance `L`.
+cv::Mat LogChannel(const ImageRGB& f, int c, const cv::Mat& L) {
+  cv::Mat out(L.rows, L.cols, CV_32F);
+  for (int y = 0; y < L.rows; ++y)
+    for (int x = 0; x < L.cols; ++x) {
+      const float r = f.at(x, y, 0), g = f.at(x, y, 1), b = f.at(x, y, 2);
+      const bool ok = std::isfinite(r) && std::isfinite(g) && std::isfinite(b) && r > 0.0f && g > 0.0f && b > 0.0f;
+      out.at<float>(y, x) = ok ? std::log(f.at(x, y, c)) : L.at<float>(y, x);
+    }
+  return out;
+}
 
 // The cues over the rows above the horizon: log luminance, gradient energy and darkness
 // below the sky's reference (natural-log units).
@@ -209,9 +246,7 @@ SkyCues ComputeSkyCues(const ImageRGB& frame, int rows, const SkyMaskOptions& o)
   SkyCues q;
   cv::Mat valid;
   q.L = LogLuminance(frame, rows, &valid);
-  // Gradient energy: local RMS of log luminance about its own blur.
-  const cv::Mat residual = q.L - BlurWrapped(q.L, o.texture_sigma_px);
-  cv::sqrt(BlurWrapped(residual.mul(residual), 2.0 * o.texture_sigma_px), q.energy);
+  q.energy = Texture(q.L, o.texture_sigma_px);
   // Darkness below the sky's reference; 0.15 log units per degree of elevation at most
   // (a CIE overcast sky darkens 0.03 per degree near the horizon, a twilight sky's far side
   // more; buildings are darker by far more than that over their height).
@@ -220,18 +255,27 @@ SkyCues ComputeSkyCues(const ImageRGB& frame, int rows, const SkyMaskOptions& o)
   return q;
 }
 
+// The pixels within `exclusion_deg` of the sun (CV_8U 0/255; none without a sun): its glare
+// and the ringing of lossy compression round the disc are no evidence of anything.
+cv::Mat NearSun(const std::optional<std::array<double, 3>>& sun, int rows, int w, int h, double exclusion_deg) {
+  cv::Mat near(rows, w, CV_8U, cv::Scalar(0));
+  if (!sun || exclusion_deg <= 0.0) return near;
+  const double cos_exclusion = std::cos(exclusion_deg * M_PI / 180.0);
+  for (int y = 0; y < rows; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto v = latlong::PixelDirection(x, y, w, h);
+      if (v[0] * (*sun)[0] + v[1] * (*sun)[1] + v[2] * (*sun)[2] > cos_exclusion) near.at<uchar>(y, x) = 255;
+    }
+  return near;
+}
+
 // Non-sky candidates (CV_8U 0/255): dark, or textured and somewhat dark; none near the sun.
-cv::Mat NonSkyCandidates(const SkyCues& q, const std::optional<std::array<double, 3>>& sun, int rows, int w, int h,
-                         const SkyMaskOptions& o) {
-  const double deg = 180.0 / M_PI;
+cv::Mat NonSkyCandidates(const SkyCues& q, const cv::Mat& near_sun, const SkyMaskOptions& o) {
+  const int rows = q.L.rows, w = q.L.cols;
   cv::Mat candidates(rows, w, CV_8U, cv::Scalar(0));
   for (int y = 0; y < rows; ++y)
     for (int x = 0; x < w; ++x) {
-      if (sun && o.sun_exclusion_deg > 0.0) {
-        const auto v = latlong::PixelDirection(x, y, w, h);
-        const double c = v[0] * (*sun)[0] + v[1] * (*sun)[1] + v[2] * (*sun)[2];
-        if (std::acos(std::clamp(c, -1.0, 1.0)) * deg < o.sun_exclusion_deg) continue;
-      }
+      if (near_sun.at<uchar>(y, x)) continue;
       const float d = q.dark.at<float>(y, x), e = q.energy.at<float>(y, x);
       if (d > o.darkness_threshold || (e > o.texture_threshold && d > o.textured_darkness))
         candidates.at<uchar>(y, x) = 255;
@@ -239,6 +283,46 @@ cv::Mat NonSkyCandidates(const SkyCues& q, const std::optional<std::array<double
   // Close small gaps (lattice, foliage) before the connectivity test.
   cv::morphologyEx(candidates, candidates, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
   return candidates;
+}
+
+// Thin dark lines hanging from the non-sky class (CV_8U 0/255, `non_sky` included): wires
+// slung between pylons, a crane's jib and cables. A wire one pixel wide mixes its dark with the
+// bright sky's, so it is neither dark enough for the darkness cue nor wide enough for the
+// texture cue's ring. The black-hat of ln Y picks out dark features up to two pixels wide;
+// one above `line_darkness` is a line where it is
+//   - neutral: an opaque occluder covering part of a pixel scales the sky's three channels by
+//     one factor, so their black-hats agree (spread under half the luminance's); a cloud's
+//     dark fleck has a colour of its own; or
+//   - on a smooth sky: the line closed, its surroundings are under the texture cue's
+//     threshold (a wire's colour fringes against a hazy glow), where a cloud's flecks are not.
+// Lines join the class when they connect to it (8-connected, wrapping) through line pixels
+// above half of `line_darkness`: a wire's faint stretch does not cut it off. None near the sun.
+cv::Mat WithThinLinesAttached(const ImageRGB& frame, const cv::Mat& L, const cv::Mat& non_sky, const cv::Mat& near_sun,
+                              const SkyMaskOptions& o) {
+  const cv::Mat black_hat = BlackHat(L);
+  cv::Mat lo = BlackHat(LogChannel(frame, 0, L)), hi = lo.clone();
+  for (int c = 1; c < 3; ++c) {
+    const cv::Mat bc = BlackHat(LogChannel(frame, c, L));
+    cv::min(lo, bc, lo);
+    cv::max(hi, bc, hi);
+  }
+  const cv::Mat neutral = (hi - lo) < 0.5 * black_hat;
+  const cv::Mat smooth = Texture(L + black_hat, o.texture_sigma_px) < o.texture_threshold;
+  const cv::Mat eligible = (neutral | smooth) & (near_sun == 0);
+  const cv::Mat line = (black_hat > o.line_darkness) & eligible;
+  const cv::Mat faint = (black_hat > 0.5 * o.line_darkness) & eligible;
+  cv::Mat labels;
+  const int n = cv::connectedComponents(faint | non_sky, labels, 8, CV_32S);
+  std::vector<char> attached(n, 0);
+  for (int y = 0; y < L.rows; ++y)
+    for (int x = 0; x < L.cols; ++x)
+      if (non_sky.at<uchar>(y, x)) attached[labels.at<int>(y, x)] = 1;
+  SpreadAcrossSeam(labels, &attached);
+  cv::Mat out = non_sky.clone();
+  for (int y = 0; y < L.rows; ++y)
+    for (int x = 0; x < L.cols; ++x)
+      if (line.at<uchar>(y, x) && attached[labels.at<int>(y, x)]) out.at<uchar>(y, x) = 255;
+  return out;
 }
 
 // grabCut's seed labels: non-sky is its foreground. Definite: ground-connected and twice
@@ -312,7 +396,8 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
   if (rows < 2) return m;
 
   const SkyCues q = ComputeSkyCues(frame, rows, o);
-  const cv::Mat candidates = NonSkyCandidates(q, sun, rows, w, h, o);
+  const cv::Mat near_sun = NearSun(sun, rows, w, h, o.sun_exclusion_deg);
+  const cv::Mat candidates = NonSkyCandidates(q, near_sun, o);
   cv::Mat kept =
       KeepGroundConnected(candidates, band_top, q.dark, o.darkness_threshold, o.ground_dark_share, &m.floating_candidates);
   m.ground_connected_candidates = cv::countNonZero(kept);
@@ -337,6 +422,7 @@ SkyMask EstimateSkyMask(const ImageRGB& frame, const std::optional<std::array<do
   } else {
     gc_mask.setTo(cv::GC_PR_BGD);
   }
+  if (o.line_darkness > 0.0) non_sky = WithThinLinesAttached(frame, q.L, non_sky, near_sun, o);
   if (o.dilate_px > 0)
     cv::dilate(non_sky, non_sky,
                cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * o.dilate_px + 1, 2 * o.dilate_px + 1}));

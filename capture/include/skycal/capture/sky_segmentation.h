@@ -52,6 +52,9 @@ struct SkyMaskOptions {
   // dark (bench/results/sky_segmentation.md, "Cloud banks on the horizon").
   double ground_dark_share = 0.1;
   double sun_exclusion_deg = 6.0;      // no candidates within this angle of the sun (glare, DWAB ringing), [0, 45]
+  // Thin dark lines (wires, cables) joining the non-sky class they hang from: a pixel darker
+  // than its 3x3 closing by this much (log units), connected to it; 0: off. [0, 10]
+  double line_darkness = 0.05;
   bool grabcut = true;                 // refine with cv::grabCut
   int grabcut_iterations = 3;          // [1, 20]
   int dilate_px = 1;                   // grow the non-sky class by this many pixels (mixed edge pixels), [0, 16]
