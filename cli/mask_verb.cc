@@ -36,6 +36,7 @@ bool MaskOptions::IsValid(std::string* why) const {
                                      {"SkyMaskOptions::texture_threshold", "--texture"},
                                      {"SkyMaskOptions::ground_band_deg", "--ground-band-deg"},
                                      {"SkyMaskOptions::ground_dark_share", "--ground-dark-share"},
+                                     {"SkyMaskOptions::line_darkness", "--lines"},
                                      {"SkyMaskOptions::dilate_px", "--dilate"}};
   *why = FieldsAsFlags(*why, kFlags);
   return false;
@@ -93,6 +94,9 @@ MaskOptions ParseMaskArgs(int argc, char** argv) {
   cl.Number("--ground-dark-share", &s.ground_dark_share, "F",
             "... and when this share of their pixels in that band is dark (by --darkness): a cloud bank meeting the "
             "horizon through haze is not ground (default 0.1, [0, 1]; 0: any contact)");
+  cl.Number("--lines", &s.line_darkness, "LOG",
+            "thin dark lines (wires, a crane's jib) this much darker than their 3x3 closing join the non-sky "
+            "class they hang from (default 0.05, [0, 10]; 0: off)");
   cl.Integer("--dilate", &s.dilate_px, 0, 16, "expected an integer in [0, 16] pixels", "PX",
              "grow the non-sky class by this many pixels (default 1)");
   cl.Flag("--no-grabcut", &no_grabcut, "skip the cv::grabCut refinement (cues and ground connection only)");

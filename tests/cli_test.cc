@@ -199,7 +199,7 @@ TEST(Cli, HelpListsEveryRegisteredOption) {
       {"import", {"--in", "--out", "--source-convention", "--sun-dir", "--detect-sun", "--min-sun-contrast", "--half",
                   "--json"}},
       {"mask", {"--reference", "--out", "--horizon-deg", "--darkness", "--texture", "--ground-band-deg",
-                "--ground-dark-share", "--dilate", "--no-grabcut", "--json"}},
+                "--ground-dark-share", "--lines", "--dilate", "--no-grabcut", "--json"}},
       {"probe-extract", {"--image", "--circle", "--camera-rotation", "--albedo", "--clip-level", "--out", "--json"}},
       {"probe-predict", {"--preset", "--sun-elevation", "--sun-azimuth", "--sun-dir", "--albedo", "--normals",
                          "--sky-width", "--backend", "--ground", "--vulkan-validation", "--json"}},
