@@ -132,14 +132,13 @@ TEST(Calibrate, TheSunWithItsDiscCoveredIsFoundFromTheSky) {
 
 // An overcast deck whose sun nothing places: the nominal sun sits on the deck's bright patch
 // within 1.5 deg (the gradient under the patch lifts the smoothed peak by about a degree), not
-// at the centre of a 10-degree cell (5.1 deg off here). The deck: the CIE
-// overcast gradient (1 + 2 sin el) / 3, a patch of 8 deg round a sun between cell centres, a
-// texture of +-10% and a tower masked out. A control: with the patch off, the peak is the
-// gradient's, at the zenith side of the frame, far from the sun.
+// at the centre of a 10-degree cell (5.1 deg off here), and across the lat-long's seam too (the
+// smoothing wraps). The deck: the CIE overcast gradient (1 + 2 sin el) / 3, a patch of 8 deg
+// round a sun between cell centres, a texture of +-10% and a tower masked out. A control: with
+// the patch off, the peak is the gradient's, at the zenith side of the frame, far from the sun.
 TEST(Calibrate, TheNominalSunOfAnOvercastDeckSitsOnItsBrightPatch) {
   const int w = 512, h = 256;
-  const auto sun = latlong::DirectionFromElevationAzimuthDeg(21.0, 41.5);  // 10-deg cells: (25, 45), 5 deg off
-  auto deck = [&](double patch) {
+  auto deck = [&](const std::array<double, 3>& sun, double patch) {
     ImageRGB img(w, h);
     std::vector<float> sky(static_cast<size_t>(w) * h, 1.0f);
     for (int y = 0; y < h; ++y)
@@ -154,13 +153,18 @@ TEST(Calibrate, TheNominalSunOfAnOvercastDeckSitsOnItsBrightPatch) {
       }
     return controllers::NominalOvercastSun(img, sky);
   };
-  const auto s = deck(1.0);
+  const auto sun = latlong::DirectionFromElevationAzimuthDeg(21.0, 41.5);  // 10-deg cells: (25, 45), 5 deg off
+  const auto s = deck(sun, 1.0);
   ASSERT_TRUE(s && s->direction);
   std::cout << "[calibrate] overcast deck: the nominal sun " << AngleDeg(*s->direction, sun) << " deg off its patch (el "
             << latlong::ElevationDeg(*s->direction) << ", az " << latlong::AzimuthDeg(*s->direction) << ")\n";
   EXPECT_LT(AngleDeg(*s->direction, sun), 1.5);
   EXPECT_EQ(s->uncertainty_deg, 90.0);
-  const auto flat = deck(0.0);
+  const auto seam_sun = latlong::DirectionFromElevationAzimuthDeg(21.0, 178.0);  // 2 deg from the seam
+  const auto seam = deck(seam_sun, 1.0);
+  ASSERT_TRUE(seam && seam->direction);
+  EXPECT_LT(AngleDeg(*seam->direction, seam_sun), 1.5);
+  const auto flat = deck(sun, 0.0);
   ASSERT_TRUE(flat && flat->direction);
   EXPECT_GT(AngleDeg(*flat->direction, sun), 30.0);
 }

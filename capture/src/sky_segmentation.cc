@@ -5,6 +5,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "latlong_blur.h"
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
@@ -18,16 +19,6 @@ bool InRange(double v, double lo, double hi) { return std::isfinite(v) && v >= l
 bool Fail(std::string* why, const std::string& field, double value, const std::string& expected) {
   *why = "SkyMaskOptions::" + field + " = " + FormatNumber(value) + " (expected " + expected + ")";
   return false;
-}
-
-// Gaussian blur of a lat-long band that wraps in longitude (cv::GaussianBlur has no wrap
-// border): pad both sides by the kernel's reach, blur, crop.
-cv::Mat BlurWrapped(const cv::Mat& in, double sigma_px) {
-  const int pad = std::min(in.cols, static_cast<int>(std::ceil(3.0 * sigma_px)) + 1);
-  cv::Mat padded, blurred;
-  cv::copyMakeBorder(in, padded, 0, 0, pad, pad, cv::BORDER_WRAP);
-  cv::GaussianBlur(padded, blurred, cv::Size(0, 0), sigma_px, sigma_px, cv::BORDER_REFLECT);
-  return blurred(cv::Rect(pad, 0, in.cols, in.rows)).clone();
 }
 
 // Log luminance of the rows above the horizon; invalid pixels (NaN, Inf, <= 0) filled by a

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
+#include "latlong_blur.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/latlong.h"
 
@@ -67,6 +70,34 @@ std::optional<SunDetection> DetectSun(const ImageRGB& img, std::string* why, dou
   d.direction = latlong::Normalized(sum, "sun centroid");
   d.clipped = plateau >= 3;
   return d;
+}
+
+std::optional<std::array<double, 3>> BrightestSkyPatch(const ImageRGB& img, const std::vector<float>& sky,
+                                                       double sigma_deg, double min_elevation_deg) {
+  const int w = img.width, h = img.height;
+  cv::Mat1f num(h, w, 0.0f), den(h, w, 0.0f);  // sky luminance and sky weight above the elevation
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const double Y = Luminance(&img.pixels[img.index(x, y)]);
+      if (latlong::ElevationDeg(latlong::PixelDirection(x, y, w, h)) < min_elevation_deg || !(sky[i] >= 0.5f) ||
+          !(Y > 0.0) || !std::isfinite(Y))
+        continue;
+      num(y, x) = static_cast<float>(Y);
+      den(y, x) = 1.0f;
+    }
+  const double sigma_px = sigma_deg / 360.0 * w;
+  const cv::Mat1f bn = BlurWrapped(num, sigma_px), bd = BlurWrapped(den, sigma_px);
+  int best_x = -1, best_y = -1;
+  double best = 0.0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (den(y, x) > 0.0f && bd(y, x) >= 0.5f && bn(y, x) / bd(y, x) > best) {
+        best = bn(y, x) / bd(y, x);
+        best_x = x, best_y = y;
+      }
+  if (best_x < 0) return std::nullopt;
+  return latlong::PixelDirection(best_x, best_y, w, h);
 }
 
 }  // namespace skycal::capture

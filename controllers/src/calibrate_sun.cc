@@ -1,10 +1,6 @@
 #include "calibrate_sun.h"
 
-#include <algorithm>
 #include <cmath>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "skycal/capture/solar_position.h"
 #include "skycal/capture/sun_detect.h"
@@ -93,40 +89,10 @@ PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
 
 std::optional<PhotoSun> NominalOvercastSun(const ImageRGB& frame, const std::vector<float>& sky) {
   constexpr double kSigmaDeg = 5.0, kMinElevationDeg = 5.0;
-  const int w = frame.width, h = frame.height;
-  cv::Mat1f num(h, w, 0.0f), den(h, w, 0.0f);  // sky luminance and sky weight, above 5 deg
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t i = static_cast<size_t>(y) * w + x;
-      const double Y = capture::Luminance(&frame.pixels[3 * i]);
-      if (latlong::ElevationDeg(latlong::PixelDirection(x, y, w, h)) < kMinElevationDeg || !(sky[i] >= 0.5f) ||
-          !(Y > 0.0) || !std::isfinite(Y))
-        continue;
-      num(y, x) = static_cast<float>(Y);
-      den(y, x) = 1.0f;
-    }
-  // Normalised convolution (the mask's edges do not darken the sky beside them); the columns
-  // wrap round the seam, the rows reflect at the poles.
-  const double sigma_px = kSigmaDeg / 360.0 * w;
-  const int pad = std::min(w, static_cast<int>(std::ceil(3.0 * sigma_px)));
-  auto blur = [&](const cv::Mat1f& m) {
-    cv::Mat1f wrapped, out;
-    cv::copyMakeBorder(m, wrapped, 0, 0, pad, pad, cv::BORDER_WRAP);
-    cv::GaussianBlur(wrapped, out, cv::Size(0, 0), sigma_px, sigma_px, cv::BORDER_REFLECT);
-    return cv::Mat1f(out.colRange(pad, pad + w));
-  };
-  const cv::Mat1f bn = blur(num), bd = blur(den);
-  int best_x = -1, best_y = -1;
-  double best = 0.0;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)  // a pixel of sky, at least half of its neighbourhood sky
-      if (den(y, x) > 0.0f && bd(y, x) >= 0.5f && bn(y, x) / bd(y, x) > best) {
-        best = bn(y, x) / bd(y, x);
-        best_x = x, best_y = y;
-      }
-  if (best_x < 0) return std::nullopt;
+  const auto patch = capture::BrightestSkyPatch(frame, sky, kSigmaDeg, kMinElevationDeg);
+  if (!patch) return std::nullopt;
   PhotoSun s;
-  s.direction = latlong::PixelDirection(best_x, best_y, w, h);
+  s.direction = *patch;
   s.source = "overcast: nominal, where the deck is brightest";
   s.uncertainty_deg = 90.0;
   return s;

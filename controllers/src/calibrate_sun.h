@@ -37,9 +37,10 @@ PhotoSun ChoosePhotoSun(const ImageRGB& frame, const std::vector<float>& sky,
                         const std::optional<std::array<double, 3>>& file_sun, const CalibrateOptions& o);
 
 // An overcast sky whose sun nothing places: the CIE overcast term that carries it does not
-// depend on the sun, so a nominal one is taken where the deck is brightest: the peak of the
-// sky pixels' luminance above 5 degrees, smoothed by a Gaussian of 5 degrees (the size of a
-// thin deck's bright patch round the sun it hides), to the pixel. Its uncertainty is
+// depend on the sun, so a nominal one is taken where the deck is brightest
+// (capture::BrightestSkyPatch): the peak of the sky pixels' luminance above 5 degrees,
+// smoothed by a Gaussian of 5 degrees (the size of a thin deck's bright patch round the sun it
+// hides), to the pixel. Its uncertainty is
 // unbounded (90 deg). To the pixel because the atmosphere's glow round the nominal sun is steep
 // in azimuth: 10-degree cells put it up to 5 degrees off the patch. Nothing when no sky pixel
 // above 5 degrees has half of its neighbourhood sky.

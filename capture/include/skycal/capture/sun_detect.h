@@ -4,6 +4,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "skycal/core/image.h"
 #include "skycal/core/luminance.h"
@@ -21,6 +22,14 @@ struct SunDetection {
 // Returns nothing (and says why in *why) when the upper hemisphere has no distinct sun:
 // peak under `min_contrast` times the median, or no finite positive pixel.
 std::optional<SunDetection> DetectSun(const ImageRGB& latlong, std::string* why, double min_contrast = 20.0);
+
+// Where the sky is brightest, as a deck hiding the sun shows it: the peak of the sky pixels'
+// luminance (`sky`: one weight per pixel, >= 0.5 sky) above `min_elevation_deg`, smoothed by a
+// Gaussian of `sigma_deg` (normalised over the sky pixels, so the mask's edges do not darken
+// the sky beside them; wrapping in longitude), to the pixel. Only a sky pixel at least half of
+// whose neighbourhood is sky qualifies; nothing when none does. Unit vector.
+std::optional<std::array<double, 3>> BrightestSkyPatch(const ImageRGB& latlong, const std::vector<float>& sky,
+                                                       double sigma_deg, double min_elevation_deg);
 
 // Rec.709 / sRGB luminance weights (ITU-R BT.709).
 inline double Luminance(const float* rgb) { return Rec709Luminance<double>(rgb[0], rgb[1], rgb[2]); }
