@@ -22,6 +22,7 @@
 #include "skycal/capture/latlong_frame.h"
 #include "skycal/capture/sky_segmentation.h"
 #include "skycal/capture/solar_position.h"
+#include "skycal/capture/sun_detect.h"
 #include "skycal/capture/time_place.h"
 #include "skycal/controllers/calibrate.h"
 #include "skycal/core/error.h"
@@ -167,6 +168,7 @@ TEST(Calibrate, TheNominalSunOfAnOvercastDeckSitsOnItsBrightPatch) {
   const auto flat = deck(sun, 0.0);
   ASSERT_TRUE(flat && flat->direction);
   EXPECT_GT(AngleDeg(*flat->direction, sun), 30.0);
+  EXPECT_THROW(capture::BrightestSkyPatch(ImageRGB(w, h), std::vector<float>(10, 1.0f), 5.0, 5.0), Error);
 }
 
 // The time and place: with north known, the SPA's direction exactly; without it, the SPA's

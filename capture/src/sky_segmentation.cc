@@ -21,6 +21,12 @@ bool Fail(std::string* why, const std::string& field, double value, const std::s
   return false;
 }
 
+// A pixel every cue can take the logarithm of: each channel finite and positive.
+bool ValidPixel(const ImageRGB& f, int x, int y) {
+  const float r = f.at(x, y, 0), g = f.at(x, y, 1), b = f.at(x, y, 2);
+  return std::isfinite(r) && std::isfinite(g) && std::isfinite(b) && r > 0.0f && g > 0.0f && b > 0.0f;
+}
+
 // Log luminance of the rows above the horizon; invalid pixels (NaN, Inf, <= 0) filled by a
 // normalised blur of their valid neighbours (a few passes; what is left takes the band's
 // median).
@@ -29,10 +35,8 @@ cv::Mat LogLuminance(const ImageRGB& f, int rows, cv::Mat* valid_out) {
   std::vector<float> good;
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < f.width; ++x) {
-      const float r = f.at(x, y, 0), g = f.at(x, y, 1), b = f.at(x, y, 2);
-      const float Y = Rec709Luminance(r, g, b);
-      const bool ok = std::isfinite(r) && std::isfinite(g) && std::isfinite(b) && r > 0.0f && g > 0.0f && b > 0.0f;
-      L.at<float>(y, x) = ok ? std::log(Y) : 0.0f;
+      const bool ok = ValidPixel(f, x, y);
+      L.at<float>(y, x) = ok ? std::log(Rec709Luminance(f.at(x, y, 0), f.at(x, y, 1), f.at(x, y, 2))) : 0.0f;
       valid.at<float>(y, x) = ok ? 1.0f : 0.0f;
       if (ok) good.push_back(L.at<float>(y, x));
     }
@@ -219,9 +223,7 @@ cv::Mat LogChannel(const ImageRGB& f, int c, const cv::Mat& L) {
   cv::Mat out(L.rows, L.cols, CV_32F);
   for (int y = 0; y < L.rows; ++y)
     for (int x = 0; x < L.cols; ++x) {
-      const float r = f.at(x, y, 0), g = f.at(x, y, 1), b = f.at(x, y, 2);
-      const bool ok = std::isfinite(r) && std::isfinite(g) && std::isfinite(b) && r > 0.0f && g > 0.0f && b > 0.0f;
-      out.at<float>(y, x) = ok ? std::log(f.at(x, y, c)) : L.at<float>(y, x);
+      out.at<float>(y, x) = ValidPixel(f, x, y) ? std::log(f.at(x, y, c)) : L.at<float>(y, x);
     }
   return out;
 }
@@ -290,6 +292,7 @@ cv::Mat NonSkyCandidates(const SkyCues& q, const cv::Mat& near_sun, const SkyMas
 // above half of `line_darkness`: a wire's faint stretch does not cut it off. None near the sun.
 cv::Mat WithThinLinesAttached(const ImageRGB& frame, const cv::Mat& L, const cv::Mat& non_sky, const cv::Mat& near_sun,
                               const SkyMaskOptions& o) {
+  if (cv::countNonZero(non_sky) == 0) return non_sky.clone();  // nothing for a line to hang from
   const cv::Mat black_hat = BlackHat(L);
   cv::Mat lo = BlackHat(LogChannel(frame, 0, L)), hi = lo.clone();
   for (int c = 1; c < 3; ++c) {

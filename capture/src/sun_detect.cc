@@ -7,7 +7,9 @@
 #include <opencv2/core.hpp>
 
 #include "latlong_blur.h"
+#include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
+#include "skycal/core/math_constants.h"
 #include "skycal/core/latlong.h"
 
 namespace skycal::capture {
@@ -75,17 +77,20 @@ std::optional<SunDetection> DetectSun(const ImageRGB& img, std::string* why, dou
 std::optional<std::array<double, 3>> BrightestSkyPatch(const ImageRGB& img, const std::vector<float>& sky,
                                                        double sigma_deg, double min_elevation_deg) {
   const int w = img.width, h = img.height;
+  if (sky.size() != static_cast<size_t>(w) * h)
+    throw Error("BrightestSkyPatch: the sky mask has " + std::to_string(sky.size()) + " values for a " +
+                std::to_string(w) + "x" + std::to_string(h) + " frame (expected one per pixel)");
   cv::Mat1f num(h, w, 0.0f), den(h, w, 0.0f);  // sky luminance and sky weight above the elevation
-  for (int y = 0; y < h; ++y)
+  for (int y = 0; y < h; ++y) {
+    if (latlong::Latitude(y, h) * 180.0 / kPi < min_elevation_deg) continue;
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
       const double Y = Luminance(&img.pixels[img.index(x, y)]);
-      if (latlong::ElevationDeg(latlong::PixelDirection(x, y, w, h)) < min_elevation_deg || !(sky[i] >= 0.5f) ||
-          !(Y > 0.0) || !std::isfinite(Y))
-        continue;
+      if (!(sky[i] >= 0.5f) || !(Y > 0.0) || !std::isfinite(Y)) continue;
       num(y, x) = static_cast<float>(Y);
       den(y, x) = 1.0f;
     }
+  }
   const double sigma_px = sigma_deg / 360.0 * w;
   const cv::Mat1f bn = BlurWrapped(num, sigma_px), bd = BlurWrapped(den, sigma_px);
   int best_x = -1, best_y = -1;
