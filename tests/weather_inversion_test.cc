@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/clouds/weather_map.h"
@@ -278,6 +280,75 @@ TEST(WeatherInversion, SmoothingFollowsThePixelFootprint) {
   EXPECT_FLOAT_EQ(map.rgb[3 * zenith], 1.0f);
   EXPECT_NEAR(map.rgb[3 * far], 0.25f + 0.75f / 25.0f, 1e-6);  // a 5 x 5 box
   EXPECT_NEAR(map.rgb[3 * (far + 1)], 0.25f + 0.75f / 25.0f, 1e-6);
+}
+
+
+// A frame later in the wind sees the same sky through the map moved under it: with the wind
+// blowing toward +x (azimuth 90), the march samples camera-relative x at x - speed x time
+// (clouds/src/resolved_clouds.cc), so each ray meets the texels of the frame at time 0 moved
+// by whole texels (speed x time a multiple of the texel here), and the camera stands there on
+// the map. Control: the opposite shift matches almost none of the samples.
+TEST(WeatherInversion, ALaterFrameSeesTheMapMovedByTheWind) {
+  clouds::CloudParams p;
+  p.wind_direction_deg = 90.0;
+  p.wind_speed_m_s = 10.0;
+  const double texel_m = p.weather_extent_m / kMap, t = 3.0 * texel_m / p.wind_speed_m_s;  // 3 texels
+  const cloudfit::WeatherTexelView v0 = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {});
+  const cloudfit::WeatherTexelView v1 = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, {}, t);
+  ASSERT_EQ(v1.cameras.size(), 1u);
+  EXPECT_NEAR(v1.cameras[0][0], -3.0 * texel_m, 1e-6);
+  EXPECT_NEAR(v1.cameras[0][1], 0.0, 1e-6);
+  const auto moved = [](int texel, int columns) { return texel / kMap * kMap + ((texel % kMap + columns) % kMap + kMap) % kMap; };
+  // Rays and centre links alike (a texel's centre moves with it); a sample on a texel's edge may
+  // round to its neighbour.
+  std::vector<std::pair<int, int>> a, b;
+  for (const auto& s : v0.rays) a.push_back({s.pixel, s.texel});
+  for (const auto& s : v1.rays) b.push_back({s.pixel, s.texel});
+  std::sort(b.begin(), b.end());
+  const double samples = static_cast<double>(a.size());
+  int along = 0, against = 0;
+  for (const auto& [pix, texel] : a) {
+    along += std::binary_search(b.begin(), b.end(), std::pair(pix, moved(texel, -3)));
+    against += std::binary_search(b.begin(), b.end(), std::pair(pix, moved(texel, 3)));
+  }
+  EXPECT_GE(along, 0.99 * samples);
+  EXPECT_LT(against, 0.5 * samples);
+}
+
+// Frames stacked: frame k's pixels follow frame k-1's, a texel is linked when any frame links
+// it, the cameras are kept in order; frames of another size are refused by name.
+TEST(WeatherInversion, StackedFramesKeepEachFramesRays) {
+  clouds::CloudParams p;
+  const std::vector<float> east = [] {
+    std::vector<float> s(static_cast<size_t>(kW) * kH, 0.0f);
+    for (int y = 0; y < kH; ++y)
+      for (int x = kW / 2; x < kW; ++x) s[static_cast<size_t>(y) * kW + x] = 1.0f;
+    return s;
+  }();
+  std::vector<float> west(east.size());
+  for (size_t i = 0; i < east.size(); ++i) west[i] = 1.0f - east[i];
+  const cloudfit::WeatherTexelView a = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, east);
+  const cloudfit::WeatherTexelView b = cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW, kH, west, 60.0);
+  const cloudfit::WeatherTexelView s = cloudfit::StackWeatherViews({a, b});
+  EXPECT_EQ(s.width, kW);
+  EXPECT_EQ(s.height, 2 * kH);
+  ASSERT_EQ(s.rays.size(), a.rays.size() + b.rays.size());
+  for (size_t k = 0; k < a.rays.size(); ++k) EXPECT_EQ(s.rays[k].pixel, a.rays[k].pixel);
+  for (size_t k = 0; k < b.rays.size(); ++k) {
+    EXPECT_EQ(s.rays[a.rays.size() + k].pixel, b.rays[k].pixel + kW * kH);
+    EXPECT_EQ(s.rays[a.rays.size() + k].texel, b.rays[k].texel);
+  }
+  int either = 0;
+  for (size_t t = 0; t < s.linked.size(); ++t) {
+    EXPECT_EQ(s.linked[t], a.linked[t] | b.linked[t]) << t;
+    either += a.linked[t] | b.linked[t];
+  }
+  EXPECT_EQ(s.constrained, either);
+  EXPECT_GT(s.constrained, std::max(a.constrained, b.constrained));
+  ASSERT_EQ(s.cameras.size(), 2u);
+  EXPECT_EQ(s.cameras[1], b.cameras[0]);
+  EXPECT_THROW(cloudfit::StackWeatherViews({a, cloudfit::ProjectWeatherTexels(p, kMap, kMap, kW / 2, kH / 2, {})}), Error);
+  EXPECT_THROW(cloudfit::StackWeatherViews({}), Error);
 }
 
 }  // namespace

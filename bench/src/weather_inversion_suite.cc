@@ -9,7 +9,9 @@
 // as calibrate does. Measured: IoU of the opacity masks (>= 0.5) and the opacity RMS over the
 // upper hemisphere, start -> inverted; the coverage correlation with the truth over the texels
 // within 8 km and 20 km of the camera (the photo resolves a texel radially to ~7 km at 512 px);
-// the inversion's time. Error: the inverted opacity RMS.
+// the inversion's time. Error: the inverted opacity RMS. Not --quick: a day of four frames
+// moved by the wind, one map inverted from all of them (cloudfit::StackWeatherViews), against
+// the last frame's own map: its fit, and the next frame predicted.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -100,11 +102,13 @@ struct Scene {
     r.sun_disc = false;
     sky = render::CreateRenderer(render::Backend::kCpu)->Render(preset, r);
   }
-  std::vector<float> Opacity(const clouds::WeatherMap& map) {
+  // At `time_s` in the scene's wind (CloudParams' 10 m/s toward azimuth 0).
+  std::vector<float> Opacity(const clouds::WeatherMap& map, double time_s = 0.0) {
     clouds::CloudRenderRequest r;
     r.width = kW;
     r.height = kH;
     r.sun_dir = sun;
+    r.time_s = time_s;
     r.march.light_samples = 0;
     r.march.far_light = false;
     const clouds::CloudImage image = renderer->Render({&preset, &params, &noise, &map}, r);
@@ -268,16 +272,72 @@ void MeasureLighting(Scene& scene, const clouds::WeatherMap& truth, const clouds
   c.extra["inverted_fitted_over_truth"] = on_inverted.ratios;
 }
 
+// What the statistics fit leaves, where every inversion starts.
+clouds::WeatherMap StartMap(const Scene& scene) {
+  clouds::WeatherNoiseOptions start;
+  start.mean_coverage = 0.2;
+  start.mean_precipitation = 0.0;
+  return clouds::ResampleWeatherMap(clouds::NoiseWeatherMap(7, kMap, scene.params.weather_extent_m, start), kInverted);
+}
+
+// A day: frames kDayInterval_s apart (FH3 shoots one every 30 s; four minutes of frames move
+// the clouds 1.2 km in the scene's 10 m/s wind), their opacities concatenated in
+// StackWeatherViews' order.
+constexpr double kDayInterval_s = 120.0;
+std::vector<float> FramesOpacity(Scene& scene, const clouds::WeatherMap& map, int frames) {
+  std::vector<float> all;
+  for (int k = 0; k < frames; ++k) {
+    const std::vector<float> o = scene.Opacity(map, k * kDayInterval_s);
+    all.insert(all.end(), o.begin(), o.end());
+  }
+  return all;
+}
+
+// One map inverted from all of a day's frames through the wind, against the truth, and against
+// the last frame's own map (what calibrate inverts per frame, moved by the wind to predict the
+// next): the coverage correlation over the texels the frames constrain, each frame's opacity
+// agreement (mean over the frames; the last map: its own frame's), and the next frame predicted.
+void RunDayCase(Scene& scene, CaseResult& c, int frames) {
+  const clouds::WeatherMap truth = TruthMap(Get(c.settings, "map"), scene.params.weather_extent_m);
+  const double extent = scene.params.weather_extent_m, last_s = (frames - 1) * kDayInterval_s;
+  std::vector<cloudfit::WeatherTexelView> views;
+  for (int k = 0; k < frames; ++k)
+    views.push_back(cloudfit::ProjectWeatherTexels(scene.params, kInverted, kInverted, kW, kH, {}, k * kDayInterval_s));
+  const cloudfit::WeatherTexelView day = cloudfit::StackWeatherViews(views);
+  clouds::WeatherMap map = StartMap(scene), last = StartMap(scene);
+  c.time = Measure(
+      [&] {
+        cloudfit::InvertWeatherMap(day, extent, FramesOpacity(scene, truth, frames),
+                                   [&](const clouds::WeatherMap& m) { return FramesOpacity(scene, m, frames); }, {}, &map);
+      },
+      0, 1);
+  cloudfit::InvertWeatherMap(views.back(), extent, scene.Opacity(truth, last_s),
+                             [&](const clouds::WeatherMap& m) { return scene.Opacity(m, last_s); }, {}, &last);
+  double iou = 0.0, rms = 0.0;
+  for (int k = 0; k < frames; ++k) {
+    const auto [i, r] = Agreement(scene.Opacity(truth, k * kDayInterval_s), scene.Opacity(map, k * kDayInterval_s));
+    iou += i / frames, rms += r / frames;
+  }
+  const std::vector<float> next = scene.Opacity(truth, last_s + kDayInterval_s);
+  const auto [own_iou, own_rms] = Agreement(scene.Opacity(truth, last_s), scene.Opacity(last, last_s));
+  const auto [day_next_iou, day_next_rms] = Agreement(next, scene.Opacity(map, last_s + kDayInterval_s));
+  const auto [last_next_iou, last_next_rms] = Agreement(next, scene.Opacity(last, last_s + kDayInterval_s));
+  c.error = rms;
+  c.extra = {{"correlation_constrained", Correlation(truth, map, 1e9, &day)},
+             {"last_correlation_constrained", Correlation(truth, last, 1e9, &views.back())},
+             {"frames_iou", iou},         {"frames_opacity_rms", rms},
+             {"last_own_iou", own_iou},   {"last_own_opacity_rms", own_rms},
+             {"next_by_day_iou", day_next_iou},   {"next_by_day_opacity_rms", day_next_rms},
+             {"next_by_last_iou", last_next_iou}, {"next_by_last_opacity_rms", last_next_rms}};
+}
+
 void RunCase(Scene& scene, CaseResult& c) {
+  if (const int frames = std::stoi(Get(c.settings, "frames")); frames > 1) return RunDayCase(scene, c, frames);
   const clouds::WeatherMap truth = TruthMap(Get(c.settings, "map"), scene.params.weather_extent_m);
   const std::vector<float> photo = scene.Opacity(truth);
   const ImageRGB reference = scene.Composite(truth, scene.params);
   const cloudfit::WeatherTexelView view = cloudfit::ProjectWeatherTexels(scene.params, kInverted, kInverted, kW, kH, {});
-  clouds::WeatherNoiseOptions start;
-  start.mean_coverage = 0.2;
-  start.mean_precipitation = 0.0;
-  clouds::WeatherMap map =
-      clouds::ResampleWeatherMap(clouds::NoiseWeatherMap(7, kMap, scene.params.weather_extent_m, start), kInverted);
+  clouds::WeatherMap map = StartMap(scene);
   const auto [iou0, rms0] = Agreement(photo, scene.Opacity(map));
   const double corr0 = Correlation(truth, map, 8000.0);
   c.time = Measure(  // once: the inversion refines `map` in place
@@ -323,6 +383,30 @@ std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
   return md;
 }
 
+// The day's rows.
+std::string DayMarkdown(const std::vector<CaseResult>& cases) {
+  std::string md =
+      "\n## One map for a day's frames\n\nFrames " + FormatFixed(kDayInterval_s, 0) +
+      " s apart in the scene's wind (10 m/s), the same truths; one map inverted from every frame's opacity at once "
+      "(cloudfit::StackWeatherViews: each frame's rays reach the map where the wind has moved it), against the last "
+      "frame's own map (the single-frame inversion calibrate runs per photo). Coverage correlation over the texels "
+      "the frames constrain; opacity IoU / RMS of each frame (the day's map: the mean over its frames; the last "
+      "map: its own frame); the next frame, one interval after the last, predicted by each map moved by the wind."
+      "\n\n| map | frames | correlation: last frame's map -> the day's | fit: last frame's map on its frame | fit: "
+      "the day's map, mean over its frames | next frame by the last frame's map | next frame by the day's map | "
+      "inversion (s) |\n|---|---|---|---|---|---|---|---|\n";
+  for (const CaseResult& c : cases) {
+    if (!c.extra.contains("next_by_day_iou")) continue;
+    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
+    md += "| " + Get(c.settings, "map") + " | " + Get(c.settings, "frames") + " | " + f("last_correlation_constrained") +
+          " -> " + f("correlation_constrained") + " | " + f("last_own_iou") + " / " + f("last_own_opacity_rms") + " | " +
+          f("frames_iou") + " / " + f("frames_opacity_rms") + " | " + f("next_by_last_iou") + " / " +
+          f("next_by_last_opacity_rms") + " | " + f("next_by_day_iou") + " / " + f("next_by_day_opacity_rms") + " | " +
+          FormatFixed(c.time.median_ms / 1000.0, 2) + " |\n";
+  }
+  return md;
+}
+
 std::string Markdown(const std::vector<CaseResult>& cases) {
   std::string md =
       "# The weather map inverted from a reference's opacity, against its truth\n\n"
@@ -337,14 +421,14 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
       "start -> inverted | correlation <= 8 km start -> inverted | <= 20 km | constrained texels | constrained, "
       "truth at the footprint | inversion (s) |\n|---|---|---|---|---|---|---|---|\n";
   for (const CaseResult& c : cases) {
-    if (!c.extra.contains("iou")) continue;
+    if (!c.extra.contains("iou_start")) continue;
     const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
     md += "| " + Get(c.settings, "map") + " | " + f("iou_start") + " -> " + f("iou") + " | " + f("opacity_rms_start") +
           " -> " + f("opacity_rms") + " | " + f("correlation_8km_start") + " -> " + f("correlation_8km") + " | " +
           f("correlation_20km") + " | " + f("correlation_constrained") + " | " +
           f("correlation_constrained_footprint") + " | " + FormatFixed(c.time.median_ms / 1000.0, 2) + " |\n";
   }
-  return md + LightingMarkdown(cases);
+  return md + LightingMarkdown(cases) + DayMarkdown(cases);
 }
 
 std::vector<CaseResult> Run(const SuiteOptions& o) {
@@ -352,7 +436,9 @@ std::vector<CaseResult> Run(const SuiteOptions& o) {
   grid.axes = {{"map", o.quick ? std::vector<std::string>{"blobs"} : std::vector<std::string>{"noise", "blobs", "bands", "front"},
                 "blobs"},
                // The lit re-render and the lighting refit on the inverted shapes (~1 min a map).
-               {"lighting", {o.quick ? "off" : "on"}, o.quick ? "off" : "on"}};
+               {"lighting", {o.quick ? "off" : "on"}, o.quick ? "off" : "on"},
+               // A day of frames (~12 s a map at four frames); the lighting is measured on single frames.
+               {"frames", o.quick ? std::vector<std::string>{"1"} : std::vector<std::string>{"1", "4"}, "1"}};
   Scene scene;
   return RunGrid("weather-inversion", grid, o, [&](CaseResult& c) { RunCase(scene, c); });
 }

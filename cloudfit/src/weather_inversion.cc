@@ -37,8 +37,17 @@ int PixelOf(double x, double y, double z, const clouds::CloudParams& p, int widt
   return (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f)) ? -1 : pix;
 }
 
-// The texel under camera-relative (x, z); the map tiles (the march's sampler wraps).
-int TexelOf(double x, double z, const clouds::CloudParams& p, int map_width, int map_height) {
+// The wind's offset of the map at time_s, m (clouds/src/resolved_clouds.cc's ShadeFromParams).
+std::array<double, 2> WindOffset(const clouds::CloudParams& p, double time_s) {
+  const double az = p.wind_direction_deg * kPi / 180.0;
+  return {-std::sin(az) * p.wind_speed_m_s * time_s, -std::cos(az) * p.wind_speed_m_s * time_s};
+}
+
+// The texel under camera-relative (x, z) seen from `camera` (the wind's offset); the map tiles
+// (the march's sampler wraps).
+int TexelOf(double x, double z, const std::array<double, 2>& camera, const clouds::CloudParams& p, int map_width,
+            int map_height) {
+  x += camera[0], z += camera[1];
   const double u = (x / p.weather_extent_m + 0.5) * map_width, v = (z / p.weather_extent_m + 0.5) * map_height;
   const int i = static_cast<int>(std::floor(u)), j = static_cast<int>(std::floor(v));
   return ((j % map_height + map_height) % map_height) * map_width + ((i % map_width + map_width) % map_width);
@@ -51,8 +60,12 @@ void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sk
   const double r_mid = R + 0.5 * (p.layer_bottom_m + p.layer_top_m);
   for (int j = 0; j < v->map_height; ++j)
     for (int i = 0; i < v->map_width; ++i) {
-      const double x = ((i + 0.5) / v->map_width - 0.5) * p.weather_extent_m;
-      const double z = ((j + 0.5) / v->map_height - 0.5) * p.weather_extent_m;
+      // The texel's centre, camera-relative, at its nearest copy (the map wraps).
+      const auto near = [&](double m, double camera) {
+        return m - camera - p.weather_extent_m * std::round((m - camera) / p.weather_extent_m);
+      };
+      const double x = near(((i + 0.5) / v->map_width - 0.5) * p.weather_extent_m, v->cameras[0][0]);
+      const double z = near(((j + 0.5) / v->map_height - 0.5) * p.weather_extent_m, v->cameras[0][1]);
       if (x * x + z * z >= r_mid * r_mid) continue;
       const double y = std::sqrt(r_mid * r_mid - x * x - z * z) - (R + hc);
       const int pix = PixelOf(x, y, z, p, v->width, v->height, sky);
@@ -94,7 +107,7 @@ void LinkPixelRows(const clouds::CloudParams& p, const std::vector<float>& sky, 
       const RaySpan span = SpanThroughLayer(p, v, d);
       int last = -1;
       for (double t = span.t0; t <= span.t1; t += span.step) {
-        const int texel = TexelOf(t * d[0], t * d[2], p, v.map_width, v.map_height);
+        const int texel = TexelOf(t * d[0], t * d[2], v.cameras[0], p, v.map_width, v.map_height);
         if (texel == last) continue;
         last = texel;
         const double x = t * d[0], y = R + hc + t * d[1], z = t * d[2];
@@ -141,11 +154,11 @@ void LinkPixelRays(const clouds::CloudParams& p, const std::vector<float>& sky, 
 }  // namespace
 
 WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_width, int map_height, int width, int height,
-                                      const std::vector<float>& sky) {
+                                      const std::vector<float>& sky, double time_s) {
   if (!sky.empty() && sky.size() != static_cast<size_t>(width) * height)
     throw Error("weather inversion: the sky mask has " + std::to_string(sky.size()) + " values, the photo " +
                 std::to_string(static_cast<size_t>(width) * height) + " pixels");
-  WeatherTexelView v{map_width, map_height, width, height, {}, 0, {}};
+  WeatherTexelView v{map_width, map_height, width, height, {}, 0, {}, {WindOffset(p, time_s)}};
   // The rays come out grouped by pixel in order, each front to back (the height rises along
   // a ray); the centre links are sorted alone and merged in (a sort of the millions of
   // samples at 512 pixels cost more than the renders).
@@ -163,6 +176,30 @@ WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_widt
   for (const auto& s : v.rays) v.linked[static_cast<size_t>(s.texel)] = 1;
   v.constrained = static_cast<int>(std::count(v.linked.begin(), v.linked.end(), 1));
   return v;
+}
+
+WeatherTexelView StackWeatherViews(const std::vector<WeatherTexelView>& views) {
+  if (views.empty()) throw Error("StackWeatherViews: no view given; expected one per frame");
+  const WeatherTexelView& a = views.front();
+  WeatherTexelView out{a.map_width, a.map_height, a.width, 0, std::vector<char>(a.linked.size(), 0), 0, {}, {}};
+  for (size_t k = 0; k < views.size(); ++k) {
+    const WeatherTexelView& v = views[k];
+    if (v.map_width != a.map_width || v.map_height != a.map_height || v.width != a.width || v.height != a.height)
+      throw Error("StackWeatherViews: frame " + std::to_string(k) + " views a " + std::to_string(v.map_width) + "x" +
+                  std::to_string(v.map_height) + " map from " + std::to_string(v.width) + "x" + std::to_string(v.height) +
+                  " pixels; expected frame 0's " + std::to_string(a.map_width) + "x" + std::to_string(a.map_height) +
+                  " from " + std::to_string(a.width) + "x" + std::to_string(a.height));
+    const int first = out.height * out.width;  // frame k's pixel 0
+    for (WeatherTexelView::RaySample s : v.rays) {
+      s.pixel += first;
+      out.rays.push_back(s);
+    }
+    for (size_t t = 0; t < v.linked.size(); ++t) out.linked[t] |= v.linked[t];
+    out.cameras.insert(out.cameras.end(), v.cameras.begin(), v.cameras.end());
+    out.height += v.height;
+  }
+  out.constrained = static_cast<int>(std::count(out.linked.begin(), out.linked.end(), 1));
+  return out;
 }
 
 double CloudTypeForTop(double top) { return top >= kCumulusClearFraction ? 0.5 : 0.0; }
@@ -333,6 +370,22 @@ LightRefineStep RefineByLight(const WeatherTexelView& v, const LitPixels& photo,
   return r;
 }
 
+namespace {
+
+// Texel (i, j)'s horizontal distance to the nearest of the view's cameras, m (the map wraps).
+double NearestCamera(const WeatherTexelView& v, double extent_m, int i, int j) {
+  const double x = ((i + 0.5) / v.map_width - 0.5) * extent_m, z = ((j + 0.5) / v.map_height - 0.5) * extent_m;
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& c : v.cameras) {
+    const double dx = x - c[0] - extent_m * std::round((x - c[0]) / extent_m);
+    const double dz = z - c[1] - extent_m * std::round((z - c[1]) / extent_m);
+    best = std::min(best, std::hypot(dx, dz));
+  }
+  return v.cameras.empty() ? std::hypot(x, z) : best;
+}
+
+}  // namespace
+
 void SmoothCoverageByFootprint(const WeatherTexelView& v, double extent_m, clouds::WeatherMap* map) {
   SmoothChannelByFootprint(v, extent_m, 0, map);
 }
@@ -345,7 +398,7 @@ void SmoothChannelByFootprint(const WeatherTexelView& v, double extent_m, int ch
   for (int j = 0; j < H; ++j)
     for (int i = 0; i < W; ++i) {
       if (!constrained[static_cast<size_t>(j) * W + i]) continue;
-      const double d = texel_m * std::hypot(i + 0.5 - 0.5 * W, j + 0.5 - 0.5 * H);
+      const double d = NearestCamera(v, extent_m, i, j);
       const int k = static_cast<int>(0.5 * d * pixel_rad / texel_m);
       if (k < 1) continue;
       double sum = 0.0, n = 0.0;

@@ -30,6 +30,7 @@
 // camera: opacity RMS and IoU worse on every map of `skycal bench --suite weather-inversion`,
 // bench/results/weather_inversion.md.)
 #pragma once
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -53,6 +54,10 @@ struct WeatherTexelView {
     float fraction = 0.0f;
   };
   std::vector<RaySample> rays;  // grouped by pixel, each pixel's samples in order
+  // Where the camera stands on the map, m from its centre (x, z), one per frame: the march
+  // samples camera-relative (x, z) at (x, z) + the wind's offset, -(sin, cos)(direction) x
+  // speed x time (clouds/src/resolved_clouds.cc), and the camera at that offset.
+  std::vector<std::array<double, 2>> cameras;
 };
 
 // The tallest cloud type whose column is clear from `top` (a fraction of the layer) up:
@@ -84,8 +89,19 @@ void CarveCoverage(const WeatherTexelView& view, const std::vector<float>& opaci
                    clouds::WeatherMap* map);
 
 // `sky`: width * height weights (>= 0.5 sky) or empty (every pixel above the horizon).
+// `time_s`: the frame's time in the march's wind (p.wind_speed_m_s, p.wind_direction_deg),
+// as clouds::CloudRenderRequest::time_s.
 WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_width, int map_height, int width, int height,
-                                      const std::vector<float>& sky);
+                                      const std::vector<float>& sky, double time_s = 0.0);
+
+// Several frames of one sky as one view: consecutive time-lapse frames see the same map moved
+// by the wind, each from another place on it, so a texel that one frame sees along a ray's
+// length another sees across its rays (with one camera, the opacity says how much cloud a ray
+// met, not where along it). Frame k's pixels become pixels k x width x height + p of a view
+// `height` x frames rows tall (the frames' opacities concatenated in order); a texel is linked
+// when any frame links it. Carving and refinement then run unchanged over every frame's rays.
+// Throws skycal::Error when the views differ in map or image size, or none is given.
+WeatherTexelView StackWeatherViews(const std::vector<WeatherTexelView>& views);
 
 // The first guess: each constrained texel's coverage = clamp(gain x the mean opacity of its
 // pixels); unconstrained texels unchanged. `opacity`: width * height values in [0, 1].
