@@ -116,13 +116,30 @@ struct Scene {
     for (size_t i = 0; i < o.size(); ++i) o[i] = 1.0f - image.transmittance[i];
     return o;
   }
+  // The game's image as RefineCoverageByLight reads it: the opacity everywhere, ln Y where
+  // `counts` (the reference's cloud pixels above the horizon).
+  cloudfit::LitPixels Lit(const clouds::WeatherMap& map, const std::vector<char>& counts) {
+    const ImageRGB image = Composite(map, params, &last_transmittance);
+    cloudfit::LitPixels p{std::vector<float>(counts.size()), std::vector<float>(counts.size(), std::nanf(""))};
+    for (size_t i = 0; i < counts.size(); ++i) {
+      p.opacity[i] = 1.0f - last_transmittance[i];
+      const float* c = &image.pixels[3 * i];
+      const double y = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+      if (counts[i] && y > 0.0) p.log_luminance[i] = static_cast<float>(std::log(y));
+    }
+    return p;
+  }
+  std::vector<float> last_transmittance;
   // The game's image: sky x T + the lit clouds (the game's march and steps).
-  ImageRGB Composite(const clouds::WeatherMap& map, const clouds::CloudParams& lit) {
+  ImageRGB Composite(const clouds::WeatherMap& map, const clouds::CloudParams& lit,
+                     std::vector<float>* transmittance = nullptr) {
     clouds::CloudRenderRequest r;
     r.width = kW;
     r.height = kH;
     r.sun_dir = sun;
-    return clouds::CompositeClouds(sky, renderer->Render({&preset, &lit, &noise, &map}, r));
+    const clouds::CloudImage image = renderer->Render({&preset, &lit, &noise, &map}, r);
+    if (transmittance) *transmittance = image.transmittance;
+    return clouds::CompositeClouds(sky, image);
   }
 };
 
@@ -244,8 +261,22 @@ Refit RefitLighting(Scene& scene, const ImageRGB& reference, const clouds::Weath
 
 // The game's image of the inverted shapes, under the truth's lighting, then under the
 // lighting refitted on them (and, the control, on the truth's shapes).
+// The inverted shapes' coverage read from the light under the truth's lighting (what
+// calibrate does under the refitted lighting), over the reference's cloud pixels.
+clouds::WeatherMap CoverageFromTheLight(Scene& scene, const cloudfit::WeatherTexelView& view,
+                                        const std::vector<float>& photo_opacity, const clouds::WeatherMap& truth,
+                                        const clouds::WeatherMap& map) {
+  std::vector<char> counts(photo_opacity.size(), 0);
+  for (size_t i = 0; i < counts.size() / 2; ++i) counts[i] = photo_opacity[i] >= 0.5f;  // upper hemisphere
+  clouds::WeatherMap refined = map;
+  cloudfit::RefineCoverageByLight(view, scene.Lit(truth, counts),
+                                  [&](const clouds::WeatherMap& m) { return scene.Lit(m, counts); }, {}, &refined);
+  return refined;
+}
+
 void MeasureLighting(Scene& scene, const clouds::WeatherMap& truth, const clouds::WeatherMap& map,
-                     const ImageRGB& reference, CaseResult& c) {
+                     const ImageRGB& reference, const cloudfit::WeatherTexelView& view,
+                     const std::vector<float>& photo_opacity, CaseResult& c) {
   const ImageRGB inverted_image = scene.Composite(map, scene.params);
   const appearance::Comparison shapes_only =
       appearance::Compare(reference, inverted_image, {}, {}, "reference", "re-render");
@@ -270,6 +301,16 @@ void MeasureLighting(Scene& scene, const clouds::WeatherMap& truth, const clouds
   c.extra["inverted_log_rmse"] = on_inverted.rerender.per_pixel_log_rmse;
   c.extra["inverted_appearance"] = on_inverted.rerender.appearance_error;
   c.extra["inverted_fitted_over_truth"] = on_inverted.ratios;
+  const clouds::WeatherMap lit_map = CoverageFromTheLight(scene, view, photo_opacity, truth, map);
+  const appearance::Comparison lit_shapes =
+      appearance::Compare(reference, scene.Composite(lit_map, scene.params), {}, {}, "reference", "re-render");
+  const Refit on_lit = RefitLighting(scene, reference, lit_map, free);
+  c.extra["light_coverage_log_rmse_truth_lighting"] = lit_shapes.per_pixel_log_rmse;
+  c.extra["light_coverage_appearance_truth_lighting"] = lit_shapes.appearance_error;
+  c.extra["light_coverage_refit_log_rmse"] = on_lit.rerender.per_pixel_log_rmse;
+  c.extra["light_coverage_refit_appearance"] = on_lit.rerender.appearance_error;
+  c.extra["light_coverage_refit_worst_error"] = on_lit.worst;
+  c.extra["light_coverage_refit_worst"] = on_lit.worst_name;
 }
 
 // What the statistics fit leaves, where every inversion starts.
@@ -353,7 +394,7 @@ void RunCase(Scene& scene, CaseResult& c) {
              {"correlation_20km", Correlation(truth, map, 20000.0)},
              {"correlation_constrained", Correlation(truth, map, 1e9, &view)},
              {"correlation_constrained_footprint", Correlation(AtFootprint(truth, view), map, 1e9, &view)}};
-  if (Get(c.settings, "lighting") == "on") MeasureLighting(scene, truth, map, reference, c);
+  if (Get(c.settings, "lighting") == "on") MeasureLighting(scene, truth, map, reference, view, photo, c);
 }
 
 // The lit half: what the inverted shapes cost the game's image, and the lighting refitted on them.
@@ -384,6 +425,25 @@ std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
 }
 
 // The day's rows.
+// The inverted shapes with their coverage read from the light.
+std::string LightCoverageMarkdown(const std::vector<CaseResult>& cases) {
+  std::string md =
+      "\nThe same inverted shapes, their coverage then read from the light (cloudfit::RefineCoverageByLight, as "
+      "calibrate runs it, here under the truth's lighting, over the reference's cloud pixels), then the lighting "
+      "refitted on them as above:\n\n| map | inverted shapes, truth's lighting: log RMSE / appearance | coverage from "
+      "the light, truth's lighting | refitted: log RMSE / appearance | refitted: worst error |\n|---|---|---|---|---|\n";
+  for (const CaseResult& c : cases) {
+    if (!c.extra.contains("light_coverage_log_rmse_truth_lighting")) continue;
+    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
+    md += "| " + Get(c.settings, "map") + " | " + f("rerender_log_rmse_truth_lighting") + " / " +
+          f("rerender_appearance_truth_lighting") + " | " + f("light_coverage_log_rmse_truth_lighting") + " / " +
+          f("light_coverage_appearance_truth_lighting") + " | " + f("light_coverage_refit_log_rmse") + " / " +
+          f("light_coverage_refit_appearance") + " | " + FormatFixed(100.0 * c.extra["light_coverage_refit_worst_error"].get<double>(), 1) +
+          "% (" + c.extra["light_coverage_refit_worst"].get<std::string>() + ") |\n";
+  }
+  return md;
+}
+
 std::string DayMarkdown(const std::vector<CaseResult>& cases) {
   std::string md =
       "\n## One map for a day's frames\n\nFrames " + FormatFixed(kDayInterval_s, 0) +
@@ -428,7 +488,7 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
           f("correlation_20km") + " | " + f("correlation_constrained") + " | " +
           f("correlation_constrained_footprint") + " | " + FormatFixed(c.time.median_ms / 1000.0, 2) + " |\n";
   }
-  return md + LightingMarkdown(cases) + DayMarkdown(cases);
+  return md + LightingMarkdown(cases) + LightCoverageMarkdown(cases) + DayMarkdown(cases);
 }
 
 std::vector<CaseResult> Run(const SuiteOptions& o) {

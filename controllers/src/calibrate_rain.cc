@@ -96,7 +96,8 @@ class LitGame {
   clouds::CloudRenderRequest request_;
 };
 
-// One step of precipitation on `map` (in place) and what it did.
+// One step of precipitation on `map` (in place), then its coverage read from the light, and what
+// they did.
 PrecipitationRecord Rain(const PhotoAnalysis& a, const PhotoWeatherView& v, LitGame& game, clouds::WeatherMap* map) {
   const std::vector<char> counts = LightCounts(v, *a.sun.direction);
   const cloudfit::LitPixels photo = Lit(v.photo, v.opacity, counts);
@@ -117,6 +118,8 @@ PrecipitationRecord Rain(const PhotoAnalysis& a, const PhotoWeatherView& v, LitG
     }
   r.mean_raised = r.raised_texels > 0 ? sum / r.raised_texels : 0.0;
   r.width = v.width;
+  r.coverage = cloudfit::RefineCoverageByLight(
+      v.texels, photo, [&](const clouds::WeatherMap& m) { return game.Render(m, counts, false); }, {}, map);
   return r;
 }
 
@@ -153,8 +156,13 @@ fit::FitDecision RainFromTheLight::Decision() const {
           " under the refitted lighting; precipitation raised by " + FormatNumber(kRaisedAtLeast) + " or more in " +
           std::to_string(r.raised_texels) + " texels (mean " + f3(r.mean_raised) + ", at most " + f3(r.max_raised) +
           "): the game's rain absorption darkens a column with little change to where its cloud is, which coverage cannot "
-          "once the column is opaque; two lit renders at " + std::to_string(r.width) + " px wide, " +
-          FormatNumber(std::round(r.seconds * 100.0) / 100.0) + " s; the lighting solved on from there";
+          "once the column is opaque; then the coverage texel by texel from the light (random perturbations: a "
+          "texel's own effect told from its shadow on others'): ln Y RMS " + f3(r.coverage.log_rms.front()) + " -> " +
+          f3(r.coverage.log_rms.back()) + ", opacity RMS " + f3(r.coverage.opacity_rms.front()) + " -> " +
+          f3(r.coverage.opacity_rms.back()) + " over the photo's cloud pixels, " + std::to_string(r.coverage.kept) +
+          " of " + std::to_string(r.coverage.log_rms.size() - 1) + " steps kept; " +
+          std::to_string(2 + 2 * (r.coverage.log_rms.size() - 1) + 1) + " lit renders at " + std::to_string(r.width) +
+          " px wide, " + FormatNumber(std::round(r.seconds * 100.0) / 100.0) + " s; the lighting solved on from there";
   return d;
 }
 

@@ -90,11 +90,14 @@ WeatherInversionRecord InvertPhotoWeather(const PhotoAnalysis& a, const StagedDi
 // The light inside the recovered clouds (cloudfit::RefineByLight), as the lighting refit's
 // shape refinement (cloudfit::ShapeRefinement): with the lighting the refit's solve found, the
 // map gains precipitation where the photo's clouds are darker than the game draws them, and
-// the refit solves on from there. One step, from two lit renders at the view's width.
+// the refit solves on from there. One step, from two lit renders at the view's width; then the
+// coverage read from the light texel by texel (cloudfit::RefineCoverageByLight, 8 iterations
+// of two renders; what it gains: bench/results/weather_inversion.md).
 struct PrecipitationRecord {
   cloudfit::LightRefineStep step;
   int raised_texels = 0;                       // texels whose precipitation rose (by 0.01 or more)
   double mean_raised = 0.0, max_raised = 0.0;  // their precipitation
+  cloudfit::CoverageLightResult coverage;     // then the coverage read from the light
   int width = 0;                               // the renders' lat-long width (pixels)
   double seconds = 0.0;
 };

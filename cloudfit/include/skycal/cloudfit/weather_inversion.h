@@ -163,6 +163,39 @@ clouds::WeatherMap RaisedMap(const WeatherTexelView& view, const clouds::Weather
 LightRefineStep RefineByLight(const WeatherTexelView& view, const LitPixels& photo, const LitPixels& at,
                               const LitPixels& raised, const LightRefineOptions& options, clouds::WeatherMap* map);
 
+// The light inside the clouds, texel by texel, in coverage. Once a column is opaque its
+// coverage hardly moves its opacity, but it moves its light: its density, self-shadowing and
+// the shadow it casts on its neighbours (bench/results/weather_inversion.md, "How much the
+// light sees inside an opaque column"). Raising every texel at once, as RefineByLight does,
+// sums a texel's effect on its own rays with its shadow on others' and cannot tell them
+// apart. Here each iteration moves every constrained texel's coverage by +-delta, the sign
+// drawn at random per texel (simultaneous perturbation, Spall 1992, IEEE TAC 37(3)): a
+// pixel's change over delta, times a texel's sign, estimates that texel's derivative for the
+// pixels whose rays cross it, the other texels' moves being noise of zero mean. Each texel
+// then takes the Gauss-Newton step of its pixels (ln Y where both images give one, and the
+// opacity, weighted by opacity_weight, wherever the view links a pixel), at most max_step;
+// the step is kept when the whole cost falls. Two renders an iteration: the perturbed map,
+// and the stepped one (the next iteration's start).
+struct CoverageLightOptions {
+  int iterations = 8;
+  double delta = 0.1;           // the perturbation of coverage
+  double max_step = 0.1;        // per texel and iteration, at most
+  double opacity_weight = 4.0;  // of the opacity's squared residual against ln Y's (keeps the shapes where they are)
+  unsigned seed = 1;            // the signs' generator (std::mt19937): the same map, the same result
+  bool IsValid(std::string* why) const;  // false: CoverageLightOptions::<field>, value and expectation
+};
+struct CoverageLightResult {
+  // At the start, then after each iteration (a rejected step repeats the previous values).
+  std::vector<double> log_rms, opacity_rms;
+  int kept = 0;  // iterations whose step was kept
+};
+// `render`: the game's lit image of a map at the view's size (LitPixels: ln Y NaN where a pixel
+// does not count, the same pixels for every map). Throws skycal::Error naming the field when
+// the options or the pixels' sizes are wrong.
+CoverageLightResult RefineCoverageByLight(const WeatherTexelView& view, const LitPixels& photo,
+                                          const std::function<LitPixels(const clouds::WeatherMap&)>& render,
+                                          const CoverageLightOptions& options, clouds::WeatherMap* map);
+
 // The inverted map's texels a side (calibrate resamples a coarser statistics map to it first):
 // over HZD's 60 km extent a 256 map's texel is 234 m, about 5 degrees seen from under a
 // 2.75 km mid-layer, so the photo's zenith, its finest detail on the layer, averages into
