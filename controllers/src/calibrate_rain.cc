@@ -150,17 +150,17 @@ fit::FitDecision RainFromTheLight::Decision() const {
     return d;
   }
   const PrecipitationRecord& r = *record_;
-  d.what = "precipitation where the photo's clouds are darker than the game draws them";
+  d.what = "precipitation where the photo's clouds are darker than the game draws them, then their coverage from the light";
   d.why = std::to_string(r.step.pixels) + " cloud pixels compared (cloud in the photo and the game, outside " +
           FormatNumber(kSunGlareDeg) + " degrees of the sun): ln Y RMS " + f3(r.step.log_rms) +
           " under the refitted lighting; precipitation raised by " + FormatNumber(kRaisedAtLeast) + " or more in " +
           std::to_string(r.raised_texels) + " texels (mean " + f3(r.mean_raised) + ", at most " + f3(r.max_raised) +
-          "): the game's rain absorption darkens a column with little change to where its cloud is, which coverage cannot "
-          "once the column is opaque; then the coverage texel by texel from the light (random perturbations: a "
-          "texel's own effect told from its shadow on others'): ln Y RMS " + f3(r.coverage.log_rms.front()) + " -> " +
-          f3(r.coverage.log_rms.back()) + ", opacity RMS " + f3(r.coverage.opacity_rms.front()) + " -> " +
-          f3(r.coverage.opacity_rms.back()) + " over the photo's cloud pixels, " + std::to_string(r.coverage.kept) +
-          " of " + std::to_string(r.coverage.log_rms.size() - 1) + " steps kept; " +
+          "): the game's rain absorption darkens a column with little change to where its cloud is; then the coverage "
+          "texel by texel from the light (random perturbations tell a texel's own effect from its shadow on others', "
+          "which one render with every texel raised cannot): ln Y RMS over the photo's cloud pixels " +
+          f3(r.coverage.log_rms.front()) + " -> " + f3(r.coverage.log_rms.back()) + ", opacity RMS over the sky " +
+          f3(r.coverage.opacity_rms.front()) + " -> " + f3(r.coverage.opacity_rms.back()) + ", " +
+          std::to_string(r.coverage.kept) + " of " + std::to_string(r.coverage.log_rms.size() - 1) + " steps kept; " +
           std::to_string(2 + 2 * (r.coverage.log_rms.size() - 1) + 1) + " lit renders at " + std::to_string(r.width) +
           " px wide, " + FormatNumber(std::round(r.seconds * 100.0) / 100.0) + " s; the lighting solved on from there";
   return d;

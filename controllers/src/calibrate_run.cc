@@ -194,7 +194,8 @@ std::optional<fit::FitDecision> HorizonSkyDecision(const PhotoAnalysis& a) {
 }
 
 // The inverted shapes lit: the lighting refitted on them, precipitation where the photo's clouds
-// are darker than that lighting draws them, and the lighting solved on from there, in one
+// are darker than that lighting draws them, the coverage read from the light texel by texel,
+// and the lighting solved on from there, in one
 // known-shapes fit (calibrate_weather.h). A failed refit leaves the statistics fit's lighting
 // and map, and no precipitation.
 void LightTheRecoveredClouds(const PhotoAnalysis& a, const PhotoWeatherView& view, const StagedDirectory& out,
