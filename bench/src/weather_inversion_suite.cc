@@ -26,6 +26,7 @@
 #include "skycal/core/data_dir.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
+#include "skycal/core/luminance.h"
 #include "skycal/render/preset.h"
 #include "skycal/render/renderer.h"
 #include "skycal/testing/lighting_start.h"
@@ -119,17 +120,17 @@ struct Scene {
   // The game's image as RefineCoverageByLight reads it: the opacity everywhere, ln Y where
   // `counts` (the reference's cloud pixels above the horizon).
   cloudfit::LitPixels Lit(const clouds::WeatherMap& map, const std::vector<char>& counts) {
-    const ImageRGB image = Composite(map, params, &last_transmittance);
+    std::vector<float> transmittance;
+    const ImageRGB image = Composite(map, params, &transmittance);
     cloudfit::LitPixels p{std::vector<float>(counts.size()), std::vector<float>(counts.size(), std::nanf(""))};
     for (size_t i = 0; i < counts.size(); ++i) {
-      p.opacity[i] = 1.0f - last_transmittance[i];
+      p.opacity[i] = 1.0f - transmittance[i];
       const float* c = &image.pixels[3 * i];
-      const double y = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+      const double y = Rec709Luminance<double>(c[0], c[1], c[2]);
       if (counts[i] && y > 0.0) p.log_luminance[i] = static_cast<float>(std::log(y));
     }
     return p;
   }
-  std::vector<float> last_transmittance;
   // The game's image: sky x T + the lit clouds (the game's march and steps).
   ImageRGB Composite(const clouds::WeatherMap& map, const clouds::CloudParams& lit,
                      std::vector<float>* transmittance = nullptr) {
@@ -259,8 +260,6 @@ Refit RefitLighting(Scene& scene, const ImageRGB& reference, const clouds::Weath
   return out;
 }
 
-// The game's image of the inverted shapes, under the truth's lighting, then under the
-// lighting refitted on them (and, the control, on the truth's shapes).
 // The inverted shapes' coverage read from the light under the truth's lighting (what
 // calibrate does under the refitted lighting), over the reference's cloud pixels.
 clouds::WeatherMap CoverageFromTheLight(Scene& scene, const cloudfit::WeatherTexelView& view,
@@ -274,6 +273,9 @@ clouds::WeatherMap CoverageFromTheLight(Scene& scene, const cloudfit::WeatherTex
   return refined;
 }
 
+// The game's image of the inverted shapes, under the truth's lighting, then under the
+// lighting refitted on them (and, the control, on the truth's shapes), then with their
+// coverage read from the light.
 void MeasureLighting(Scene& scene, const clouds::WeatherMap& truth, const clouds::WeatherMap& map,
                      const ImageRGB& reference, const cloudfit::WeatherTexelView& view,
                      const std::vector<float>& photo_opacity, CaseResult& c) {
