@@ -405,7 +405,9 @@ TEST(WeatherInversion, CoverageIsReadFromTheLightTexelByTexel) {
   EXPECT_LT(r.log_rms.back(), 0.5 * r.log_rms.front());
   for (size_t k = 1; k < r.log_rms.size(); ++k) EXPECT_LE(r.log_rms[k], r.log_rms[k - 1] + 1e-12) << k;  // kept only when it falls
   for (size_t t = 0; t < map.rgb.size() / 3; ++t)
-    if (!v.linked[t]) EXPECT_EQ(map.rgb[3 * t], start.rgb[3 * t]) << t;
+    if (!v.linked[t]) {
+      EXPECT_EQ(map.rgb[3 * t], start.rgb[3 * t]) << t;
+    }
   // The control: every texel raised at once.
   clouds::WeatherMap global = start;
   cloudfit::LightRefineOptions g;

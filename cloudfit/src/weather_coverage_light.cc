@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "lit_pixels_check.h"
 #include "skycal/cloudfit/weather_inversion.h"
 #include "skycal/core/error.h"
 
@@ -43,13 +44,6 @@ std::pair<double, double> Residuals(const WeatherTexelView& v, const LitPixels& 
   return {nl > 0.0 ? std::sqrt(sl / nl) : 0.0, no > 0.0 ? std::sqrt(so / no) : 0.0};
 }
 
-void CheckPixels(const LitPixels& p, size_t n, const char* which) {
-  if (p.opacity.size() != n || p.log_luminance.size() != n)
-    throw Error(std::string("RefineCoverageByLight: ") + which + " has " + std::to_string(p.opacity.size()) +
-                " opacities and " + std::to_string(p.log_luminance.size()) + " log luminances; expected the view's " +
-                std::to_string(n) + " pixels each");
-}
-
 // The map stepped from `at` by each texel's Gauss-Newton step, its derivatives from `moved`
 // (the map with each texel moved by sign x delta).
 clouds::WeatherMap Stepped(const WeatherTexelView& v, const LitPixels& photo, const LitPixels& at, const LitPixels& moved,
@@ -85,9 +79,9 @@ CoverageLightResult RefineCoverageByLight(const WeatherTexelView& v, const LitPi
   std::string why;
   if (!o.IsValid(&why)) throw Error("RefineCoverageByLight: " + why);
   const size_t pixels = static_cast<size_t>(v.width) * v.height;
-  CheckPixels(photo, pixels, "photo");
+  CheckLitPixels(photo, pixels, "RefineCoverageByLight", "photo");
   LitPixels at = render(*map);
-  CheckPixels(at, pixels, "the render");
+  CheckLitPixels(at, pixels, "RefineCoverageByLight", "the render");
   auto [log_rms, opacity_rms] = Residuals(v, photo, at);
   CoverageLightResult r{{log_rms}, {opacity_rms}, 0};
   std::mt19937 rng(o.seed);

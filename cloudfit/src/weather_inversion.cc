@@ -8,6 +8,7 @@
 #include <thread>
 #include <utility>
 
+#include "lit_pixels_check.h"
 #include "skycal/core/error.h"
 #include "skycal/core/latlong.h"
 #include "skycal/core/math_constants.h"
@@ -37,10 +38,13 @@ int PixelOf(double x, double y, double z, const clouds::CloudParams& p, int widt
   return (!sky.empty() && !(sky[static_cast<size_t>(pix)] >= 0.5f)) ? -1 : pix;
 }
 
-// The wind's offset of the map at time_s, m (clouds/src/resolved_clouds.cc's ShadeFromParams).
-std::array<double, 2> WindOffset(const clouds::CloudParams& p, double time_s) {
-  const double az = p.wind_direction_deg * kPi / 180.0;
-  return {-std::sin(az) * p.wind_speed_m_s * time_s, -std::cos(az) * p.wind_speed_m_s * time_s};
+// Texel (i, j)'s centre relative to a camera standing at `camera` on the map, m, at the
+// texel's nearest copy (the map tiles).
+std::array<double, 2> TexelFromCamera(int i, int j, int map_width, int map_height, double extent_m,
+                                      const std::array<double, 2>& camera) {
+  const auto nearest = [&](double m, double c) { return m - c - extent_m * std::round((m - c) / extent_m); };
+  return {nearest(((i + 0.5) / map_width - 0.5) * extent_m, camera[0]),
+          nearest(((j + 0.5) / map_height - 0.5) * extent_m, camera[1])};
 }
 
 // The texel under camera-relative (x, z) seen from `camera` (the wind's offset); the map tiles
@@ -60,12 +64,7 @@ void LinkTexelCentres(const clouds::CloudParams& p, const std::vector<float>& sk
   const double r_mid = R + 0.5 * (p.layer_bottom_m + p.layer_top_m);
   for (int j = 0; j < v->map_height; ++j)
     for (int i = 0; i < v->map_width; ++i) {
-      // The texel's centre, camera-relative, at its nearest copy (the map wraps).
-      const auto near = [&](double m, double camera) {
-        return m - camera - p.weather_extent_m * std::round((m - camera) / p.weather_extent_m);
-      };
-      const double x = near(((i + 0.5) / v->map_width - 0.5) * p.weather_extent_m, v->cameras[0][0]);
-      const double z = near(((j + 0.5) / v->map_height - 0.5) * p.weather_extent_m, v->cameras[0][1]);
+      const auto [x, z] = TexelFromCamera(i, j, v->map_width, v->map_height, p.weather_extent_m, v->cameras[0]);
       if (x * x + z * z >= r_mid * r_mid) continue;
       const double y = std::sqrt(r_mid * r_mid - x * x - z * z) - (R + hc);
       const int pix = PixelOf(x, y, z, p, v->width, v->height, sky);
@@ -158,7 +157,7 @@ WeatherTexelView ProjectWeatherTexels(const clouds::CloudParams& p, int map_widt
   if (!sky.empty() && sky.size() != static_cast<size_t>(width) * height)
     throw Error("weather inversion: the sky mask has " + std::to_string(sky.size()) + " values, the photo " +
                 std::to_string(static_cast<size_t>(width) * height) + " pixels");
-  WeatherTexelView v{map_width, map_height, width, height, {}, 0, {}, {WindOffset(p, time_s)}};
+  WeatherTexelView v{map_width, map_height, width, height, {}, 0, {}, {clouds::WindOffsetM(p, time_s)}};
   // The rays come out grouped by pixel in order, each front to back (the height rises along
   // a ray); the centre links are sorted alone and merged in (a sort of the millions of
   // samples at 512 pixels cost more than the renders).
@@ -325,13 +324,6 @@ std::vector<double> SmoothSteps(const std::vector<double>& steps, int width, int
   return out;
 }
 
-void CheckLitPixels(const LitPixels& p, size_t n, const char* which) {
-  if (p.opacity.size() != n || p.log_luminance.size() != n)
-    throw Error(std::string("RefineByLight: ") + which + " has " + std::to_string(p.opacity.size()) + " opacities and " +
-                std::to_string(p.log_luminance.size()) + " log luminances; expected the view's " + std::to_string(n) +
-                " pixels each");
-}
-
 }  // namespace
 
 LightRefineStep RefineByLight(const WeatherTexelView& v, const LitPixels& photo, const LitPixels& at,
@@ -339,9 +331,9 @@ LightRefineStep RefineByLight(const WeatherTexelView& v, const LitPixels& photo,
   std::string why;
   if (!o.IsValid(&why)) throw Error("RefineByLight: " + why);
   const size_t pixels = static_cast<size_t>(v.width) * v.height, n = static_cast<size_t>(v.map_width) * v.map_height;
-  CheckLitPixels(photo, pixels, "photo");
-  CheckLitPixels(at, pixels, "at");
-  CheckLitPixels(raised, pixels, "raised");
+  CheckLitPixels(photo, pixels, "RefineByLight", "photo");
+  CheckLitPixels(at, pixels, "RefineByLight", "at");
+  CheckLitPixels(raised, pixels, "RefineByLight", "raised");
   std::vector<double> steps(pixels, std::numeric_limits<double>::quiet_NaN());
   double sq = 0.0, counted = 0.0;
   for (size_t b = 0; b < v.rays.size(); ++b)
@@ -374,14 +366,16 @@ namespace {
 
 // Texel (i, j)'s horizontal distance to the nearest of the view's cameras, m (the map wraps).
 double NearestCamera(const WeatherTexelView& v, double extent_m, int i, int j) {
-  const double x = ((i + 0.5) / v.map_width - 0.5) * extent_m, z = ((j + 0.5) / v.map_height - 0.5) * extent_m;
+  if (v.cameras.empty()) {  // a view built by hand: the camera at the map's centre
+    const auto [x, z] = TexelFromCamera(i, j, v.map_width, v.map_height, extent_m, {0.0, 0.0});
+    return std::hypot(x, z);
+  }
   double best = std::numeric_limits<double>::infinity();
   for (const auto& c : v.cameras) {
-    const double dx = x - c[0] - extent_m * std::round((x - c[0]) / extent_m);
-    const double dz = z - c[1] - extent_m * std::round((z - c[1]) / extent_m);
-    best = std::min(best, std::hypot(dx, dz));
+    const auto [x, z] = TexelFromCamera(i, j, v.map_width, v.map_height, extent_m, c);
+    best = std::min(best, std::hypot(x, z));
   }
-  return v.cameras.empty() ? std::hypot(x, z) : best;
+  return best;
 }
 
 }  // namespace

@@ -6,9 +6,15 @@
 #include "skycal/core/error.h"
 #include "skycal/core/format_number.h"
 #include "skycal/core/json_schema.h"
+#include "skycal/core/math_constants.h"
 
 namespace skycal::clouds {
 using nlohmann::json;
+
+std::array<double, 2> WindOffsetM(const CloudParams& p, double time_s) {
+  const double az = p.wind_direction_deg * kPi / 180.0;
+  return {-std::sin(az) * p.wind_speed_m_s * time_s, -std::cos(az) * p.wind_speed_m_s * time_s};
+}
 
 const char* ToString(CloudIntegration i) {
   return i == CloudIntegration::kEnergyConserving ? "energy-conserving" : "hzd-simple";

@@ -106,9 +106,9 @@ void ShadeFromParams(const CloudParams& c, double time_s, CloudShadeD& s) {
   s.curl_tile = c.curl_noise_tile_m;
   s.curl_strength = c.curl_strength_m;
   // Density at x is the texture at x - wind x time: the clouds drift with the wind.
-  const double az = c.wind_direction_deg * kPi / 180.0;
-  s.wind_x = -std::sin(az) * c.wind_speed_m_s * time_s;
-  s.wind_z = -std::cos(az) * c.wind_speed_m_s * time_s;
+  const std::array<double, 2> wind = WindOffsetM(c, time_s);
+  s.wind_x = wind[0];
+  s.wind_z = wind[1];
   s.coverage_scale = c.coverage_scale;
   s.erosion = c.erosion;
   s.height_shaping = c.height_shaping;

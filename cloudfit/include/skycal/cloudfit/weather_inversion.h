@@ -54,9 +54,8 @@ struct WeatherTexelView {
     float fraction = 0.0f;
   };
   std::vector<RaySample> rays;  // grouped by pixel, each pixel's samples in order
-  // Where the camera stands on the map, m from its centre (x, z), one per frame: the march
-  // samples camera-relative (x, z) at (x, z) + the wind's offset, -(sin, cos)(direction) x
-  // speed x time (clouds/src/resolved_clouds.cc), and the camera at that offset.
+  // Where the camera stands on the map, m from its centre (x, z), one per frame: at the
+  // wind's offset (clouds::WindOffsetM), where the march samples camera-relative (0, 0).
   std::vector<std::array<double, 2>> cameras;
 };
 

@@ -8,6 +8,7 @@
 // Hillaire 2016, "Physically Based Sky, Atmosphere and Cloud Rendering in Frostbite"
 // (energy-conserving integration, multiple-scattering octaves after Wrenninge et al.).
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,11 @@ struct CloudParamSpec {
   std::vector<const char*> choices = {};
 };
 const std::vector<CloudParamSpec>& CloudParameterSpecs();
+
+// Where the wind has moved the clouds at `time_s` (s), m along x and z: the march samples
+// camera-relative (x, z) of the weather map and the noise at (x, z) + this offset, so the
+// clouds drift toward wind_direction_deg at wind_speed_m_s.
+std::array<double, 2> WindOffsetM(const CloudParams& params, double time_s);
 
 // Throws skycal::Error "origin: field 'clouds.NAME' = V is out of range (expected ... UNIT)"
 // for a value outside its bounds or of the wrong kind, and for a layer whose bottom is not
