@@ -399,6 +399,12 @@ void RunCase(Scene& scene, CaseResult& c) {
   if (Get(c.settings, "lighting") == "on") MeasureLighting(scene, truth, map, reference, view, photo, c);
 }
 
+// A case's extra number for the tables: to 3 decimals, or as a percentage to 1.
+std::string Fixed3(const CaseResult& c, const char* key) { return FormatFixed(c.extra[key].get<double>(), 3); }
+std::string Percent1(const CaseResult& c, const char* key) {
+  return FormatFixed(100.0 * c.extra[key].get<double>(), 1) + "%";
+}
+
 // The lit half: what the inverted shapes cost the game's image, and the lighting refitted on them.
 std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
   std::string md =
@@ -414,8 +420,8 @@ std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
       "refitted: worst error | refitted / truth |\n|---|---|---|---|---|---|---|\n";
   for (const CaseResult& c : cases) {
     if (!c.extra.contains("inverted_log_rmse")) continue;
-    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
-    const auto pct = [&](const char* k) { return FormatFixed(100.0 * c.extra[k].get<double>(), 1) + "%"; };
+    const auto f = [&](const char* k) { return Fixed3(c, k); };
+    const auto pct = [&](const char* k) { return Percent1(c, k); };
     md += "| " + Get(c.settings, "map") + " | " + c.extra["free_parameters"].get<std::string>() + " | " +
           pct("truth_shapes_worst_error") + " (" + c.extra["truth_shapes_worst"].get<std::string>() + "), " +
           f("truth_shapes_log_rmse") + " | " + f("rerender_log_rmse_truth_lighting") + " / " +
@@ -426,7 +432,6 @@ std::string LightingMarkdown(const std::vector<CaseResult>& cases) {
   return md;
 }
 
-// The day's rows.
 // The inverted shapes with their coverage read from the light.
 std::string LightCoverageMarkdown(const std::vector<CaseResult>& cases) {
   std::string md =
@@ -436,16 +441,17 @@ std::string LightCoverageMarkdown(const std::vector<CaseResult>& cases) {
       "the light, truth's lighting | refitted: log RMSE / appearance | refitted: worst error |\n|---|---|---|---|---|\n";
   for (const CaseResult& c : cases) {
     if (!c.extra.contains("light_coverage_log_rmse_truth_lighting")) continue;
-    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
+    const auto f = [&](const char* k) { return Fixed3(c, k); };
     md += "| " + Get(c.settings, "map") + " | " + f("rerender_log_rmse_truth_lighting") + " / " +
           f("rerender_appearance_truth_lighting") + " | " + f("light_coverage_log_rmse_truth_lighting") + " / " +
           f("light_coverage_appearance_truth_lighting") + " | " + f("light_coverage_refit_log_rmse") + " / " +
-          f("light_coverage_refit_appearance") + " | " + FormatFixed(100.0 * c.extra["light_coverage_refit_worst_error"].get<double>(), 1) +
-          "% (" + c.extra["light_coverage_refit_worst"].get<std::string>() + ") |\n";
+          f("light_coverage_refit_appearance") + " | " + Percent1(c, "light_coverage_refit_worst_error") +
+          " (" + c.extra["light_coverage_refit_worst"].get<std::string>() + ") |\n";
   }
   return md;
 }
 
+// The day's rows.
 std::string DayMarkdown(const std::vector<CaseResult>& cases) {
   std::string md =
       "\n## One map for a day's frames\n\nFrames " + FormatFixed(kDayInterval_s, 0) +
@@ -459,7 +465,7 @@ std::string DayMarkdown(const std::vector<CaseResult>& cases) {
       "inversion (s) |\n|---|---|---|---|---|---|---|---|\n";
   for (const CaseResult& c : cases) {
     if (!c.extra.contains("next_by_day_iou")) continue;
-    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
+    const auto f = [&](const char* k) { return Fixed3(c, k); };
     md += "| " + Get(c.settings, "map") + " | " + Get(c.settings, "frames") + " | " + f("last_correlation_constrained") +
           " -> " + f("correlation_constrained") + " | " + f("last_own_iou") + " / " + f("last_own_opacity_rms") + " | " +
           f("frames_iou") + " / " + f("frames_opacity_rms") + " | " + f("next_by_last_iou") + " / " +
@@ -484,7 +490,7 @@ std::string Markdown(const std::vector<CaseResult>& cases) {
       "truth at the footprint | inversion (s) |\n|---|---|---|---|---|---|---|---|\n";
   for (const CaseResult& c : cases) {
     if (!c.extra.contains("iou_start")) continue;
-    const auto f = [&](const char* k) { return FormatFixed(c.extra[k].get<double>(), 3); };
+    const auto f = [&](const char* k) { return Fixed3(c, k); };
     md += "| " + Get(c.settings, "map") + " | " + f("iou_start") + " -> " + f("iou") + " | " + f("opacity_rms_start") +
           " -> " + f("opacity_rms") + " | " + f("correlation_8km_start") + " -> " + f("correlation_8km") + " | " +
           f("correlation_20km") + " | " + f("correlation_constrained") + " | " +
